@@ -1,0 +1,320 @@
+#include "glsl/Emit.h"
+
+#include <cmath>
+#include <fmt/format.h>
+#include <functional>
+#include <set>
+
+#include "sema/Builtins.h"
+
+namespace iqc::glsl {
+
+using ir::Instr;
+using ir::Op;
+using ir::ValueId;
+
+std::string type_name(const Type& t, std::string* why) {
+    auto fail = [&](std::string w) {
+        if (why) *why = std::move(w);
+        return std::string();
+    };
+    switch (t.kind) {
+        case Type::Scalar:
+        case Type::Integer: return "float";
+        case Type::Bool: return "bool";
+        case Type::Vector:
+            if (t.rows > 4) return fail(fmt::format("{} is larger than GLSL's largest vector (vec4)", t.str()));
+            return fmt::format("vec{}", t.rows);
+        case Type::Matrix:
+            if (t.rows == 1) return fail(fmt::format("GLSL has no row-vector type for {}", t.str()));
+            if (t.rows > 4 || t.cols > 4)
+                return fail(fmt::format("{} is larger than GLSL's largest matrix (mat4)", t.str()));
+            if (t.rows == t.cols) return fmt::format("mat{}", t.rows);
+            return fmt::format("mat{}x{}", t.cols, t.rows);  // GLSL: columns x rows
+        default: return fail("invalid type");
+    }
+}
+
+std::string float_literal(double v) {
+    if (std::isnan(v)) return "(0.0 / 0.0)";
+    if (std::isinf(v)) return v > 0 ? "1.0e38" : "-1.0e38";
+    float f = static_cast<float>(v);
+    if (f == 0.0f) f = 0.0f;  // no "-0.0"
+    std::string s = fmt::format("{}", f);
+    size_t e = s.find_first_of("eE");
+    std::string mant = e == std::string::npos ? s : s.substr(0, e);
+    std::string exp = e == std::string::npos ? "" : s.substr(e);
+    if (mant.find('.') == std::string::npos) mant += ".0";
+    return mant + exp;
+}
+
+std::string constant(const Type& t, const std::vector<double>& v) {
+    if (t.is_scalar()) return float_literal(v[0]);
+    std::string tn = type_name(t);
+    std::vector<std::string> parts;
+    if (t.is_vector()) {
+        bool same = true;
+        for (double x : v) same &= (x == v[0]);
+        if (same) return fmt::format("{}({})", tn, float_literal(v[0]));
+        for (double x : v) parts.push_back(float_literal(x));
+    } else {
+        for (int c = 0; c < t.cols; ++c)
+            for (int r = 0; r < t.rows; ++r) parts.push_back(float_literal(v[size_t(r * t.cols + c)]));
+    }
+    return fmt::format("{}({})", tn, fmt::join(parts, ", "));
+}
+
+const std::string& Emitter::function_name(int fn) {
+    auto it = names_.find(fn);
+    if (it != names_.end()) return it->second;
+    const ir::Function& f = m_.functions[size_t(fn)];
+    return names_[fn] = globals_.unique(f.glsl_name.empty() ? f.name : f.glsl_name);
+}
+
+std::vector<int> Emitter::closure(const std::vector<int>& roots) const {
+    std::vector<int> order;
+    std::set<int> seen;
+    std::function<void(int)> visit = [&](int fn) {
+        if (seen.count(fn)) return;
+        seen.insert(fn);
+        for (const Instr& in : m_.functions[size_t(fn)].body)
+            if (in.op == Op::Call) visit(in.aux);
+        order.push_back(fn);
+    };
+    for (int r : roots) visit(r);
+    return order;
+}
+
+namespace {
+
+const char* kSwizzle = "xyzw";
+
+std::string one_line(const std::string& s) {
+    std::string out;
+    bool space = false;
+    for (char c : s) {
+        if (c == '\n' || c == '\r' || c == '\t' || c == ' ') {
+            space = true;
+            continue;
+        }
+        if (space && !out.empty()) out += ' ';
+        space = false;
+        out += c;
+    }
+    return out;
+}
+
+struct FunctionEmitter {
+    const ir::Module& m;
+    const ir::Function& f;
+    Emitter& em;
+    Diagnostics& diags;
+    Namer locals;
+    std::vector<int> uses;
+    std::vector<bool> live;
+    std::vector<std::string> var;  // GLSL variable holding the value, if materialised
+    bool failed = false;
+
+    FunctionEmitter(const ir::Module& mod, const ir::Function& fn, Emitter& e, Diagnostics& d, const Namer& globals)
+        : m(mod), f(fn), em(e), diags(d), locals(&globals) {}
+
+    std::string type_of(const Type& t, Span span) {
+        std::string why;
+        std::string n = type_name(t, &why);
+        if (n.empty() && !failed) {
+            diags.error(span, fmt::format("cannot generate GLSL: {}", why));
+            failed = true;
+        }
+        return n.empty() ? "float" : n;
+    }
+
+    // Whether the value is simple enough to repeat rather than give a variable.
+    bool trivial(ValueId v) const {
+        const Instr& in = f.body[v];
+        return in.op == Op::Param || (in.op == Op::Const && in.type.is_scalar());
+    }
+
+    std::string operand(ValueId v) {  // an operand inside a larger expression: parenthesised if compound
+        std::string s = expr(v);
+        const Instr& in = f.body[v];
+        if (!var[v].empty()) return s;
+        switch (in.op) {
+            case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Hadamard: case Op::Compare:
+            case Op::And: case Op::Or: case Op::Select: case Op::Neg:
+                return "(" + s + ")";
+            case Op::Const:
+                if (in.type.is_scalar() && in.data[0] < 0) return "(" + s + ")";
+                return s;
+            default: return s;
+        }
+    }
+
+    // A value as something `.x` or `[i]` may follow.
+    std::string postfix_base(ValueId v) {
+        std::string s = expr(v);
+        const Instr& in = f.body[v];
+        if (!var[v].empty() || in.op == Op::Param || in.op == Op::Builtin || in.op == Op::Call || in.op == Op::Construct ||
+            in.op == Op::Dot || in.op == Op::Cross || in.op == Op::Transpose || in.op == Op::Inverse)
+            return s;
+        return "(" + s + ")";
+    }
+
+    std::string expr(ValueId v) {
+        if (!var[v].empty()) return var[v];
+        const Instr& in = f.body[v];
+        auto a = [&](size_t i) { return operand(in.args[i]); };
+        auto plain = [&](size_t i) { return expr(in.args[i]); };
+        switch (in.op) {
+            case Op::Const: return constant(in.type, in.data);
+            case Op::Param: return var[v];
+            case Op::Copy: return plain(0);
+            case Op::Add: return a(0) + " + " + a(1);
+            case Op::Sub: return a(0) + " - " + a(1);
+            case Op::Mul: {
+                const Type& rt = f.body[in.args[1]].type;
+                const Instr& rhs = f.body[in.args[1]];
+                if (f.body[in.args[0]].type.is_vector() && rt.is_matrix() && rt.rows == 1 && rhs.op == Op::Transpose)
+                    return fmt::format("outerProduct({}, {})", plain(0), expr(rhs.args[0]));
+                return a(0) + " * " + a(1);
+            }
+            case Op::Div: return a(0) + " / " + a(1);
+            case Op::Neg: return "-" + a(0);
+            case Op::Hadamard:
+                if (in.type.is_matrix()) return fmt::format("matrixCompMult({}, {})", plain(0), plain(1));
+                return a(0) + " * " + a(1);
+            case Op::Dot: return fmt::format("dot({}, {})", plain(0), plain(1));
+            case Op::Cross: return fmt::format("cross({}, {})", plain(0), plain(1));
+            case Op::Transpose: return fmt::format("transpose({})", plain(0));
+            case Op::Inverse: return fmt::format("inverse({})", plain(0));
+            case Op::Det: return fmt::format("determinant({})", plain(0));
+            case Op::Builtin: {
+                std::vector<std::string> args;
+                for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
+                return fmt::format("{}({})", builtin(in.aux).glsl, fmt::join(args, ", "));
+            }
+            case Op::Construct: {
+                std::string tn = type_of(in.type, in.span);
+                // vec3(x, x, x) -> vec3(x)
+                bool same = in.args.size() > 1;
+                for (ValueId x : in.args) same &= (x == in.args[0]);
+                if (same && f.body[in.args[0]].type.is_scalar() && in.type.is_vector())
+                    return fmt::format("{}({})", tn, plain(0));
+                // (p_1, p_3) -> p.xz
+                if (in.type.is_vector()) {
+                    bool swz = true;
+                    ValueId src = 0;
+                    std::string sel;
+                    for (size_t i = 0; i < in.args.size() && swz; ++i) {
+                        const Instr& x = f.body[in.args[i]];
+                        if (x.op != Op::Extract || !f.body[x.args[0]].type.is_vector() || !var[in.args[i]].empty()) {
+                            swz = false;
+                            break;
+                        }
+                        if (i == 0) src = x.args[0];
+                        else if (x.args[0] != src) swz = false;
+                        sel += kSwizzle[x.aux];
+                    }
+                    if (swz) return postfix_base(src) + "." + sel;
+                }
+                std::vector<std::string> args;
+                if (in.type.is_matrix()) {
+                    // Row-major entries -> GLSL's column-major constructor.
+                    for (int c = 0; c < in.type.cols; ++c)
+                        for (int r = 0; r < in.type.rows; ++r) args.push_back(plain(size_t(r * in.type.cols + c)));
+                } else {
+                    for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
+                }
+                return fmt::format("{}({})", tn, fmt::join(args, ", "));
+            }
+            case Op::Extract: {
+                const Type& st = f.body[in.args[0]].type;
+                if (st.is_vector()) return postfix_base(in.args[0]) + "." + kSwizzle[in.aux];
+                return fmt::format("{}[{}][{}]", postfix_base(in.args[0]), in.aux % st.cols, in.aux / st.cols);
+            }
+            case Op::Column: return fmt::format("{}[{}]", postfix_base(in.args[0]), in.aux);
+            case Op::Row: {
+                const Type& st = f.body[in.args[0]].type;
+                std::vector<std::string> parts;
+                std::string base = postfix_base(in.args[0]);
+                for (int c = 0; c < st.cols; ++c) parts.push_back(fmt::format("{}[{}][{}]", base, c, in.aux));
+                return fmt::format("{}({})", type_of(in.type, in.span), fmt::join(parts, ", "));
+            }
+            case Op::Compare: {
+                static const char* ops[] = {"==", "!=", "<", "<=", ">", ">="};
+                return fmt::format("{} {} {}", a(0), ops[in.aux], a(1));
+            }
+            case Op::And: return a(0) + " && " + a(1);
+            case Op::Or: return a(0) + " || " + a(1);
+            case Op::Select: return fmt::format("{} ? {} : {}", a(0), a(1), a(2));
+            case Op::Call: {
+                std::vector<std::string> args;
+                for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
+                return fmt::format("{}({})", em.function_name(in.aux), fmt::join(args, ", "));
+            }
+        }
+        return "0.0";
+    }
+
+    std::string run(const std::string& name, const std::string& comment) {
+        size_t n = f.body.size();
+        uses.assign(n, 0);
+        live.assign(n, false);
+        var.assign(n, "");
+        // Liveness from the result backwards.
+        live[f.result] = true;
+        for (size_t i = n; i-- > 0;) {
+            if (!live[i]) continue;
+            for (ValueId a : f.body[i].args) {
+                live[a] = true;
+                uses[a]++;
+            }
+        }
+        std::string out;
+        if (!comment.empty()) out += "// " + comment + "\n";
+        std::vector<std::string> params;
+        for (size_t i = 0; i < f.params.size(); ++i) {
+            std::string pn = locals.unique(f.params[i].name);
+            params.push_back(fmt::format("{} {}", type_of(f.params[i].type, {}), pn));
+            for (size_t k = 0; k < n; ++k)
+                if (f.body[k].op == Op::Param && f.body[k].aux == int(i)) var[k] = pn;
+        }
+        out += fmt::format("{} {}({}) {{\n", type_of(f.result_type(), {}), name, fmt::join(params, ", "));
+        std::set<std::string> commented;
+        for (size_t i = 0; i < n; ++i) {
+            const Instr& in = f.body[i];
+            if (!live[i] || in.op == Op::Param) continue;
+            bool named = !in.name.empty();
+            bool shared = uses[i] > 1 && !trivial(ValueId(i));
+            if (i == f.result && !named) continue;
+            if (!named && !shared) continue;
+            if (in.op == Op::Construct && !named && in.type.is_vector()) {
+                // A shared broadcast such as vec3(x) is cheap: keep it inline.
+                bool same = true;
+                for (ValueId x : in.args) same &= x == in.args[0];
+                if (same) continue;
+            }
+            std::string value = expr(ValueId(i));
+            std::string vn = locals.unique(named ? in.name : "t");
+            out += fmt::format("    {} {} = {};", type_of(in.type, in.span), vn, value);
+            if (named && !in.source.empty()) out += " // " + one_line(in.source);
+            out += "\n";
+            var[i] = vn;
+        }
+        const Instr& r = f.body[f.result];
+        std::string rv = expr(f.result);
+        out += fmt::format("    return {};", rv);
+        if (r.name.empty() && !r.source.empty()) out += " // " + one_line(r.source);
+        out += "\n}\n";
+        return out;
+    }
+};
+
+}  // namespace
+
+std::string Emitter::function(int fn, const std::string& comment) {
+    const std::string& name = function_name(fn);
+    FunctionEmitter fe(m_, m_.functions[size_t(fn)], *this, diags_, globals_);
+    return fe.run(name, comment);
+}
+
+}  // namespace iqc::glsl

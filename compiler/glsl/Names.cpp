@@ -1,0 +1,135 @@
+#include "glsl/Names.h"
+
+#include <fmt/format.h>
+
+#include "source/Source.h"
+
+namespace iqc::glsl {
+
+namespace {
+
+const char* greek(char32_t c) {
+    static const char* lower[] = {"alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta",
+                                  "iota", "kappa", "lambda", "mu", "nu", "xi", "omicron", "pi", "rho",
+                                  "sigmaf", "sigma", "tau", "upsilon", "phi", "chi", "psi", "omega"};
+    static const char* upper[] = {"Alpha", "Beta", "Gamma", "Delta", "Epsilon", "Zeta", "Eta", "Theta",
+                                  "Iota", "Kappa", "Lambda", "Mu", "Nu", "Xi", "Omicron", "Pi", "Rho",
+                                  "", "Sigma", "Tau", "Upsilon", "Phi", "Chi", "Psi", "Omega"};
+    if (c >= 0x3B1 && c <= 0x3C9) return lower[c - 0x3B1];
+    if (c >= 0x391 && c <= 0x3A9 && c != 0x3A2) return upper[c - 0x391];
+    switch (c) {
+        case 0x3D1: return "vartheta";
+        case 0x3D5: return "varphi";
+        case 0x3F5: return "varepsilon";
+        case 0x2113: return "ell";
+        default: return nullptr;
+    }
+}
+
+const char* mark(char32_t c) {
+    switch (c) {
+        case 0x0302: return "hat";
+        case 0x0303: return "tilde";
+        case 0x0304: case 0x0305: return "bar";
+        case 0x0307: return "dot";
+        case 0x0308: return "ddot";
+        case 0x0301: return "acute";
+        case 0x0300: return "grave";
+        case 0x030C: return "check";
+        case 0x20D7: return "vec";
+        default: return nullptr;
+    }
+}
+
+}  // namespace
+
+std::string identifier(const std::string& math) {
+    std::string out;
+    auto append_word = [&](const std::string& w) {
+        if (!out.empty() && out.back() != '_') out += '_';
+        out += w;
+    };
+    for (size_t i = 0; i < math.size();) {
+        char32_t c = utf8::decode(math, i);
+        if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')) {
+            out += char(c);
+        } else if (c == '_' || c == ' ' || c == '-' || c == '.') {
+            if (!out.empty() && out.back() != '_') out += '_';
+        } else if (const char* g = greek(c)) {
+            if (!out.empty() && out.back() != '_') out += '_';
+            out += g;
+        } else if (const char* m = mark(c)) {
+            append_word(m);
+        } else if (c == '\'' || c == 0x2032) {
+            append_word("prime");
+        } else if (c == 0x2033) {
+            append_word("dprime");
+        } else {
+            append_word(fmt::format("u{:04X}", uint32_t(c)));
+        }
+    }
+    // No double underscores (reserved in GLSL), no leading digit, never empty.
+    std::string clean;
+    for (char ch : out)
+        if (!(ch == '_' && !clean.empty() && clean.back() == '_')) clean += ch;
+    while (!clean.empty() && clean.back() == '_' && clean.size() > 1) clean.pop_back();
+    if (clean.empty() || clean == "_") clean = "v";
+    if (std::isdigit(static_cast<unsigned char>(clean[0]))) clean = "v" + clean;
+    if (clean[0] == '_') clean = "v" + clean;
+    if (clean.rfind("gl_", 0) == 0) clean = "v_" + clean;
+    return clean;
+}
+
+bool is_reserved(const std::string& n) {
+    static const std::set<std::string> words = {
+        // keywords and reserved words (GLSL ES 3.00 and 3.30 core)
+        "attribute", "const", "uniform", "varying", "layout", "centroid", "flat", "smooth", "noperspective",
+        "break", "continue", "do", "for", "while", "switch", "case", "default", "if", "else", "in", "out",
+        "inout", "float", "int", "void", "bool", "true", "false", "invariant", "discard", "return", "mat2",
+        "mat3", "mat4", "mat2x2", "mat2x3", "mat2x4", "mat3x2", "mat3x3", "mat3x4", "mat4x2", "mat4x3",
+        "mat4x4", "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "bvec2", "bvec3", "bvec4", "uint",
+        "uvec2", "uvec3", "uvec4", "lowp", "mediump", "highp", "precision", "sampler2D", "sampler3D",
+        "samplerCube", "sampler2DShadow", "samplerCubeShadow", "sampler2DArray", "sampler2DArrayShadow",
+        "isampler2D", "isampler3D", "isamplerCube", "isampler2DArray", "usampler2D", "usampler3D",
+        "usamplerCube", "usampler2DArray", "struct", "asm", "class", "union", "enum", "typedef", "template",
+        "this", "packed", "resource", "goto", "inline", "noinline", "volatile", "public", "static", "extern",
+        "external", "interface", "long", "short", "double", "half", "fixed", "unsigned", "superp", "input",
+        "output", "hvec2", "hvec3", "hvec4", "dvec2", "dvec3", "dvec4", "fvec2", "fvec3", "fvec4",
+        "sampler3DRect", "filter", "image1D", "image2D", "image3D", "imageCube", "sizeof", "cast",
+        "namespace", "using", "sampler1D", "sampler1DShadow", "sampler2DRect", "sampler2DRectShadow",
+        "samplerBuffer", "patch", "sample", "subroutine", "common", "partition", "active", "main",
+        // built-in functions
+        "radians", "degrees", "sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh", "asinh",
+        "acosh", "atanh", "pow", "exp", "log", "exp2", "log2", "sqrt", "inversesqrt", "abs", "sign",
+        "floor", "trunc", "round", "roundEven", "ceil", "fract", "mod", "modf", "min", "max", "clamp", "mix",
+        "step", "smoothstep", "isnan", "isinf", "floatBitsToInt", "floatBitsToUint", "intBitsToFloat",
+        "uintBitsToFloat", "packSnorm2x16", "unpackSnorm2x16", "packUnorm2x16", "unpackUnorm2x16",
+        "packHalf2x16", "unpackHalf2x16", "length", "distance", "dot", "cross", "normalize", "faceforward",
+        "reflect", "refract", "matrixCompMult", "outerProduct", "transpose", "determinant", "inverse",
+        "lessThan", "lessThanEqual", "greaterThan", "greaterThanEqual", "equal", "notEqual", "any", "all",
+        "not", "texture", "textureSize", "textureProj", "textureLod", "textureOffset", "texelFetch",
+        "texelFetchOffset", "textureProjOffset", "textureLodOffset", "textureProjLod", "textureProjLodOffset",
+        "textureGrad", "textureGradOffset", "textureProjGrad", "textureProjGradOffset", "dFdx", "dFdy",
+        "fwidth", "fma", "frexp", "ldexp",
+        // Shadertoy's inputs and the runtime's names
+        "mainImage", "fragColor", "fragCoord", "iResolution", "iTime", "iTimeDelta", "iFrame", "iFrameRate",
+        "iChannelTime", "iChannelResolution", "iMouse", "iDate", "iSampleRate", "iChannel0", "iChannel1",
+        "iChannel2", "iChannel3",
+    };
+    return words.count(n) > 0 || n.rfind("gl_", 0) == 0 || n.rfind("iqc_", 0) == 0 || n.rfind("IQC_", 0) == 0 ||
+           n.find("__") != std::string::npos;
+}
+
+bool Namer::taken(const std::string& name) const {
+    return used_.count(name) > 0 || (parent_ && parent_->taken(name));
+}
+
+std::string Namer::unique(const std::string& math_name) {
+    std::string base = identifier(math_name);
+    std::string n = base;
+    for (int k = 2; is_reserved(n) || taken(n); ++k) n = fmt::format("{}_{}", base, k);
+    used_.insert(n);
+    return n;
+}
+
+}  // namespace iqc::glsl

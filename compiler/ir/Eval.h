@@ -1,0 +1,33 @@
+// The double-precision evaluator: runs an IR function on values.
+//
+// It is the reference for `iqc eval`, for compile-time folding (constant transforms are evaluated and
+// inverted here, once) and, later, for the numerical tests. Built-ins use the evaluation rules of the
+// built-in table (sema/Builtins.h), so they mean the same as in the folder and the GLSL backend.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ir/IR.h"
+
+namespace iqc::ir {
+
+struct Value {
+    Type type;
+    std::vector<double> v;  // components; matrices row-major
+    double operator[](size_t i) const { return v[i]; }
+};
+
+// Evaluates function `fn` of `m` with the given arguments; returns every value of its body (index = ValueId).
+std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value>& args);
+// Evaluates and returns the function's result.
+Value evaluate(const Module& m, int fn, const std::vector<Value>& args);
+
+// Math helpers shared with scene assembly.
+std::vector<double> mat_inverse(const std::vector<double>& a, int n, bool* singular);
+double mat_det(const std::vector<double>& a, int n);
+
+// "1.5", "(1, 2, 3)", "[1 2; 3 4]" — full precision (shortest round-trip).
+std::string format_value(const Value& v);
+
+}  // namespace iqc::ir

@@ -1,0 +1,237 @@
+#include "ir/IR.h"
+
+#include <fmt/format.h>
+
+#include "sema/Builtins.h"
+
+namespace iqc {
+
+static const char* kSuperDigits[] = {"⁰", "¹", "²", "³", "⁴", "⁵", "⁶", "⁷", "⁸", "⁹"};
+
+std::string Type::str() const {
+    auto sup = [](int n) {
+        std::string s;
+        for (char c : std::to_string(n)) s += kSuperDigits[c - '0'];
+        return s;
+    };
+    switch (kind) {
+        case Invalid: return "<invalid>";
+        case Scalar: return "ℝ";
+        case Integer: return "ℤ";
+        case Bool: return "condition";
+        case Vector: return "ℝ" + sup(rows);
+        case Matrix: return fmt::format("ℝ^({}×{})", rows, cols);
+    }
+    return "?";
+}
+
+namespace ir {
+
+const char* op_name(Op op) {
+    switch (op) {
+#define X(name, n) \
+    case Op::name: return #name;
+        IQC_IR_OPS(X)
+#undef X
+    }
+    return "?";
+}
+
+int op_arity(Op op) {
+    switch (op) {
+#define X(name, n) \
+    case Op::name: return n;
+        IQC_IR_OPS(X)
+#undef X
+    }
+    return -1;
+}
+
+ValueId Function::constant(Type t, std::vector<double> data) {
+    Instr in;
+    in.op = Op::Const;
+    in.type = t;
+    in.data = std::move(data);
+    return add(std::move(in));
+}
+
+int Module::find(const std::string& name) const {
+    for (size_t i = 0; i < functions.size(); ++i)
+        if (functions[i].name == name) return int(i);
+    return -1;
+}
+
+Type result_type(Op op, const std::vector<Type>& a, int aux) {
+    auto is_num = [](const Type& t) { return t.is_numeric(); };
+    switch (op) {
+        case Op::Const:
+        case Op::Param:
+        case Op::Call:
+        case Op::Construct:
+            return {};  // carried by the instruction itself
+        case Op::Copy:
+            return a[0];
+        case Op::Add:
+        case Op::Sub:
+            if (a[0].is_scalar() && a[1].is_scalar()) return Type::scalar();
+            return (a[0] == a[1] && is_num(a[0])) ? a[0] : Type{};
+        case Op::Neg:
+            return is_num(a[0]) ? (a[0].is_scalar() ? Type::scalar() : a[0]) : Type{};
+        case Op::Mul:
+            if (a[0].is_scalar() && is_num(a[1])) return a[1].is_scalar() ? Type::scalar() : a[1];
+            if (a[1].is_scalar() && is_num(a[0])) return a[0];
+            if (a[0].is_matrix() && a[1].is_vector() && a[0].cols == a[1].rows) return Type::vector(a[0].rows);
+            if (a[0].is_matrix() && a[1].is_matrix() && a[0].cols == a[1].rows) {
+                if (a[1].cols == 1) return Type::vector(a[0].rows);
+                if (a[0].rows == 1 && a[1].cols == 1) return Type::scalar();
+                return Type::matrix(a[0].rows, a[1].cols);
+            }
+            if (a[0].is_vector() && a[1].is_matrix() && a[1].rows == 1)  // outer product a bᵀ
+                return Type::matrix(a[0].rows, a[1].cols);
+            if (a[0].is_matrix() && a[0].rows == 1 && a[1].is_vector() && a[0].cols == a[1].rows)
+                return Type::scalar();
+            return {};
+        case Op::Div:
+            return (is_num(a[0]) && a[1].is_scalar()) ? (a[0].is_scalar() ? Type::scalar() : a[0]) : Type{};
+        case Op::Hadamard:
+            if (a[0].is_scalar() && a[1].is_scalar()) return Type::scalar();
+            return (a[0] == a[1] && is_num(a[0])) ? a[0] : Type{};
+        case Op::Dot:
+            return (a[0].is_vector() && a[0] == a[1]) ? Type::scalar() : Type{};
+        case Op::Cross:
+            return (a[0] == Type::vector(3) && a[1] == Type::vector(3)) ? a[0] : Type{};
+        case Op::Transpose:
+            if (a[0].is_matrix()) {
+                if (a[0].rows == 1) return Type::vector(a[0].cols);
+                return Type::matrix(a[0].cols, a[0].rows);
+            }
+            if (a[0].is_vector()) return Type::matrix(1, a[0].rows);
+            if (a[0].is_scalar()) return Type::scalar();
+            return {};
+        case Op::Inverse:
+            return (a[0].is_matrix() && a[0].rows == a[0].cols) ? a[0] : Type{};
+        case Op::Det:
+            return (a[0].is_matrix() && a[0].rows == a[0].cols) ? Type::scalar() : Type{};
+        case Op::Builtin: {
+            BuiltinCheck c = check_builtin(aux, a);
+            return c.error.empty() ? c.type : Type{};
+        }
+        case Op::Extract:
+            return (is_num(a[0]) && aux >= 0 && aux < a[0].components()) ? Type::scalar() : Type{};
+        case Op::Row:
+            return (a[0].is_matrix() && aux >= 0 && aux < a[0].rows) ? Type::vector(a[0].cols) : Type{};
+        case Op::Column:
+            return (a[0].is_matrix() && aux >= 0 && aux < a[0].cols) ? Type::vector(a[0].rows) : Type{};
+        case Op::Compare:
+            return (a[0].is_scalar() && a[1].is_scalar()) ? Type::boolean() : Type{};
+        case Op::And:
+        case Op::Or:
+            return (a[0].kind == Type::Bool && a[1].kind == Type::Bool) ? Type::boolean() : Type{};
+        case Op::Select:
+            if (a[0].kind != Type::Bool) return {};
+            if (a[1].is_scalar() && a[2].is_scalar()) return Type::scalar();
+            return a[1] == a[2] ? a[1] : Type{};
+    }
+    return {};
+}
+
+static std::string format_number(double v) { return fmt::format("{}", v); }
+
+static std::string instr_text(const Function& f, const Instr& in, const Module* m) {
+    std::string s = fmt::format("{} {}", in.type.str(), op_name(in.op));
+    switch (in.op) {
+        case Op::Const: {
+            s += " ";
+            for (size_t i = 0; i < in.data.size(); ++i) s += (i ? ", " : "") + format_number(in.data[i]);
+            break;
+        }
+        case Op::Param: s += fmt::format(" #{} {}", in.aux, f.params[size_t(in.aux)].name); break;
+        case Op::Builtin: s += fmt::format(" {}", builtin(in.aux).name); break;
+        case Op::Call:
+            s += " " + (m && in.aux < int(m->functions.size()) ? m->functions[size_t(in.aux)].name
+                                                               : fmt::format("@{}", in.aux));
+            break;
+        case Op::Extract:
+        case Op::Row:
+        case Op::Column: s += fmt::format(" [{}]", in.aux); break;
+        case Op::Compare: {
+            static const char* k[] = {"eq", "ne", "lt", "le", "gt", "ge"};
+            s += fmt::format(" {}", k[in.aux]);
+            break;
+        }
+        default: break;
+    }
+    for (size_t i = 0; i < in.args.size(); ++i) s += fmt::format("{} %{}", i ? "," : "", in.args[i]);
+    if (!in.name.empty()) s += "  ; " + in.name;
+    return s;
+}
+
+std::string print(const Function& f, const Module* m) {
+    std::string out = fmt::format("function {}(", f.name);
+    for (size_t i = 0; i < f.params.size(); ++i)
+        out += fmt::format("{}{}: {}", i ? ", " : "", f.params[i].name, f.params[i].type.str());
+    out += fmt::format(") -> {} {{\n", f.result_type().str());
+    for (size_t i = 0; i < f.body.size(); ++i) out += fmt::format("  %{} = {}\n", i, instr_text(f, f.body[i], m));
+    out += fmt::format("  return %{}\n", f.result);
+    for (const auto& [name, v] : f.outputs) out += fmt::format("  output {} = %{}\n", name, v);
+    out += "}\n";
+    return out;
+}
+
+std::string print(const Module& m) {
+    std::string out;
+    for (const auto& f : m.functions) out += print(f, &m);
+    return out;
+}
+
+std::string verify(const Function& f, const Module& m) {
+    for (size_t i = 0; i < f.body.size(); ++i) {
+        const Instr& in = f.body[i];
+        auto fault = [&](const std::string& what) {
+            return fmt::format("{}: %{} ({}): {}", f.name, i, op_name(in.op), what);
+        };
+        int arity = op_arity(in.op);
+        if (arity >= 0 && int(in.args.size()) != arity) return fault("wrong operand count");
+        std::vector<Type> types;
+        for (ValueId a : in.args) {
+            if (a >= i) return fault(fmt::format("operand %{} is not defined before use", a));
+            types.push_back(f.body[a].type);
+        }
+        if (!in.type.valid()) return fault("invalid type");
+        switch (in.op) {
+            case Op::Const:
+                if (int(in.data.size()) != in.type.components()) return fault("constant size does not match its type");
+                break;
+            case Op::Param:
+                if (in.aux < 0 || size_t(in.aux) >= f.params.size() || f.params[size_t(in.aux)].type != in.type)
+                    return fault("parameter index or type mismatch");
+                break;
+            case Op::Construct: {
+                int n = 0;
+                for (auto& t : types) n += t.components();
+                if (n != in.type.components()) return fault("constructed components do not add up");
+                break;
+            }
+            case Op::Call: {
+                if (in.aux < 0 || size_t(in.aux) >= m.functions.size()) return fault("bad callee");
+                const Function& callee = m.functions[size_t(in.aux)];
+                if (callee.params.size() != in.args.size()) return fault("argument count mismatch");
+                for (size_t k = 0; k < types.size(); ++k)
+                    if (callee.params[k].type != types[k] && !(callee.params[k].type.is_scalar() && types[k].is_scalar()))
+                        return fault("argument type mismatch");
+                if (callee.result_type() != in.type) return fault("result type mismatch");
+                break;
+            }
+            default: {
+                Type t = result_type(in.op, types, in.aux);
+                if (t != in.type && !(t.is_scalar() && in.type.is_scalar()))
+                    return fault(fmt::format("type {} does not match operands (expected {})", in.type.str(), t.str()));
+            }
+        }
+    }
+    if (!f.body.empty() && f.result >= f.body.size()) return fmt::format("{}: result out of range", f.name);
+    return "";
+}
+
+}  // namespace ir
+}  // namespace iqc

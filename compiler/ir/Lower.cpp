@@ -1,0 +1,306 @@
+#include "ir/Lower.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "sema/Builtins.h"
+
+namespace iqc {
+
+using namespace ast;
+using ir::Instr;
+using ir::Op;
+using ir::ValueId;
+
+namespace {
+
+int lower_local_function(const CheckedModule& m, int fi, LowerContext& ctx);
+
+struct Env {
+    const CheckedModule& m;
+    LowerContext& ctx;
+    ir::Function& f;
+    std::vector<ValueId> params;                 // module parameters (module body)
+    std::map<std::string, ValueId> values;       // assigned names
+    std::vector<ValueId> locals;                 // local function parameters
+    std::vector<ValueId> captures;               // local function captures
+    const LocalFunction* fn = nullptr;           // when lowering a local function
+
+    ValueId emit(Op op, Type t, std::vector<ValueId> args, int aux = 0, Span span = {}) {
+        Instr in;
+        in.op = op;
+        in.type = t;
+        in.args = std::move(args);
+        in.aux = aux;
+        in.span = span;
+        return f.add(std::move(in));
+    }
+    const Type& type_of(ValueId v) const { return f.body[v].type; }
+
+    // A scalar operand widened to `t` (a vector), for built-ins whose GLSL overloads need equal types.
+    ValueId broadcast(ValueId v, const Type& t) {
+        if (!t.is_vector() || !type_of(v).is_scalar()) return v;
+        return emit(Op::Construct, t, std::vector<ValueId>(size_t(t.rows), v));
+    }
+
+    // The value of a name that a local function captures, as seen from this environment.
+    ValueId lookup_capture(const std::string& name) {
+        if (fn)
+            for (size_t i = 0; i < fn->captures.size(); ++i)
+                if (fn->captures[i].first == name) return captures[i];
+        if (int pi = m.find_param(name); pi >= 0) return params[size_t(pi)];
+        auto it = values.find(name);
+        if (it == values.end()) throw std::logic_error("lowering: captured name '" + name + "' has no value");
+        return it->second;
+    }
+
+    ValueId power(ValueId base, const Expr& ex, Span span) {
+        auto c = const_eval(ex);
+        if (c && c->size() == 1 && std::fabs((*c)[0]) <= 4 && (*c)[0] == std::floor((*c)[0])) {
+            int n = int((*c)[0]);
+            if (n == 0) return f.scalar(1.0);
+            ValueId r = base;
+            for (int i = 1; i < std::abs(n); ++i) r = emit(Op::Mul, Type::scalar(), {r, base}, 0, span);
+            if (n < 0) r = emit(Op::Div, Type::scalar(), {f.scalar(1.0), r}, 0, span);
+            return r;
+        }
+        ValueId e = lower(ex);
+        return emit(Op::Builtin, Type::scalar(), {base, e}, *find_builtin("pow"), span);
+    }
+
+    ValueId builtin(const char* name, std::vector<ValueId> args, Type t, Span span) {
+        int id = *find_builtin(name);
+        const BuiltinInfo& b = iqc::builtin(id);
+        if (b.sig == Sig::Nary && args.size() > 2) {
+            ValueId acc = builtin(name, {args[0], args[1]}, t, span);
+            for (size_t i = 2; i < args.size(); ++i) acc = builtin(name, {acc, args[i]}, t, span);
+            return acc;
+        }
+        if (b.sig == Sig::Elementwise2 || b.sig == Sig::Nary || b.sig == Sig::Clamp || b.sig == Sig::Mix) {
+            Type common = Type::scalar();
+            for (ValueId a : args)
+                if (type_of(a).is_vector()) common = type_of(a);
+            if (common.is_vector())
+                for (auto& a : args) a = broadcast(a, common);
+            std::vector<Type> ts;
+            for (ValueId a : args) ts.push_back(type_of(a));
+            t = check_builtin(id, ts).type;
+        }
+        return emit(Op::Builtin, t, std::move(args), id, span);
+    }
+
+    ValueId mul(ValueId a, ValueId b, Span span) {
+        const Instr& ai = f.body[a];
+        // aᵀb is a dot product.
+        if (ai.op == Op::Transpose && type_of(ai.args[0]).is_vector() && type_of(b).is_vector())
+            return emit(Op::Dot, Type::scalar(), {ai.args[0], b}, 0, span);
+        Type t = ir::result_type(Op::Mul, {type_of(a), type_of(b)}, 0);
+        return emit(Op::Mul, t, {a, b}, 0, span);
+    }
+
+    ValueId lower(const Expr& e) {
+        switch (e.kind) {
+            case ExprKind::Number: return f.scalar(e.number);
+            case ExprKind::Name:
+                switch (e.resolved) {
+                    case R_Param: return params[size_t(e.aux)];
+                    case R_Value: return values.at(e.text);
+                    case R_Local: return locals[size_t(e.aux)];
+                    case R_Capture: return captures[size_t(e.aux)];
+                    case R_Pi: return f.scalar(M_PI);
+                    default: throw std::logic_error("lowering: unresolved name " + e.text);
+                }
+            case ExprKind::Call: {
+                if (e.resolved == R_Scale) return mul(lower(*e.args[0]), lower(*e.args[1]), e.span);
+                std::vector<ValueId> args;
+                for (auto& a : e.args) args.push_back(lower(*a));
+                if (e.resolved == R_Builtin) return builtin(iqc::builtin(e.aux).name, std::move(args), e.type, e.span);
+                const CheckedModule* owner = &m;
+                int fi = e.aux;
+                if (e.resolved == R_ImportFn) {
+                    const ImportedFunction& im = m.imports[size_t(e.aux)];
+                    owner = im.from;
+                    fi = im.function;
+                }
+                const LocalFunction& callee = owner->functions[size_t(fi)];
+                for (auto& cap : callee.captures) {
+                    if (owner == &m) {
+                        args.push_back(lookup_capture(cap.first));
+                    } else {  // a library module's own parameter: its default value
+                        int pi = owner->find_param(cap.first);
+                        if (pi < 0) throw std::logic_error("lowering: imported function captures a value");
+                        args.push_back(f.constant(cap.second, owner->params[size_t(pi)].value));
+                    }
+                }
+                int idx = lower_local_function(*owner, fi, ctx);
+                // Scalar arguments of integer type pass as they are.
+                return emit(Op::Call, callee.result, std::move(args), idx, e.span);
+            }
+            case ExprKind::Binary: {
+                ValueId a = lower(*e.args[0]);
+                ValueId b = lower(*e.args[1]);
+                switch (e.op) {
+                    case BinOp::Add: return emit(Op::Add, e.type, {a, b}, 0, e.span);
+                    case BinOp::Sub: return emit(Op::Sub, e.type, {a, b}, 0, e.span);
+                    case BinOp::Div: return emit(Op::Div, e.type, {a, b}, 0, e.span);
+                    case BinOp::Hadamard:
+                        return emit(e.type.is_scalar() ? Op::Mul : Op::Hadamard, e.type, {a, b}, 0, e.span);
+                    case BinOp::Cross: return emit(Op::Cross, e.type, {a, b}, 0, e.span);
+                    default:
+                        if (e.resolved == R_DotProduct) return emit(Op::Dot, Type::scalar(), {a, b}, 0, e.span);
+                        return mul(a, b, e.span);
+                }
+            }
+            case ExprKind::Negate: return emit(Op::Neg, e.type, {lower(*e.args[0])}, 0, e.span);
+            case ExprKind::Power: {
+                ValueId base = lower(*e.args[0]);
+                if (e.resolved == R_Inverse) return emit(Op::Inverse, e.type, {base}, 0, e.span);
+                return power(base, *e.args[1], e.span);
+            }
+            case ExprKind::Transpose: {
+                ValueId a = lower(*e.args[0]);
+                if (type_of(a).is_scalar()) return a;
+                return emit(Op::Transpose, e.type, {a}, 0, e.span);
+            }
+            case ExprKind::Index: {
+                ValueId a = lower(*e.args[0]);
+                const Type& t = type_of(a);
+                if (t.is_vector()) return emit(Op::Extract, Type::scalar(), {a}, e.indices[0].value, e.span);
+                int r = e.indices[0].value, c = e.indices[1].value;
+                if (r < 0 && c < 0) return a;
+                if (r < 0) return emit(Op::Column, Type::vector(t.rows), {a}, c, e.span);
+                if (c < 0) return emit(Op::Row, Type::vector(t.cols), {a}, r, e.span);
+                return emit(Op::Extract, Type::scalar(), {a}, r * t.cols + c, e.span);
+            }
+            case ExprKind::Vector: {
+                std::vector<ValueId> items;
+                for (auto& a : e.args) items.push_back(lower(*a));
+                return emit(Op::Construct, e.type, std::move(items), 0, e.span);
+            }
+            case ExprKind::Matrix: {
+                std::vector<ValueId> items;
+                for (auto& row : e.rows)
+                    for (auto& a : row) items.push_back(lower(*a));
+                if (items.size() == 1) return items[0];
+                return emit(Op::Construct, e.type, std::move(items), 0, e.span);
+            }
+            case ExprKind::Norm:
+            case ExprKind::Abs: {
+                ValueId a = lower(*e.args[0]);
+                if (e.resolved == R_Det) return emit(Op::Det, Type::scalar(), {a}, 0, e.span);
+                return builtin(e.resolved == R_Length ? "length" : "abs", {a}, e.type, e.span);
+            }
+            case ExprKind::Floor: return builtin("floor", {lower(*e.args[0])}, e.type, e.span);
+            case ExprKind::Ceil: return builtin("ceil", {lower(*e.args[0])}, e.type, e.span);
+            case ExprKind::Sqrt: return builtin("sqrt", {lower(*e.args[0])}, e.type, e.span);
+            case ExprKind::Compare: {
+                ValueId a = lower(*e.args[0]);
+                ValueId b = lower(*e.args[1]);
+                ir::CompareKind k = ir::CompareKind::Eq;
+                switch (e.op) {
+                    case BinOp::Eq: k = ir::CompareKind::Eq; break;
+                    case BinOp::Neq: k = ir::CompareKind::Ne; break;
+                    case BinOp::Lt: k = ir::CompareKind::Lt; break;
+                    case BinOp::Le: k = ir::CompareKind::Le; break;
+                    case BinOp::Gt: k = ir::CompareKind::Gt; break;
+                    default: k = ir::CompareKind::Ge; break;
+                }
+                return emit(Op::Compare, Type::boolean(), {a, b}, int(k), e.span);
+            }
+            case ExprKind::Logic: {
+                ValueId a = lower(*e.args[0]);
+                ValueId b = lower(*e.args[1]);
+                return emit(e.op == BinOp::And ? Op::And : Op::Or, Type::boolean(), {a, b}, 0, e.span);
+            }
+            case ExprKind::Piecewise: {
+                // Cases are tried in order: the first true condition wins.
+                ValueId acc = e.otherwise ? lower(*e.otherwise)
+                                          : f.constant(e.type, std::vector<double>(size_t(e.type.components()), 0.0));
+                for (size_t i = e.rows.size(); i-- > 0;) {
+                    ValueId v = lower(*e.rows[i][0]);
+                    ValueId c = lower(*e.rows[i][1]);
+                    acc = emit(Op::Select, e.type, {c, v, acc}, 0, e.span);
+                }
+                return acc;
+            }
+        }
+        throw std::logic_error("lowering: unknown expression");
+    }
+
+    // Gives `v` the statement's name (or a named copy, when v is a parameter or already named).
+    ValueId name_value(ValueId v, const Stmt& s) {
+        Instr& in = f.body[v];
+        if (in.op == Op::Param || !in.name.empty()) {
+            v = emit(Op::Copy, in.type, {v}, 0, s.span);
+        }
+        Instr& out = f.body[v];
+        out.name = s.kind == StmtKind::Return ? "" : s.name;
+        out.source = s.source_line;
+        out.span = s.span;
+        return v;
+    }
+};
+
+ValueId add_param(ir::Function& f, const std::string& name, Type t) {
+    f.params.push_back({name, t});
+    Instr in;
+    in.op = Op::Param;
+    in.type = t;
+    in.aux = int(f.params.size() - 1);
+    in.name = name;
+    return f.add(std::move(in));
+}
+
+int lower_local_function(const CheckedModule& m, int fi, LowerContext& ctx) {
+    auto key = std::make_pair(&m, fi);
+    if (auto it = ctx.functions.find(key); it != ctx.functions.end()) return it->second;
+    const LocalFunction& lf = m.functions[size_t(fi)];
+    ir::Function fn;
+    fn.name = m.ast.name.empty() ? lf.stmt->name : m.ast.name + "." + lf.stmt->name;
+    fn.glsl_name = lf.stmt->name;
+    // Reserve the slot first so recursive lowering of callees gets stable indices.
+    int idx = int(ctx.module.functions.size());
+    ctx.functions[key] = idx;
+    ctx.module.functions.emplace_back();
+    Env env{m, ctx, fn};
+    env.fn = &lf;
+    for (auto& [n, t] : lf.params) env.locals.push_back(add_param(fn, n, t));
+    for (auto& [n, t] : lf.captures) env.captures.push_back(add_param(fn, n, t));
+    ValueId r = env.lower(*lf.stmt->value);
+    Instr& ri = fn.body[r];
+    if (ri.source.empty()) ri.source = lf.stmt->source_line;
+    fn.result = r;
+    ctx.module.functions[size_t(idx)] = std::move(fn);
+    return idx;
+}
+
+}  // namespace
+
+int lower_module(const CheckedModule& m, const std::string& name, const std::string& glsl_name, LowerContext& ctx) {
+    ir::Function fn;
+    fn.name = name;
+    fn.glsl_name = glsl_name;
+    int idx = int(ctx.module.functions.size());
+    ctx.module.functions.emplace_back();
+    Env env{m, ctx, fn};
+    for (auto& p : m.params) env.params.push_back(add_param(fn, p.name, p.type));
+    ValueId result = 0;
+    bool have_result = false;
+    for (const Stmt* s : m.order) {
+        ValueId v = env.name_value(env.lower(*s->value), *s);
+        if (s->kind == StmtKind::Assign) {
+            env.values[s->name] = v;
+            fn.outputs.push_back({s->name, v});
+            if (s->name == m.primary) { result = v; have_result = true; }
+        } else {
+            result = v;
+            have_result = true;
+        }
+    }
+    if (!have_result) result = fn.scalar(0.0);
+    fn.result = result;
+    ctx.module.functions[size_t(idx)] = std::move(fn);
+    return idx;
+}
+
+}  // namespace iqc

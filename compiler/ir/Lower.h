@@ -1,0 +1,27 @@
+// Lowering: checked AST -> IR functions.
+//
+// Requires a module that checked without errors. A shape, material or transform module becomes one IR
+// function whose parameters are the module's free parameters (in declaration order) and whose result is
+// its primary output (D, C, or the bare expression); every assigned name is recorded as an output. Local
+// and imported functions become functions of their own (once each), with any module values they use
+// passed as extra parameters. n-ary min/max become chains, integer powers become products (GLSL's pow is
+// undefined for negative bases), and scalars that meet vectors in built-ins are broadcast explicitly.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "ir/IR.h"
+#include "sema/Check.h"
+
+namespace iqc {
+
+struct LowerContext {
+    ir::Module& module;
+    std::map<std::pair<const CheckedModule*, int>, int> functions;  // (module, local function) -> IR index
+};
+
+// Returns the index of the new function in ctx.module.
+int lower_module(const CheckedModule& m, const std::string& name, const std::string& glsl_name, LowerContext& ctx);
+
+}  // namespace iqc

@@ -1,0 +1,591 @@
+#include "scene/Compile.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fmt/format.h>
+#include <memory>
+#include <set>
+
+#include "glsl/Emit.h"
+#include "glsl/ShadertoyWrapper.h"
+#include "glsl/Validate.h"
+#include "ir/Eval.h"
+#include "ir/Lower.h"
+#include "resources/Embedded.h"
+#include "sema/Builtins.h"
+#include "sema/Check.h"
+#include "syntax/Parser.h"
+
+namespace iqc {
+
+namespace {
+
+const std::vector<std::pair<std::string, std::string>> kTransformImports = {
+    {"T", "transformations"}, {"R_x", "transformations"}, {"R_y", "transformations"},
+    {"R_z", "transformations"}, {"S", "transformations"}};
+
+std::string join_values(const std::vector<double>& v) {
+    if (v.size() == 1) return fmt::format("{}", v[0]);
+    return fmt::format("({})", fmt::join(v, ", "));
+}
+
+// Largest singular value of a 3×3 matrix (row-major): sqrt of the largest eigenvalue of LᵀL (Jacobi).
+double spectral_norm3(const std::vector<double>& L) {
+    double a[3][3];
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double s = 0;
+            for (int k = 0; k < 3; ++k) s += L[size_t(k * 3 + i)] * L[size_t(k * 3 + j)];
+            a[i][j] = s;
+        }
+    for (int sweep = 0; sweep < 64; ++sweep) {
+        double off = std::fabs(a[0][1]) + std::fabs(a[0][2]) + std::fabs(a[1][2]);
+        if (off < 1e-300) break;
+        for (int p = 0; p < 2; ++p)
+            for (int q = p + 1; q < 3; ++q) {
+                if (std::fabs(a[p][q]) < 1e-300) continue;
+                double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
+                double t = (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1));
+                double c = 1 / std::sqrt(t * t + 1), s = t * c;
+                // a = Jᵀ a J with the rotation J in the (p, q) plane.
+                for (int k = 0; k < 3; ++k) {
+                    double akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    double apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+            }
+    }
+    return std::sqrt(std::max({a[0][0], a[1][1], a[2][2], 0.0}));
+}
+
+struct InstancePlan {
+    const InstanceDesc* desc = nullptr;
+    std::string name;  // instance name as the user sees it
+    std::string glsl;  // its GLSL prefix
+    const CheckedModule* shape = nullptr;
+    int shape_fn = -1;
+    int query = -1;  // index of the shape's query-point parameter
+    std::vector<std::vector<double>> shape_values;
+    const CheckedModule* material = nullptr;
+    int material_fn = -1;
+    int roles[3] = {-1, -1, -1};  // material parameters bound to the surface point, normal and eye
+    std::vector<std::vector<double>> material_values;
+    std::map<std::string, std::string> constants;  // "shape.t" -> GLSL constant name
+    bool has_transform = false;
+    std::vector<double> inv_linear, inv_offset;  // world -> object
+    double scale = 1;                            // 1 / Lipschitz factor of the world -> object map
+    std::string transform_comment;
+};
+
+class SceneCompiler {
+public:
+    SceneCompiler(const SceneDesc& s, SourceManager& sm, Diagnostics& d, const CompileOptions& o)
+        : s_(s), sm_(sm), d_(d), opts_(o) {}
+    CompileResult run();
+
+private:
+    const SceneDesc& s_;
+    SourceManager& sm_;
+    Diagnostics& d_;
+    const CompileOptions& opts_;
+    std::map<std::string, const ModuleSource*> registry_;
+    std::vector<std::unique_ptr<ModuleSource>> stdlib_;
+    std::map<std::string, std::unique_ptr<CheckedModule>> checked_;
+    std::set<std::string> in_progress_;
+    std::vector<std::unique_ptr<CheckedModule>> transforms_;
+    ir::Module ir_;
+    LowerContext lower_{ir_, {}};
+    std::map<const CheckedModule*, int> lowered_;
+
+    void build_registry();
+    const ModuleSource* find_source(const std::string& name);
+    std::vector<std::string> module_names() const;
+    std::unique_ptr<CheckedModule> parse_check(const ModuleSource& src, const std::string& name, bool transform);
+    const CheckedModule* get(const std::string& name, Span where);
+    bool plan_instance(const InstanceDesc& inst, InstancePlan& plan, std::map<std::string, int>& counts,
+                       std::set<std::string>& names);
+    bool apply_overrides(const std::vector<ParamOverride>& ovs, const CheckedModule& m, const char* role,
+                         const std::vector<int>& bound, std::vector<std::vector<double>>& values);
+    bool plan_transform(const InstanceDesc& inst, InstancePlan& plan);
+    int lower(const CheckedModule* m);
+    std::string assemble(std::vector<InstancePlan>& plans);
+};
+
+void SceneCompiler::build_registry() {
+    for (const auto& m : s_.modules) {
+        auto it = registry_.find(m.name);
+        if (it != registry_.end()) {
+            if (it->second->origin == m.origin && m.origin == "document") continue;  // joined blocks
+            auto& e = d_.error(m.where, fmt::format("module '{}' is defined twice", m.name));
+            Diagnostics::note(e, it->second->where, fmt::format("also defined here ({})", it->second->origin));
+            continue;
+        }
+        registry_[m.name] = &m;
+    }
+}
+
+const ModuleSource* SceneCompiler::find_source(const std::string& name) {
+    if (auto it = registry_.find(name); it != registry_.end()) return it->second;
+    std::string path = "stdlib/" + name + ".iql";
+    auto text = embedded_file(path);
+    if (!text) return nullptr;
+    auto ms = std::make_unique<ModuleSource>();
+    ms->name = name;
+    ms->file = sm_.add(path, std::string(*text));
+    ms->ranges = {{0, uint32_t(text->size())}};
+    ms->where = {ms->file, 0, 1};
+    ms->origin = "stdlib";
+    registry_[name] = ms.get();
+    stdlib_.push_back(std::move(ms));
+    return stdlib_.back().get();
+}
+
+std::vector<std::string> SceneCompiler::module_names() const {
+    std::vector<std::string> names;
+    for (auto& [n, m] : registry_) names.push_back(n);
+    for (const auto& f : embedded_resources()) {
+        std::string p(f.path);
+        if (p.rfind("stdlib/", 0) == 0 && p.size() > 11 && p.substr(p.size() - 4) == ".iql")
+            names.push_back(p.substr(7, p.size() - 11));
+    }
+    return names;
+}
+
+std::unique_ptr<CheckedModule> SceneCompiler::parse_check(const ModuleSource& src, const std::string& name, bool transform) {
+    ParseOptions po;
+    for (const auto& b : builtins()) po.known_names.insert(b.name);
+    CheckOptions co;
+    if (transform) {
+        po.allow_header = false;
+        for (auto& [n, mod] : kTransformImports) po.known_names.insert(n);
+        co.implicit_imports = kTransformImports;
+    }
+    ast::Module ast = parse_module(sm_, src.file, src.ranges, name, po, d_);
+    ast.span = src.where;
+    if (!src.ranges.empty()) ast.span = {src.file, src.ranges[0].begin, std::max(src.ranges[0].begin + 1, src.ranges[0].begin)};
+    ModuleLookup lookup = [this](const std::string& n, Span where) { return get(n, where); };
+    return check_module(std::move(ast), lookup, co, d_);
+}
+
+const CheckedModule* SceneCompiler::get(const std::string& name, Span where) {
+    if (auto it = checked_.find(name); it != checked_.end()) return it->second.get();
+    if (in_progress_.count(name)) {
+        d_.error(where, fmt::format("module '{}' imports itself (an import cycle)", name));
+        return nullptr;
+    }
+    const ModuleSource* src = find_source(name);
+    if (!src) return nullptr;
+    in_progress_.insert(name);
+    auto m = parse_check(*src, name, false);
+    in_progress_.erase(name);
+    m->ast.span = src->where;
+    return (checked_[name] = std::move(m)).get();
+}
+
+bool SceneCompiler::apply_overrides(const std::vector<ParamOverride>& ovs, const CheckedModule& m, const char* role,
+                                    const std::vector<int>& bound, std::vector<std::vector<double>>& values) {
+    bool ok = true;
+    for (const auto& ov : ovs) {
+        int pi = m.find_param(ov.name);
+        if (pi < 0) {
+            std::vector<std::string> cands;
+            for (size_t i = 0; i < m.params.size(); ++i)
+                if (std::find(bound.begin(), bound.end(), int(i)) == bound.end()) cands.push_back(m.params[i].name);
+            auto& e = d_.error(ov.span, fmt::format("{} '{}' has no parameter '{}'", role, m.ast.name, ov.name));
+            if (auto sug = did_you_mean(ov.name, cands)) Diagnostics::note(e, ov.span, fmt::format("did you mean '{}'?", *sug));
+            else if (!cands.empty()) Diagnostics::note(e, ov.span, fmt::format("its parameters are: {}", fmt::join(cands, ", ")));
+            ok = false;
+            continue;
+        }
+        if (std::find(bound.begin(), bound.end(), pi) != bound.end()) {
+            d_.error(ov.span, fmt::format("'{}' is bound by the renderer and cannot be set", ov.name));
+            ok = false;
+            continue;
+        }
+        const ParamInfo& p = m.params[size_t(pi)];
+        if (int(ov.value.size()) != p.type.components()) {
+            d_.error(ov.span, fmt::format("'{}' is {} but the value has {} component{}", ov.name, p.type.str(),
+                                          ov.value.size(), ov.value.size() == 1 ? "" : "s"));
+            ok = false;
+            continue;
+        }
+        if (p.bounded)
+            for (size_t i = 0; i < ov.value.size(); ++i)
+                if (ov.value[i] < p.lo[i] || ov.value[i] > p.hi[i]) {
+                    d_.warning(ov.span, fmt::format("the value {} of '{}' is outside its slider bounds [{}, {}]", ov.value[i],
+                                                    ov.name, p.lo[i], p.hi[i]));
+                    break;
+                }
+        values[size_t(pi)] = ov.value;
+    }
+    return ok;
+}
+
+bool SceneCompiler::plan_transform(const InstanceDesc& inst, InstancePlan& plan) {
+    if (!inst.transform) return true;
+    const ModuleSource& src = *inst.transform;
+    bool blank = true;
+    for (auto& r : src.ranges)
+        for (char c : sm_.text(src.file).substr(r.begin, r.end - r.begin)) blank &= (c == ' ' || c == '\n' || c == '\t' || c == '\r');
+    if (blank) return true;  // "" is the identity
+    auto m = parse_check(src, plan.name + ".transform", true);
+    if (!m->ok) return false;
+    Span where = src.where;
+    if (!m->ret) {
+        d_.error(where, "a transform must end with a matrix expression such as T(X)⋅`R_x`(r)");
+        return false;
+    }
+    if (m->primary_type != Type::matrix(4, 4)) {
+        d_.error(m->ret->value->span, fmt::format("a transform must be a 4×4 matrix, but this is {}", m->primary_type.str()));
+        return false;
+    }
+    int fn = lower_module(*m, plan.name + ".transform", plan.name + "_transform", lower_);
+    std::vector<ir::Value> args;
+    std::vector<std::string> settings;
+    for (const auto& p : m->params) {
+        args.push_back({p.type, p.value});
+        settings.push_back(fmt::format("{} = {}", p.name, join_values(p.value)));
+    }
+    ir::Value M = ir::evaluate(ir_, fn, args);
+    const auto& v = M.v;
+    plan.transform_comment = std::string(sm_.slice(m->ret->span));
+    for (char& c : plan.transform_comment)
+        if (c == '\n') c = ' ';
+    if (!settings.empty()) plan.transform_comment += fmt::format(" with {}", fmt::join(settings, ", "));
+    for (double x : v)
+        if (!std::isfinite(x)) {
+            d_.error(m->ret->value->span, "the transform evaluates to a matrix with non-finite entries");
+            return false;
+        }
+    if (std::fabs(v[12]) > 1e-9 || std::fabs(v[13]) > 1e-9 || std::fabs(v[14]) > 1e-9 || std::fabs(v[15] - 1) > 1e-9) {
+        d_.error(m->ret->value->span,
+                 fmt::format("the transform's last row is ({}, {}, {}, {}), not (0, 0, 0, 1): only affine transforms are "
+                             "supported", v[12], v[13], v[14], v[15]));
+        return false;
+    }
+    bool singular = false;
+    std::vector<double> inv = ir::mat_inverse(v, 4, &singular);
+    if (singular) {
+        d_.error(m->ret->value->span, "the transform is singular (it flattens space and has no inverse)");
+        return false;
+    }
+    plan.has_transform = true;
+    plan.inv_linear = {inv[0], inv[1], inv[2], inv[4], inv[5], inv[6], inv[8], inv[9], inv[10]};
+    plan.inv_offset = {inv[3], inv[7], inv[11]};
+    double norm = spectral_norm3(plan.inv_linear);
+    plan.scale = std::fabs(norm - 1) < 1e-9 ? 1.0 : 1.0 / norm;
+    transforms_.push_back(std::move(m));
+    return true;
+}
+
+bool SceneCompiler::plan_instance(const InstanceDesc& inst, InstancePlan& plan, std::map<std::string, int>& counts,
+                                  std::set<std::string>& names) {
+    plan.desc = &inst;
+    bool ok = true;
+    plan.name = inst.name.empty() ? fmt::format("{}_{}", inst.type, ++counts[inst.type]) : inst.name;
+    if (!inst.name.empty()) {
+        if (names.count(inst.name)) {
+            d_.error(inst.name_span, fmt::format("two instances are named '{}'", inst.name));
+            ok = false;
+        }
+    } else {
+        while (names.count(plan.name)) plan.name = fmt::format("{}_{}", inst.type, ++counts[inst.type]);
+    }
+    names.insert(plan.name);
+    plan.shape = get(inst.type, inst.type_span);
+    if (!plan.shape) {
+        auto& e = d_.error(inst.type_span, fmt::format("unknown shape '{}'", inst.type));
+        if (auto sug = did_you_mean(inst.type, module_names())) Diagnostics::note(e, inst.type_span, fmt::format("did you mean '{}'?", *sug));
+        return false;
+    }
+    if (plan.shape->ast.kind != ast::ModuleKind::Shape) {
+        d_.error(inst.type_span, fmt::format("'{}' is not a shape (its module does not start with 'shape')", inst.type));
+        return false;
+    }
+    if (!plan.shape->ok) return false;
+    const auto& sp = plan.shape->params;
+    for (size_t i = 0; i < sp.size(); ++i)
+        if (sp[i].name == "p") plan.query = int(i);
+    if (plan.query < 0 && !sp.empty()) plan.query = 0;
+    if (plan.query < 0 || sp[size_t(plan.query)].type != Type::vector(3)) {
+        d_.error(inst.type_span, fmt::format("shape '{}' needs a query point 'p ∈ ℝ³' as a parameter", inst.type));
+        return false;
+    }
+    for (auto& p : sp) plan.shape_values.push_back(p.value);
+    ok &= apply_overrides(inst.shape_params, *plan.shape, "shape", {plan.query}, plan.shape_values);
+    if (!inst.material.empty()) {
+        plan.material = get(inst.material, inst.material_span);
+        if (!plan.material) {
+            auto& e = d_.error(inst.material_span, fmt::format("unknown material '{}'", inst.material));
+            if (auto sug = did_you_mean(inst.material, module_names()))
+                Diagnostics::note(e, inst.material_span, fmt::format("did you mean '{}'?", *sug));
+            return false;
+        }
+        if (plan.material->ast.kind != ast::ModuleKind::Material) {
+            d_.error(inst.material_span, fmt::format("'{}' is not a material (its module does not start with 'material')", inst.material));
+            return false;
+        }
+        if (!plan.material->ok) return false;
+        // The renderer binds the surface point, the normal and the eye: by their conventional names
+        // (p, N̂, I) where the module uses them, otherwise the first three parameters in order.
+        const auto& mp = plan.material->params;
+        const std::vector<std::vector<std::string>> role_names = {{"p"}, {"N̂", "N", "n̂", "n"}, {"I", "eye", "E"}};
+        for (int r = 0; r < 3; ++r)
+            for (const auto& cand : role_names[size_t(r)])
+                if (plan.roles[r] < 0) plan.roles[r] = plan.material->find_param(cand);
+        std::set<int> used;
+        for (int r = 0; r < 3; ++r)
+            if (plan.roles[r] >= 0) used.insert(plan.roles[r]);
+        for (int r = 0, next = 0; r < 3; ++r) {
+            if (plan.roles[r] >= 0) continue;
+            while (next < int(mp.size()) && used.count(next)) ++next;
+            if (next < int(mp.size())) {
+                plan.roles[r] = next;
+                used.insert(next);
+            }
+        }
+        static const char* role_desc[] = {"the surface point (p ∈ ℝ³)", "the unit normal (N̂ ∈ ℝ³)", "the eye position (I ∈ ℝ³)"};
+        for (int r = 0; r < 3; ++r)
+            if (plan.roles[r] < 0 || mp[size_t(plan.roles[r])].type != Type::vector(3)) {
+                d_.error(inst.material_span, fmt::format("material '{}' needs {} as a parameter", inst.material, role_desc[r]));
+                return false;
+            }
+        for (auto& p : mp) plan.material_values.push_back(p.value);
+        ok &= apply_overrides(inst.material_params, *plan.material, "material",
+                              {plan.roles[0], plan.roles[1], plan.roles[2]}, plan.material_values);
+    } else if (!inst.material_params.empty()) {
+        d_.error(inst.material_params.front().span, "'material_params' needs a 'material'");
+        ok = false;
+    }
+    ok &= plan_transform(inst, plan);
+    return ok;
+}
+
+int SceneCompiler::lower(const CheckedModule* m) {
+    if (auto it = lowered_.find(m); it != lowered_.end()) return it->second;
+    int fn = lower_module(*m, m->ast.name, m->ast.name, lower_);
+    lowered_[m] = fn;
+    return fn;
+}
+
+std::string param_comment(const ParamInfo& p) {
+    std::string s = fmt::format("{} ∈ ", p.name);
+    if (p.bounded) {
+        std::vector<std::string> iv;
+        for (size_t i = 0; i < p.lo.size(); ++i) iv.push_back(fmt::format("[{}, {}]", p.lo[i], p.hi[i]));
+        s += fmt::format("{}", fmt::join(iv, "×"));
+    } else {
+        s += p.type.str();
+    }
+    if (!p.description.empty()) s += ": " + p.description;
+    return s;
+}
+
+void replace_all(std::string& s, const std::string& key, const std::string& value) {
+    for (size_t pos = s.find(key); pos != std::string::npos; pos = s.find(key, pos + value.size()))
+        s.replace(pos, key.size(), value);
+}
+
+std::string vec3_literal(const std::array<double, 3>& v) { return glsl::constant(Type::vector(3), {v[0], v[1], v[2]}); }
+
+std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans) {
+    glsl::Namer globals;
+    glsl::Emitter em(ir_, globals, d_);
+    // Functions: every shape and material used, with what they call (callees first).
+    std::vector<int> roots;
+    for (auto& p : plans) {
+        roots.push_back(p.shape_fn);
+        if (p.material) roots.push_back(p.material_fn);
+    }
+    std::vector<int> fns = em.closure(roots);
+    for (int f : fns) em.function_name(f);
+    // Parameter constants.
+    std::string params;
+    for (auto& p : plans) {
+        p.glsl = globals.unique(p.name);
+        std::string block;
+        auto emit_params = [&](const CheckedModule& m, const std::vector<std::vector<double>>& values, const char* role,
+                               const std::vector<int>& bound) {
+            for (size_t i = 0; i < m.params.size(); ++i) {
+                if (std::find(bound.begin(), bound.end(), int(i)) != bound.end()) continue;
+                const ParamInfo& pi = m.params[i];
+                std::string n = globals.unique(fmt::format("{}_{}_{}", p.glsl, role, glsl::identifier(pi.name)));
+                p.constants[std::string(role) + "." + pi.name] = n;
+                std::string ty = glsl::type_name(pi.type);
+                block += fmt::format("const {} {} = {};  // {}\n", ty, n, glsl::constant(pi.type, values[i]), param_comment(pi));
+            }
+        };
+        emit_params(*p.shape, p.shape_values, "shape", {p.query});
+        if (p.material) emit_params(*p.material, p.material_values, "material", {p.roles[0], p.roles[1], p.roles[2]});
+        if (!block.empty()) params += fmt::format("// {}: {}{}\n{}", p.name, p.desc->type,
+                                                  p.material ? " with " + p.desc->material : std::string(), block);
+    }
+    if (!params.empty()) params = "// ---- parameters (Shadertoy has no sliders: edit the values here) ----\n" + params;
+    std::string functions;
+    for (int f : fns) {
+        const ir::Function& fn = ir_.functions[size_t(f)];
+        std::string comment;
+        for (auto& p : plans) {
+            if (p.shape_fn == f) comment = "shape " + p.shape->ast.name;
+            if (p.material && p.material_fn == f) comment = "material " + p.material->ast.name;
+        }
+        if (comment.empty()) comment = fn.name;
+        functions += "\n" + em.function(f, comment);
+    }
+    if (!functions.empty()) functions = "// ---- modules ----" + functions;
+    // Transforms, scene body, materials.
+    std::string transforms, body, shade;
+    for (size_t i = 0; i < plans.size(); ++i) {
+        InstancePlan& p = plans[i];
+        std::string q = "p";
+        if (p.has_transform) {
+            transforms += fmt::format("// {}: {}\n", p.name, p.transform_comment);
+            bool identity = true;
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c) identity &= std::fabs(p.inv_linear[size_t(r * 3 + c)] - (r == c ? 1.0 : 0.0)) < 1e-12;
+            bool no_offset = std::fabs(p.inv_offset[0]) + std::fabs(p.inv_offset[1]) + std::fabs(p.inv_offset[2]) < 1e-12;
+            std::string lin = globals.unique(p.glsl + "_to_object");
+            std::string off = globals.unique(p.glsl + "_offset");
+            if (!identity) {
+                transforms += fmt::format("const mat3 {} = {};\n", lin, glsl::constant(Type::matrix(3, 3), p.inv_linear));
+                q = lin + " * p";
+            }
+            if (!no_offset) {
+                transforms += fmt::format("const vec3 {} = {};\n", off, glsl::constant(Type::vector(3), p.inv_offset));
+                q += " + " + off;
+            }
+            if (p.scale != 1.0) {
+                std::string sc = globals.unique(p.glsl + "_scale");
+                transforms += fmt::format("const float {} = {};  // 1 / Lipschitz factor: keeps distances conservative\n",
+                                          sc, glsl::float_literal(p.scale));
+                p.transform_comment = sc;
+            } else {
+                p.transform_comment.clear();
+            }
+        }
+        std::vector<std::string> args;
+        const auto& sp = p.shape->params;
+        for (size_t k = 0; k < sp.size(); ++k)
+            args.push_back(int(k) == p.query ? q
+                                             : p.constants.at("shape." + sp[k].name));
+        std::string call = fmt::format("{}({})", em.function_name(p.shape_fn), fmt::join(args, ", "));
+        if (!p.transform_comment.empty()) call += " * " + p.transform_comment;
+        body += fmt::format("    d = {};  // {}\n", call, p.name);
+        body += fmt::format("    if (d < res.x) res = vec2(d, {});\n", glsl::float_literal(double(i)));
+        if (p.material) {
+            std::vector<std::string> margs;
+            const auto& mp = p.material->params;
+            for (size_t k = 0; k < mp.size(); ++k) {
+                if (int(k) == p.roles[0]) margs.push_back("p");
+                else if (int(k) == p.roles[1]) margs.push_back("N");
+                else if (int(k) == p.roles[2]) margs.push_back("eye");
+                else margs.push_back(p.constants.at("material." + mp[k].name));
+            }
+            shade += fmt::format("    if (id == {}) return {}({});  // {}\n", i, em.function_name(p.material_fn),
+                                 fmt::join(margs, ", "), p.name);
+        }
+    }
+    if (!transforms.empty()) transforms += "\n";
+    // Camera basis, computed once here.
+    auto sub = [](std::array<double, 3> a, std::array<double, 3> b) { return std::array<double, 3>{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
+    auto cross = [](std::array<double, 3> a, std::array<double, 3> b) {
+        return std::array<double, 3>{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    };
+    auto normalize = [](std::array<double, 3> a) {
+        double l = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        return std::array<double, 3>{a[0] / l, a[1] / l, a[2] / l};
+    };
+    auto fwd = normalize(sub(s_.camera.target, s_.camera.position));
+    std::array<double, 3> up{0, 1, 0};
+    if (std::fabs(fwd[1]) > 0.999) up = {0, 0, 1};
+    auto right = normalize(cross(up, fwd));
+    auto cam_up = cross(fwd, right);
+    std::vector<double> basis = {right[0], cam_up[0], fwd[0], right[1], cam_up[1], fwd[1], right[2], cam_up[2], fwd[2]};
+    double focal = 1.0 / std::tan(s_.camera.fov * M_PI / 360.0);
+
+    std::string out(*embedded_file("runtime_templates/shadertoy.glsl"));
+    replace_all(out, "{{TITLE}}", s_.title);
+    replace_all(out, "{{VERSION}}", IQC_VERSION);
+    replace_all(out, "{{SOURCE}}", std::filesystem::path(s_.path).filename().string());
+    replace_all(out, "{{MAX_STEPS}}", std::to_string(s_.render.max_steps));
+    replace_all(out, "{{MAX_DIST}}", glsl::float_literal(s_.render.max_dist));
+    replace_all(out, "{{HIT}}", glsl::float_literal(s_.render.hit));
+    replace_all(out, "{{BACKGROUND}}", vec3_literal(s_.render.background));
+    replace_all(out, "{{CAMERA_POSITION}}", vec3_literal(s_.camera.position));
+    replace_all(out, "{{CAMERA_BASIS}}", glsl::constant(Type::matrix(3, 3), basis));
+    replace_all(out, "{{CAMERA_FOCAL}}", glsl::float_literal(focal));
+    replace_all(out, "{{PARAMETERS}}", params);
+    replace_all(out, "{{FUNCTIONS}}", functions);
+    replace_all(out, "{{TRANSFORMS}}", transforms);
+    replace_all(out, "{{SCENE_BODY}}", body);
+    replace_all(out, "{{SHADE_BODY}}", shade);
+    return out;
+}
+
+CompileResult SceneCompiler::run() {
+    CompileResult res;
+    size_t before = d_.error_count();
+    build_registry();
+    std::vector<InstancePlan> plans(s_.instances.size());
+    std::map<std::string, int> counts;
+    std::set<std::string> names;
+    for (const auto& inst : s_.instances)
+        if (!inst.name.empty()) names.insert(inst.name);
+    std::set<std::string> explicit_names = names;
+    names.clear();
+    for (size_t i = 0; i < s_.instances.size(); ++i) {
+        const auto& inst = s_.instances[i];
+        // Explicit names are reserved first so generated ones avoid them.
+        std::set<std::string> taken = names;
+        for (auto& n : explicit_names)
+            if (inst.name != n) taken.insert(n);
+        plan_instance(inst, plans[i], counts, taken);
+        names.insert(plans[i].name);
+    }
+    if (d_.error_count() != before) return res;
+    for (auto& p : plans) {
+        p.shape_fn = lower(p.shape);
+        if (p.material) p.material_fn = lower(p.material);
+    }
+    for (size_t f = 0; f < ir_.functions.size(); ++f) {
+        std::string fault = ir::verify(ir_.functions[f], ir_);
+        if (!fault.empty()) {
+            res.exit_code = 3;
+            res.internal = "internal compiler error: invalid IR (this is a bug in iqc): " + fault;
+            return res;
+        }
+    }
+    if (opts_.dump_ir) res.ir = ir::print(ir_);
+    std::string code = assemble(plans);
+    if (d_.error_count() != before) return res;
+    glsl::ValidationResult v = glsl::validate_fragment(glsl::wrap_shadertoy(code), glsl::Profile::Es300);
+    if (!v.ok) {
+        res.exit_code = 3;
+        res.internal = "internal compiler error: glslang rejected the generated shader (this is a bug in iqc; "
+                       "nothing was written):\n" + v.log;
+        return res;
+    }
+    res.code = std::move(code);
+    res.exit_code = 0;
+    return res;
+}
+
+}  // namespace
+
+CompileResult compile_scene(const SceneDesc& scene, SourceManager& sm, Diagnostics& diags, const CompileOptions& opts) {
+    SceneCompiler c(scene, sm, diags, opts);
+    return c.run();
+}
+
+CompileResult compile_file(const std::string& path, SourceManager& sm, Diagnostics& diags, const CompileOptions& opts) {
+    SceneDesc scene;
+    if (!load_scene(path, sm, diags, scene)) return {};
+    return compile_scene(scene, sm, diags, opts);
+}
+
+}  // namespace iqc

@@ -1,0 +1,36 @@
+// Scene compilation: modules -> checked modules -> one IR module -> scene assembly from
+// runtime_templates/ -> GLSL -> glslang validation.
+//
+// Module lookup for `type = "torus"`: modules of the scene or its document, then included files, then the
+// standard library (stdlib/, embedded in the binary); the same name in the scene and an include is an
+// error naming both. Transforms are evaluated in double precision and inverted once, at compile time (on
+// Shadertoy every parameter is a constant); a transform that scales divides the distance by its Lipschitz
+// factor so sphere tracing stays conservative.
+#pragma once
+
+#include <string>
+
+#include "scene/Scene.h"
+
+namespace iqc {
+
+enum class Target { Shadertoy };
+
+struct CompileOptions {
+    Target target = Target::Shadertoy;
+    bool dump_ir = false;
+};
+
+struct CompileResult {
+    int exit_code = 1;     // 0 ok, 1 diagnostics about the input, 3 internal error (glslang rejected our output)
+    std::string code;      // the shader (only when exit_code == 0)
+    std::string ir;        // the IR, when dump_ir
+    std::string internal;  // the internal error's text
+};
+
+CompileResult compile_scene(const SceneDesc& scene, SourceManager& sm, Diagnostics& diags, const CompileOptions& opts);
+
+// Convenience: load + compile a file.
+CompileResult compile_file(const std::string& path, SourceManager& sm, Diagnostics& diags, const CompileOptions& opts);
+
+}  // namespace iqc

@@ -1,0 +1,450 @@
+#include "scene/Scene.h"
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "sema/Check.h"
+
+namespace iqc {
+
+namespace fs = std::filesystem;
+
+uint32_t offset_at(const SourceManager& sm, FileId file, uint32_t base, uint32_t line, uint32_t col) {
+    std::string_view t = sm.text(file);
+    size_t i = base;
+    for (uint32_t l = 1; l < line && i < t.size(); ++i)
+        if (t[i] == '\n') ++l;
+    for (uint32_t c = 1; c < col && i < t.size() && t[i] != '\n';) {
+        utf8::decode(t, i);
+        ++c;
+    }
+    return uint32_t(std::min(i, t.size()));
+}
+
+namespace {
+
+bool read_file(const std::string& path, std::string& out, std::string& err) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) {
+        err = "it is a directory";
+        return false;
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        err = std::strerror(errno);
+        return false;
+    }
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    out = ss.str();
+    return true;
+}
+
+const std::vector<std::string> kTopKeys = {"title", "include", "modules", "camera", "render", "effects", "lights", "shapes"};
+const std::vector<std::string> kShapeKeys = {"name", "type", "material", "transform", "shape_params", "material_params"};
+const std::vector<std::string> kCameraKeys = {"position", "target", "fov", "orbit"};
+const std::vector<std::string> kRenderKeys = {"march", "max_steps", "max_dist", "hit", "normals", "background"};
+
+class SceneReader {
+public:
+    SceneReader(SourceManager& sm, Diagnostics& d, SceneDesc& s, FileId file, uint32_t base)
+        : sm_(sm), d_(d), s_(s), file_(file), base_(base) {}
+
+    void read(std::string_view toml_text);
+
+private:
+    SourceManager& sm_;
+    Diagnostics& d_;
+    SceneDesc& s_;
+    FileId file_;
+    uint32_t base_;  // offset of the TOML text in the file (a document's scene block)
+
+    Span span_of(const toml::source_region& r) {
+        uint32_t b = offset_at(sm_, file_, base_, r.begin.line ? r.begin.line : 1, r.begin.column ? r.begin.column : 1);
+        uint32_t e = r.end.line ? offset_at(sm_, file_, base_, r.end.line, r.end.column) : b + 1;
+        if (e <= b) e = b + 1;
+        // Keep the span on one line for the caret.
+        std::string_view t = sm_.text(file_);
+        for (uint32_t k = b; k < e && k < t.size(); ++k)
+            if (t[k] == '\n') { e = k; break; }
+        if (e <= b) e = b + 1;
+        return {file_, b, e};
+    }
+    Span span_of(const toml::node& n) { return span_of(n.source()); }
+
+    static const char* type_name(const toml::node& n) {
+        if (n.is_string()) return "a string";
+        if (n.is_integer()) return "an integer";
+        if (n.is_floating_point()) return "a number";
+        if (n.is_boolean()) return "a boolean";
+        if (n.is_array()) return "an array";
+        if (n.is_table()) return "a table";
+        return "a date or time";
+    }
+    void wrong_type(const toml::node& n, const std::string& key, const char* want) {
+        d_.error(span_of(n), fmt::format("'{}' must be {}, not {}", key, want, type_name(n)));
+    }
+    void check_keys(const toml::table& t, const std::vector<std::string>& allowed, const std::string& where) {
+        for (auto&& [k, v] : t) {
+            std::string key(k.str());
+            if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+            auto& e = d_.error(span_of(k.source()), fmt::format("unknown field '{}'{}", key, where));
+            if (auto s = did_you_mean(key, allowed)) Diagnostics::note(e, span_of(k.source()), fmt::format("did you mean '{}'?", *s));
+        }
+    }
+    std::optional<std::string> get_string(const toml::node& n, const std::string& key) {
+        if (auto v = n.value<std::string>(); v && n.is_string()) return *v;
+        wrong_type(n, key, "a string");
+        return std::nullopt;
+    }
+    std::optional<double> get_number(const toml::node& n, const std::string& key) {
+        if (n.is_number()) return n.value<double>();
+        wrong_type(n, key, "a number");
+        return std::nullopt;
+    }
+    std::optional<std::vector<double>> get_numbers(const toml::node& n, const std::string& key) {
+        if (n.is_number()) return std::vector<double>{*n.value<double>()};
+        if (!n.is_array()) {
+            wrong_type(n, key, "a number or an array of numbers");
+            return std::nullopt;
+        }
+        std::vector<double> out;
+        for (auto& x : *n.as_array()) {
+            if (!x.is_number()) {
+                wrong_type(x, key, "a number");
+                return std::nullopt;
+            }
+            out.push_back(*x.value<double>());
+        }
+        return out;
+    }
+    bool get_vec3(const toml::node& n, const std::string& key, std::array<double, 3>& out) {
+        auto v = get_numbers(n, key);
+        if (!v) return false;
+        if (v->size() != 3) {
+            d_.error(span_of(n), fmt::format("'{}' must have 3 components, not {}", key, v->size()));
+            return false;
+        }
+        out = {(*v)[0], (*v)[1], (*v)[2]};
+        return true;
+    }
+
+    // The text of a TOML string value as module source: its bytes in the file when verbatim, else an
+    // embedded copy located at the string.
+    ModuleSource string_source(const toml::node& n, const std::string& value, const std::string& name, const char* origin) {
+        ModuleSource ms;
+        ms.name = name;
+        ms.origin = origin;
+        Span s = span_of(n);
+        ms.where = s;
+        std::string_view t = sm_.text(file_);
+        uint32_t off = s.begin;
+        uint32_t content = off;
+        if (t.substr(off, 3) == "\"\"\"" || t.substr(off, 3) == "'''") {
+            content = off + 3;
+            if (t.substr(content, 1) == "\n") content += 1;
+            else if (t.substr(content, 2) == "\r\n") content += 2;
+        } else if (t.substr(off, 1) == "\"" || t.substr(off, 1) == "'") {
+            content = off + 1;
+        }
+        if (t.substr(content, value.size()) == value) {
+            ms.file = file_;
+            ms.ranges = {{content, uint32_t(content + value.size())}};
+        } else {
+            ms.file = sm_.add_embedded(sm_.name(file_), value, file_, content);
+            ms.ranges = {{0, uint32_t(value.size())}};
+        }
+        return ms;
+    }
+
+    void read_params(const toml::node& n, const std::string& key, std::vector<ParamOverride>& out) {
+        if (!n.is_table()) {
+            wrong_type(n, key, "a table such as { r = 1.5 }");
+            return;
+        }
+        for (auto&& [k, v] : *n.as_table()) {
+            auto nums = get_numbers(v, std::string(k.str()));
+            if (!nums) continue;
+            out.push_back({std::string(k.str()), *nums, span_of(k.source())});
+        }
+    }
+};
+
+void SceneReader::read(std::string_view text) {
+    toml::table root;
+    try {
+        root = toml::parse(text, sm_.name(file_));
+    } catch (const toml::parse_error& e) {
+        Span s = span_of(e.source());
+        d_.error(s, fmt::format("invalid TOML: {}", e.description()));
+        return;
+    }
+    check_keys(root, kTopKeys, " in the scene");
+    if (auto* n = root.get("title"))
+        if (auto v = get_string(*n, "title")) s_.title = *v;
+    fs::path dir = fs::path(s_.path).parent_path();
+    if (auto* n = root.get("include")) {
+        if (!n->is_array()) {
+            wrong_type(*n, "include", "an array of file names");
+        } else {
+            for (auto& item : *n->as_array()) {
+                auto rel = get_string(item, "include");
+                if (!rel) continue;
+                fs::path p = dir / *rel;
+                std::string text, err;
+                if (!read_file(p.string(), text, err)) {
+                    d_.error(span_of(item), fmt::format("cannot read included file '{}': {}", p.string(), err));
+                    continue;
+                }
+                FileId f = sm_.add(p.string(), std::move(text));
+                ModuleSource ms;
+                ms.name = p.stem().string();
+                ms.file = f;
+                ms.ranges = {{0, uint32_t(sm_.text(f).size())}};
+                ms.where = span_of(item);
+                ms.origin = "include";
+                s_.modules.push_back(std::move(ms));
+            }
+        }
+    }
+    if (auto* n = root.get("modules")) {
+        if (!n->is_table()) {
+            wrong_type(*n, "modules", "a table of name = \"\"\"source\"\"\"");
+        } else {
+            for (auto&& [k, v] : *n->as_table()) {
+                auto src = get_string(v, std::string(k.str()));
+                if (!src) continue;
+                s_.modules.push_back(string_source(v, *src, std::string(k.str()), "scene"));
+            }
+        }
+    }
+    if (auto* n = root.get("camera")) {
+        if (!n->is_table()) {
+            wrong_type(*n, "camera", "a table");
+        } else {
+            auto& t = *n->as_table();
+            check_keys(t, kCameraKeys, " in [camera]");
+            if (auto* x = t.get("position")) get_vec3(*x, "position", s_.camera.position);
+            if (auto* x = t.get("target")) get_vec3(*x, "target", s_.camera.target);
+            if (auto* x = t.get("fov")) {
+                if (auto v = get_number(*x, "fov")) {
+                    if (*v <= 0 || *v >= 180) d_.error(span_of(*x), fmt::format("'fov' must be between 0 and 180 degrees, not {}", *v));
+                    else s_.camera.fov = *v;
+                }
+            }
+            if (auto* x = t.get("orbit")) {
+                if (!x->is_boolean()) wrong_type(*x, "orbit", "true or false");
+                else if (*x->value<bool>()) d_.warning(span_of(*x), "'orbit' is not implemented yet: the camera stays fixed");
+            }
+            if (s_.camera.position == s_.camera.target)
+                d_.error(span_of(*n), "the camera's position and target are the same point");
+        }
+    }
+    if (auto* n = root.get("render")) {
+        if (!n->is_table()) {
+            wrong_type(*n, "render", "a table");
+        } else {
+            auto& t = *n->as_table();
+            check_keys(t, kRenderKeys, " in [render]");
+            if (auto* x = t.get("max_steps")) {
+                if (!x->is_integer() || *x->value<int64_t>() < 1 || *x->value<int64_t>() > 100000)
+                    d_.error(span_of(*x), "'max_steps' must be a whole number from 1 to 100000");
+                else s_.render.max_steps = int(*x->value<int64_t>());
+            }
+            if (auto* x = t.get("max_dist"))
+                if (auto v = get_number(*x, "max_dist")) {
+                    if (*v <= 0) d_.error(span_of(*x), "'max_dist' must be positive");
+                    else s_.render.max_dist = *v;
+                }
+            if (auto* x = t.get("hit"))
+                if (auto v = get_number(*x, "hit")) {
+                    if (*v <= 0) d_.error(span_of(*x), "'hit' must be positive");
+                    else s_.render.hit = *v;
+                }
+            if (auto* x = t.get("background")) get_vec3(*x, "background", s_.render.background);
+            if (auto* x = t.get("march"))
+                if (auto v = get_string(*x, "march"); v && *v != "sphere")
+                    d_.warning(span_of(*x), fmt::format("march method '{}' is not implemented yet: using 'sphere'", *v));
+            if (auto* x = t.get("normals"))
+                if (auto v = get_string(*x, "normals"); v && *v != "tetrahedron")
+                    d_.warning(span_of(*x), fmt::format("normals method '{}' is not implemented yet: using 'tetrahedron'", *v));
+        }
+    }
+    for (const char* k : {"effects", "lights"})
+        if (auto* n = root.get(k)) d_.warning(span_of(*n), fmt::format("[{}] is not implemented yet and is ignored", k));
+    auto* shapes = root.get("shapes");
+    if (!shapes) {
+        d_.error({file_, base_, base_ + 1}, "the scene has no [[shapes]]: add at least one, e.g. [[shapes]] type = \"sphere\"");
+        return;
+    }
+    if (!shapes->is_array_of_tables()) {
+        wrong_type(*shapes, "shapes", "an array of tables ([[shapes]])");
+        return;
+    }
+    for (auto& item : *shapes->as_array()) {
+        auto& t = *item.as_table();
+        InstanceDesc inst;
+        inst.span = span_of(item);
+        check_keys(t, kShapeKeys, " in [[shapes]]");
+        if (auto* x = t.get("name"))
+            if (auto v = get_string(*x, "name")) {
+                inst.name = *v;
+                inst.name_span = span_of(*x);
+                if (v->empty()) d_.error(inst.name_span, "an instance name cannot be empty");
+            }
+        if (auto* x = t.get("type")) {
+            if (auto v = get_string(*x, "type")) {
+                inst.type = *v;
+                inst.type_span = span_of(*x);
+            }
+        } else {
+            d_.error(inst.span, "this [[shapes]] entry has no 'type' (the shape module to use)");
+            continue;
+        }
+        if (auto* x = t.get("material"))
+            if (auto v = get_string(*x, "material")) {
+                inst.material = *v;
+                inst.material_span = span_of(*x);
+            }
+        if (auto* x = t.get("transform"))
+            if (auto v = get_string(*x, "transform")) inst.transform = string_source(*x, *v, "transform", "scene");
+        if (auto* x = t.get("shape_params")) read_params(*x, "shape_params", inst.shape_params);
+        if (auto* x = t.get("material_params")) read_params(*x, "material_params", inst.material_params);
+        if (!inst.type.empty()) s_.instances.push_back(std::move(inst));
+    }
+}
+
+bool is_fence(std::string_view line, std::string_view& info) {
+    size_t i = 0;
+    while (i < line.size() && line[i] == ' ') ++i;
+    if (line.substr(i, 3) != "```") return false;
+    size_t j = i;
+    while (j < line.size() && line[j] == '`') ++j;
+    info = line.substr(j);
+    while (!info.empty() && (info.back() == ' ' || info.back() == '\r')) info.remove_suffix(1);
+    while (!info.empty() && info.front() == ' ') info.remove_prefix(1);
+    return true;
+}
+
+void read_document(SourceManager& sm, Diagnostics& d, SceneDesc& s) {
+    std::string_view t = sm.text(s.file);
+    // Split into lines with offsets.
+    std::vector<std::pair<uint32_t, uint32_t>> lines;  // begin, end (without newline)
+    for (size_t b = 0; b <= t.size();) {
+        size_t e = t.find('\n', b);
+        if (e == std::string_view::npos) e = t.size();
+        lines.push_back({uint32_t(b), uint32_t(e)});
+        b = e + 1;
+        if (e == t.size()) break;
+    }
+    std::string pending_name;
+    Span pending_span;
+    bool have_scene = false;
+    std::map<std::string, size_t> by_name;
+    for (size_t li = 0; li < lines.size(); ++li) {
+        std::string_view line = t.substr(lines[li].first, lines[li].second - lines[li].first);
+        std::string_view info;
+        for (std::string_view heart : {std::string_view("❤"), std::string_view("♥")}) {
+            size_t k = 0;
+            while (k < line.size() && line[k] == ' ') ++k;
+            if (line.substr(k, heart.size()) == heart) {
+                size_t c = k + heart.size();
+                if (line.substr(c, 3) == "\xEF\xB8\x8F") c += 3;  // variation selector after ❤
+                if (line.substr(c, 1) == ":") {
+                    std::string_view name = line.substr(c + 1);
+                    while (!name.empty() && (name.front() == ' ')) name.remove_prefix(1);
+                    while (!name.empty() && (name.back() == ' ' || name.back() == '\r')) name.remove_suffix(1);
+                    pending_name = std::string(name);
+                    pending_span = {s.file, lines[li].first, lines[li].second};
+                }
+            }
+        }
+        if (!is_fence(line, info)) continue;
+        // Find the closing fence.
+        size_t close = li + 1;
+        std::string_view dummy;
+        while (close < lines.size() && !is_fence(t.substr(lines[close].first, lines[close].second - lines[close].first), dummy))
+            ++close;
+        uint32_t body_begin = li + 1 < lines.size() ? lines[li + 1].first : lines[li].second;
+        uint32_t body_end = close < lines.size() ? lines[close].first : uint32_t(t.size());
+        if (close >= lines.size())
+            d.error({s.file, lines[li].first, lines[li].second}, "this code block is never closed with ```");
+        if (info == "iheartla") {
+            if (pending_name.empty()) {
+                d.error({s.file, lines[li].first, lines[li].second},
+                        "this iheartla block has no module name: put a line '❤: name' before it");
+            } else if (auto it = by_name.find(pending_name); it != by_name.end()) {
+                s.modules[it->second].ranges.push_back({body_begin, body_end});  // blocks with one name join
+            } else {
+                ModuleSource ms;
+                ms.name = pending_name;
+                ms.file = s.file;
+                ms.ranges = {{body_begin, body_end}};
+                ms.where = pending_span;
+                ms.origin = "document";
+                by_name[pending_name] = s.modules.size();
+                s.modules.push_back(std::move(ms));
+            }
+            pending_name.clear();
+        } else if (info == "scene") {
+            if (have_scene) {
+                d.error({s.file, lines[li].first, lines[li].second}, "a document can have only one scene block");
+            } else {
+                have_scene = true;
+                SceneReader r(sm, d, s, s.file, body_begin);
+                r.read(t.substr(body_begin, body_end - body_begin));
+            }
+        }
+        li = close;
+    }
+    if (!have_scene) {
+        uint32_t end = uint32_t(t.size());
+        d.error({s.file, 0, std::min<uint32_t>(end, lines.empty() ? 0 : lines[0].second)},
+                "the document has no scene block: add a ```scene block with at least one [[shapes]] entry");
+    }
+}
+
+}  // namespace
+
+bool load_scene(const std::string& path, SourceManager& sm, Diagnostics& d, SceneDesc& s) {
+    std::string text, err;
+    size_t before = d.error_count();
+    if (!read_file(path, text, err)) {
+        d.error_nospan(fmt::format("cannot read '{}': {}", path, err));
+        return false;
+    }
+    s.path = path;
+    s.file = sm.add(path, std::move(text));
+    std::string ext = fs::path(path).extension().string();
+    if (ext == ".md") {
+        read_document(sm, d, s);
+    } else if (ext == ".iql") {
+        // A module file alone: one instance of it at the origin, seen from the default camera.
+        ModuleSource ms;
+        ms.name = fs::path(path).stem().string();
+        ms.file = s.file;
+        ms.ranges = {{0, uint32_t(sm.text(s.file).size())}};
+        ms.where = {s.file, 0, 1};
+        ms.origin = "document";
+        s.modules.push_back(ms);
+        InstanceDesc inst;
+        inst.type = ms.name;
+        inst.type_span = ms.where;
+        inst.span = ms.where;
+        s.instances.push_back(std::move(inst));
+        s.camera.position = {0, 0, -5};
+        s.camera.target = {0, 0, 0};
+    } else {
+        SceneReader r(sm, d, s, s.file, 0);
+        r.read(sm.text(s.file));
+    }
+    if (s.title.empty()) s.title = fs::path(path).stem().string();
+    return d.error_count() == before;
+}
+
+}  // namespace iqc

@@ -1,0 +1,945 @@
+#include "sema/Check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <set>
+
+#include "ir/IR.h"
+#include "sema/Builtins.h"
+
+namespace iqc {
+
+using namespace ast;
+
+int CheckedModule::find_param(const std::string& n) const {
+    for (size_t i = 0; i < params.size(); ++i)
+        if (params[i].name == n) return int(i);
+    return -1;
+}
+
+int CheckedModule::find_function(const std::string& n) const {
+    for (size_t i = 0; i < functions.size(); ++i)
+        if (functions[i].stmt->name == n) return int(i);
+    return -1;
+}
+
+std::optional<std::string> did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
+    auto dist = [](const std::string& a, const std::string& b) {
+        std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+        for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+        for (size_t i = 1; i <= a.size(); ++i) {
+            cur[0] = i;
+            for (size_t j = 1; j <= b.size(); ++j)
+                cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            std::swap(prev, cur);
+        }
+        return prev[b.size()];
+    };
+    std::optional<std::string> best;
+    size_t best_d = std::max<size_t>(1, name.size() / 3) + 1;
+    for (const auto& c : candidates) {
+        if (c == name) continue;
+        size_t d = dist(name, c);
+        if (d < best_d) { best_d = d; best = c; }
+    }
+    return best;
+}
+
+std::optional<std::vector<double>> const_eval(const Expr& e) {
+    auto scalar = [](std::optional<std::vector<double>> v) -> std::optional<double> {
+        if (v && v->size() == 1) return (*v)[0];
+        return std::nullopt;
+    };
+    switch (e.kind) {
+        case ExprKind::Number: return std::vector<double>{e.number};
+        case ExprKind::Name:
+            if (e.text == "π") return std::vector<double>{M_PI};
+            return std::nullopt;
+        case ExprKind::Negate: {
+            auto v = const_eval(*e.args[0]);
+            if (!v) return std::nullopt;
+            for (auto& x : *v) x = -x;
+            return v;
+        }
+        case ExprKind::Vector: {
+            std::vector<double> out;
+            for (const auto& a : e.args) {
+                auto v = const_eval(*a);
+                if (!v) return std::nullopt;
+                out.insert(out.end(), v->begin(), v->end());
+            }
+            return out;
+        }
+        case ExprKind::Binary: {
+            auto a = const_eval(*e.args[0]);
+            auto b = const_eval(*e.args[1]);
+            if (!a || !b) return std::nullopt;
+            if (b->size() == 1 && e.op != BinOp::Add && e.op != BinOp::Sub) {
+                std::vector<double> out = *a;
+                for (auto& x : out) {
+                    if (e.op == BinOp::Div) x /= (*b)[0];
+                    else x *= (*b)[0];
+                }
+                return out;
+            }
+            if (a->size() == 1 && (e.op == BinOp::Juxtapose || e.op == BinOp::Star || e.op == BinOp::Dot)) {
+                std::vector<double> out = *b;
+                for (auto& x : out) x *= (*a)[0];
+                return out;
+            }
+            if (a->size() != b->size()) return std::nullopt;
+            std::vector<double> out = *a;
+            for (size_t i = 0; i < out.size(); ++i) {
+                if (e.op == BinOp::Add) out[i] += (*b)[i];
+                else if (e.op == BinOp::Sub) out[i] -= (*b)[i];
+                else return std::nullopt;
+            }
+            return out;
+        }
+        case ExprKind::Power: {
+            auto a = scalar(const_eval(*e.args[0]));
+            auto b = scalar(const_eval(*e.args[1]));
+            if (!a || !b) return std::nullopt;
+            return std::vector<double>{std::pow(*a, *b)};
+        }
+        default: return std::nullopt;
+    }
+}
+
+namespace {
+
+// Free names an expression refers to (syntactically), excluding `bound` ones.
+void collect_names(const Expr& e, std::vector<std::pair<std::string, Span>>& out) {
+    if (e.kind == ExprKind::Name || e.kind == ExprKind::Call) out.push_back({e.text, e.name_span});
+    for (const auto& a : e.args) collect_names(*a, out);
+    for (const auto& r : e.rows)
+        for (const auto& a : r) collect_names(*a, out);
+    for (const auto& i : e.indices)
+        if (i.expr) collect_names(*i.expr, out);
+    if (e.otherwise) collect_names(*e.otherwise, out);
+}
+
+class Checker {
+public:
+    Checker(CheckedModule& m, const ModuleLookup& lookup, const CheckOptions& opts, Diagnostics& d)
+        : m_(m), lookup_(lookup), opts_(opts), d_(d) {}
+    void run();
+
+private:
+    CheckedModule& m_;
+    const ModuleLookup& lookup_;
+    const CheckOptions& opts_;
+    Diagnostics& d_;
+    std::map<std::string, const Stmt*> assigns_;
+    std::map<std::string, Decl*> decls_;
+    std::map<std::string, std::pair<std::string, Span>> decl_spans_;
+    struct Scope {
+        LocalFunction* fn;
+        std::map<std::string, int> locals;
+    };
+    Scope* scope_ = nullptr;
+
+    void collect_declarations();
+    void collect_imports();
+    void collect_statements();
+    void order_statements();
+    void check_function(LocalFunction& f, Span call_site);
+    Type check(Expr& e);
+    Type check_name(Expr& e);
+    Type check_call(Expr& e);
+    Type check_binary(Expr& e);
+    Type mul_type(Expr& e, const Type& a, const Type& b, bool dot);
+    Type param_type(const TypeSpec& ts, const std::string& name);
+    std::vector<std::string> visible_names() const;
+    void undefined(const std::string& name, Span s);
+    Type value_type_for_scope(const std::string& name, Type t, Expr& e, int resolved, int aux);
+};
+
+Type Checker::param_type(const TypeSpec& ts, const std::string& name) {
+    if (!ts.sym_rows.empty() || !ts.sym_cols.empty()) {
+        d_.error(ts.span, fmt::format("symbolic sizes such as ℝ^{} are not supported yet for '{}'; write the size",
+                                      ts.sym_rows.empty() ? ts.sym_cols : ts.sym_rows, name));
+        return {};
+    }
+    switch (ts.kind) {
+        case TypeSpec::Scalar: return Type::scalar();
+        case TypeSpec::Integer: return Type::integer();
+        case TypeSpec::Vector: return Type::vector(ts.rows);
+        case TypeSpec::Matrix:
+            if (ts.cols == 1) return Type::vector(ts.rows);
+            return Type::matrix(ts.rows, ts.cols);
+        case TypeSpec::Function:
+            d_.error(ts.span, fmt::format("function parameters such as '{}' are not supported yet", name));
+            return {};
+    }
+    return {};
+}
+
+void Checker::collect_declarations() {
+    // Names used at module level (outside local function bodies), to tell module parameters from
+    // declarations that only give a local function's parameter its type.
+    std::set<std::string> used_at_module;
+    std::set<std::string> fn_params;
+    for (const auto& s : m_.ast.stmts) {
+        if (s.kind == StmtKind::Assign || s.kind == StmtKind::Return) {
+            std::vector<std::pair<std::string, Span>> names;
+            collect_names(*s.value, names);
+            for (auto& n : names) used_at_module.insert(n.first);
+        } else if (s.kind == StmtKind::Function) {
+            for (auto& p : s.params) {
+                bool local = false;
+                for (auto& ld : s.local_decls)
+                    for (auto& n : ld.names) local |= n.first == p.first;
+                if (!local) fn_params.insert(p.first);
+            }
+            // A function body may capture module parameters.
+            std::vector<std::pair<std::string, Span>> names;
+            collect_names(*s.value, names);
+            std::set<std::string> own;
+            for (auto& p : s.params) own.insert(p.first);
+            for (auto& n : names)
+                if (!own.count(n.first)) used_at_module.insert(n.first);
+        }
+    }
+    for (auto& decl : m_.ast.decls) {
+        for (auto& [name, span] : decl.names) {
+            if (decl_spans_.count(name)) {
+                auto& e = d_.error(span, fmt::format("'{}' is declared twice", name));
+                Diagnostics::note(e, decl_spans_[name].second, "first declared here");
+                continue;
+            }
+            decl_spans_[name] = {name, span};
+            decls_[name] = &decl;
+            if (fn_params.count(name) && !used_at_module.count(name)) continue;  // a local function's parameter
+            ParamInfo p;
+            p.name = name;
+            p.span = span;
+            p.description = decl.description;
+            p.type = param_type(decl.type, name);
+            if (!p.type.valid()) continue;
+            int n = p.type.components();
+            if (!decl.bounds.empty()) {
+                p.bounded = true;
+                for (auto& iv : decl.bounds) {
+                    auto lo = const_eval(*iv.lo), hi = const_eval(*iv.hi);
+                    if (!lo || lo->size() != 1) { d_.error(iv.lo->span, "an interval bound must be a constant number"); continue; }
+                    if (!hi || hi->size() != 1) { d_.error(iv.hi->span, "an interval bound must be a constant number"); continue; }
+                    if ((*lo)[0] > (*hi)[0])
+                        d_.error(iv.span, fmt::format("the interval is empty: {} > {}", (*lo)[0], (*hi)[0]));
+                    p.lo.push_back((*lo)[0]);
+                    p.hi.push_back((*hi)[0]);
+                }
+                if (int(p.lo.size()) != n) continue;
+            }
+            if (decl.default_value) {
+                auto v = const_eval(*decl.default_value);
+                if (!v) {
+                    d_.error(decl.default_value->span, "a default must be a constant (numbers, π, and arithmetic on them)");
+                } else if (int(v->size()) != n) {
+                    auto& e = d_.error(decl.default_value->span,
+                                       fmt::format("the default has {} component{} but '{}' is {}", v->size(),
+                                                   v->size() == 1 ? "" : "s", name, p.type.str()));
+                    if (p.bounded)
+                        Diagnostics::note(e, decl.type.span, fmt::format("the bounds give {} interval{}", n, n == 1 ? "" : "s"));
+                } else {
+                    p.value = *v;
+                    p.has_default = true;
+                    if (p.bounded)
+                        for (int i = 0; i < n; ++i)
+                            if (p.value[i] < p.lo[i] || p.value[i] > p.hi[i]) {
+                                d_.error(decl.default_value->span,
+                                         fmt::format("the default {} of '{}' is outside its bounds [{}, {}]", p.value[i],
+                                                     name, p.lo[i], p.hi[i]));
+                                break;
+                            }
+                }
+            }
+            if (p.value.empty()) {
+                p.value.assign(size_t(n), 0.0);
+                if (p.bounded)
+                    for (int i = 0; i < n; ++i) p.value[i] = 0.5 * (p.lo[i] + p.hi[i]);
+            }
+            m_.params.push_back(std::move(p));
+        }
+    }
+}
+
+void Checker::collect_imports() {
+    auto add_import = [&](const std::string& name, const std::string& module, Span span, Span from_span) {
+        for (auto& im : m_.imports)
+            if (im.name == name) return;  // importing a name twice is harmless
+        ImportedFunction im;
+        im.name = name;
+        im.module = module;
+        im.span = span;
+        if (is_builtin_module(module)) {
+            auto b = find_builtin(name);
+            if (!b || module != builtin(*b).module) {
+                std::vector<std::string> cands;
+                for (auto& bi : builtins())
+                    if (module == bi.module) cands.push_back(bi.name);
+                auto& e = d_.error(span, fmt::format("module '{}' has no function '{}'", module, name));
+                if (auto s = did_you_mean(name, cands)) Diagnostics::note(e, span, fmt::format("did you mean '{}'?", *s));
+                return;
+            }
+            im.builtin = *b;
+        } else {
+            const CheckedModule* from = lookup_ ? lookup_(module, from_span) : nullptr;
+            if (!from) {
+                d_.error(from_span, fmt::format("no module named '{}' to import from", module));
+                return;
+            }
+            im.from = from;
+            im.function = from->find_function(name);
+            if (im.function < 0) {
+                std::vector<std::string> cands;
+                for (auto& f : from->functions) cands.push_back(f.stmt->name);
+                auto& e = d_.error(span, fmt::format("module '{}' defines no function '{}'", module, name));
+                if (auto s = did_you_mean(name, cands)) Diagnostics::note(e, span, fmt::format("did you mean '{}'?", *s));
+                return;
+            }
+        }
+        m_.imports.push_back(std::move(im));
+    };
+    for (const auto& s : m_.ast.stmts)
+        if (s.kind == StmtKind::Import)
+            for (auto& [n, sp] : s.imports) add_import(n, s.from, sp, s.from_span);
+    for (auto& [n, mod] : opts_.implicit_imports) {
+        bool defined = decl_spans_.count(n) > 0;
+        for (const auto& s : m_.ast.stmts)
+            if ((s.kind == StmtKind::Assign || s.kind == StmtKind::Function) && s.name == n) defined = true;
+        if (!defined) add_import(n, mod, m_.ast.span, m_.ast.span);
+    }
+}
+
+void Checker::collect_statements() {
+    std::map<std::string, Span> defined;
+    for (auto& [n, s] : decl_spans_) defined[n] = s.second;
+    for (const auto& s : m_.ast.stmts) {
+        if (s.kind == StmtKind::Assign || s.kind == StmtKind::Function) {
+            if (auto it = defined.find(s.name); it != defined.end()) {
+                auto& e = d_.error(s.name_span, decl_spans_.count(s.name)
+                                                    ? fmt::format("'{}' is a declared parameter and cannot be assigned", s.name)
+                                                    : fmt::format("'{}' is assigned twice", s.name));
+                Diagnostics::note(e, it->second, "first defined here");
+                continue;
+            }
+            defined[s.name] = s.name_span;
+            if (s.kind == StmtKind::Assign) {
+                assigns_[s.name] = &s;
+            } else {
+                LocalFunction f;
+                f.stmt = &s;
+                m_.functions.push_back(std::move(f));
+            }
+        } else if (s.kind == StmtKind::Return) {
+            if (m_.ret) {
+                auto& e = d_.error(s.span, "a module can have only one bare expression (its value)");
+                Diagnostics::note(e, m_.ret->span, "the first one is here");
+                continue;
+            }
+            m_.ret = &s;
+        }
+    }
+}
+
+void Checker::order_statements() {
+    // Depth-first topological sort in source order; reports the first cycle.
+    std::map<const Stmt*, int> state;  // 0 new, 1 visiting, 2 done
+    std::vector<const Stmt*> stack;
+    std::function<std::set<std::string>(const Stmt&)> deps_of = [&](const Stmt& s) {
+        std::vector<std::pair<std::string, Span>> names;
+        collect_names(*s.value, names);
+        std::set<std::string> deps;
+        std::set<std::string> seen_fn;
+        // Names used through local functions count too.
+        for (size_t i = 0; i < names.size(); ++i) {
+            const std::string& n = names[i].first;
+            if (assigns_.count(n)) deps.insert(n);
+            int fi = m_.find_function(n);
+            if (fi >= 0 && !seen_fn.count(n)) {
+                seen_fn.insert(n);
+                const Stmt& fs = *m_.functions[size_t(fi)].stmt;
+                std::vector<std::pair<std::string, Span>> inner;
+                collect_names(*fs.value, inner);
+                for (auto& in : inner) {
+                    bool own = false;
+                    for (auto& p : fs.params) own |= p.first == in.first;
+                    if (!own) names.push_back(in);
+                }
+            }
+        }
+        return deps;
+    };
+    bool reported = false;
+    std::function<void(const Stmt*)> visit = [&](const Stmt* s) {
+        if (state[s] == 2) return;
+        if (state[s] == 1) {
+            if (reported) return;
+            reported = true;
+            auto it = std::find(stack.begin(), stack.end(), s);
+            std::string cycle;
+            for (auto j = it; j != stack.end(); ++j) cycle += (*j)->name + " → ";
+            cycle += s->name;
+            auto& e = d_.error(s->name_span, fmt::format("dependency cycle: {}", cycle));
+            for (auto j = it + 1; j != stack.end(); ++j) Diagnostics::note(e, (*j)->name_span, fmt::format("'{}' is defined here", (*j)->name));
+            return;
+        }
+        state[s] = 1;
+        stack.push_back(s);
+        for (const auto& dep : deps_of(*s)) visit(assigns_[dep]);
+        stack.pop_back();
+        state[s] = 2;
+        m_.order.push_back(s);
+    };
+    for (const auto& s : m_.ast.stmts)
+        if (s.kind == StmtKind::Assign && assigns_.count(s.name) && assigns_[s.name] == &s) visit(&s);
+    if (m_.ret) {
+        for (const auto& dep : deps_of(*m_.ret)) visit(assigns_[dep]);
+        m_.order.push_back(m_.ret);
+    }
+    if (reported) m_.order.clear();
+}
+
+std::vector<std::string> Checker::visible_names() const {
+    std::vector<std::string> v;
+    for (auto& p : m_.params) v.push_back(p.name);
+    for (auto& [n, s] : assigns_) v.push_back(n);
+    for (auto& f : m_.functions) v.push_back(f.stmt->name);
+    for (auto& im : m_.imports) v.push_back(im.name);
+    if (scope_)
+        for (auto& [n, i] : scope_->locals) v.push_back(n);
+    for (auto& b : builtins()) v.push_back(b.name);
+    return v;
+}
+
+void Checker::undefined(const std::string& name, Span s) {
+    if (auto b = find_builtin(name)) {
+        d_.error(s, fmt::format("'{}' needs an import: add '{} from {}'", name, name, builtin(*b).module));
+        return;
+    }
+    auto& e = d_.error(s, fmt::format("undefined name '{}'", name));
+    if (auto sug = did_you_mean(name, visible_names())) Diagnostics::note(e, s, fmt::format("did you mean '{}'?", *sug));
+}
+
+Type Checker::value_type_for_scope(const std::string& name, Type t, Expr& e, int resolved, int aux) {
+    if (!scope_) {
+        e.resolved = resolved;
+        e.aux = aux;
+        return t;
+    }
+    // Inside a local function: a module value or parameter becomes a capture.
+    auto& caps = scope_->fn->captures;
+    for (size_t i = 0; i < caps.size(); ++i)
+        if (caps[i].first == name) {
+            e.resolved = R_Capture;
+            e.aux = int(i);
+            return t;
+        }
+    caps.push_back({name, t});
+    e.resolved = R_Capture;
+    e.aux = int(caps.size() - 1);
+    return t;
+}
+
+Type Checker::check_name(Expr& e) {
+    const std::string& n = e.text;
+    if (scope_) {
+        if (auto it = scope_->locals.find(n); it != scope_->locals.end()) {
+            e.resolved = R_Local;
+            e.aux = it->second;
+            return scope_->fn->params[size_t(it->second)].second;
+        }
+    }
+    if (int pi = m_.find_param(n); pi >= 0) return value_type_for_scope(n, m_.params[size_t(pi)].type, e, R_Param, pi);
+    if (auto it = m_.values.find(n); it != m_.values.end()) return value_type_for_scope(n, it->second, e, R_Value, 0);
+    if (assigns_.count(n)) return {};  // defined, but its own statement failed to check: already reported
+    if (n == "π") {
+        e.resolved = R_Pi;
+        return Type::scalar();
+    }
+    if (m_.find_function(n) >= 0 || std::any_of(m_.imports.begin(), m_.imports.end(), [&](auto& im) { return im.name == n; })) {
+        d_.error(e.span, fmt::format("'{}' is a function: call it with arguments, as in {}(x)", n, n));
+        return {};
+    }
+    undefined(n, e.name_span);
+    return {};
+}
+
+void Checker::check_function(LocalFunction& f, Span call_site) {
+    if (f.checked) return;
+    if (f.checking) {
+        d_.error(call_site, fmt::format("'{}' calls itself: recursion is not supported (use an iteration)", f.stmt->name));
+        return;
+    }
+    f.checking = true;
+    const Stmt& s = *f.stmt;
+    Scope scope{&f, {}};
+    f.params.clear();
+    for (size_t i = 0; i < s.params.size(); ++i) {
+        const auto& [pname, pspan] = s.params[i];
+        const Decl* decl = nullptr;
+        for (auto& ld : s.local_decls)
+            for (auto& nm : ld.names)
+                if (nm.first == pname) decl = &ld;
+        if (!decl)
+            if (auto it = decls_.find(pname); it != decls_.end()) decl = it->second;
+        Type t;
+        if (!decl) {
+            d_.error(pspan, fmt::format("the parameter '{}' of '{}' has no type: add 'where {} ∈ ℝ' (or its type)", pname,
+                                        s.name, pname));
+        } else if (!decl->bounds.empty()) {
+            t = Type::vector(int(decl->bounds.size()));
+        } else {
+            t = param_type(decl->type, pname);
+        }
+        scope.locals[pname] = int(i);
+        f.params.push_back({pname, t});
+    }
+    Scope* saved = scope_;
+    scope_ = &scope;
+    f.result = check(*s.value);
+    scope_ = saved;
+    f.checking = false;
+    f.checked = true;
+}
+
+Type Checker::check_call(Expr& e) {
+    const std::string& n = e.text;
+    std::vector<Type> at;
+    bool args_ok = true;
+    for (auto& a : e.args) {
+        at.push_back(check(*a));
+        args_ok &= at.back().valid();
+    }
+    auto check_args = [&](const std::vector<Type>& params, const std::string& fname) -> bool {
+        if (params.size() != at.size()) {
+            d_.error(e.span, fmt::format("'{}' takes {} argument{}, but {} {} given", fname, params.size(),
+                                         params.size() == 1 ? "" : "s", at.size(), at.size() == 1 ? "is" : "are"));
+            return false;
+        }
+        for (size_t i = 0; i < at.size(); ++i) {
+            if (!params[i].valid() || !at[i].valid()) continue;
+            if (params[i] != at[i] && !(params[i].is_scalar() && at[i].is_scalar())) {
+                d_.error(e.args[i]->span, fmt::format("argument {} of '{}' must be {}, but it is {}", i + 1, fname,
+                                                      params[i].str(), at[i].str()));
+                return false;
+            }
+        }
+        return true;
+    };
+    // A value followed by a parenthesis is a product: a(b + c).
+    bool is_value = (scope_ && scope_->locals.count(n)) || m_.find_param(n) >= 0 || m_.values.count(n) ||
+                    assigns_.count(n) || n == "π";
+    if (is_value) {
+        Expr name_expr(ExprKind::Name, e.name_span);
+        name_expr.text = n;
+        name_expr.name_span = e.name_span;
+        Type vt = check_name(name_expr);
+        e.resolved = R_Scale;
+        // Keep the value's resolution for lowering in a Name node inserted as the first argument.
+        auto callee = std::make_unique<Expr>(ExprKind::Name, e.name_span);
+        callee->text = n;
+        callee->name_span = e.name_span;
+        callee->resolved = name_expr.resolved;
+        callee->aux = name_expr.aux;
+        callee->type = vt;
+        if (e.args.size() != 1) {
+            d_.error(e.span, fmt::format("'{}' is a value, not a function: it cannot take {} arguments", n, e.args.size()));
+            return {};
+        }
+        Expr& arg = *e.args[0];
+        e.args.insert(e.args.begin(), std::move(callee));
+        if (!vt.valid() || !arg.type.valid()) return {};
+        return mul_type(e, vt, arg.type, false);
+    }
+    if (int fi = m_.find_function(n); fi >= 0) {
+        LocalFunction& f = m_.functions[size_t(fi)];
+        check_function(f, e.name_span);
+        e.resolved = R_LocalFn;
+        e.aux = fi;
+        std::vector<Type> pt;
+        for (auto& p : f.params) pt.push_back(p.second);
+        if (!check_args(pt, n) || !args_ok) return {};
+        // Calls from inside another local function need that function to capture what the callee captures.
+        if (scope_)
+            for (auto& c : f.captures) {
+                bool have = false;
+                for (auto& mine : scope_->fn->captures) have |= mine.first == c.first;
+                if (!have) scope_->fn->captures.push_back(c);
+            }
+        return f.result;
+    }
+    for (size_t ii = 0; ii < m_.imports.size(); ++ii) {
+        const ImportedFunction& im = m_.imports[ii];
+        if (im.name != n) continue;
+        if (im.builtin >= 0) break;  // handled below as a built-in
+        const LocalFunction& f = im.from->functions[size_t(im.function)];
+        e.resolved = R_ImportFn;
+        e.aux = int(ii);
+        std::vector<Type> pt;
+        for (auto& p : f.params) pt.push_back(p.second);
+        if (!check_args(pt, n) || !args_ok) return {};
+        return f.result;
+    }
+    if (auto b = find_builtin(n)) {
+        const BuiltinInfo& bi = builtin(*b);
+        if (*bi.module) {
+            bool imported = false;
+            for (auto& im : m_.imports) imported |= im.builtin == *b;
+            if (!imported) {
+                d_.error(e.name_span, fmt::format("'{}' needs an import: add '{} from {}'", n, n, bi.module));
+                return {};
+            }
+        }
+        e.resolved = R_Builtin;
+        e.aux = *b;
+        if (!args_ok) return {};
+        BuiltinCheck c = check_builtin(*b, at);
+        if (!c.error.empty()) {
+            d_.error(c.bad_arg >= 0 ? e.args[size_t(c.bad_arg)]->span : e.span, c.error);
+            return {};
+        }
+        return c.type;
+    }
+    undefined(n, e.name_span);
+    return {};
+}
+
+Type Checker::mul_type(Expr& e, const Type& a, const Type& b, bool dot) {
+    e.resolved = R_Mul;
+    if (a.is_scalar()) return b.is_scalar() ? Type::scalar() : b;
+    if (b.is_scalar()) return a;
+    if (a.is_vector() && b.is_vector()) {
+        if (dot && a == b) {
+            e.resolved = R_DotProduct;
+            return Type::scalar();
+        }
+        if (dot) {
+            d_.error(e.span, fmt::format("cannot take the dot product of {} and {}: the sizes differ", a.str(), b.str()));
+            return {};
+        }
+        d_.error(e.span, fmt::format("cannot multiply {} by {}: use ⋅ for the dot product, ∘ for the elementwise "
+                                     "product, or ᵀ for a matrix product",
+                                     a.str(), b.str()));
+        return {};
+    }
+    Type t = ir::result_type(ir::Op::Mul, {a, b}, 0);
+    if (!t.valid()) {
+        d_.error(e.span, fmt::format("cannot multiply {} by {}: the inner sizes differ", a.str(), b.str()));
+        return {};
+    }
+    return t;
+}
+
+Type Checker::check_binary(Expr& e) {
+    Type a = check(*e.args[0]);
+    Type b = check(*e.args[1]);
+    if (!a.valid() || !b.valid()) return {};
+    auto numeric = [&](const Type& t, const Expr& x) {
+        if (!t.is_numeric()) {
+            d_.error(x.span, fmt::format("a {} cannot be used in arithmetic", t.str()));
+            return false;
+        }
+        return true;
+    };
+    switch (e.op) {
+        case BinOp::Add:
+        case BinOp::Sub:
+            if (!numeric(a, *e.args[0]) || !numeric(b, *e.args[1])) return {};
+            if (a.is_scalar() && b.is_scalar()) return Type::scalar();
+            if (a != b) {
+                d_.error(e.span, fmt::format("cannot {} {} and {}", e.op == BinOp::Add ? "add" : "subtract", a.str(), b.str()));
+                return {};
+            }
+            return a;
+        case BinOp::Juxtapose:
+        case BinOp::Star:
+        case BinOp::Dot:
+            if (!numeric(a, *e.args[0]) || !numeric(b, *e.args[1])) return {};
+            return mul_type(e, a, b, e.op == BinOp::Dot);
+        case BinOp::Div:
+            if (!numeric(a, *e.args[0]) || !numeric(b, *e.args[1])) return {};
+            if (!b.is_scalar()) {
+                d_.error(e.args[1]->span, fmt::format("cannot divide by {}: '/' needs a scalar divisor", b.str()));
+                return {};
+            }
+            return a.is_scalar() ? Type::scalar() : a;
+        case BinOp::Hadamard:
+            if (!numeric(a, *e.args[0]) || !numeric(b, *e.args[1])) return {};
+            if (a.is_scalar() && b.is_scalar()) return Type::scalar();
+            if (a != b) {
+                d_.error(e.span, fmt::format("the elementwise product ∘ needs equal sizes, not {} and {}", a.str(), b.str()));
+                return {};
+            }
+            return a;
+        case BinOp::Cross:
+            if (a != Type::vector(3) || b != Type::vector(3)) {
+                d_.error(e.span, fmt::format("the cross product × needs two ℝ³ vectors, not {} and {}", a.str(), b.str()));
+                return {};
+            }
+            return a;
+        default: break;
+    }
+    return {};
+}
+
+Type Checker::check(Expr& e) {
+    Type t;
+    switch (e.kind) {
+        case ExprKind::Number: t = Type::scalar(); break;
+        case ExprKind::Name: t = check_name(e); break;
+        case ExprKind::Call: t = check_call(e); break;
+        case ExprKind::Binary: t = check_binary(e); break;
+        case ExprKind::Negate: {
+            Type a = check(*e.args[0]);
+            if (a.valid() && !a.is_numeric()) d_.error(e.span, "a condition cannot be negated with '-'");
+            else t = a.is_scalar() ? Type::scalar() : a;
+            break;
+        }
+        case ExprKind::Power: {
+            Type a = check(*e.args[0]);
+            Type b = check(*e.args[1]);
+            if (!a.valid() || !b.valid()) break;
+            if (a.is_scalar() && b.is_scalar()) {
+                e.resolved = R_Pow;
+                t = Type::scalar();
+            } else if (a.is_matrix() && a.rows == a.cols && b.is_scalar()) {
+                auto c = const_eval(*e.args[1]);
+                if (c && c->size() == 1 && (*c)[0] == -1) {
+                    e.resolved = R_Inverse;
+                    t = a;
+                } else {
+                    d_.error(e.args[1]->span, "a matrix power must be ⁻¹ (the inverse)");
+                }
+            } else if (a.is_matrix()) {
+                d_.error(e.span, fmt::format("only square matrices have powers, not {}", a.str()));
+            } else if (!b.is_scalar()) {
+                d_.error(e.args[1]->span, fmt::format("an exponent must be a scalar, not {}", b.str()));
+            } else {
+                d_.error(e.span, fmt::format("cannot raise {} to a power: use ‖v‖² for a squared length, or ∘ for "
+                                             "elementwise products", a.str()));
+            }
+            break;
+        }
+        case ExprKind::Transpose: {
+            Type a = check(*e.args[0]);
+            if (a.valid()) t = ir::result_type(ir::Op::Transpose, {a}, 0);
+            break;
+        }
+        case ExprKind::Index: {
+            Type a = check(*e.args[0]);
+            if (!a.valid()) break;
+            std::vector<int> idx;
+            bool ok = true;
+            for (auto& it : e.indices) {
+                if (!it.expr) {
+                    it.value = -1;
+                    idx.push_back(-1);
+                    continue;
+                }
+                auto c = const_eval(*it.expr);
+                if (!c || c->size() != 1 || (*c)[0] != std::floor((*c)[0])) {
+                    d_.error(it.span, "a subscript must be a whole number such as p_1 (or * for a whole row or column)");
+                    ok = false;
+                    continue;
+                }
+                it.value = int((*c)[0]) - 1;
+                idx.push_back(it.value);
+            }
+            if (!ok) break;
+            auto range_error = [&](const IndexItem& it, int size, const char* what) {
+                d_.error(it.span, fmt::format("subscript {} is out of range: {} has {} {} (subscripts start at 1)",
+                                              it.value + 1, a.str(), size, what));
+            };
+            if (a.is_vector()) {
+                if (idx.size() != 1 || idx[0] < 0) {
+                    d_.error(e.span, fmt::format("a vector ({}) takes one subscript", a.str()));
+                } else if (idx[0] >= a.rows) {
+                    range_error(e.indices[0], a.rows, "components");
+                } else {
+                    t = Type::scalar();
+                }
+            } else if (a.is_matrix()) {
+                if (idx.size() != 2) {
+                    d_.error(e.span, fmt::format("a matrix ({}) takes two subscripts, as in A_2,3 or A_(2,3)", a.str()));
+                } else if (idx[0] >= a.rows) {
+                    range_error(e.indices[0], a.rows, "rows");
+                } else if (idx[1] >= a.cols) {
+                    range_error(e.indices[1], a.cols, "columns");
+                } else if (idx[0] < 0 && idx[1] < 0) {
+                    t = a;
+                } else if (idx[0] < 0) {
+                    t = Type::vector(a.rows);
+                } else if (idx[1] < 0) {
+                    t = Type::vector(a.cols);
+                } else {
+                    t = Type::scalar();
+                }
+            } else {
+                d_.error(e.span, fmt::format("cannot subscript {}", a.str()));
+            }
+            break;
+        }
+        case ExprKind::Vector: {
+            int n = 0;
+            bool ok = true;
+            for (auto& a : e.args) {
+                Type at = check(*a);
+                if (!at.valid()) { ok = false; continue; }
+                if (at.is_scalar()) n += 1;
+                else if (at.is_vector()) n += at.rows;
+                else {
+                    d_.error(a->span, fmt::format("a vector's items must be scalars or vectors, not {}", at.str()));
+                    ok = false;
+                }
+            }
+            if (ok) t = Type::vector(n);
+            break;
+        }
+        case ExprKind::Matrix: {
+            size_t cols = e.rows[0].size();
+            bool ok = true;
+            for (auto& row : e.rows) {
+                for (auto& item : row) {
+                    Type it = check(*item);
+                    if (it.valid() && !it.is_scalar()) {
+                        d_.error(item->span, fmt::format("matrix entries must be scalars, not {} (block matrices are not "
+                                                         "supported yet)", it.str()));
+                        ok = false;
+                    }
+                    ok &= it.valid();
+                }
+                if (row.size() != cols) {
+                    d_.error(Span::join(row.front()->span, row.back()->span),
+                             fmt::format("this row has {} entries but the first row has {}", row.size(), cols));
+                    ok = false;
+                }
+            }
+            if (!ok) break;
+            int r = int(e.rows.size()), c = int(cols);
+            t = c == 1 ? Type::vector(r) : Type::matrix(r, c);
+            break;
+        }
+        case ExprKind::Norm: {
+            Type a = check(*e.args[0]);
+            if (!a.valid()) break;
+            if (a.is_vector()) { e.resolved = R_Length; t = Type::scalar(); }
+            else if (a.is_scalar()) { e.resolved = R_AbsValue; t = Type::scalar(); }
+            else d_.error(e.span, fmt::format("the norm ‖·‖ of {} is not supported (vectors and scalars only)", a.str()));
+            break;
+        }
+        case ExprKind::Abs: {
+            Type a = check(*e.args[0]);
+            if (!a.valid()) break;
+            if (a.is_matrix()) {
+                if (a.rows != a.cols) d_.error(e.span, fmt::format("the determinant |·| needs a square matrix, not {}", a.str()));
+                else { e.resolved = R_Det; t = Type::scalar(); }
+            } else if (a.is_numeric()) {
+                e.resolved = R_AbsValue;
+                t = a.is_scalar() ? Type::scalar() : a;
+            }
+            break;
+        }
+        case ExprKind::Floor:
+        case ExprKind::Ceil:
+        case ExprKind::Sqrt: {
+            Type a = check(*e.args[0]);
+            if (!a.valid()) break;
+            if (a.is_scalar() || a.is_vector()) t = a.is_scalar() ? Type::scalar() : a;
+            else d_.error(e.span, fmt::format("{} needs a scalar or a vector, not {}",
+                                              e.kind == ExprKind::Sqrt ? "√" : e.kind == ExprKind::Floor ? "⌊⌋" : "⌈⌉", a.str()));
+            break;
+        }
+        case ExprKind::Compare: {
+            Type a = check(*e.args[0]);
+            Type b = check(*e.args[1]);
+            if (!a.valid() || !b.valid()) break;
+            if (!a.is_scalar() || !b.is_scalar())
+                d_.error(e.span, fmt::format("a comparison needs two scalars, not {} and {}", a.str(), b.str()));
+            else t = Type::boolean();
+            break;
+        }
+        case ExprKind::Logic: {
+            Type a = check(*e.args[0]);
+            Type b = check(*e.args[1]);
+            if (a.valid() && b.valid()) t = Type::boolean();
+            break;
+        }
+        case ExprKind::Piecewise: {
+            Type common;
+            bool ok = true;
+            auto unify = [&](Expr& v) {
+                Type vt = check(v);
+                if (!vt.valid()) { ok = false; return; }
+                if (!common.valid()) common = vt.is_scalar() ? Type::scalar() : vt;
+                else if (!(common.is_scalar() && vt.is_scalar()) && common != vt) {
+                    d_.error(v.span, fmt::format("the cases of a piecewise definition must have one type: {} and {}",
+                                                 common.str(), vt.str()));
+                    ok = false;
+                }
+            };
+            for (auto& c : e.rows) {
+                unify(*c[0]);
+                Type ct = check(*c[1]);
+                if (ct.valid() && ct.kind != Type::Bool) {
+                    d_.error(c[1]->span, "expected a condition such as x > 0");
+                    ok = false;
+                }
+            }
+            if (e.otherwise) unify(*e.otherwise);
+            if (ok) t = common;
+            break;
+        }
+    }
+    e.type = t;
+    return t;
+}
+
+void Checker::run() {
+    collect_declarations();
+    collect_imports();
+    collect_statements();
+    order_statements();
+    // Statements in dependency order; a local function is checked at its first call (its captured values
+    // are typed by then), and uncalled ones afterwards.
+    for (const Stmt* s : m_.order) {
+        Type t = check(*s->value);
+        if (s->kind == StmtKind::Assign && t.valid()) m_.values[s->name] = t;
+    }
+    for (auto& f : m_.functions) check_function(f, f.stmt->name_span);
+    // Outputs the module kind requires.
+    if (m_.ast.kind == ModuleKind::Shape || m_.ast.kind == ModuleKind::Material) {
+        const char* out = m_.ast.kind == ModuleKind::Shape ? "D" : "C";
+        m_.primary = out;
+        if (!assigns_.count(out)) {
+            d_.error(m_.ast.span, fmt::format("{} '{}' does not assign '{}' ({})", m_.ast.kind == ModuleKind::Shape ? "shape" : "material",
+                                              m_.ast.name, out,
+                                              m_.ast.kind == ModuleKind::Shape ? "its signed distance" : "its RGB colour"));
+        } else if (m_.values.count(out)) {
+            Type t = m_.values[out];
+            Type want = m_.ast.kind == ModuleKind::Shape ? Type::scalar() : Type::vector(3);
+            if (t != want && !(want.is_scalar() && t.is_scalar()))
+                d_.error(assigns_[out]->name_span, fmt::format("'{}' must be {}, but it is {}", out, want.str(), t.str()));
+            m_.primary_type = want;
+        }
+    } else if (m_.ret) {
+        m_.primary_type = m_.ret->value->type;
+    }
+}
+
+}  // namespace
+
+std::unique_ptr<CheckedModule> check_module(ast::Module module, const ModuleLookup& lookup, const CheckOptions& opts,
+                                            Diagnostics& diags) {
+    auto m = std::make_unique<CheckedModule>();
+    m->ast = std::move(module);
+    size_t before = diags.error_count();
+    Checker c(*m, lookup, opts, diags);
+    c.run();
+    m->ok = diags.error_count() == before;
+    return m;
+}
+
+}  // namespace iqc

@@ -1,0 +1,107 @@
+// Checker: names, types with sizes, and statement order for one module.
+//
+// Requires a parsed module. Resolves every name (parameters, assigned values, local functions, imports,
+// built-ins, π), infers every expression's type, orders statements by their data dependencies (a module
+// may use `q` before the line that defines it), and reports: undefined names (with a did-you-mean), names
+// assigned twice, dependency cycles, operand types that do not fit (naming both sides), and missing `D`/`C`
+// outputs. Errors are collected; checking goes on where it can.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "syntax/Ast.h"
+
+namespace iqc {
+
+// What a Name/Call/operator node was resolved to (stored in ast::Expr::resolved, with Expr::aux).
+enum Resolved : int {
+    R_None = 0,
+    R_Param,      // module parameter, aux = index in CheckedModule::params
+    R_Value,      // a value assigned in the module
+    R_Local,      // local function parameter, aux = index
+    R_Capture,    // inside a local function: a module value or parameter it uses, aux = capture index
+    R_Pi,         // π
+    R_Builtin,    // call of a built-in, aux = builtin id
+    R_LocalFn,    // call of a local function, aux = index in CheckedModule::functions
+    R_ImportFn,   // call of an imported function, aux = index in CheckedModule::imports
+    R_Scale,      // `a(b)` where a is a value: multiplication
+    R_Mul,        // product (scalar, matrix-vector, matrix-matrix, outer)
+    R_DotProduct, // a ⋅ b of two equal-size vectors
+    R_Pow,        // scalar power
+    R_Inverse,    // matrix⁻¹
+    R_Length,     // ‖vector‖
+    R_AbsValue,   // |x|, ‖scalar‖
+    R_Det,        // |matrix|
+};
+
+struct ParamInfo {
+    std::string name;
+    Span span;
+    Type type;
+    bool bounded = false;
+    std::vector<double> lo, hi;  // per component, when bounded
+    std::vector<double> value;   // default: given, else the bounds' midpoint, else 0
+    bool has_default = false;
+    std::string description;
+};
+
+struct CheckedModule;
+
+struct LocalFunction {
+    const ast::Stmt* stmt = nullptr;
+    std::vector<std::pair<std::string, Type>> params;
+    Type result;
+    // Module values and parameters the body uses; passed as extra arguments after the declared ones.
+    std::vector<std::pair<std::string, Type>> captures;
+    bool checked = false;
+    bool checking = false;  // recursion detection
+};
+
+struct ImportedFunction {
+    std::string name;
+    std::string module;
+    Span span;
+    const CheckedModule* from = nullptr;  // null for built-in modules
+    int function = -1;                    // index in from->functions
+    int builtin = -1;                     // for built-in modules
+};
+
+struct CheckedModule {
+    ast::Module ast;
+    std::vector<ParamInfo> params;             // free parameters, in declaration order
+    std::vector<const ast::Stmt*> order;       // Assign/Return statements in dependency order
+    std::map<std::string, Type> values;        // assigned name -> type
+    std::vector<LocalFunction> functions;
+    std::vector<ImportedFunction> imports;
+    const ast::Stmt* ret = nullptr;            // the bare expression, if any
+    std::string primary;                       // "D" (shape), "C" (material) or "" (the bare expression)
+    Type primary_type;
+    bool ok = false;
+
+    int find_param(const std::string& n) const;
+    int find_function(const std::string& n) const;
+};
+
+// Looks up a module by name for imports; may check it on demand. Returns null when there is none.
+using ModuleLookup = std::function<const CheckedModule*(const std::string& name, Span where)>;
+
+struct CheckOptions {
+    // Names imported without an import line (the scene's transforms get T, R_x, ... from transformations).
+    std::vector<std::pair<std::string, std::string>> implicit_imports;  // name, module
+};
+
+std::unique_ptr<CheckedModule> check_module(ast::Module module, const ModuleLookup& lookup,
+                                            const CheckOptions& opts, Diagnostics& diags);
+
+// Evaluates a constant expression (numbers, π, + - * / ^, vectors) as used in bounds and defaults.
+std::optional<std::vector<double>> const_eval(const ast::Expr& e);
+
+// The closest candidate within a small edit distance, for "did you mean" notes.
+std::optional<std::string> did_you_mean(const std::string& name, const std::vector<std::string>& candidates);
+
+}  // namespace iqc

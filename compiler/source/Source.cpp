@@ -1,0 +1,183 @@
+#include "source/Source.h"
+
+#include <algorithm>
+#include <fmt/format.h>
+
+namespace iqc {
+
+namespace utf8 {
+
+char32_t decode(std::string_view t, size_t& i) {
+    unsigned char c = static_cast<unsigned char>(t[i]);
+    auto cont = [&](size_t k) -> int {
+        if (i + k >= t.size()) return -1;
+        unsigned char b = static_cast<unsigned char>(t[i + k]);
+        return (b & 0xC0) == 0x80 ? (b & 0x3F) : -1;
+    };
+    if (c < 0x80) { i += 1; return c; }
+    if ((c & 0xE0) == 0xC0) {
+        int b1 = cont(1);
+        if (b1 >= 0) { i += 2; return char32_t(((c & 0x1F) << 6) | b1); }
+    } else if ((c & 0xF0) == 0xE0) {
+        int b1 = cont(1), b2 = cont(2);
+        if (b1 >= 0 && b2 >= 0) { i += 3; return char32_t(((c & 0x0F) << 12) | (b1 << 6) | b2); }
+    } else if ((c & 0xF8) == 0xF0) {
+        int b1 = cont(1), b2 = cont(2), b3 = cont(3);
+        if (b1 >= 0 && b2 >= 0 && b3 >= 0) {
+            i += 4;
+            return char32_t(((c & 0x07) << 18) | (b1 << 12) | (b2 << 6) | b3);
+        }
+    }
+    i += 1;
+    return 0xFFFD;
+}
+
+void append(std::string& out, char32_t c) {
+    if (c < 0x80) {
+        out += char(c);
+    } else if (c < 0x800) {
+        out += char(0xC0 | (c >> 6));
+        out += char(0x80 | (c & 0x3F));
+    } else if (c < 0x10000) {
+        out += char(0xE0 | (c >> 12));
+        out += char(0x80 | ((c >> 6) & 0x3F));
+        out += char(0x80 | (c & 0x3F));
+    } else {
+        out += char(0xF0 | (c >> 18));
+        out += char(0x80 | ((c >> 12) & 0x3F));
+        out += char(0x80 | ((c >> 6) & 0x3F));
+        out += char(0x80 | (c & 0x3F));
+    }
+}
+
+bool is_combining(char32_t c) {
+    return (c >= 0x0300 && c <= 0x036F) || (c >= 0x1AB0 && c <= 0x1AFF) || (c >= 0x1DC0 && c <= 0x1DFF) ||
+           (c >= 0x20D0 && c <= 0x20FF) || (c >= 0xFE20 && c <= 0xFE2F);
+}
+
+size_t width(std::string_view s) {
+    size_t w = 0;
+    for (size_t i = 0; i < s.size();) {
+        char32_t c = decode(s, i);
+        if (!is_combining(c)) ++w;
+    }
+    return w;
+}
+
+}  // namespace utf8
+
+static std::vector<uint32_t> compute_line_starts(std::string_view text) {
+    std::vector<uint32_t> starts{0};
+    for (uint32_t i = 0; i < text.size(); ++i)
+        if (text[i] == '\n') starts.push_back(i + 1);
+    return starts;
+}
+
+FileId SourceManager::add(std::string name, std::string text) {
+    File f;
+    f.name = std::move(name);
+    f.text = std::move(text);
+    f.line_starts = compute_line_starts(f.text);
+    files_.push_back(std::move(f));
+    return FileId(files_.size() - 1);
+}
+
+FileId SourceManager::add_embedded(std::string name, std::string text, FileId outer, uint32_t outer_offset) {
+    FileId id = add(std::move(name), std::move(text));
+    files_[id].embedded = true;
+    files_[id].outer = outer;
+    files_[id].outer_offset = outer_offset;
+    return id;
+}
+
+LineCol SourceManager::line_col(FileId f, uint32_t offset) const {
+    const File& file = files_[f];
+    offset = std::min<uint32_t>(offset, uint32_t(file.text.size()));
+    auto it = std::upper_bound(file.line_starts.begin(), file.line_starts.end(), offset);
+    uint32_t line = uint32_t(it - file.line_starts.begin());
+    uint32_t start = file.line_starts[line - 1];
+    uint32_t col = 1 + uint32_t(utf8::width(std::string_view(file.text).substr(start, offset - start)));
+    return {line, col};
+}
+
+std::string_view SourceManager::line_text(FileId f, uint32_t line) const {
+    const File& file = files_[f];
+    if (line == 0 || line > file.line_starts.size()) return {};
+    uint32_t start = file.line_starts[line - 1];
+    uint32_t end = line < file.line_starts.size() ? file.line_starts[line] - 1 : uint32_t(file.text.size());
+    std::string_view v = std::string_view(file.text).substr(start, end - start);
+    if (!v.empty() && v.back() == '\r') v.remove_suffix(1);
+    return v;
+}
+
+std::string SourceManager::location(Span s) const {
+    const File& file = files_[s.file];
+    LineCol lc = line_col(s.file, s.begin);
+    if (file.embedded) {
+        LineCol outer = line_col(file.outer, file.outer_offset);
+        uint32_t line = outer.line + lc.line - 1;
+        uint32_t col = lc.line == 1 ? outer.col + lc.col - 1 : lc.col;
+        return fmt::format("{}:{}:{}", files_[file.outer].name, line, col);
+    }
+    return fmt::format("{}:{}:{}", file.name, lc.line, lc.col);
+}
+
+Diagnostic& Diagnostics::error(Span s, std::string msg) {
+    list_.push_back({Severity::Error, s, true, std::move(msg), {}});
+    ++errors_;
+    return list_.back();
+}
+
+Diagnostic& Diagnostics::warning(Span s, std::string msg) {
+    list_.push_back({Severity::Warning, s, true, std::move(msg), {}});
+    return list_.back();
+}
+
+Diagnostic& Diagnostics::error_nospan(std::string msg) {
+    list_.push_back({Severity::Error, {}, false, std::move(msg), {}});
+    ++errors_;
+    return list_.back();
+}
+
+void Diagnostics::note(Diagnostic& d, Span s, std::string msg) {
+    d.notes.push_back({Severity::Note, s, true, std::move(msg), {}});
+}
+
+static const char* severity_name(Severity s) {
+    switch (s) {
+        case Severity::Error: return "error";
+        case Severity::Warning: return "warning";
+        case Severity::Note: return "note";
+    }
+    return "error";
+}
+
+std::string Diagnostics::render(const Diagnostic& d) const {
+    std::string out;
+    if (!d.has_span) {
+        out += fmt::format("iqc: {}: {}\n", severity_name(d.severity), d.message);
+    } else {
+        out += fmt::format("{}: {}: {}\n", sm_.location(d.span), severity_name(d.severity), d.message);
+        LineCol b = sm_.line_col(d.span.file, d.span.begin);
+        LineCol e = sm_.line_col(d.span.file, d.span.end);
+        std::string_view line = sm_.line_text(d.span.file, b.line);
+        out += fmt::format("  {}\n", line);
+        size_t line_width = utf8::width(line);
+        size_t start = b.col - 1;
+        size_t len = (e.line == b.line && e.col > b.col) ? e.col - b.col : 1;
+        if (e.line != b.line) len = std::max<size_t>(1, line_width > start ? line_width - start : 1);
+        std::string marks(len, '~');
+        marks[0] = '^';
+        out += fmt::format("  {}{}\n", std::string(start, ' '), marks);
+    }
+    for (const auto& n : d.notes) out += render(n);
+    return out;
+}
+
+std::string Diagnostics::render() const {
+    std::string out;
+    for (const auto& d : list_) out += render(d);
+    return out;
+}
+
+}  // namespace iqc

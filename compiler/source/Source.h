@@ -1,0 +1,102 @@
+// Source files, spans and diagnostics.
+//
+// Every other pass refers to text by Span (a file and a byte range). Diagnostics are collected, never
+// thrown, and rendered GCC-style: `file:line:col: error: message`, the source line, and a caret line
+// underlining the span. Columns count Unicode code points (combining marks take no column), so carets
+// line up under math such as `N̂`.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace iqc {
+
+using FileId = uint32_t;
+
+struct Span {
+    FileId file = 0;
+    uint32_t begin = 0;  // byte offset
+    uint32_t end = 0;    // byte offset, exclusive
+    bool valid() const { return end >= begin && (begin != 0 || end != 0 || file != 0); }
+    static Span join(Span a, Span b) { return {a.file, std::min(a.begin, b.begin), std::max(a.end, b.end)}; }
+};
+
+struct LineCol {
+    uint32_t line = 1;  // 1-based
+    uint32_t col = 1;   // 1-based, in code points
+};
+
+class SourceManager {
+public:
+    // Adds a file with the given display name and contents.
+    FileId add(std::string name, std::string text);
+    // Adds text that sits inside another file starting at byte `offset` (e.g. an escaped TOML string whose
+    // text differs from the file's bytes): diagnostics report the outer file's name and the line where the
+    // string starts, plus the line within the string.
+    FileId add_embedded(std::string name, std::string text, FileId outer, uint32_t outer_offset);
+
+    const std::string& name(FileId f) const { return files_[f].name; }
+    std::string_view text(FileId f) const { return files_[f].text; }
+    LineCol line_col(FileId f, uint32_t offset) const;
+    std::string_view line_text(FileId f, uint32_t line) const;  // without the newline
+    std::string_view slice(Span s) const { return text(s.file).substr(s.begin, s.end - s.begin); }
+    // Display position: for embedded files, the position translated into the outer file.
+    std::string location(Span s) const;
+    size_t size() const { return files_.size(); }
+
+private:
+    struct File {
+        std::string name, text;
+        std::vector<uint32_t> line_starts;
+        bool embedded = false;
+        FileId outer = 0;
+        uint32_t outer_offset = 0;
+    };
+    std::vector<File> files_;
+};
+
+enum class Severity { Error, Warning, Note };
+
+struct Diagnostic {
+    Severity severity = Severity::Error;
+    Span span;
+    bool has_span = true;
+    std::string message;
+    std::vector<Diagnostic> notes;
+};
+
+class Diagnostics {
+public:
+    explicit Diagnostics(const SourceManager& sm) : sm_(sm) {}
+    Diagnostic& error(Span s, std::string msg);
+    Diagnostic& warning(Span s, std::string msg);
+    Diagnostic& error_nospan(std::string msg);
+    static void note(Diagnostic& d, Span s, std::string msg);
+
+    bool has_errors() const { return errors_ > 0; }
+    size_t error_count() const { return errors_; }
+    const std::vector<Diagnostic>& all() const { return list_; }
+    // Renders every diagnostic, in the order reported.
+    std::string render() const;
+    std::string render(const Diagnostic& d) const;
+    const SourceManager& sources() const { return sm_; }
+
+private:
+    const SourceManager& sm_;
+    std::vector<Diagnostic> list_;
+    size_t errors_ = 0;
+};
+
+// UTF-8 helpers shared by the lexer and the renderer.
+namespace utf8 {
+// Decodes one code point at text[i]; advances i. Invalid bytes decode as U+FFFD.
+char32_t decode(std::string_view text, size_t& i);
+void append(std::string& out, char32_t c);
+bool is_combining(char32_t c);
+// Display width of a string in columns (combining marks are 0, everything else 1).
+size_t width(std::string_view s);
+}  // namespace utf8
+
+}  // namespace iqc

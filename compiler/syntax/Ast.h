@@ -1,0 +1,131 @@
+// Abstract syntax of one module of the math language.
+//
+// The parser produces it; the checker (sema/) annotates each expression with its type. Nodes own their
+// children. Names are stored as written (without backticks); spans point into the source for diagnostics.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sema/Type.h"
+#include "source/Source.h"
+
+namespace iqc::ast {
+
+enum class ExprKind {
+    Number,     // number
+    Name,       // name (a variable, parameter, constant such as π)
+    Call,       // name(args): a function call, or a name times a parenthesised value (decided by sema)
+    Binary,     // op, args[0], args[1]
+    Negate,     // -args[0]
+    Power,      // args[0] ^ args[1]  (also superscripts; ᵀ is Transpose)
+    Transpose,  // args[0]ᵀ
+    Index,      // args[0] subscripted by indices (1-based; `*` is a whole row/column)
+    Vector,     // (a, b, ...) — concatenation of scalars and vectors
+    Matrix,     // [a b; c d]
+    Norm,       // ‖args[0]‖
+    Abs,        // |args[0]|
+    Floor,      // ⌊args[0]⌋
+    Ceil,       // ⌈args[0]⌉
+    Sqrt,       // √args[0]
+    Compare,    // args[0] op args[1]  (=, ≠, <, ≤, >, ≥) — only in piecewise conditions
+    Logic,      // and / or
+    Piecewise,  // cases: values[i] if conds[i]; otherwise
+};
+
+enum class BinOp {
+    Add, Sub,
+    Juxtapose,  // a b, 2x
+    Star,       // a * b (extension)
+    Dot,        // a ⋅ b: dot product of two equal-size vectors, otherwise multiplication
+    Div,        // a / b, a ÷ b
+    Hadamard,   // a ∘ b
+    Cross,      // a × b
+    Eq, Neq, Lt, Le, Gt, Ge,
+    And, Or,
+};
+
+const char* binop_spelling(BinOp op);
+
+struct Expr;
+using ExprPtr = std::unique_ptr<Expr>;
+
+struct IndexItem {
+    ExprPtr expr;     // null for `*`
+    Span span;
+    int value = 0;    // 0-based index, filled by the checker (-1 for `*`)
+};
+
+struct Expr {
+    ExprKind kind;
+    Span span;
+    double number = 0;
+    std::string text;  // number as written; the name for Name/Call
+    Span name_span;
+    BinOp op = BinOp::Add;
+    std::vector<ExprPtr> args;
+    std::vector<std::vector<ExprPtr>> rows;  // Matrix rows; Piecewise: {value, condition} per case
+    std::vector<IndexItem> indices;          // Index
+    ExprPtr otherwise;                       // Piecewise
+    // Filled by the checker.
+    Type type;
+    int resolved = 0;  // sema's meaning for Name/Call/Binary (see sema/Check.h: Resolved)
+    int aux = 0;       // with `resolved`: a builtin id, a function index, ...
+
+    Expr(ExprKind k, Span s) : kind(k), span(s) {}
+};
+
+// A type as written in a declaration.
+struct TypeSpec {
+    enum Kind { Scalar, Integer, Vector, Matrix, Function } kind = Scalar;
+    int rows = 1, cols = 1;
+    std::string sym_rows, sym_cols;  // symbolic sizes (`ℝ^n`)
+    std::vector<TypeSpec> params;    // Function
+    std::unique_ptr<TypeSpec> result;
+    Span span;
+};
+
+struct Interval {
+    ExprPtr lo, hi;
+    Span span;
+};
+
+struct Decl {
+    std::vector<std::pair<std::string, Span>> names;
+    TypeSpec type;
+    std::vector<Interval> bounds;  // `[a,b]x[c,d]`: one interval per component (type is then derived)
+    ExprPtr default_value;
+    Span default_span;
+    std::string description;
+    Span span;
+};
+
+enum class StmtKind { Assign, Function, Return, Import };
+
+struct Stmt {
+    StmtKind kind = StmtKind::Assign;
+    std::string name;  // Assign / Function
+    Span name_span;
+    std::vector<std::pair<std::string, Span>> params;  // Function
+    ExprPtr value;
+    std::vector<Decl> local_decls;  // Function: its own `where`
+    std::vector<std::pair<std::string, Span>> imports;  // Import: names
+    std::string from;                                   // Import: module
+    Span from_span;
+    Span span;
+    std::string source_line;  // the statement as written, for comments in the generated code
+};
+
+enum class ModuleKind { Library, Shape, Material };
+
+struct Module {
+    ModuleKind kind = ModuleKind::Library;
+    std::string name;
+    Span span;
+    std::vector<Stmt> stmts;
+    std::vector<Decl> decls;
+};
+
+}  // namespace iqc::ast

@@ -1,0 +1,996 @@
+#include "syntax/Parser.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <fmt/format.h>
+
+namespace iqc {
+
+using namespace ast;
+
+const char* ast::binop_spelling(BinOp op) {
+    switch (op) {
+        case BinOp::Add: return "+";
+        case BinOp::Sub: return "-";
+        case BinOp::Juxtapose: return "juxtaposition";
+        case BinOp::Star: return "*";
+        case BinOp::Dot: return "⋅";
+        case BinOp::Div: return "/";
+        case BinOp::Hadamard: return "∘";
+        case BinOp::Cross: return "×";
+        case BinOp::Eq: return "=";
+        case BinOp::Neq: return "≠";
+        case BinOp::Lt: return "<";
+        case BinOp::Le: return "≤";
+        case BinOp::Gt: return ">";
+        case BinOp::Ge: return "≥";
+        case BinOp::And: return "and";
+        case BinOp::Or: return "or";
+    }
+    return "?";
+}
+
+namespace {
+
+const std::set<std::string> kKeywords = {"where", "given", "from", "if", "otherwise", "and", "or",
+                                         "in", "default", "shape", "material", "scalar", "vector", "matrix"};
+
+bool is_name_token(const Token& t) { return t.kind == Tok::Word || t.kind == Tok::Backtick; }
+bool is_kw(const Token& t, const char* kw) { return t.kind == Tok::Word && t.text == kw; }
+
+// Splits a letter run into letter units: a base letter and the combining marks after it.
+std::vector<std::pair<size_t, size_t>> letter_units(const std::string& w) {
+    std::vector<std::pair<size_t, size_t>> units;  // byte offset, length
+    size_t i = 0;
+    while (i < w.size()) {
+        size_t b = i;
+        utf8::decode(w, i);
+        while (i < w.size()) {
+            size_t j = i;
+            char32_t c = utf8::decode(w, j);
+            if (!utf8::is_combining(c)) break;
+            i = j;
+        }
+        units.push_back({b, i - b});
+    }
+    return units;
+}
+
+// Pre-scan: names the module assigns, declares, defines as functions or imports.
+std::set<std::string> prescan(const std::vector<Token>& toks) {
+    std::set<std::string> known;
+    size_t i = 0;
+    while (i < toks.size()) {
+        size_t line_end = i;
+        while (line_end < toks.size() && toks[line_end].kind != Tok::Newline && toks[line_end].kind != Tok::End)
+            ++line_end;
+        // Scan every position in the line where a declaration, assignment or import may begin.
+        for (size_t s = i; s < line_end; ++s) {
+            bool starts = (s == i) || is_kw(toks[s - 1], "where") || is_kw(toks[s - 1], "given") ||
+                          toks[s - 1].kind == Tok::Semicolon ||
+                          (toks[s - 1].kind == Tok::Comma && s >= 2);
+            if (!starts || !is_name_token(toks[s])) continue;
+            // name list: NAME[_SUB] {, NAME[_SUB]}
+            std::vector<std::string> names;
+            size_t k = s;
+            while (k < line_end && is_name_token(toks[k])) {
+                std::string n = toks[k].text;
+                if (k + 2 < line_end && toks[k + 1].kind == Tok::Underscore && !toks[k + 1].space_before &&
+                    (is_name_token(toks[k + 2]) || toks[k + 2].kind == Tok::Number) && !toks[k + 2].space_before) {
+                    names.push_back(n);
+                    n += "_" + toks[k + 2].text;
+                    k += 2;
+                }
+                names.push_back(n);
+                ++k;
+                if (k < line_end && toks[k].kind == Tok::Comma) { ++k; continue; }
+                break;
+            }
+            if (k >= line_end) continue;
+            const Token& t = toks[k];
+            bool decl = t.kind == Tok::In || t.kind == Tok::Colon || is_kw(t, "in");
+            bool imp = is_kw(t, "from");
+            bool assign = t.kind == Tok::Eq && names.size() == 1;
+            bool func = false;
+            if (t.kind == Tok::LParen && names.size() == 1) {
+                // NAME ( NAME {, NAME} ) =
+                size_t m = k + 1;
+                std::vector<std::string> params;
+                while (m < line_end && is_name_token(toks[m])) {
+                    params.push_back(toks[m].text);
+                    ++m;
+                    if (m < line_end && toks[m].kind == Tok::Comma) ++m;
+                    else break;
+                }
+                if (m + 1 < line_end && toks[m].kind == Tok::RParen && toks[m + 1].kind == Tok::Eq) {
+                    func = true;
+                    for (auto& p : params) known.insert(p);
+                }
+            }
+            if (decl || imp || assign || func)
+                for (auto& n : names) known.insert(n);
+        }
+        i = line_end + 1;
+    }
+    return known;
+}
+
+// Replaces each Word token by the names it spells (see the header comment).
+std::vector<Token> split_words(const std::vector<Token>& toks, const std::set<std::string>& known) {
+    std::vector<Token> out;
+    out.reserve(toks.size());
+    for (size_t i = 0; i < toks.size(); ++i) {
+        const Token& t = toks[i];
+        bool after_from = i > 0 && is_kw(toks[i - 1], "from");
+        if (t.kind != Tok::Word || kKeywords.count(t.text) || known.count(t.text) || after_from) {
+            out.push_back(t);
+            continue;
+        }
+        auto units = letter_units(t.text);
+        size_t u = 0;
+        bool first = true;
+        while (u < units.size()) {
+            size_t best = 1;
+            for (size_t len = units.size() - u; len > 1; --len) {
+                size_t b = units[u].first;
+                size_t e = units[u + len - 1].first + units[u + len - 1].second;
+                if (known.count(t.text.substr(b, e - b))) { best = len; break; }
+            }
+            size_t b = units[u].first;
+            size_t e = units[u + best - 1].first + units[u + best - 1].second;
+            Token piece = t;
+            piece.text = t.text.substr(b, e - b);
+            piece.span = {t.span.file, uint32_t(t.span.begin + b), uint32_t(t.span.begin + e)};
+            if (!first) { piece.space_before = false; piece.line_start = false; }
+            out.push_back(std::move(piece));
+            first = false;
+            u += best;
+        }
+    }
+    return out;
+}
+
+enum class Ctx { Top, Paren, Bracket, Brace, Bars };
+
+class Parser {
+public:
+    Parser(const SourceManager& sm, std::vector<Token> toks, std::set<std::string> known, Diagnostics& d)
+        : sm_(sm), toks_(std::move(toks)), known_(std::move(known)), diags_(d) {}
+
+    Module parse(std::string name, bool allow_header);
+
+private:
+    const SourceManager& sm_;
+    std::vector<Token> toks_;
+    std::set<std::string> known_;
+    Diagnostics& diags_;
+    size_t pos_ = 0;
+    std::vector<Ctx> ctx_{Ctx::Top};
+    bool failed_ = false;  // an error in the current statement: skip to its end
+
+    struct Bail {};  // unwinds to the statement loop after an error
+
+    bool newline_insensitive() const { return ctx_.back() == Ctx::Paren || ctx_.back() == Ctx::Bars; }
+    const Token& cur() {
+        if (newline_insensitive())
+            while (toks_[pos_].kind == Tok::Newline) ++pos_;
+        return toks_[pos_];
+    }
+    const Token& peek_raw(size_t k = 0) const { return toks_[std::min(pos_ + k, toks_.size() - 1)]; }
+    bool at(Tok k) { return cur().kind == k; }
+    bool at_kw(const char* kw) { return is_kw(cur(), kw); }
+    const Token& advance() {
+        const Token& t = cur();
+        if (pos_ < toks_.size() - 1) ++pos_;
+        return t;
+    }
+    bool accept(Tok k) {
+        if (at(k)) { advance(); return true; }
+        return false;
+    }
+    [[noreturn]] void fail(Span s, std::string msg) {
+        diags_.error(s, std::move(msg));
+        throw Bail{};
+    }
+    const Token& expect(Tok k, const char* what) {
+        if (!at(k))
+            fail(cur().span, fmt::format("expected {} {}, found {}", token_description(k), what, describe(cur())));
+        return advance();
+    }
+    std::string describe(const Token& t) const {
+        switch (t.kind) {
+            case Tok::Word: return fmt::format("'{}'", t.text);
+            case Tok::Backtick: return fmt::format("`{}`", t.text);
+            case Tok::Number: return fmt::format("number {}", t.text);
+            case Tok::Unknown: return fmt::format("'{}'", t.text);
+            default: return token_description(t.kind);
+        }
+    }
+    Span prev_span() const { return toks_[pos_ > 0 ? pos_ - 1 : 0].span; }
+    void skip_line() {
+        while (toks_[pos_].kind != Tok::Newline && toks_[pos_].kind != Tok::End) ++pos_;
+    }
+
+    ExprPtr make(ExprKind k, Span s) { return std::make_unique<Expr>(k, s); }
+    ExprPtr binary(BinOp op, ExprPtr a, ExprPtr b) {
+        auto e = make(ExprKind::Binary, Span::join(a->span, b->span));
+        e->op = op;
+        e->args.push_back(std::move(a));
+        e->args.push_back(std::move(b));
+        return e;
+    }
+
+    bool line_is_decl();
+    bool line_is_import();
+    void parse_line(Module& m);
+    Stmt parse_statement();
+    Decl parse_decl();
+    TypeSpec parse_type();
+    std::vector<std::pair<std::string, Span>> parse_name_list();
+    std::pair<std::string, Span> parse_name();
+
+    ExprPtr parse_condition();
+    ExprPtr parse_comparison();
+    ExprPtr parse_expr();
+    ExprPtr parse_unary();
+    ExprPtr parse_mult();
+    ExprPtr parse_operand();  // operand of an explicit operator: allows a leading sign
+    ExprPtr parse_elem();
+    ExprPtr parse_power();
+    ExprPtr parse_postfix();
+    ExprPtr parse_primary();
+    ExprPtr parse_matrix(Span open);
+    ExprPtr parse_piecewise(Span open);
+    ExprPtr parse_delimited(ExprKind kind, Tok close, Span open, const char* what);
+    bool starts_juxtaposed_operand();
+    std::string statement_text(Span s) const;
+};
+
+std::string Parser::statement_text(Span s) const { return std::string(sm_.slice(s)); }
+
+// name := WORD | `text` ; a subscripted name such as `k_d` is one name when the module declares it
+std::pair<std::string, Span> Parser::parse_name() {
+    const Token& t = cur();
+    if (!is_name_token(t)) fail(t.span, fmt::format("expected a name, found {}", describe(t)));
+    if (t.kind == Tok::Word && kKeywords.count(t.text))
+        fail(t.span, fmt::format("'{}' is a keyword and cannot be used as a name", t.text));
+    std::string n = t.text;
+    Span s = t.span;
+    advance();
+    if (at(Tok::Underscore) && !cur().space_before) {
+        const Token& sub = peek_raw(1);
+        if ((is_name_token(sub) || sub.kind == Tok::Number) && !sub.space_before && known_.count(n + "_" + sub.text)) {
+            advance();
+            n += "_" + sub.text;
+            s = Span::join(s, advance().span);
+        }
+    }
+    return {n, s};
+}
+
+std::vector<std::pair<std::string, Span>> Parser::parse_name_list() {
+    std::vector<std::pair<std::string, Span>> names;
+    names.push_back(parse_name());
+    while (accept(Tok::Comma)) names.push_back(parse_name());
+    return names;
+}
+
+// Looks ahead: NAME {, NAME} (∈ | : | in)
+bool Parser::line_is_decl() {
+    size_t k = pos_;
+    while (true) {
+        if (!is_name_token(toks_[k])) return false;
+        ++k;
+        if (toks_[k].kind == Tok::Underscore && k + 1 < toks_.size() && is_name_token(toks_[k + 1]) &&
+            known_.count(toks_[k - 1].text + "_" + toks_[k + 1].text))
+            k += 2;
+        else if (toks_[k].kind == Tok::Underscore && k + 1 < toks_.size() && toks_[k + 1].kind == Tok::Number &&
+                 known_.count(toks_[k - 1].text + "_" + toks_[k + 1].text))
+            k += 2;
+        if (toks_[k].kind == Tok::Comma) { ++k; continue; }
+        break;
+    }
+    return toks_[k].kind == Tok::In || toks_[k].kind == Tok::Colon || is_kw(toks_[k], "in");
+}
+
+bool Parser::line_is_import() {
+    size_t k = pos_;
+    while (true) {
+        if (!is_name_token(toks_[k])) return false;
+        ++k;
+        if (toks_[k].kind == Tok::Comma) { ++k; continue; }
+        break;
+    }
+    return is_kw(toks_[k], "from");
+}
+
+// type := ℝ [SUPER | ^ dims] | ℤ | R [^ dims] | Z | scalar | vector(n) | matrix(m, n) | type {, type} → type
+TypeSpec Parser::parse_type() {
+    TypeSpec ts;
+    Span start = cur().span;
+    auto parse_dim = [&](int& value, std::string& sym) {
+        if (at(Tok::Number)) {
+            const Token& t = advance();
+            value = std::atoi(t.text.c_str());
+            if (value < 1 || t.text.find_first_not_of("0123456789") != std::string::npos)
+                fail(t.span, fmt::format("a size must be a positive integer, found {}", t.text));
+        } else if (is_name_token(cur())) {
+            sym = advance().text;
+            value = 0;
+        } else {
+            fail(cur().span, fmt::format("expected a size, found {}", describe(cur())));
+        }
+    };
+    auto parse_dims = [&]() {  // after ℝ: ³ | ^3 | ^n | ^(m×n)
+        if (at(Tok::Super) && !cur().space_before) {
+            const Token& t = advance();
+            if (t.text == "n") { ts.kind = TypeSpec::Vector; ts.sym_rows = "n"; ts.rows = 0; return; }
+            int n = std::atoi(t.text.c_str());
+            if (n < 1 || t.text.find_first_not_of("0123456789") != std::string::npos)
+                fail(t.span, "a size must be a positive integer");
+            ts.kind = n == 1 ? TypeSpec::Scalar : TypeSpec::Vector;
+            ts.rows = n;
+            return;
+        }
+        if (!accept(Tok::Caret)) return;
+        if (accept(Tok::LParen)) {
+            ctx_.push_back(Ctx::Paren);
+            parse_dim(ts.rows, ts.sym_rows);
+            if (accept(Tok::Cross) || (at(Tok::Word) && cur().text == "x" && (advance(), true)) || accept(Tok::Comma)) {
+                parse_dim(ts.cols, ts.sym_cols);
+                ts.kind = TypeSpec::Matrix;
+            } else {
+                ts.kind = TypeSpec::Vector;
+            }
+            ctx_.pop_back();
+            expect(Tok::RParen, "to close the size");
+        } else {
+            parse_dim(ts.rows, ts.sym_rows);
+            ts.kind = TypeSpec::Vector;
+        }
+        if (ts.kind == TypeSpec::Vector && ts.rows == 1 && ts.sym_rows.empty()) ts.kind = TypeSpec::Scalar;
+    };
+    if (accept(Tok::Reals) || (at(Tok::Word) && cur().text == "R" && (advance(), true))) {
+        ts.kind = TypeSpec::Scalar;
+        parse_dims();
+    } else if (accept(Tok::Integers) || (at(Tok::Word) && cur().text == "Z" && (advance(), true))) {
+        ts.kind = TypeSpec::Integer;
+    } else if (at_kw("scalar")) {
+        advance();
+        ts.kind = TypeSpec::Scalar;
+    } else if (at_kw("vector")) {
+        advance();
+        expect(Tok::LParen, "after 'vector'");
+        ctx_.push_back(Ctx::Paren);
+        parse_dim(ts.rows, ts.sym_rows);
+        ctx_.pop_back();
+        expect(Tok::RParen, "to close 'vector('");
+        ts.kind = (ts.rows == 1 && ts.sym_rows.empty()) ? TypeSpec::Scalar : TypeSpec::Vector;
+    } else if (at_kw("matrix")) {
+        advance();
+        expect(Tok::LParen, "after 'matrix'");
+        ctx_.push_back(Ctx::Paren);
+        parse_dim(ts.rows, ts.sym_rows);
+        expect(Tok::Comma, "between the sizes of 'matrix(m, n)'");
+        parse_dim(ts.cols, ts.sym_cols);
+        ctx_.pop_back();
+        expect(Tok::RParen, "to close 'matrix('");
+        ts.kind = TypeSpec::Matrix;
+    } else {
+        fail(cur().span, fmt::format("expected a type (ℝ, ℝⁿ, ℤ, an interval [a,b]), found {}", describe(cur())));
+    }
+    ts.span = Span::join(start, prev_span());
+    // Function type: type {, type} → type
+    if (at(Tok::Comma) || at(Tok::Arrow)) {
+        size_t save = pos_;
+        std::vector<TypeSpec> params;
+        params.push_back(std::move(ts));
+        bool ok = true;
+        while (accept(Tok::Comma)) {
+            if (!(at(Tok::Reals) || at(Tok::Integers) || at_kw("scalar") || at_kw("vector") || at_kw("matrix") ||
+                  (at(Tok::Word) && (cur().text == "R" || cur().text == "Z")))) { ok = false; break; }
+            params.push_back(parse_type());
+        }
+        if (ok && accept(Tok::Arrow)) {
+            TypeSpec f;
+            f.kind = TypeSpec::Function;
+            f.params = std::move(params);
+            f.result = std::make_unique<TypeSpec>(parse_type());
+            f.span = Span::join(start, prev_span());
+            return f;
+        }
+        pos_ = save;
+        return std::move(params[0]);
+    }
+    return ts;
+}
+
+// decl := names (∈ | : | in) (type | interval {(x | ×) interval}) [default = expr] [: description]
+Decl Parser::parse_decl() {
+    Decl d;
+    Span start = cur().span;
+    d.names = parse_name_list();
+    if (!(accept(Tok::In) || accept(Tok::Colon) || (at_kw("in") && (advance(), true))))
+        fail(cur().span, fmt::format("expected '∈' in the declaration, found {}", describe(cur())));
+    if (at(Tok::LBracket)) {
+        while (true) {
+            Interval iv;
+            Span open = expect(Tok::LBracket, "to open an interval").span;
+            ctx_.push_back(Ctx::Paren);
+            iv.lo = parse_expr();
+            expect(Tok::Comma, "between an interval's bounds");
+            iv.hi = parse_expr();
+            ctx_.pop_back();
+            expect(Tok::RBracket, "to close the interval");
+            iv.span = Span::join(open, prev_span());
+            d.bounds.push_back(std::move(iv));
+            if (accept(Tok::Cross) || (at(Tok::Word) && cur().text == "x" && peek_raw(1).kind == Tok::LBracket &&
+                                       (advance(), true)))
+                continue;
+            break;
+        }
+        d.type.kind = d.bounds.size() == 1 ? TypeSpec::Scalar : TypeSpec::Vector;
+        d.type.rows = int(d.bounds.size());
+        d.type.span = Span::join(d.bounds.front().span, d.bounds.back().span);
+    } else {
+        d.type = parse_type();
+    }
+    if (at_kw("default")) {
+        Span ds = advance().span;
+        expect(Tok::Eq, "after 'default'");
+        d.default_value = parse_expr();
+        d.default_span = Span::join(ds, d.default_value->span);
+    }
+    if (at(Tok::Colon)) {
+        Span colon = advance().span;
+        // The description is the raw text to the end of the line.
+        size_t k = pos_;
+        while (toks_[k].kind != Tok::Newline && toks_[k].kind != Tok::End) ++k;
+        uint32_t end = toks_[k].span.begin;
+        std::string_view text = sm_.text(colon.file).substr(colon.end, end - colon.end);
+        while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
+        while (!text.empty() && (text.back() == ' ' || text.back() == '\t' || text.back() == '\r')) text.remove_suffix(1);
+        d.description = std::string(text);
+        pos_ = k;
+    }
+    d.span = Span::join(start, prev_span());
+    return d;
+}
+
+// statement := NAME = expr [where decls] | NAME(params) = expr [where decls] | expr
+Stmt Parser::parse_statement() {
+    Stmt s;
+    Span start = cur().span;
+    bool assign = false, func = false;
+    if (is_name_token(cur())) {
+        size_t save = pos_;
+        auto name = parse_name();
+        if (at(Tok::Eq)) {
+            assign = true;
+        } else if (at(Tok::LParen) && !cur().space_before) {
+            // NAME ( NAME {, NAME} ) =
+            size_t k = pos_ + 1;
+            while (is_name_token(toks_[k])) {
+                ++k;
+                if (toks_[k].kind == Tok::Comma) ++k;
+                else break;
+            }
+            func = toks_[k].kind == Tok::RParen && toks_[k + 1].kind == Tok::Eq;
+        }
+        if (assign || func) {
+            s.name = name.first;
+            s.name_span = name.second;
+        } else {
+            pos_ = save;
+        }
+    }
+    if (func) {
+        s.kind = StmtKind::Function;
+        expect(Tok::LParen, "");
+        ctx_.push_back(Ctx::Paren);
+        s.params = parse_name_list();
+        ctx_.pop_back();
+        expect(Tok::RParen, "to close the parameter list");
+    }
+    if (assign || func) {
+        expect(Tok::Eq, "");
+        if (assign) s.kind = StmtKind::Assign;
+    } else {
+        s.kind = StmtKind::Return;
+    }
+    s.value = parse_expr();
+    s.span = Span::join(start, s.value->span);
+    s.source_line = statement_text(s.span);
+    if (at_kw("where") || at_kw("given")) {
+        if (s.kind != StmtKind::Function)
+            fail(cur().span, "a 'where' on the same line belongs to a local function definition, such as 'f(x) = x² where x ∈ ℝ'");
+        advance();
+        while (true) {
+            s.local_decls.push_back(parse_decl());
+            if (at(Tok::Comma) && (advance(), true)) continue;
+            break;
+        }
+    }
+    return s;
+}
+
+void Parser::parse_line(Module& m) {
+    if (at_kw("where") || at_kw("given")) {
+        advance();
+        if (at(Tok::Newline) || at(Tok::End)) return;
+    }
+    if (line_is_import()) {
+        Stmt s;
+        s.kind = StmtKind::Import;
+        Span start = cur().span;
+        s.imports = parse_name_list();
+        advance();  // from
+        if (!is_name_token(cur())) fail(cur().span, fmt::format("expected a module name after 'from', found {}", describe(cur())));
+        s.from = cur().text;
+        s.from_span = cur().span;
+        advance();
+        s.span = Span::join(start, s.from_span);
+        m.stmts.push_back(std::move(s));
+    } else if (line_is_decl()) {
+        m.decls.push_back(parse_decl());
+    } else {
+        m.stmts.push_back(parse_statement());
+    }
+}
+
+Module Parser::parse(std::string name, bool allow_header) {
+    Module m;
+    m.name = std::move(name);
+    while (at(Tok::Newline)) advance();
+    m.span = cur().span;
+    if (allow_header && (at_kw("shape") || at_kw("material")) &&
+        (peek_raw(1).kind == Tok::Newline || peek_raw(1).kind == Tok::End)) {
+        m.kind = cur().text == "shape" ? ModuleKind::Shape : ModuleKind::Material;
+        advance();
+    }
+    while (!at(Tok::End)) {
+        if (at(Tok::Newline) || at(Tok::Semicolon)) { advance(); continue; }
+        try {
+            ctx_.assign(1, Ctx::Top);
+            parse_line(m);
+            if (!at(Tok::Newline) && !at(Tok::End) && !at(Tok::Semicolon)) {
+                const Token& t = cur();
+                if (t.kind == Tok::Unknown)
+                    fail(t.span, fmt::format("unexpected character '{}'", t.text));
+                fail(t.span, fmt::format("unexpected {} after the end of the statement", describe(t)));
+            }
+        } catch (Bail&) {
+            skip_line();
+        }
+    }
+    return m;
+}
+
+// condition := comparison {(and | or) comparison}
+ExprPtr Parser::parse_condition() {
+    ExprPtr lhs = parse_comparison();
+    while (at_kw("and") || at_kw("or")) {
+        BinOp op = cur().text == "and" ? BinOp::And : BinOp::Or;
+        advance();
+        ExprPtr rhs = parse_comparison();
+        auto e = binary(op, std::move(lhs), std::move(rhs));
+        e->kind = ExprKind::Logic;
+        lhs = std::move(e);
+    }
+    return lhs;
+}
+
+// comparison := expr (= | ≠ | < | ≤ | > | ≥) expr
+ExprPtr Parser::parse_comparison() {
+    ExprPtr lhs = parse_expr();
+    BinOp op;
+    switch (cur().kind) {
+        case Tok::Eq: op = BinOp::Eq; break;
+        case Tok::Neq: op = BinOp::Neq; break;
+        case Tok::Lt: op = BinOp::Lt; break;
+        case Tok::Le: op = BinOp::Le; break;
+        case Tok::Gt: op = BinOp::Gt; break;
+        case Tok::Ge: op = BinOp::Ge; break;
+        default: fail(cur().span, fmt::format("expected a comparison (=, ≠, <, ≤, >, ≥), found {}", describe(cur())));
+    }
+    advance();
+    ExprPtr rhs = parse_expr();
+    auto e = binary(op, std::move(lhs), std::move(rhs));
+    e->kind = ExprKind::Compare;
+    return e;
+}
+
+// expr := unary {(+ | -) unary}
+ExprPtr Parser::parse_expr() {
+    ExprPtr lhs = parse_unary();
+    while (true) {
+        const Token& t = cur();
+        if (t.kind != Tok::Plus && t.kind != Tok::Minus) break;
+        // Inside a matrix, `a -b` is two items while `a - b` and `a-b` are one.
+        if (ctx_.back() == Ctx::Bracket && t.space_before && !peek_raw(1).space_before) break;
+        BinOp op = t.kind == Tok::Plus ? BinOp::Add : BinOp::Sub;
+        advance();
+        while (toks_[pos_].kind == Tok::Newline && ctx_.back() == Ctx::Top) ++pos_;  // `a +` continues
+        ExprPtr rhs = parse_unary();
+        lhs = binary(op, std::move(lhs), std::move(rhs));
+    }
+    return lhs;
+}
+
+// unary := (- | +) unary | mult        (so -a2 is -(2a) and -x² is -(x²))
+ExprPtr Parser::parse_unary() {
+    if (at(Tok::Minus)) {
+        Span s = advance().span;
+        ExprPtr inner = parse_unary();
+        auto e = make(ExprKind::Negate, Span::join(s, inner->span));
+        e->args.push_back(std::move(inner));
+        return e;
+    }
+    if (at(Tok::Plus)) {
+        advance();
+        return parse_unary();
+    }
+    return parse_mult();
+}
+
+ExprPtr Parser::parse_operand() {
+    if (at(Tok::Minus)) {
+        Span s = advance().span;
+        ExprPtr inner = parse_operand();
+        auto e = make(ExprKind::Negate, Span::join(s, inner->span));
+        e->args.push_back(std::move(inner));
+        return e;
+    }
+    return parse_elem();
+}
+
+bool Parser::starts_juxtaposed_operand() {
+    const Token& t = cur();
+    if (ctx_.back() == Ctx::Bracket && t.space_before) return false;
+    switch (t.kind) {
+        case Tok::Number: case Tok::Backtick: case Tok::LParen: case Tok::LFloor: case Tok::LCeil:
+        case Tok::Sqrt: case Tok::Fraction: case Tok::Norm: case Tok::DoubleBar:
+            return !(ctx_.back() == Ctx::Bars && (t.kind == Tok::Norm || t.kind == Tok::DoubleBar));
+        case Tok::Bar: return ctx_.back() != Ctx::Bars;
+        case Tok::Word: return !kKeywords.count(t.text);
+        default: return false;
+    }
+}
+
+// mult := elem {(⋅ | * | / | ÷) operand | elem}      (juxtaposition; a/bc is (a/b)c)
+ExprPtr Parser::parse_mult() {
+    ExprPtr lhs = parse_elem();
+    while (true) {
+        BinOp op;
+        const Token& t = cur();
+        if (t.kind == Tok::Dot) op = BinOp::Dot;
+        else if (t.kind == Tok::Star) op = BinOp::Star;
+        else if (t.kind == Tok::Slash || t.kind == Tok::Divide) op = BinOp::Div;
+        else if (starts_juxtaposed_operand()) op = BinOp::Juxtapose;
+        else break;
+        if (op != BinOp::Juxtapose) advance();
+        ExprPtr rhs = op == BinOp::Juxtapose ? parse_elem() : parse_operand();
+        lhs = binary(op, std::move(lhs), std::move(rhs));
+    }
+    return lhs;
+}
+
+// elem := power {(∘ | ×) power}
+ExprPtr Parser::parse_elem() {
+    ExprPtr lhs = parse_power();
+    while (at(Tok::Circle) || at(Tok::Cross)) {
+        BinOp op = at(Tok::Circle) ? BinOp::Hadamard : BinOp::Cross;
+        advance();
+        ExprPtr rhs = parse_power();
+        lhs = binary(op, std::move(lhs), std::move(rhs));
+    }
+    return lhs;
+}
+
+// power := postfix {^ [-] primary | SUPERSCRIPT}      (x^2y is x²·y; ᵀ and ⁻¹ are superscripts too)
+ExprPtr Parser::parse_power() {
+    ExprPtr base = parse_postfix();
+    while (true) {
+        if (at(Tok::Super) && !cur().space_before) {
+            const Token& t = advance();
+            if (t.text == "T") {
+                auto e = make(ExprKind::Transpose, Span::join(base->span, t.span));
+                e->args.push_back(std::move(base));
+                base = std::move(e);
+                continue;
+            }
+            if (t.text.empty() || t.text.find_first_not_of("+-0123456789") != std::string::npos ||
+                t.text.find_first_of("0123456789") == std::string::npos)
+                fail(t.span, "a superscript power must be an integer such as ² or ⁻¹");
+            auto ex = make(ExprKind::Number, t.span);
+            ex->number = std::strtod(t.text.c_str(), nullptr);
+            ex->text = t.text;
+            auto e = make(ExprKind::Power, Span::join(base->span, t.span));
+            e->args.push_back(std::move(base));
+            e->args.push_back(std::move(ex));
+            base = std::move(e);
+            continue;
+        }
+        if (at(Tok::Caret)) {
+            advance();
+            if (at(Tok::Word) && cur().text == "T" && !known_.count("T")) {
+                Span ts = advance().span;
+                auto e = make(ExprKind::Transpose, Span::join(base->span, ts));
+                e->args.push_back(std::move(base));
+                base = std::move(e);
+                continue;
+            }
+            ExprPtr ex;
+            if (at(Tok::Minus)) {
+                Span s = advance().span;
+                ExprPtr inner = parse_postfix();
+                ex = make(ExprKind::Negate, Span::join(s, inner->span));
+                ex->args.push_back(std::move(inner));
+            } else {
+                ex = parse_postfix();
+            }
+            auto e = make(ExprKind::Power, Span::join(base->span, ex->span));
+            e->args.push_back(std::move(base));
+            e->args.push_back(std::move(ex));
+            base = std::move(e);
+            continue;
+        }
+        break;
+    }
+    return base;
+}
+
+// postfix := primary {_ index [, index] | SUBSCRIPT | (args)}
+ExprPtr Parser::parse_postfix() {
+    ExprPtr e = parse_primary();
+    while (true) {
+        if (at(Tok::Sub)) {
+            const Token& t = advance();
+            auto idx = make(ExprKind::Index, Span::join(e->span, t.span));
+            IndexItem it;
+            if (std::isdigit(static_cast<unsigned char>(t.text[0]))) {
+                it.expr = make(ExprKind::Number, t.span);
+                it.expr->number = std::atof(t.text.c_str());
+                it.expr->text = t.text;
+            } else {
+                it.expr = make(ExprKind::Name, t.span);
+                it.expr->text = t.text;
+                it.expr->name_span = t.span;
+            }
+            it.span = t.span;
+            idx->args.push_back(std::move(e));
+            idx->indices.push_back(std::move(it));
+            e = std::move(idx);
+            continue;
+        }
+        if (at(Tok::Underscore) && !cur().space_before) {
+            advance();
+            auto idx = make(ExprKind::Index, e->span);
+            idx->args.push_back(std::move(e));
+            auto parse_index = [&]() {
+                IndexItem it;
+                const Token& t = cur();
+                it.span = t.span;
+                if (t.kind == Tok::Star) {
+                    advance();
+                } else if (t.kind == Tok::Number) {
+                    it.expr = make(ExprKind::Number, t.span);
+                    it.expr->number = std::atof(t.text.c_str());
+                    it.expr->text = t.text;
+                    advance();
+                } else if (is_name_token(t)) {
+                    it.expr = make(ExprKind::Name, t.span);
+                    it.expr->text = t.text;
+                    it.expr->name_span = t.span;
+                    advance();
+                } else if (t.kind == Tok::LParen) {
+                    advance();
+                    ctx_.push_back(Ctx::Paren);
+                    it.expr = parse_expr();
+                    ctx_.pop_back();
+                    it.span = Span::join(t.span, expect(Tok::RParen, "to close the subscript").span);
+                } else {
+                    fail(t.span, fmt::format("expected a subscript after '_', found {}", describe(t)));
+                }
+                idx->span = Span::join(idx->span, it.span);
+                idx->indices.push_back(std::move(it));
+            };
+            parse_index();
+            // A second index (`A_2,3`) only outside parenthesised lists, written without spaces.
+            if (ctx_.back() == Ctx::Top && toks_[pos_].kind == Tok::Comma && !toks_[pos_].space_before &&
+                !peek_raw(1).space_before)
+                advance(), parse_index();
+            e = std::move(idx);
+            continue;
+        }
+        if (at(Tok::LParen) && !cur().space_before && e->kind == ExprKind::Name) {
+            Span open = advance().span;
+            ctx_.push_back(Ctx::Paren);
+            auto call = make(ExprKind::Call, e->span);
+            call->text = e->text;
+            call->name_span = e->name_span;
+            if (!at(Tok::RParen)) {
+                call->args.push_back(parse_expr());
+                while (accept(Tok::Comma)) call->args.push_back(parse_expr());
+            }
+            ctx_.pop_back();
+            Span close = expect(Tok::RParen, "to close the argument list").span;
+            (void)open;
+            call->span = Span::join(call->span, close);
+            e = std::move(call);
+            continue;
+        }
+        break;
+    }
+    return e;
+}
+
+ExprPtr Parser::parse_delimited(ExprKind kind, Tok close, Span open, const char* what) {
+    ctx_.push_back(kind == ExprKind::Norm || kind == ExprKind::Abs ? Ctx::Bars : Ctx::Paren);
+    ExprPtr inner = parse_expr();
+    ctx_.pop_back();
+    if (!at(close)) {
+        if (kind == ExprKind::Norm && at(Tok::DoubleBar)) {
+        } else {
+            auto& d = diags_.error(cur().span, fmt::format("expected {} to close {}, found {}", token_description(close),
+                                                           what, describe(cur())));
+            Diagnostics::note(d, open, "opened here");
+            throw Bail{};
+        }
+    }
+    Span end = advance().span;
+    auto e = make(kind, Span::join(open, end));
+    e->args.push_back(std::move(inner));
+    return e;
+}
+
+// matrix := [ row {(; | newline) row} ]       row := item {[,] item}
+ExprPtr Parser::parse_matrix(Span open) {
+    ctx_.push_back(Ctx::Bracket);
+    auto m = make(ExprKind::Matrix, open);
+    std::vector<ExprPtr> row;
+    auto end_row = [&]() {
+        if (!row.empty()) m->rows.push_back(std::move(row));
+        row.clear();
+    };
+    while (true) {
+        const Token& t = cur();
+        if (t.kind == Tok::RBracket) break;
+        if (t.kind == Tok::End) {
+            auto& d = diags_.error(t.span, "expected ']' to close the matrix");
+            Diagnostics::note(d, open, "opened here");
+            throw Bail{};
+        }
+        if (t.kind == Tok::Newline || t.kind == Tok::Semicolon) { advance(); end_row(); continue; }
+        if (t.kind == Tok::Comma) { advance(); continue; }
+        row.push_back(parse_expr());
+    }
+    end_row();
+    ctx_.pop_back();
+    m->span = Span::join(open, advance().span);
+    if (m->rows.empty()) fail(m->span, "a matrix needs at least one entry");
+    return m;
+}
+
+// piecewise := { case {newline case}      case := expr [,] (if condition | otherwise)
+ExprPtr Parser::parse_piecewise(Span open) {
+    ctx_.push_back(Ctx::Brace);
+    auto p = make(ExprKind::Piecewise, open);
+    while (true) {
+        while (at(Tok::Newline)) advance();
+        if (at(Tok::RBrace)) { advance(); break; }
+        ExprPtr value = parse_expr();
+        accept(Tok::Comma);
+        if (at_kw("otherwise")) {
+            p->span = Span::join(p->span, advance().span);
+            p->otherwise = std::move(value);
+            accept(Tok::RBrace);
+            break;
+        }
+        if (!at_kw("if")) fail(cur().span, fmt::format("expected 'if' or 'otherwise' in the piecewise case, found {}", describe(cur())));
+        advance();
+        ExprPtr cond = parse_condition();
+        p->span = Span::join(p->span, cond->span);
+        std::vector<ExprPtr> c;
+        c.push_back(std::move(value));
+        c.push_back(std::move(cond));
+        p->rows.push_back(std::move(c));
+        // The cases continue on the next line only if it holds another case.
+        size_t k = pos_;
+        while (toks_[k].kind == Tok::Newline) ++k;
+        bool more = false;
+        for (size_t j = k; toks_[j].kind != Tok::Newline && toks_[j].kind != Tok::End; ++j)
+            if (is_kw(toks_[j], "if") || is_kw(toks_[j], "otherwise") || toks_[j].kind == Tok::RBrace) more = true;
+        if (!more) break;
+    }
+    ctx_.pop_back();
+    if (p->rows.empty()) fail(p->span, "a piecewise definition needs at least one 'if' case");
+    return p;
+}
+
+// primary := NUMBER | NAME | FRACTION | ( expr {, expr} ) | [ matrix ] | ‖expr‖ | |expr| | ⌊expr⌋ | ⌈expr⌉
+//          | √ postfix | { piecewise
+ExprPtr Parser::parse_primary() {
+    const Token& t = cur();
+    switch (t.kind) {
+        case Tok::Number: {
+            auto e = make(ExprKind::Number, t.span);
+            e->number = std::strtod(t.text.c_str(), nullptr);
+            e->text = t.text;
+            advance();
+            return e;
+        }
+        case Tok::Fraction: {
+            auto e = make(ExprKind::Number, t.span);
+            int num = t.text[0] - '0', den = t.text[2] - '0';
+            e->number = double(num) / double(den);
+            e->text = t.text;
+            advance();
+            return e;
+        }
+        case Tok::Word:
+        case Tok::Backtick: {
+            if (t.kind == Tok::Word && kKeywords.count(t.text))
+                fail(t.span, fmt::format("unexpected keyword '{}' in an expression", t.text));
+            auto e = make(ExprKind::Name, t.span);
+            auto [n, s] = parse_name();
+            e->text = n;
+            e->span = s;
+            e->name_span = s;
+            return e;
+        }
+        case Tok::LParen: {
+            Span open = advance().span;
+            ctx_.push_back(Ctx::Paren);
+            std::vector<ExprPtr> items;
+            items.push_back(parse_expr());
+            while (accept(Tok::Comma)) items.push_back(parse_expr());
+            ctx_.pop_back();
+            if (!at(Tok::RParen)) {
+                auto& d = diags_.error(cur().span, fmt::format("expected ')', found {}", describe(cur())));
+                Diagnostics::note(d, open, "opened here");
+                throw Bail{};
+            }
+            Span close = advance().span;
+            if (items.size() == 1) {
+                items[0]->span = Span::join(open, close);
+                return std::move(items[0]);
+            }
+            auto e = make(ExprKind::Vector, Span::join(open, close));
+            e->args = std::move(items);
+            return e;
+        }
+        case Tok::LBracket: return parse_matrix(advance().span);
+        case Tok::LBrace: return parse_piecewise(advance().span);
+        case Tok::Norm: return parse_delimited(ExprKind::Norm, Tok::Norm, advance().span, "the norm");
+        case Tok::DoubleBar: return parse_delimited(ExprKind::Norm, Tok::DoubleBar, advance().span, "the norm");
+        case Tok::Bar: return parse_delimited(ExprKind::Abs, Tok::Bar, advance().span, "the absolute value");
+        case Tok::LFloor: return parse_delimited(ExprKind::Floor, Tok::RFloor, advance().span, "the floor");
+        case Tok::LCeil: return parse_delimited(ExprKind::Ceil, Tok::RCeil, advance().span, "the ceiling");
+        case Tok::Sqrt: {
+            Span s = advance().span;
+            ExprPtr inner = parse_postfix();
+            auto e = make(ExprKind::Sqrt, Span::join(s, inner->span));
+            e->args.push_back(std::move(inner));
+            return e;
+        }
+        case Tok::Unknown: fail(t.span, fmt::format("unexpected character '{}'", t.text));
+        case Tok::Newline:
+        case Tok::End: fail(t.span, "expected an expression, found the end of the line");
+        default: fail(t.span, fmt::format("expected an expression, found {}", describe(t)));
+    }
+}
+
+}  // namespace
+
+ast::Module parse_module(const SourceManager& sm, FileId file, const std::vector<TextRange>& ranges,
+                         std::string name, const ParseOptions& opts, Diagnostics& diags) {
+    std::vector<Token> raw = lex(sm, file, ranges);
+    std::set<std::string> known = prescan(raw);
+    known.insert(opts.known_names.begin(), opts.known_names.end());
+    std::vector<Token> toks = split_words(raw, known);
+    Parser p(sm, std::move(toks), std::move(known), diags);
+    return p.parse(std::move(name), opts.allow_header);
+}
+
+}  // namespace iqc
