@@ -3,12 +3,16 @@
 // Exit codes: 0 success; 1 a diagnostic about the input; 2 usage; 3 internal error (a bug in iqc, such as
 // generated GLSL that glslang rejects; nothing is written then).
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fmt/format.h>
 #include <fstream>
 #include <iostream>
 
+#include "render/Png.h"
+#include "render/Render.h"
+#include "glsl/ShadertoyWrapper.h"
 #include "scene/Compile.h"
 
 namespace {
@@ -49,29 +53,51 @@ int main(int argc, char** argv) {
         "Exit codes: 0 ok, 1 error in the input, 2 usage, 3 internal error (a bug in iqc).",
         "iqc"};
     app.set_version_flag("--version", std::string("iqc ") + IQC_VERSION);
+    app.require_subcommand(0, 1);
     std::string input, output, target = "shadertoy";
     bool dump_ir = false, time = false;
-    app.add_option("input", input, "scene (.iq), document (.md) or shape module (.iql)")->required();
+    app.add_option("input", input, "scene (.iq), document (.md) or shape module (.iql)");
     app.add_option("-o,--output", output, "where to write the shader (default: standard output)");
     app.add_option("--target", target, "output kind: shadertoy (default)")
         ->check(CLI::IsMember({"shadertoy"}));
     app.add_flag("--dump-ir", dump_ir, "print the typed IR of every function to standard error");
     app.add_flag("--time", time, "print the compile time to standard error");
+    bool time_passes = false;
+    int repeat = 0;
+    app.add_option("--repeat", repeat,
+                   "benchmark: compile N more times in this process and print the median time (the first compile "
+                   "pays glslang's one-time set-up)")
+        ->check(CLI::Range(1, 100000));
+    app.add_flag("--time-passes", time_passes, "print the time of each compiler phase to standard error");
+
+    CLI::App* render = app.add_subcommand("render", "render the scene headlessly to a PNG (no GPU or display needed)");
+    std::string r_input, r_output, r_size = "640x360";
+    float r_time = 0;
+    render->add_option("input", r_input, "scene (.iq), document (.md) or shape module (.iql)")->required();
+    render->add_option("-o,--output", r_output, "the PNG to write")->required();
+    render->add_option("--size", r_size, "image size WxH (default 640x360)");
+    render->add_option("--time", r_time, "iTime in seconds (default 0)");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         int code = app.exit(e);
         return e.get_exit_code() == 0 ? 0 : (code == 0 ? 0 : 2);
     }
+    if (!render->parsed() && input.empty()) {
+        std::fprintf(stderr, "iqc: error: no input file (see iqc --help)\n");
+        return 2;
+    }
     auto t0 = std::chrono::steady_clock::now();
     iqc::SourceManager sm;
     iqc::Diagnostics diags(sm);
     iqc::CompileOptions opts;
     opts.dump_ir = dump_ir;
-    iqc::CompileResult r = iqc::compile_file(input, sm, diags, opts);
+    iqc::CompileResult r = iqc::compile_file(render->parsed() ? r_input : input, sm, diags, opts);
     std::string rendered = diags.render();
     if (!rendered.empty()) std::fputs(rendered.c_str(), stderr);
     if (dump_ir && !r.ir.empty()) std::fputs(r.ir.c_str(), stderr);
+    if (time_passes)
+        for (auto& [name, ms] : r.pass_ms) std::fprintf(stderr, "iqc: %-28s %8.3f ms\n", name.c_str(), ms);
     if (r.exit_code == 3) {
         std::fprintf(stderr, "%s\n", r.internal.c_str());
         return 3;
@@ -79,6 +105,47 @@ int main(int argc, char** argv) {
     if (r.exit_code != 0) {
         if (diags.error_count() > 1) std::fprintf(stderr, "%zu errors\n", diags.error_count());
         return 1;
+    }
+    if (render->parsed()) {
+        iqc::render::RenderOptions ro;
+        if (std::sscanf(r_size.c_str(), "%dx%d", &ro.width, &ro.height) != 2 || ro.width < 1 || ro.height < 1 ||
+            ro.width > 16384 || ro.height > 16384) {
+            std::fprintf(stderr, "iqc: error: --size must look like 640x360\n");
+            return 2;
+        }
+        ro.time = r_time;
+        iqc::render::RenderResult rr = iqc::render::render_shadertoy(r.code, ro);
+        if (!rr.ok) {
+            std::fprintf(stderr, "iqc: error: rendering failed: %s\n", rr.error.c_str());
+            return 1;
+        }
+        std::string err;
+        if (!iqc::render::write_png(r_output, rr.image, &err)) {
+            std::fprintf(stderr, "iqc: error: %s\n", err.c_str());
+            return 1;
+        }
+        std::fprintf(stderr, "iqc: rendered %s (%dx%d, %s, %.1f ms)\n", r_output.c_str(), ro.width, ro.height,
+                     rr.renderer.c_str(), rr.frame_ms);
+        return 0;
+    }
+    if (repeat > 0) {
+        std::vector<double> times;
+        for (int i = 0; i < repeat; ++i) {
+            auto s0 = std::chrono::steady_clock::now();
+            iqc::SourceManager sm2;
+            iqc::Diagnostics d2(sm2);
+            iqc::CompileResult r2 = iqc::compile_file(input, sm2, d2, opts);
+            times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - s0).count());
+            if (r2.code != r.code) {
+                std::fprintf(stderr, "iqc: internal error: output differs between runs\n");
+                return 3;
+            }
+        }
+        std::sort(times.begin(), times.end());
+        std::fprintf(stderr, "iqc: %d warm compiles: median %.3f ms, min %.3f ms, max %.3f ms (first, cold: %.3f ms)\n",
+                     repeat, times[times.size() / 2], times.front(), times.back(),
+                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() -
+                         [&] { double s = 0; for (double x : times) s += x; return s; }());
     }
     int rc = write_output(output, r.code);
     if (time) {

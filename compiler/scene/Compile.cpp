@@ -1,5 +1,6 @@
 #include "scene/Compile.h"
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
@@ -530,6 +531,12 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans) {
 CompileResult SceneCompiler::run() {
     CompileResult res;
     size_t before = d_.error_count();
+    auto clock = std::chrono::steady_clock::now();
+    auto lap = [&](const char* name) {
+        auto now = std::chrono::steady_clock::now();
+        res.pass_ms.push_back({name, std::chrono::duration<double, std::milli>(now - clock).count()});
+        clock = now;
+    };
     build_registry();
     std::vector<InstancePlan> plans(s_.instances.size());
     std::map<std::string, int> counts;
@@ -547,6 +554,7 @@ CompileResult SceneCompiler::run() {
         plan_instance(inst, plans[i], counts, taken);
         names.insert(plans[i].name);
     }
+    lap("parse + check + transforms");
     if (d_.error_count() != before) return res;
     for (auto& p : plans) {
         p.shape_fn = lower(p.shape);
@@ -561,9 +569,12 @@ CompileResult SceneCompiler::run() {
         }
     }
     if (opts_.dump_ir) res.ir = ir::print(ir_);
+    lap("lower + verify IR");
     std::string code = assemble(plans);
+    lap("GLSL backend + assembly");
     if (d_.error_count() != before) return res;
     glsl::ValidationResult v = glsl::validate_fragment(glsl::wrap_shadertoy(code), glsl::Profile::Es300);
+    lap("glslang validation");
     if (!v.ok) {
         res.exit_code = 3;
         res.internal = "internal compiler error: glslang rejected the generated shader (this is a bug in iqc; "
@@ -583,9 +594,13 @@ CompileResult compile_scene(const SceneDesc& scene, SourceManager& sm, Diagnosti
 }
 
 CompileResult compile_file(const std::string& path, SourceManager& sm, Diagnostics& diags, const CompileOptions& opts) {
+    auto t0 = std::chrono::steady_clock::now();
     SceneDesc scene;
     if (!load_scene(path, sm, diags, scene)) return {};
-    return compile_scene(scene, sm, diags, opts);
+    double load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    CompileResult r = compile_scene(scene, sm, diags, opts);
+    r.pass_ms.insert(r.pass_ms.begin(), {"read scene", load_ms});
+    return r;
 }
 
 }  // namespace iqc

@@ -9,6 +9,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "scene/Scene.h"
 
@@ -26,6 +28,7 @@ struct CompileResult {
     std::string code;      // the shader (only when exit_code == 0)
     std::string ir;        // the IR, when dump_ir
     std::string internal;  // the internal error's text
+    std::vector<std::pair<std::string, double>> pass_ms;  // wall time per phase, for --time-passes
 };
 
 CompileResult compile_scene(const SceneDesc& scene, SourceManager& sm, Diagnostics& diags, const CompileOptions& opts);

@@ -25,22 +25,30 @@ int CheckedModule::find_function(const std::string& n) const {
 }
 
 std::optional<std::string> did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
-    auto dist = [](const std::string& a, const std::string& b) {
-        std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
-        for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-        for (size_t i = 1; i <= a.size(); ++i) {
-            cur[0] = i;
-            for (size_t j = 1; j <= b.size(); ++j)
-                cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
-            std::swap(prev, cur);
-        }
-        return prev[b.size()];
+    // Edit distance with adjacent transpositions (optimal string alignment), over code points.
+    auto points = [](const std::string& s) {
+        std::vector<char32_t> v;
+        for (size_t i = 0; i < s.size();) v.push_back(utf8::decode(s, i));
+        return v;
     };
+    auto dist = [](const std::vector<char32_t>& a, const std::vector<char32_t>& b) {
+        std::vector<std::vector<size_t>> d(a.size() + 1, std::vector<size_t>(b.size() + 1));
+        for (size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+        for (size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+        for (size_t i = 1; i <= a.size(); ++i)
+            for (size_t j = 1; j <= b.size(); ++j) {
+                d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+                if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+            }
+        return d[a.size()][b.size()];
+    };
+    auto n = points(name);
+    if (n.size() < 3) return std::nullopt;  // one- and two-letter names: any suggestion would be noise
     std::optional<std::string> best;
-    size_t best_d = std::max<size_t>(1, name.size() / 3) + 1;
+    size_t best_d = std::max<size_t>(1, n.size() / 3) + 1;
     for (const auto& c : candidates) {
         if (c == name) continue;
-        size_t d = dist(name, c);
+        size_t d = dist(n, points(c));
         if (d < best_d) { best_d = d; best = c; }
     }
     return best;

@@ -1,0 +1,131 @@
+// Helpers shared by the tests: temporary files, running the iqc binary, compiling and evaluating
+// modules in process.
+#pragma once
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+#include "ir/Eval.h"
+#include "ir/Lower.h"
+#include "scene/Compile.h"
+#include "sema/Builtins.h"
+#include "sema/Check.h"
+#include "syntax/Parser.h"
+
+namespace iqc::test {
+
+inline std::string read_text(const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+inline std::filesystem::path temp_dir() {
+    static std::filesystem::path dir = [] {
+        auto d = std::filesystem::temp_directory_path() / ("iqc_tests_" + std::to_string(::getpid()));
+        std::filesystem::create_directories(d);
+        return d;
+    }();
+    return dir;
+}
+
+inline std::filesystem::path write_temp(const std::string& name, const std::string& text) {
+    auto p = temp_dir() / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+}
+
+struct RunResult {
+    int exit_code = -1;
+    std::string out, err;
+};
+
+// Runs the iqc binary with the given arguments (a shell-quoted string).
+inline RunResult run_iqc(const std::string& args) {
+    auto out = temp_dir() / "stdout.txt";
+    auto err = temp_dir() / "stderr.txt";
+    std::string cmd = std::string(IQC_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string() + " </dev/null";
+    int status = std::system(cmd.c_str());
+    RunResult r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = read_text(out);
+    r.err = read_text(err);
+    return r;
+}
+
+// Compiles a file in process; returns the result and the rendered diagnostics.
+struct Compiled {
+    CompileResult result;
+    std::string diagnostics;
+};
+inline Compiled compile_path(const std::filesystem::path& p) {
+    SourceManager sm;
+    Diagnostics d(sm);
+    Compiled c;
+    c.result = compile_file(p.string(), sm, d, {});
+    c.diagnostics = d.render();
+    return c;
+}
+inline Compiled compile_text(const std::string& name, const std::string& text) { return compile_path(write_temp(name, text)); }
+
+// Parses, checks, lowers and evaluates a standalone module (a function library may import
+// trigonometry); returns every output (assigned name or "ret") formatted as `iqc eval` prints values.
+struct Evaluated {
+    bool ok = false;
+    std::string diagnostics;
+    std::map<std::string, ir::Value> outputs;
+    std::map<std::string, std::string> text;  // formatted
+};
+inline Evaluated eval_module(const std::string& source, const std::map<std::string, std::vector<double>>& set = {}) {
+    SourceManager sm;
+    Diagnostics d(sm);
+    FileId f = sm.add("test.iql", source);
+    ParseOptions po;
+    for (const auto& b : builtins()) po.known_names.insert(b.name);
+    ast::Module m = parse_module(sm, f, {{0, uint32_t(source.size())}}, "test", po, d);
+    Evaluated e;
+    if (d.has_errors()) {
+        e.diagnostics = d.render();
+        return e;
+    }
+    auto cm = check_module(std::move(m), nullptr, {}, d);
+    if (d.has_errors()) {
+        e.diagnostics = d.render();
+        return e;
+    }
+    ir::Module irm;
+    LowerContext ctx{irm, {}};
+    int fn = lower_module(*cm, "test", "test", ctx);
+    std::string fault = ir::verify(irm.functions[size_t(fn)], irm);
+    if (!fault.empty()) {
+        e.diagnostics = "invalid IR: " + fault;
+        return e;
+    }
+    std::vector<ir::Value> args;
+    for (const auto& p : cm->params) {
+        auto it = set.find(p.name);
+        args.push_back({p.type, it != set.end() ? it->second : p.value});
+    }
+    auto all = ir::evaluate_all(irm, fn, args);
+    const ir::Function& F = irm.functions[size_t(fn)];
+    for (auto& [name, v] : F.outputs) {
+        e.outputs[name] = all[v];
+        e.text[name] = ir::format_value(all[v]);
+    }
+    if (cm->ret) {
+        e.outputs["ret"] = all[F.result];
+        e.text["ret"] = ir::format_value(all[F.result]);
+    }
+    e.ok = true;
+    return e;
+}
+
+inline double scalar_of(const Evaluated& e, const std::string& name) { return e.outputs.at(name).v.at(0); }
+
+}  // namespace iqc::test

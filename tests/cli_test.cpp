@@ -1,0 +1,133 @@
+// The command line: exit codes, output files, and every scene-level error path with its message and
+// location (unknown shape or material, a shape without D, a material without C, TOML errors, a document
+// without a scene block, an unreadable file).
+#include <catch2/catch.hpp>
+
+#include "TestUtil.h"
+
+using namespace iqc::test;
+
+static const char* kTorus = R"(❤: torus
+```iheartla
+shape
+D = ‖q‖ - t_2
+q = (‖(p_1, p_3)‖ - t_1, p_2)
+where
+p ∈ ℝ³
+t ∈ [0,2]x[0,2] default = (0.77, 0.6)
+```
+)";
+
+static RunResult compile_doc(const std::string& name, const std::string& text) {
+    auto p = write_temp(name, text);
+    return run_iqc(p.string());
+}
+
+TEST_CASE("--help, --version and usage errors", "[cli]") {
+    RunResult h = run_iqc("--help");
+    CHECK(h.exit_code == 0);
+    CHECK_THAT(h.out, Catch::Contains("Exit codes"));
+    RunResult v = run_iqc("--version");
+    CHECK(v.exit_code == 0);
+    CHECK_THAT(v.out, Catch::StartsWith("iqc "));
+    CHECK(run_iqc("").exit_code == 2);
+    CHECK(run_iqc("--no-such-flag x.md").exit_code == 2);
+    CHECK(run_iqc("x.md --target nowhere").exit_code == 2);
+}
+
+TEST_CASE("a successful compile writes the file and exits 0", "[cli]") {
+    auto in = write_temp("ok.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\n```\n");
+    auto out = temp_dir() / "ok.frag";
+    RunResult r = run_iqc(in.string() + " -o " + out.string());
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    std::string code = read_text(out);
+    CHECK_THAT(code, Catch::Contains("void mainImage(out vec4 fragColor, in vec2 fragCoord)"));
+    // Standard output when -o is absent, byte-identical (deterministic).
+    RunResult s = run_iqc(in.string());
+    CHECK(s.exit_code == 0);
+    CHECK(s.out == code);
+}
+
+TEST_CASE("unknown shape and material", "[cli]") {
+    RunResult r = compile_doc("unknown_shape.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"tours\"\n```\n");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("unknown_shape.md:12:8: error: unknown shape 'tours'"));
+    CHECK_THAT(r.err, Catch::Contains("note: did you mean 'torus'?"));
+    CHECK_THAT(r.err, Catch::Contains("  type = \"tours\"\n         ^~~~~~~"));
+    RunResult m = compile_doc("unknown_material.md",
+                              std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\nmaterial = \"phongg\"\n```\n");
+    CHECK(m.exit_code == 1);
+    CHECK_THAT(m.err, Catch::Contains("unknown_material.md:13:12: error: unknown material 'phongg'"));
+}
+
+TEST_CASE("a shape without D and a material without C", "[cli]") {
+    RunResult r = compile_doc("no_d.md", "❤: blob\n```iheartla\nshape\nd = ‖p‖ - 1\nwhere\np ∈ ℝ³\n```\n"
+                                         "```scene\n[[shapes]]\ntype = \"blob\"\n```\n");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("no_d.md:3:1: error: shape 'blob' does not assign 'D' (its signed distance)"));
+    RunResult m = compile_doc("no_c.md", std::string(kTorus) +
+                                             "❤: flat\n```iheartla\nmaterial\ncolour = (1, 0, 0)\nwhere\np ∈ ℝ³\nN ∈ ℝ³\nI ∈ ℝ³\n```\n"
+                                             "```scene\n[[shapes]]\ntype = \"torus\"\nmaterial = \"flat\"\n```\n");
+    CHECK(m.exit_code == 1);
+    CHECK_THAT(m.err, Catch::Contains("no_c.md:12:1: error: material 'flat' does not assign 'C' (its RGB colour)"));
+}
+
+TEST_CASE("an undefined name inside a module of a document", "[cli]") {
+    RunResult r = compile_doc("undefined.md", "❤: ball\n```iheartla\nshape\nD = ‖p‖ - radius\nwhere\np ∈ ℝ³\n```\n"
+                                              "```scene\n[[shapes]]\ntype = \"ball\"\n```\n");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("undefined.md:4:11: error: undefined name 'r'"));
+}
+
+TEST_CASE("TOML syntax errors carry their line", "[cli]") {
+    RunResult r = compile_doc("bad.iq", "title = \"x\"\n\n[[shapes]]\ntype = \"sphere\nmaterial = 1\n");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("bad.iq:4:"));
+    CHECK_THAT(r.err, Catch::Contains("error: invalid TOML"));
+    RunResult d = compile_doc("bad_doc.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = = \"torus\"\n```\n");
+    CHECK(d.exit_code == 1);
+    CHECK_THAT(d.err, Catch::Contains("bad_doc.md:12:8: error: invalid TOML"));
+}
+
+TEST_CASE("scene schema errors: unknown fields and wrong types", "[cli]") {
+    RunResult r = compile_doc("schema.iq", "[[shapes]]\ntpye = \"torus\"\ntype = 3\n");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("schema.iq:2:1: error: unknown field 'tpye' in [[shapes]]"));
+    CHECK_THAT(r.err, Catch::Contains("did you mean 'type'?"));
+    CHECK_THAT(r.err, Catch::Contains("schema.iq:3:8: error: 'type' must be a string, not an integer"));
+}
+
+TEST_CASE("a document without a scene block", "[cli]") {
+    RunResult r = compile_doc("noscene.md", kTorus);
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("noscene.md:1:1: error: the document has no scene block"));
+}
+
+TEST_CASE("an unreadable file", "[cli]") {
+    RunResult r = run_iqc((temp_dir() / "does_not_exist.md").string());
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("error: cannot read '"));
+    CHECK_THAT(r.err, Catch::Contains("does_not_exist.md': No such file or directory"));
+    RunResult d = run_iqc(temp_dir().string());
+    CHECK(d.exit_code == 1);
+    CHECK_THAT(d.err, Catch::Contains("it is a directory"));
+}
+
+TEST_CASE("transform errors: not a 4×4 matrix, singular", "[cli]") {
+    RunResult r = compile_doc("tr.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\ntransform = \"(1, 2, 3)\"\n```\n");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("tr.md:13:14: error: a transform must be a 4×4 matrix, but this is ℝ³"));
+    RunResult s = compile_doc("sing.md", std::string(kTorus) +
+                                             "```scene\n[[shapes]]\ntype = \"torus\"\ntransform = \"S((1, 0, 1))\"\n```\n");
+    CHECK(s.exit_code == 1);
+    CHECK_THAT(s.err, Catch::Contains("sing.md:13:14: error: the transform is singular"));
+}
+
+TEST_CASE("parameter overrides name real parameters with the right size", "[cli]") {
+    RunResult r = compile_doc("ov.md", std::string(kTorus) +
+                                           "```scene\n[[shapes]]\ntype = \"torus\"\nshape_params = { r = 1, t = [1, 2, 3] }\n```\n");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("ov.md:13:18: error: shape 'torus' has no parameter 'r'"));
+    CHECK_THAT(r.err, Catch::Contains("ov.md:13:25: error: 't' is ℝ² but the value has 3 components"));
+}

@@ -1,0 +1,81 @@
+// Every error path of the language front end: the message, its location (file:line:col), the source
+// line and the caret. Several errors are reported in one run where recovery makes sense.
+#include <catch2/catch.hpp>
+
+#include "TestUtil.h"
+
+using namespace iqc;
+using namespace iqc::test;
+
+static std::string errors_of(const std::string& src) {
+    Evaluated e = eval_module(src);
+    REQUIRE_FALSE(e.ok);
+    return e.diagnostics;
+}
+
+TEST_CASE("diagnostics show the location, the line and a caret under the span", "[diag]") {
+    std::string d = errors_of("D = ‖q‖ - s\nwhere\nq ∈ ℝ³\n");
+    CHECK(d == "test.iql:1:11: error: undefined name 's'\n"
+               "  D = ‖q‖ - s\n"
+               "            ^\n");
+}
+
+TEST_CASE("type errors name both sides with their types", "[diag]") {
+    CHECK_THAT(errors_of("y = a + b\nwhere\na ∈ ℝ³\nb ∈ ℝ⁴\n"),
+               Catch::Contains("test.iql:1:5: error: cannot add ℝ³ and ℝ⁴"));
+    CHECK_THAT(errors_of("y = A b\nwhere\nA ∈ ℝ^(3×3)\nb ∈ ℝ²\n"),
+               Catch::Contains("test.iql:1:5: error: cannot multiply ℝ^(3×3) by ℝ²: the inner sizes differ"));
+    CHECK_THAT(errors_of("y = a b\nwhere\na ∈ ℝ³\nb ∈ ℝ³\n"),
+               Catch::Contains("test.iql:1:5: error: cannot multiply ℝ³ by ℝ³: use ⋅ for the dot product"));
+    CHECK_THAT(errors_of("y = a / b\nwhere\na ∈ ℝ\nb ∈ ℝ³\n"),
+               Catch::Contains("test.iql:1:9: error: cannot divide by ℝ³: '/' needs a scalar divisor"));
+    CHECK_THAT(errors_of("y = v_4\nwhere\nv ∈ ℝ³\n"),
+               Catch::Contains("test.iql:1:7: error: subscript 4 is out of range: ℝ³ has 3 components"));
+}
+
+TEST_CASE("declaration errors", "[diag]") {
+    CHECK_THAT(errors_of("y = t_1\nwhere\nt ∈ [0,2]x[0,2] default = (1, 2, 3)\n"),
+               Catch::Contains("test.iql:3:27: error: the default has 3 components but 't' is ℝ²"));
+    CHECK_THAT(errors_of("y = t\nwhere\nt ∈ [0,1] default = 2\n"),
+               Catch::Contains("test.iql:3:21: error: the default 2 of 't' is outside its bounds [0, 1]"));
+    CHECK_THAT(errors_of("y = t\nwhere\nt ∈ [2,1]\n"), Catch::Contains("test.iql:3:5: error: the interval is empty"));
+}
+
+TEST_CASE("names assigned twice, cycles and recursion", "[diag]") {
+    std::string d = errors_of("a = 1\nb = 2\na = 3\n");
+    CHECK_THAT(d, Catch::Contains("test.iql:3:1: error: 'a' is assigned twice"));
+    CHECK_THAT(d, Catch::Contains("test.iql:1:1: note: first defined here"));
+    CHECK_THAT(errors_of("a = b + 1\nb = c\nc = a\n"), Catch::Contains("test.iql:1:1: error: dependency cycle: a → b → c → a"));
+    CHECK_THAT(errors_of("f(x) = f(x) + 1 where x ∈ ℝ\ny = f(1)\n"),
+               Catch::Contains("error: 'f' calls itself: recursion is not supported"));
+}
+
+TEST_CASE("did-you-mean and missing imports", "[diag]") {
+    std::string d2 = errors_of("y = raduis2\nwhere\nradius ∈ ℝ\n");
+    CHECK_THAT(d2, Catch::Contains("error: undefined name"));
+    CHECK_THAT(errors_of("y = `radiu` + 1\nwhere\n`radius` ∈ ℝ\n"),
+               Catch::Contains("test.iql:1:5: note: did you mean 'radius'?"));
+    CHECK_THAT(errors_of("y = sin(1)\n"), Catch::Contains("test.iql:1:5: error: 'sin' needs an import: add 'sin from trigonometry'"));
+    CHECK_THAT(errors_of("sinus from trigonometry\ny = 1\n"),
+               Catch::Contains("test.iql:1:1: error: module 'trigonometry' has no function 'sinus'"));
+}
+
+TEST_CASE("syntax errors are located and recovery reports several per run", "[diag]") {
+    // Inside parentheses and norms an expression may go on over several lines, so an unclosed one is
+    // reported where the next statement begins, with a note where it opened.
+    std::string d = errors_of("a = (1 + 2\nb = 3 +\nc = ‖x\nd = 4\ne = 4 $ 5\nf = 2 +\nwhere\nx ∈ ℝ³\n");
+    CHECK_THAT(d, Catch::Contains("test.iql:2:3: error: expected ')', found '='"));
+    CHECK_THAT(d, Catch::Contains("test.iql:1:5: note: opened here"));
+    CHECK_THAT(d, Catch::Contains("test.iql:4:3: error: expected '‖' to close the norm, found '='"));
+    CHECK_THAT(d, Catch::Contains("test.iql:3:5: note: opened here"));
+    CHECK_THAT(d, Catch::Contains("test.iql:5:7: error: unexpected character '$'"));
+    CHECK_THAT(d, Catch::Contains("test.iql:7:1: error: unexpected keyword 'where' in an expression"));
+}
+
+TEST_CASE("a module whose every statement is wrong reports each error and does not crash", "[diag]") {
+    std::string d = errors_of("a = b\nc = (1, 2) + (1, 2, 3)\nd = q_9\ne = f(1)\nwhere\nq ∈ ℝ²\n");
+    CHECK_THAT(d, Catch::Contains("1:5: error: undefined name 'b'"));
+    CHECK_THAT(d, Catch::Contains("2:5: error: cannot add ℝ² and ℝ³"));
+    CHECK_THAT(d, Catch::Contains("3:7: error: subscript 9 is out of range"));
+    CHECK_THAT(d, Catch::Contains("4:5: error: undefined name 'f'"));
+}

@@ -1,0 +1,91 @@
+// Golden tests: every example and every input under golden/ compiles to exactly the expected shader,
+// byte for byte, and the expected file itself passes glslang under Shadertoy's wrapper.
+//
+// Inputs: examples/<name>.{md,iq}  ->  golden/examples/<name>.shadertoy.expected
+//         golden/<area>/<name>.{md,iq,iql} -> golden/<area>/<name>.shadertoy.expected
+// Regenerate (then review every diff as code):  IQC_UPDATE_GOLDEN=1 ./build/tests/iqc_tests "[golden]"
+//                                          or:  scripts/update-goldens.sh
+#include <catch2/catch.hpp>
+#include <cstdlib>
+
+#include "TestUtil.h"
+#include "glsl/ShadertoyWrapper.h"
+#include "glsl/Validate.h"
+
+using namespace iqc;
+using namespace iqc::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct GoldenCase {
+    fs::path input, expected;
+};
+
+std::vector<GoldenCase> golden_cases() {
+    std::vector<GoldenCase> cases;
+    fs::path root = IQC_SOURCE_DIR;
+    auto is_input = [](const fs::path& p) {
+        auto e = p.extension();
+        return e == ".md" || e == ".iq" || e == ".iql";
+    };
+    for (auto& e : fs::directory_iterator(root / "examples"))
+        if (is_input(e.path()) && e.path().filename() != "README.md")
+            cases.push_back({e.path(), root / "golden" / "examples" / (e.path().stem().string() + ".shadertoy.expected")});
+    for (auto& area : fs::directory_iterator(root / "golden")) {
+        if (!area.is_directory()) continue;
+        for (auto& e : fs::directory_iterator(area.path()))
+            if (is_input(e.path()))
+                cases.push_back({e.path(), area.path() / (e.path().stem().string() + ".shadertoy.expected")});
+    }
+    std::sort(cases.begin(), cases.end(), [](auto& a, auto& b) { return a.input < b.input; });
+    return cases;
+}
+
+std::string unified_diff(const fs::path& expected, const std::string& actual) {
+    auto tmp = write_temp("actual.frag", actual);
+    std::string cmd = "diff -u '" + expected.string() + "' '" + tmp.string() + "' 2>&1";
+    std::string out;
+    if (FILE* p = popen(cmd.c_str(), "r")) {
+        char buf[4096];
+        size_t n;
+        while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+        pclose(p);
+    }
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("golden: every example compiles to its expected shader", "[golden]") {
+    bool update = std::getenv("IQC_UPDATE_GOLDEN") != nullptr;
+    auto cases = golden_cases();
+    REQUIRE(cases.size() >= 4);
+    for (const auto& c : cases) {
+        SECTION(c.input.filename().string()) {
+            Compiled r = compile_path(c.input);
+            INFO(c.input.string() << "\n" << r.diagnostics << r.result.internal);
+            REQUIRE(r.result.exit_code == 0);
+            // Paths in the output are file names only, so goldens do not depend on where the repo is.
+            if (update) {
+                fs::create_directories(c.expected.parent_path());
+                std::ofstream(c.expected, std::ios::binary) << r.result.code;
+            }
+            REQUIRE(fs::exists(c.expected));
+            std::string expected = read_text(c.expected);
+            INFO("golden mismatch; the diff (expected -> actual):\n" << unified_diff(c.expected, r.result.code));
+            CHECK(r.result.code == expected);
+            auto v = glsl::validate_fragment(glsl::wrap_shadertoy(expected), glsl::Profile::Es300);
+            INFO(v.log);
+            CHECK(v.ok);
+        }
+    }
+}
+
+TEST_CASE("golden: output is deterministic", "[golden]") {
+    auto cases = golden_cases();
+    REQUIRE(!cases.empty());
+    Compiled a = compile_path(cases[0].input);
+    Compiled b = compile_path(cases[0].input);
+    CHECK(a.result.code == b.result.code);
+}

@@ -1,0 +1,137 @@
+// The math language end to end through the evaluator: precedence and juxtaposition as I♥LA reads them,
+// names, statements in any order, built-ins, vectors and matrices.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "TestUtil.h"
+
+using namespace iqc;
+using namespace iqc::test;
+
+static double eval1(const std::string& src, const std::string& out = "y",
+                    const std::map<std::string, std::vector<double>>& set = {}) {
+    Evaluated e = eval_module(src, set);
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    return scalar_of(e, out);
+}
+
+TEST_CASE("precedence and juxtaposition follow I♥LA", "[lang]") {
+    const std::string decl = "\nwhere\na ∈ ℝ\nb ∈ ℝ\nc ∈ ℝ\nx ∈ ℝ\n";
+    std::map<std::string, std::vector<double>> v = {{"a", {6}}, {"b", {2}}, {"c", {3}}, {"x", {2}}};
+    CHECK(eval1("y = a/bc" + decl, "y", v) == Approx(9.0));       // (a/b)c
+    CHECK(eval1("y = -a2" + decl, "y", v) == Approx(-12.0));       // -(2a)
+    CHECK(eval1("y = x^2c" + decl, "y", v) == Approx(12.0));       // x²c
+    CHECK(eval1("y = x²c" + decl, "y", v) == Approx(12.0));
+    CHECK(eval1("y = -x²" + decl, "y", v) == Approx(-4.0));        // -(x²)
+    CHECK(eval1("y = a - b - c" + decl, "y", v) == Approx(1.0));   // left-associative
+    CHECK(eval1("y = a b + c" + decl, "y", v) == Approx(15.0));
+    CHECK(eval1("y = 2(a + b)c" + decl, "y", v) == Approx(48.0));
+    CHECK(eval1("y = a * b" + decl, "y", v) == Approx(12.0));       // ASCII * (extension)
+    CHECK(eval1("y = ½a" + decl, "y", v) == Approx(3.0));
+    CHECK(eval1("y = x^-1" + decl, "y", v) == Approx(0.5));
+    CHECK(eval1("y = x⁻¹" + decl, "y", v) == Approx(0.5));
+    CHECK(eval1("y = 2e-3" + decl, "y", v) == Approx(0.002));
+    CHECK(eval1("y = ac" + decl, "y", v) == Approx(18.0));         // undeclared `ac` is a·c
+}
+
+TEST_CASE("declared multi-letter names win over juxtaposition", "[lang]") {
+    const std::string src = "y = ab c\nwhere\nab ∈ ℝ\nc ∈ ℝ\na ∈ ℝ\nb ∈ ℝ\n";
+    CHECK(eval1(src, "y", {{"ab", {5}}, {"c", {3}}, {"a", {100}}, {"b", {100}}}) == Approx(15.0));
+    // Backtick names are one name; `abc` and abc are the same when declared.
+    CHECK(eval1("y = `k_d` 2\nwhere\n`k_d` ∈ ℝ\n", "y", {{"k_d", {4}}}) == Approx(8.0));
+}
+
+TEST_CASE("statements are ordered by dependency, not position", "[lang]") {
+    Evaluated e = eval_module("D = ‖q‖ - t_2\nq = (‖(p_1, p_3)‖ - t_1, p_2)\nwhere\np ∈ ℝ³\nt ∈ [0,2]x[0,2] default = (0.77, 0.6)\n",
+                              {{"p", {2, 0, 0}}});
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(scalar_of(e, "D") == Approx(std::hypot(2 - 0.77, 0.0) - 0.6));
+    CHECK(e.text["q"] == "(1.23, 0)");
+}
+
+TEST_CASE("vectors, norms, dot, cross, elementwise products", "[lang]") {
+    Evaluated e = eval_module(
+        "n = ‖v‖\nd = v⋅w\nc = v × w\nh = v∘w\ncat = (1, u, 4)\nab = |(-1, 2, -3)|\ns = 2v\nhalf = w/2\n"
+        "where\nv ∈ ℝ³ default = (1, 2, 2)\nw ∈ ℝ³ default = (0, 1, 0)\nu ∈ ℝ² default = (2, 3)\n");
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(e.text["n"] == "3");
+    CHECK(e.text["d"] == "2");
+    CHECK(e.text["c"] == "(-2, 0, 1)");
+    CHECK(e.text["h"] == "(0, 2, 0)");
+    CHECK(e.text["cat"] == "(1, 2, 3, 4)");
+    CHECK(e.text["ab"] == "(1, 2, 3)");
+    CHECK(e.text["s"] == "(2, 4, 4)");
+    CHECK(e.text["half"] == "(0, 0.5, 0)");
+}
+
+TEST_CASE("matrices: literals on one line or many, products, transpose, inverse, determinant", "[lang]") {
+    Evaluated e = eval_module(
+        "A = [1 2; 3 4]\nB = [2 0\n     0 2]\nP = A B\nv = A (1, 1)\nAt = Aᵀ\nAi = A⁻¹\ndt = |A|\ne = A_2,1\n"
+        "s = xᵀx\nneg = [1 -2]\n"
+        "where\nx ∈ ℝ³ default = (1, 2, 3)\n");
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(e.text["A"] == "[1 2; 3 4]");
+    CHECK(e.text["B"] == "[2 0; 0 2]");
+    CHECK(e.text["P"] == "[2 4; 6 8]");
+    CHECK(e.text["v"] == "(3, 7)");
+    CHECK(e.text["At"] == "[1 3; 2 4]");
+    CHECK(e.outputs["Ai"].v[0] == Approx(-2.0));
+    CHECK(e.outputs["Ai"].v[3] == Approx(-0.5));
+    CHECK(e.text["dt"] == "-2");
+    CHECK(e.text["e"] == "3");
+    CHECK(e.text["s"] == "14");
+    CHECK(e.text["neg"] == "[1 -2]");  // `[1 -2]` is two entries
+}
+
+TEST_CASE("built-ins: min and max are n-ary and broadcast, floor, sqrt, imports", "[lang]") {
+    Evaluated e = eval_module(
+        "sin, cos from trigonometry\na = min(3, 1, 2)\nb = max(0, (-1, 2, -3))\nc = ⌊2.5⌋ + ⌈0.2⌉\nr = √9\n"
+        "s = sin(π/2) + cos(0)\nl = ln(1) + exp(0)\n");
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(e.text["a"] == "1");
+    CHECK(e.text["b"] == "(0, 2, 0)");
+    CHECK(e.text["c"] == "3");
+    CHECK(e.text["r"] == "3");
+    CHECK(scalar_of(e, "s") == Approx(2.0));
+    CHECK(e.text["l"] == "1");
+}
+
+TEST_CASE("local functions, piecewise definitions and the bare expression", "[lang]") {
+    Evaluated e = eval_module(
+        "f(x) = x² where x ∈ ℝ\ng(x) = { x if x > 0\n        -x otherwise\n"
+        "y = f(3) + g(-2) + g(5)\nf(a) + 1\nwhere\nx ∈ ℝ\na ∈ ℝ default = 4\n");
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(e.text["y"] == "16");
+    CHECK(e.text["ret"] == "17");
+}
+
+TEST_CASE("local functions may use module values", "[lang]") {
+    Evaluated e = eval_module("y = f(2)\nf(x) = k x where x ∈ ℝ\nk = 3s\nwhere\ns ∈ ℝ default = 2\n");
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(e.text["y"] == "12");
+}
+
+TEST_CASE("bounded parameters: defaults, midpoints, vector bounds", "[lang]") {
+    SourceManager sm;
+    Diagnostics d(sm);
+    std::string src = "y = a + b_1\nwhere\na ∈ [0,4]: a slider\nb ∈ [0,1]x[2,4]×[-1,1] default = (0.5, 3, 0)\nc ∈ ℝ\n";
+    FileId f = sm.add("t.iql", src);
+    ast::Module m = parse_module(sm, f, {{0, uint32_t(src.size())}}, "t", {}, d);
+    auto cm = check_module(std::move(m), nullptr, {}, d);
+    INFO(d.render());
+    REQUIRE(!d.has_errors());
+    REQUIRE(cm->params.size() == 3);
+    CHECK(cm->params[0].value == std::vector<double>{2.0});  // midpoint
+    CHECK(cm->params[0].description == "a slider");
+    CHECK(cm->params[1].type == Type::vector(3));
+    CHECK(cm->params[1].lo == std::vector<double>{0, 2, -1});
+    CHECK(cm->params[1].value == std::vector<double>{0.5, 3, 0});
+    CHECK(cm->params[2].value == std::vector<double>{0.0});  // unbounded: 0
+}
