@@ -23,7 +23,7 @@ static RunResult compile_doc(const std::string& name, const std::string& text) {
     return run_iqc(p.string());
 }
 
-TEST_CASE("--help, --version and usage errors", "[cli]") {
+TEST_CASE("help and version flags and usage errors", "[cli]") {
     RunResult h = run_iqc("--help");
     CHECK(h.exit_code == 0);
     CHECK_THAT(h.out, Catch::Contains("Exit codes"));

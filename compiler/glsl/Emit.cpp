@@ -134,6 +134,24 @@ struct FunctionEmitter {
         return in.op == Op::Param || (in.op == Op::Const && in.type.is_scalar());
     }
 
+    // A value used more than once gets a variable when recomputing it would cost real work (a call, a
+    // square root, ...) or repeat long text; cheap ones such as `P_L - p` stay inline for readability
+    // (the driver's own CSE removes the repeat).
+    bool worth_a_variable(ValueId v) {
+        const Instr& in = f.body[v];
+        switch (in.op) {
+            case Op::Call: case Op::Inverse: case Op::Det: case Op::Dot: case Op::Cross: case Op::Select:
+                return true;
+            case Op::Builtin: {
+                std::string n = builtin(in.aux).name;
+                if (n != "abs" && n != "min" && n != "max" && n != "floor" && n != "ceil" && n != "sign") return true;
+                break;
+            }
+            default: break;
+        }
+        return expr(v).size() > 40;
+    }
+
     std::string operand(ValueId v) {  // an operand inside a larger expression: parenthesised if compound
         std::string s = expr(v);
         const Instr& in = f.body[v];
@@ -284,7 +302,7 @@ struct FunctionEmitter {
             const Instr& in = f.body[i];
             if (!live[i] || in.op == Op::Param) continue;
             bool named = !in.name.empty();
-            bool shared = uses[i] > 1 && !trivial(ValueId(i));
+            bool shared = uses[i] > 1 && !trivial(ValueId(i)) && worth_a_variable(ValueId(i));
             if (i == f.result && !named) continue;
             if (!named && !shared) continue;
             if (in.op == Op::Construct && !named && in.type.is_vector()) {
@@ -294,7 +312,7 @@ struct FunctionEmitter {
                 if (same) continue;
             }
             std::string value = expr(ValueId(i));
-            std::string vn = locals.unique(named ? in.name : "t");
+            std::string vn = locals.unique(named ? in.name : "tmp");
             out += fmt::format("    {} {} = {};", type_of(in.type, in.span), vn, value);
             if (named && !in.source.empty()) out += " // " + one_line(in.source);
             out += "\n";

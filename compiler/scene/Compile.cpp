@@ -12,6 +12,7 @@
 #include "glsl/Validate.h"
 #include "ir/Eval.h"
 #include "ir/Lower.h"
+#include "ir/passes/CSE.h"
 #include "resources/Embedded.h"
 #include "sema/Builtins.h"
 #include "sema/Check.h"
@@ -560,6 +561,7 @@ CompileResult SceneCompiler::run() {
         p.shape_fn = lower(p.shape);
         if (p.material) p.material_fn = lower(p.material);
     }
+    for (auto& f : ir_.functions) ir::eliminate_common_subexpressions(f);
     for (size_t f = 0; f < ir_.functions.size(); ++f) {
         std::string fault = ir::verify(ir_.functions[f], ir_);
         if (!fault.empty()) {

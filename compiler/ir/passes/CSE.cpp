@@ -1,0 +1,36 @@
+#include "ir/passes/CSE.h"
+
+#include <map>
+#include <tuple>
+
+namespace iqc::ir {
+
+int eliminate_common_subexpressions(Function& f) {
+    using Key = std::tuple<int, int, int, int, int, std::vector<ValueId>, std::vector<double>>;
+    std::map<Key, ValueId> seen;
+    std::vector<ValueId> remap(f.body.size());
+    int redirected = 0;
+    for (size_t i = 0; i < f.body.size(); ++i) {
+        Instr& in = f.body[i];
+        remap[i] = ValueId(i);
+        for (ValueId& a : in.args) a = remap[a];
+        if (in.op == Op::Param || in.op == Op::Copy) continue;
+        Key k{int(in.op), int(in.type.kind), in.type.rows, in.type.cols, in.aux, in.args, in.data};
+        auto it = seen.find(k);
+        if (it == seen.end()) {
+            seen.emplace(std::move(k), ValueId(i));
+            continue;
+        }
+        if (in.name.empty()) {
+            remap[i] = it->second;
+            ++redirected;
+        } else if (f.body[it->second].name.empty()) {
+            it->second = ValueId(i);  // later copies use the named value
+        }
+    }
+    f.result = remap[f.result];
+    for (auto& [name, v] : f.outputs) v = remap[v];
+    return redirected;
+}
+
+}  // namespace iqc::ir

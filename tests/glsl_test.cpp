@@ -1,0 +1,59 @@
+// GLSL backend units: readable names that never collide with GLSL, float literals, constants, and the
+// emitted code of a module.
+#include <catch2/catch.hpp>
+
+#include "TestUtil.h"
+#include "glsl/Emit.h"
+#include "glsl/Names.h"
+#include "glsl/Validate.h"
+
+using namespace iqc;
+using namespace iqc::glsl;
+
+TEST_CASE("math names become readable GLSL identifiers", "[glsl]") {
+    CHECK(identifier("N̂") == "N_hat");
+    CHECK(identifier("α") == "alpha");
+    CHECK(identifier("p'") == "p_prime");
+    CHECK(identifier("P_L") == "P_L");
+    CHECK(identifier("x̃") == "x_tilde");
+    CHECK(identifier("k_α") == "k_alpha");
+    CHECK(identifier("2x") == "v2x");
+    CHECK(identifier("gl_x") == "v_gl_x");
+    CHECK(identifier("a__b") == "a_b");
+}
+
+TEST_CASE("the namer avoids GLSL keywords, built-ins and names already taken", "[glsl]") {
+    Namer n;
+    CHECK(n.unique("length") == "length_2");
+    CHECK(n.unique("in") == "in_2");
+    CHECK(n.unique("x") == "x");
+    CHECK(n.unique("x") == "x_2");
+    Namer inner(&n);
+    CHECK(inner.unique("x") == "x_3");
+    CHECK(is_reserved("mainImage"));
+    CHECK(is_reserved("iqc_scene"));
+}
+
+TEST_CASE("float literals always have a point", "[glsl]") {
+    CHECK(float_literal(1) == "1.0");
+    CHECK(float_literal(0.5) == "0.5");
+    CHECK(float_literal(-2) == "-2.0");
+    CHECK(float_literal(1e-5) == "1.0e-05");
+    CHECK(float_literal(-0.0) == "0.0");
+    CHECK(constant(Type::vector(3), {1, 1, 1}) == "vec3(1.0)");
+    // Row-major math, column-major GLSL.
+    CHECK(constant(Type::matrix(2, 2), {1, 2, 3, 4}) == "mat2(1.0, 3.0, 2.0, 4.0)");
+    CHECK(type_name(Type::matrix(3, 4)) == "mat4x3");
+    std::string why;
+    CHECK(type_name(Type::vector(5), &why).empty());
+    CHECK_THAT(why, Catch::Contains("larger than GLSL's largest vector"));
+}
+
+TEST_CASE("glslang validation accepts good shaders and rejects bad ones", "[glsl]") {
+    CHECK(validate_fragment("#version 300 es\nprecision highp float;\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n",
+                            Profile::Es300).ok);
+    auto bad = validate_fragment("#version 300 es\nprecision highp float;\nout vec4 c;\nvoid main() { c = 1; }\n",
+                                 Profile::Es300);
+    CHECK_FALSE(bad.ok);
+    CHECK_THAT(bad.log, Catch::Contains("ERROR"));
+}
