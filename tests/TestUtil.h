@@ -46,11 +46,11 @@ struct RunResult {
     std::string out, err;
 };
 
-// Runs the iqc binary with the given arguments (a shell-quoted string).
-inline RunResult run_iqc(const std::string& args) {
+// Runs the iqc binary with the given arguments (a shell-quoted string) and environment assignments.
+inline RunResult run_iqc_env(const std::string& env, const std::string& args) {
     auto out = temp_dir() / "stdout.txt";
     auto err = temp_dir() / "stderr.txt";
-    std::string cmd = std::string(IQC_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string() + " </dev/null";
+    std::string cmd = env + " " + std::string(IQC_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string() + " </dev/null";
     int status = std::system(cmd.c_str());
     RunResult r;
     r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -64,6 +64,8 @@ struct Compiled {
     CompileResult result;
     std::string diagnostics;
 };
+inline RunResult run_iqc(const std::string& args) { return run_iqc_env("", args); }
+
 inline Compiled compile_path(const std::filesystem::path& p) {
     SourceManager sm;
     Diagnostics d(sm);

@@ -131,3 +131,14 @@ TEST_CASE("parameter overrides name real parameters with the right size", "[cli]
     CHECK_THAT(r.err, Catch::Contains("ov.md:13:18: error: shape 'torus' has no parameter 'r'"));
     CHECK_THAT(r.err, Catch::Contains("ov.md:13:25: error: 't' is ℝ² but the value has 3 components"));
 }
+
+TEST_CASE("a shader glslang rejects is an internal error: exit 3 and nothing written", "[cli]") {
+    auto in = write_temp("fault.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\n```\n");
+    auto out = temp_dir() / "fault.frag";
+    std::filesystem::remove(out);
+    RunResult r = run_iqc_env("IQC_INJECT_GLSL_FAULT=1", in.string() + " -o " + out.string());
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("internal compiler error: glslang rejected the generated shader (this is a bug in iqc"));
+    CHECK_THAT(r.err, Catch::Contains("ERROR"));
+    CHECK_FALSE(std::filesystem::exists(out));
+}

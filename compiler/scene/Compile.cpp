@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fmt/format.h>
 #include <memory>
@@ -575,6 +576,8 @@ CompileResult SceneCompiler::run() {
     std::string code = assemble(plans);
     lap("GLSL backend + assembly");
     if (d_.error_count() != before) return res;
+    // Fault injection for the test of the internal-error path: a shader glslang must reject.
+    if (std::getenv("IQC_INJECT_GLSL_FAULT")) code += "\nthis line is not GLSL;\n";
     glsl::ValidationResult v = glsl::validate_fragment(glsl::wrap_shadertoy(code), glsl::Profile::Es300);
     lap("glslang validation");
     if (!v.ok) {
