@@ -14,6 +14,7 @@
 #include "render/Render.h"
 #include "glsl/ShadertoyWrapper.h"
 #include "scene/Compile.h"
+#include "scene/Evaluate.h"
 
 namespace {
 
@@ -77,11 +78,43 @@ int main(int argc, char** argv) {
     render->add_option("-o,--output", r_output, "the PNG to write")->required();
     render->add_option("--size", r_size, "image size WxH (default 640x360)");
     render->add_option("--time", r_time, "iTime in seconds (default 0)");
+    CLI::App* eval = app.add_subcommand(
+        "eval", "evaluate a module in double precision and print every output (a graphing calculator)");
+    std::string e_input, e_module;
+    std::vector<std::string> e_sets;
+    eval->add_option("input", e_input, "module file (.iql), or a document/scene with --module")->required();
+    eval->add_option("--set", e_sets, "NAME=VALUE: a parameter's value, e.g. p=(2,0,0), r=0.5, A=[1 2; 3 4] "
+                                      "(NAME without backticks; unset parameters take their defaults)");
+    eval->add_option("--module", e_module, "which module of a .md/.iq file to evaluate");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         int code = app.exit(e);
         return e.get_exit_code() == 0 ? 0 : (code == 0 ? 0 : 2);
+    }
+    if (eval->parsed()) {
+        iqc::SourceManager sm;
+        iqc::Diagnostics diags(sm);
+        iqc::EvalRequest req;
+        req.path = e_input;
+        req.module = e_module;
+        for (const auto& s : e_sets) {
+            size_t eq = s.find('=');
+            if (eq == std::string::npos || eq == 0) {
+                std::fprintf(stderr, "iqc: error: --set needs NAME=VALUE, not '%s'\n", s.c_str());
+                return 2;
+            }
+            std::string n = s.substr(0, eq);
+            if (n.size() >= 2 && n.front() == '`' && n.back() == '`') n = n.substr(1, n.size() - 2);
+            req.sets.push_back({n, s.substr(eq + 1)});
+        }
+        std::vector<iqc::EvalOutput> outs;
+        bool ok = iqc::evaluate_module_file(req, sm, diags, outs);
+        std::string text = diags.render();
+        if (!text.empty()) std::fputs(text.c_str(), stderr);
+        if (!ok) return 1;
+        for (const auto& o : outs) std::printf("%s = %s\n", o.name.c_str(), iqc::ir::format_value(o.value).c_str());
+        return 0;
     }
     if (!render->parsed() && input.empty()) {
         std::fprintf(stderr, "iqc: error: no input file (see iqc --help)\n");

@@ -14,6 +14,7 @@
 #include "ir/Eval.h"
 #include "ir/Lower.h"
 #include "ir/passes/CSE.h"
+#include "scene/Modules.h"
 #include "resources/Embedded.h"
 #include "sema/Builtins.h"
 #include "sema/Check.h"
@@ -22,10 +23,6 @@
 namespace iqc {
 
 namespace {
-
-const std::vector<std::pair<std::string, std::string>> kTransformImports = {
-    {"T", "transformations"}, {"R_x", "transformations"}, {"R_y", "transformations"},
-    {"R_z", "transformations"}, {"S", "transformations"}};
 
 std::string join_values(const std::vector<double>& v) {
     if (v.size() == 1) return fmt::format("{}", v[0]);
@@ -96,20 +93,12 @@ private:
     SourceManager& sm_;
     Diagnostics& d_;
     const CompileOptions& opts_;
-    std::map<std::string, const ModuleSource*> registry_;
-    std::vector<std::unique_ptr<ModuleSource>> stdlib_;
-    std::map<std::string, std::unique_ptr<CheckedModule>> checked_;
-    std::set<std::string> in_progress_;
+    ModuleLibrary lib_{sm_, d_, {std::filesystem::path(s_.path).parent_path().string()}};
     std::vector<std::unique_ptr<CheckedModule>> transforms_;
     ir::Module ir_;
     LowerContext lower_{ir_, {}};
     std::map<const CheckedModule*, int> lowered_;
 
-    void build_registry();
-    const ModuleSource* find_source(const std::string& name);
-    std::vector<std::string> module_names() const;
-    std::unique_ptr<CheckedModule> parse_check(const ModuleSource& src, const std::string& name, bool transform);
-    const CheckedModule* get(const std::string& name, Span where);
     bool plan_instance(const InstanceDesc& inst, InstancePlan& plan, std::map<std::string, int>& counts,
                        std::set<std::string>& names);
     bool apply_overrides(const std::vector<ParamOverride>& ovs, const CheckedModule& m, const char* role,
@@ -118,77 +107,6 @@ private:
     int lower(const CheckedModule* m);
     std::string assemble(std::vector<InstancePlan>& plans);
 };
-
-void SceneCompiler::build_registry() {
-    for (const auto& m : s_.modules) {
-        auto it = registry_.find(m.name);
-        if (it != registry_.end()) {
-            if (it->second->origin == m.origin && m.origin == "document") continue;  // joined blocks
-            auto& e = d_.error(m.where, fmt::format("module '{}' is defined twice", m.name));
-            Diagnostics::note(e, it->second->where, fmt::format("also defined here ({})", it->second->origin));
-            continue;
-        }
-        registry_[m.name] = &m;
-    }
-}
-
-const ModuleSource* SceneCompiler::find_source(const std::string& name) {
-    if (auto it = registry_.find(name); it != registry_.end()) return it->second;
-    std::string path = "stdlib/" + name + ".iql";
-    auto text = embedded_file(path);
-    if (!text) return nullptr;
-    auto ms = std::make_unique<ModuleSource>();
-    ms->name = name;
-    ms->file = sm_.add(path, std::string(*text));
-    ms->ranges = {{0, uint32_t(text->size())}};
-    ms->where = {ms->file, 0, 1};
-    ms->origin = "stdlib";
-    registry_[name] = ms.get();
-    stdlib_.push_back(std::move(ms));
-    return stdlib_.back().get();
-}
-
-std::vector<std::string> SceneCompiler::module_names() const {
-    std::vector<std::string> names;
-    for (auto& [n, m] : registry_) names.push_back(n);
-    for (const auto& f : embedded_resources()) {
-        std::string p(f.path);
-        if (p.rfind("stdlib/", 0) == 0 && p.size() > 11 && p.substr(p.size() - 4) == ".iql")
-            names.push_back(p.substr(7, p.size() - 11));
-    }
-    return names;
-}
-
-std::unique_ptr<CheckedModule> SceneCompiler::parse_check(const ModuleSource& src, const std::string& name, bool transform) {
-    ParseOptions po;
-    for (const auto& b : builtins()) po.known_names.insert(b.name);
-    CheckOptions co;
-    if (transform) {
-        po.allow_header = false;
-        for (auto& [n, mod] : kTransformImports) po.known_names.insert(n);
-        co.implicit_imports = kTransformImports;
-    }
-    ast::Module ast = parse_module(sm_, src.file, src.ranges, name, po, d_);
-    ast.span = src.where;
-    if (!src.ranges.empty()) ast.span = {src.file, src.ranges[0].begin, std::max(src.ranges[0].begin + 1, src.ranges[0].begin)};
-    ModuleLookup lookup = [this](const std::string& n, Span where) { return get(n, where); };
-    return check_module(std::move(ast), lookup, co, d_);
-}
-
-const CheckedModule* SceneCompiler::get(const std::string& name, Span where) {
-    if (auto it = checked_.find(name); it != checked_.end()) return it->second.get();
-    if (in_progress_.count(name)) {
-        d_.error(where, fmt::format("module '{}' imports itself (an import cycle)", name));
-        return nullptr;
-    }
-    const ModuleSource* src = find_source(name);
-    if (!src) return nullptr;
-    in_progress_.insert(name);
-    auto m = parse_check(*src, name, false);
-    in_progress_.erase(name);
-    m->ast.span = src->where;
-    return (checked_[name] = std::move(m)).get();
-}
 
 bool SceneCompiler::apply_overrides(const std::vector<ParamOverride>& ovs, const CheckedModule& m, const char* role,
                                     const std::vector<int>& bound, std::vector<std::vector<double>>& values) {
@@ -236,7 +154,7 @@ bool SceneCompiler::plan_transform(const InstanceDesc& inst, InstancePlan& plan)
     for (auto& r : src.ranges)
         for (char c : sm_.text(src.file).substr(r.begin, r.end - r.begin)) blank &= (c == ' ' || c == '\n' || c == '\t' || c == '\r');
     if (blank) return true;  // "" is the identity
-    auto m = parse_check(src, plan.name + ".transform", true);
+    auto m = lib_.parse_check(src, plan.name + ".transform", true);
     if (!m->ok) return false;
     Span where = src.where;
     if (!m->ret) {
@@ -300,10 +218,10 @@ bool SceneCompiler::plan_instance(const InstanceDesc& inst, InstancePlan& plan, 
         while (names.count(plan.name)) plan.name = fmt::format("{}_{}", inst.type, ++counts[inst.type]);
     }
     names.insert(plan.name);
-    plan.shape = get(inst.type, inst.type_span);
+    plan.shape = lib_.get(inst.type, inst.type_span);
     if (!plan.shape) {
         auto& e = d_.error(inst.type_span, fmt::format("unknown shape '{}'", inst.type));
-        if (auto sug = did_you_mean(inst.type, module_names())) Diagnostics::note(e, inst.type_span, fmt::format("did you mean '{}'?", *sug));
+        if (auto sug = did_you_mean(inst.type, lib_.names())) Diagnostics::note(e, inst.type_span, fmt::format("did you mean '{}'?", *sug));
         return false;
     }
     if (plan.shape->ast.kind != ast::ModuleKind::Shape) {
@@ -322,10 +240,10 @@ bool SceneCompiler::plan_instance(const InstanceDesc& inst, InstancePlan& plan, 
     for (auto& p : sp) plan.shape_values.push_back(p.value);
     ok &= apply_overrides(inst.shape_params, *plan.shape, "shape", {plan.query}, plan.shape_values);
     if (!inst.material.empty()) {
-        plan.material = get(inst.material, inst.material_span);
+        plan.material = lib_.get(inst.material, inst.material_span);
         if (!plan.material) {
             auto& e = d_.error(inst.material_span, fmt::format("unknown material '{}'", inst.material));
-            if (auto sug = did_you_mean(inst.material, module_names()))
+            if (auto sug = did_you_mean(inst.material, lib_.names()))
                 Diagnostics::note(e, inst.material_span, fmt::format("did you mean '{}'?", *sug));
             return false;
         }
@@ -539,7 +457,10 @@ CompileResult SceneCompiler::run() {
         res.pass_ms.push_back({name, std::chrono::duration<double, std::milli>(now - clock).count()});
         clock = now;
     };
-    build_registry();
+    for (const auto& m : s_.modules) {
+        // A document's blocks with one name are already joined into one module.
+        lib_.add(m);
+    }
     std::vector<InstancePlan> plans(s_.instances.size());
     std::map<std::string, int> counts;
     std::set<std::string> names;

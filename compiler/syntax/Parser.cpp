@@ -610,7 +610,11 @@ ExprPtr Parser::parse_expr() {
         if (ctx_.back() == Ctx::Bracket && t.space_before && !peek_raw(1).space_before) break;
         BinOp op = t.kind == Tok::Plus ? BinOp::Add : BinOp::Sub;
         advance();
-        while (toks_[pos_].kind == Tok::Newline && ctx_.back() == Ctx::Top) ++pos_;  // `a +` continues
+        if (ctx_.back() == Ctx::Top) {  // `a +` continues on the next line, if there is one
+            size_t k = pos_;
+            while (toks_[k].kind == Tok::Newline) ++k;
+            if (toks_[k].kind != Tok::End) pos_ = k;
+        }
         ExprPtr rhs = parse_unary();
         lhs = binary(op, std::move(lhs), std::move(rhs));
     }

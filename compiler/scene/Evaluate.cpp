@@ -1,0 +1,134 @@
+#include "scene/Evaluate.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <cerrno>
+#include <cstring>
+#include <fmt/format.h>
+#include <fstream>
+#include <sstream>
+
+#include "ir/Lower.h"
+#include "scene/Modules.h"
+#include "scene/Scene.h"
+
+namespace iqc {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Evaluates a literal such as `3`, `-0.5`, `(1, 2, 3)` or `[1 2; 3 4]` (any constant expression).
+bool parse_value(const std::string& name, const std::string& text, SourceManager& sm, Diagnostics& d, ir::Value& out) {
+    FileId f = sm.add(fmt::format("--set {}", name), text);
+    ModuleSource src;
+    src.name = "value";
+    src.file = f;
+    src.ranges = {{0, uint32_t(text.size())}};
+    src.where = {f, 0, 1};
+    ModuleLibrary lib(sm, d);
+    size_t before = d.error_count();
+    auto m = lib.parse_check(src, "value", false);
+    if (d.error_count() != before) return false;
+    if (!m->ret || !m->params.empty() || !m->primary_type.is_numeric()) {
+        d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
+                fmt::format("the value of '{}' must be a number, a vector (1, 2, 3) or a matrix [1 2; 3 4]", name));
+        return false;
+    }
+    ir::Module irm;
+    LowerContext ctx{irm, {}};
+    int fn = lower_module(*m, "value", "value", ctx);
+    out = ir::evaluate(irm, fn, {});
+    return true;
+}
+
+}  // namespace
+
+bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics& d, std::vector<EvalOutput>& out) {
+    size_t before = d.error_count();
+    std::string ext = fs::path(req.path).extension().string();
+    SceneDesc scene;
+    std::string dir = fs::path(req.path).parent_path().string();
+    ModuleLibrary lib(sm, d, {dir});
+    std::string name = req.module;
+    if (ext == ".md" || ext == ".iq" || ext == ".toml") {
+        if (!load_scene(req.path, sm, d, scene) && scene.modules.empty()) return false;
+        // Problems in the scene part do not matter for evaluating a module: keep only module errors.
+        for (const auto& m : scene.modules) lib.add(m);
+        if (name.empty()) {
+            if (scene.modules.size() != 1) {
+                std::vector<std::string> names;
+                for (auto& m : scene.modules) names.push_back(m.name);
+                d.error_nospan(fmt::format("'{}' defines {} modules: choose one with --module ({})", req.path,
+                                           scene.modules.size(), fmt::join(names, ", ")));
+                return false;
+            }
+            name = scene.modules[0].name;
+        }
+    } else {
+        std::string text;
+        ModuleSource ms;
+        SceneDesc tmp;
+        // Read the file through the scene loader's reader for its error messages.
+        std::ifstream in(req.path, std::ios::binary);
+        std::error_code ec;
+        if (!in || fs::is_directory(req.path, ec)) {
+            d.error_nospan(fmt::format("cannot read '{}': {}", req.path, ec ? ec.message() : std::strerror(errno)));
+            return false;
+        }
+        std::ostringstream ss;
+        ss << in.rdbuf();
+        ms.file = sm.add(req.path, ss.str());
+        ms.name = name.empty() ? fs::path(req.path).stem().string() : name;
+        ms.ranges = {{0, uint32_t(sm.text(ms.file).size())}};
+        ms.where = {ms.file, 0, 1};
+        ms.origin = "module file";
+        scene.modules.push_back(ms);
+        lib.add(scene.modules.back());
+        name = ms.name;
+    }
+    const CheckedModule* m = lib.get(name, {});
+    if (!m) {
+        auto& e = d.error_nospan(fmt::format("no module named '{}' in '{}'", name, req.path));
+        (void)e;
+        return false;
+    }
+    if (!m->ok || d.error_count() != before) return false;
+    std::vector<ir::Value> args;
+    for (const auto& p : m->params) args.push_back({p.type, p.value});
+    for (const auto& [sname, stext] : req.sets) {
+        int pi = m->find_param(sname);
+        if (pi < 0) {
+            std::vector<std::string> cands;
+            for (const auto& p : m->params) cands.push_back(p.name);
+            std::string msg = fmt::format("--set {}: the module has no parameter '{}'", sname, sname);
+            if (auto s = did_you_mean(sname, cands)) msg += fmt::format(" (did you mean '{}'?)", *s);
+            else if (!cands.empty()) msg += fmt::format(" (its parameters: {})", fmt::join(cands, ", "));
+            d.error_nospan(msg);
+            continue;
+        }
+        ir::Value v;
+        if (!parse_value(sname, stext, sm, d, v)) continue;
+        const Type& want = m->params[size_t(pi)].type;
+        if (v.type != want && !(want.is_scalar() && v.type.is_scalar())) {
+            d.error_nospan(fmt::format("--set {}: '{}' is {}, but the value is {}", sname, sname, want.str(), v.type.str()));
+            continue;
+        }
+        args[size_t(pi)] = {want, v.v};
+    }
+    if (d.error_count() != before) return false;
+    ir::Module irm;
+    LowerContext ctx{irm, {}};
+    int fn = lower_module(*m, name, name, ctx);
+    auto all = ir::evaluate_all(irm, fn, args);
+    const ir::Function& F = irm.functions[size_t(fn)];
+    // Outputs in source order.
+    std::vector<std::pair<uint32_t, EvalOutput>> ordered;
+    for (const auto& [oname, v] : F.outputs) ordered.push_back({F.body[v].span.begin, {oname, all[v]}});
+    std::stable_sort(ordered.begin(), ordered.end(), [](auto& a, auto& b) { return a.first < b.first; });
+    for (auto& o : ordered) out.push_back(std::move(o.second));
+    if (m->ret) out.push_back({"ret", all[F.result]});
+    return true;
+}
+
+}  // namespace iqc

@@ -1,0 +1,28 @@
+// `iqc eval`: evaluates a module in double precision on the IR — the graphing calculator, and the
+// reference that numerical tests compare shaders against.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ir/Eval.h"
+#include "source/Source.h"
+
+namespace iqc {
+
+struct EvalRequest {
+    std::string path;                                       // a module file (.iql), or a document/scene with `module`
+    std::string module;                                     // which module of a .md/.iq (empty: the file's only one)
+    std::vector<std::pair<std::string, std::string>> sets;  // NAME=VALUE, VALUE in the language's own literals
+};
+
+struct EvalOutput {
+    std::string name;  // as written (the bare expression is "ret")
+    ir::Value value;
+};
+
+// Returns false (with diagnostics) when the module or a value is invalid.
+bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics& d, std::vector<EvalOutput>& out);
+
+}  // namespace iqc

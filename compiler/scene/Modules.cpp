@@ -1,0 +1,113 @@
+#include "scene/Modules.h"
+
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <sstream>
+
+#include "resources/Embedded.h"
+#include "sema/Builtins.h"
+#include "syntax/Parser.h"
+
+namespace iqc {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::pair<std::string, std::string>>& ModuleLibrary::transform_imports() {
+    static const std::vector<std::pair<std::string, std::string>> v = {
+        {"T", "transformations"}, {"R_x", "transformations"}, {"R_y", "transformations"},
+        {"R_z", "transformations"}, {"S", "transformations"}};
+    return v;
+}
+
+void ModuleLibrary::add(const ModuleSource& m) {
+    auto it = registry_.find(m.name);
+    if (it != registry_.end()) {
+        auto& e = d_.error(m.where, fmt::format("module '{}' is defined twice", m.name));
+        Diagnostics::note(e, it->second->where, fmt::format("also defined here ({})", it->second->origin));
+        return;
+    }
+    registry_[m.name] = &m;
+}
+
+const ModuleSource* ModuleLibrary::find_source(const std::string& name) {
+    if (auto it = registry_.find(name); it != registry_.end()) return it->second;
+    auto own = [&](std::unique_ptr<ModuleSource> ms) {
+        registry_[name] = ms.get();
+        owned_.push_back(std::move(ms));
+        return owned_.back().get();
+    };
+    for (const auto& dir : dirs_) {
+        fs::path p = fs::path(dir) / (name + ".iql");
+        std::error_code ec;
+        if (!fs::is_regular_file(p, ec)) continue;
+        std::ifstream in(p, std::ios::binary);
+        std::ostringstream ss;
+        ss << in.rdbuf();
+        auto ms = std::make_unique<ModuleSource>();
+        ms->name = name;
+        ms->file = sm_.add(p.string(), ss.str());
+        ms->ranges = {{0, uint32_t(sm_.text(ms->file).size())}};
+        ms->where = {ms->file, 0, 1};
+        ms->origin = "module file";
+        return own(std::move(ms));
+    }
+    std::string path = "stdlib/" + name + ".iql";
+    auto text = embedded_file(path);
+    if (!text) return nullptr;
+    auto ms = std::make_unique<ModuleSource>();
+    ms->name = name;
+    ms->file = sm_.add(path, std::string(*text));
+    ms->ranges = {{0, uint32_t(text->size())}};
+    ms->where = {ms->file, 0, 1};
+    ms->origin = "stdlib";
+    return own(std::move(ms));
+}
+
+std::vector<std::string> ModuleLibrary::names() const {
+    std::vector<std::string> names;
+    for (auto& [n, m] : registry_) names.push_back(n);
+    for (const auto& f : embedded_resources()) {
+        std::string p(f.path);
+        if (p.rfind("stdlib/", 0) == 0 && p.size() > 11 && p.substr(p.size() - 4) == ".iql")
+            names.push_back(p.substr(7, p.size() - 11));
+    }
+    for (const auto& dir : dirs_) {
+        std::error_code ec;
+        for (auto& e : fs::directory_iterator(dir, ec))
+            if (e.path().extension() == ".iql") names.push_back(e.path().stem().string());
+    }
+    return names;
+}
+
+std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& src, const std::string& name, bool transform) {
+    ParseOptions po;
+    for (const auto& b : builtins()) po.known_names.insert(b.name);
+    CheckOptions co;
+    if (transform) {
+        po.allow_header = false;
+        for (auto& [n, mod] : transform_imports()) po.known_names.insert(n);
+        co.implicit_imports = transform_imports();
+    }
+    ast::Module ast = parse_module(sm_, src.file, src.ranges, name, po, d_);
+    if (!src.ranges.empty()) ast.span = {src.file, src.ranges[0].begin, src.ranges[0].begin + 1};
+    ModuleLookup lookup = [this](const std::string& n, Span where) { return get(n, where); };
+    return check_module(std::move(ast), lookup, co, d_);
+}
+
+const CheckedModule* ModuleLibrary::get(const std::string& name, Span where) {
+    if (auto it = checked_.find(name); it != checked_.end()) return it->second.get();
+    if (in_progress_.count(name)) {
+        d_.error(where, fmt::format("module '{}' imports itself (an import cycle)", name));
+        return nullptr;
+    }
+    const ModuleSource* src = find_source(name);
+    if (!src) return nullptr;
+    in_progress_.insert(name);
+    auto m = parse_check(*src, name, false);
+    in_progress_.erase(name);
+    m->ast.span = src->where;
+    return (checked_[name] = std::move(m)).get();
+}
+
+}  // namespace iqc

@@ -1,0 +1,49 @@
+// The module library: finds a module's text by name and checks it once.
+//
+// Lookup order: modules added by the input (the scene's or document's own, then its includes), then
+// `<dir>/<name>.iql` in the search directories (the input's folder), then the standard library
+// (stdlib/, embedded in the binary). The same name added twice is an error naming both places; a module
+// that imports itself, directly or not, is an import cycle.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "scene/Scene.h"
+#include "sema/Check.h"
+
+namespace iqc {
+
+class ModuleLibrary {
+public:
+    ModuleLibrary(SourceManager& sm, Diagnostics& d, std::vector<std::string> search_dirs = {})
+        : sm_(sm), d_(d), dirs_(std::move(search_dirs)) {}
+
+    // Registers a module defined by the input (reports a name defined twice).
+    void add(const ModuleSource& m);
+    // The checked module of that name, or null when there is none (unknown names are the caller's to report).
+    const CheckedModule* get(const std::string& name, Span where);
+    // Parses and checks a module's text; `transform` gives it the implicit transformation imports.
+    std::unique_ptr<CheckedModule> parse_check(const ModuleSource& src, const std::string& name, bool transform);
+    // Every module name that lookup can find, for "did you mean".
+    std::vector<std::string> names() const;
+
+    // The names a scene transform imports without saying so.
+    static const std::vector<std::pair<std::string, std::string>>& transform_imports();
+
+private:
+    SourceManager& sm_;
+    Diagnostics& d_;
+    std::vector<std::string> dirs_;
+    std::map<std::string, const ModuleSource*> registry_;
+    std::vector<std::unique_ptr<ModuleSource>> owned_;
+    std::map<std::string, std::unique_ptr<CheckedModule>> checked_;
+    std::set<std::string> in_progress_;
+
+    const ModuleSource* find_source(const std::string& name);
+};
+
+}  // namespace iqc

@@ -1,0 +1,58 @@
+// `iqc eval`: outputs in source order at full precision, --set with the language's literals, errors.
+#include <catch2/catch.hpp>
+
+#include "TestUtil.h"
+
+using namespace iqc::test;
+
+static const char* kTorus =
+    "shape\nD = ‖q‖ - t_2\nq = (‖(p_1, p_3)‖ - t_1, p_2)\nwhere\np ∈ ℝ³\nt ∈ [0,2]x[0,2] default = (0.77, 0.6)\n";
+
+TEST_CASE("eval prints every output in source order", "[eval]") {
+    auto f = write_temp("torus.iql", kTorus);
+    RunResult r = run_iqc("eval " + f.string() + " --set 'p=(2,0,0)'");
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(r.out == "D = 0.63\nq = (1.23, 0)\n");
+    RunResult t = run_iqc("eval " + f.string() + " --set 'p=(0, 1, 0)' --set 't=(1, 0.25)'");
+    CHECK(t.out == "D = 1.1642135623730951\nq = (-1, 1)\n");
+}
+
+TEST_CASE("eval takes matrices, expressions and backticked names", "[eval]") {
+    auto f = write_temp("mat.iql", "y = A v\nz = `k_d` + 1\nwhere\nA ∈ ℝ^(2×2)\nv ∈ ℝ²\n`k_d` ∈ ℝ\n");
+    RunResult r = run_iqc("eval " + f.string() + " --set 'A=[1 2; 3 4]' --set 'v=(1, -1)' --set '`k_d`=π/2'");
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(r.out == "y = (-1, -1)\nz = 2.5707963267948966\n");
+}
+
+TEST_CASE("eval picks a module of a document and prints the bare expression as ret", "[eval]") {
+    auto f = write_temp("lib.iql", "sin from trigonometry\nsin(x) + 1\nwhere\nx ∈ ℝ\n");
+    RunResult r = run_iqc("eval " + f.string() + " --set x=0");
+    CHECK(r.out == "ret = 1\n");
+    auto doc = std::filesystem::path(IQC_SOURCE_DIR) / "examples" / "two_tori.md";
+    RunResult d = run_iqc("eval " + doc.string() + " --module torus --set 'p=(2,0,0)'");
+    CHECK(d.out == "D = 0.63\nq = (1.23, 0)\n");
+    RunResult many = run_iqc("eval " + doc.string());
+    CHECK(many.exit_code == 1);
+    CHECK_THAT(many.err, Catch::Contains("defines 3 modules: choose one with --module (toon, phong, torus)"));
+}
+
+TEST_CASE("eval errors: unknown parameter, wrong size, bad value, invalid module", "[eval]") {
+    auto f = write_temp("torus2.iql", kTorus);
+    RunResult a = run_iqc("eval " + f.string() + " --set 'pp=(1,2,3)'");
+    CHECK(a.exit_code == 1);
+    CHECK_THAT(a.err, Catch::Contains("--set pp: the module has no parameter 'pp' (its parameters: p, t)"));
+    RunResult b = run_iqc("eval " + f.string() + " --set 'p=(1,2)'");
+    CHECK(b.exit_code == 1);
+    CHECK_THAT(b.err, Catch::Contains("--set p: 'p' is ℝ³, but the value is ℝ²"));
+    RunResult c = run_iqc("eval " + f.string() + " --set 'p=(1,,2)'");
+    CHECK(c.exit_code == 1);
+    CHECK_THAT(c.err, Catch::Contains("--set p:1:4: error: expected an expression, found ','"));
+    RunResult u = run_iqc("eval " + f.string() + " --set novalue");
+    CHECK(u.exit_code == 2);
+    auto bad = write_temp("bad.iql", "y = x +\n");
+    RunResult e = run_iqc("eval " + bad.string());
+    CHECK(e.exit_code == 1);
+    CHECK_THAT(e.err, Catch::Contains("bad.iql:1:8: error: expected an expression, found the end of the line"));
+}
