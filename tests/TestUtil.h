@@ -89,7 +89,7 @@ inline Evaluated eval_module(const std::string& source, const std::map<std::stri
     Diagnostics d(sm);
     FileId f = sm.add("test.iql", source);
     ParseOptions po;
-    for (const auto& b : builtins()) po.known_names.insert(b.name);
+    for (const auto& n : known_names()) po.known_names.insert(n);
     ast::Module m = parse_module(sm, f, {{0, uint32_t(source.size())}}, "test", po, d);
     Evaluated e;
     if (d.has_errors()) {

@@ -135,3 +135,44 @@ TEST_CASE("bounded parameters: defaults, midpoints, vector bounds", "[lang]") {
     CHECK(cm->params[1].value == std::vector<double>{0.5, 3, 0});
     CHECK(cm->params[2].value == std::vector<double>{0.0});  // unbounded: 0
 }
+
+TEST_CASE("sums run over the size of what their index subscripts", "[lang]") {
+    Evaluated e = eval_module("s = ∑_i v_i w_i\nn = ∑_i v_i² + 1\ntr = ∑_i A_i,i\nall = ∑_i ∑_j A_i,j\n"
+                              "where\nv ∈ ℝ³ default = (1, 2, 3)\nw ∈ ℝ³ default = (4, 5, 6)\nA ∈ ℝ^(2×2)\n",
+                              {{"A", {1, 2, 3, 4}}});
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(e.text["s"] == "32");
+    CHECK(e.text["n"] == "15");  // (∑ v_i²) + 1
+    CHECK(e.text["tr"] == "5");
+    CHECK(e.text["all"] == "10");
+    Evaluated bad = eval_module("s = ∑_i v_i w_i\nwhere\nv ∈ ℝ³\nw ∈ ℝ²\n");
+    CHECK_FALSE(bad.ok);
+    CHECK_THAT(bad.diagnostics, Catch::Contains("test.iql:1:15: error: ∑_i runs over 2 here but over 3 elsewhere in the sum"));
+}
+
+TEST_CASE("block matrices size 0, 1 and I from their neighbours", "[lang]") {
+    Evaluated e = eval_module("M = [R 0; 0 1]\nH = [I v; 0 1]\nC = [v w]\nZ = [0 v]\n"
+                              "where\nv ∈ ℝ³ default = (1, 2, 3)\nw ∈ ℝ³ default = (4, 5, 6)\nR ∈ ℝ^(2×2)\n",
+                              {{"R", {1, 2, 3, 4}}});
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(e.text["M"] == "[1 2 0; 3 4 0; 0 0 1]");
+    CHECK(e.text["H"] == "[1 0 0 1; 0 1 0 2; 0 0 1 3; 0 0 0 1]");
+    CHECK(e.text["C"] == "[1 4; 2 5; 3 6]");
+    CHECK(e.text["Z"] == "[0 1; 0 2; 0 3]");
+    Evaluated bad = eval_module("M = [R v]\nwhere\nv ∈ ℝ³\nR ∈ ℝ^(2×2)\n");
+    CHECK_FALSE(bad.ok);
+    CHECK_THAT(bad.diagnostics, Catch::Contains("test.iql:1:8: error: this block has 3 rows but the blocks beside it have 2"));
+}
+
+TEST_CASE("the reserved inputs time and mouse", "[lang]") {
+    Evaluated e = eval_module("y = 2time + mouse_1\n");
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(e.text["y"] == "0");
+    // A declaration of the same name wins.
+    Evaluated d = eval_module("y = time\nwhere\ntime ∈ ℝ default = 3\n");
+    REQUIRE(d.ok);
+    CHECK(d.text["y"] == "3");
+}

@@ -86,6 +86,10 @@ int main(int argc, char** argv) {
     eval->add_option("--set", e_sets, "NAME=VALUE: a parameter's value, e.g. p=(2,0,0), r=0.5, A=[1 2; 3 4] "
                                       "(NAME without backticks; unset parameters take their defaults)");
     eval->add_option("--module", e_module, "which module of a .md/.iq file to evaluate");
+    double e_time = 0;
+    std::vector<double> e_mouse;
+    eval->add_option("--time", e_time, "the value of the reserved name `time` (seconds, default 0)");
+    eval->add_option("--mouse", e_mouse, "the value of `mouse` (two numbers in [0,1], default 0 0)")->expected(2);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -98,6 +102,11 @@ int main(int argc, char** argv) {
         iqc::EvalRequest req;
         req.path = e_input;
         req.module = e_module;
+        req.inputs.time = e_time;
+        if (e_mouse.size() == 2) {
+            req.inputs.mouse[0] = e_mouse[0];
+            req.inputs.mouse[1] = e_mouse[1];
+        }
         for (const auto& s : e_sets) {
             size_t eq = s.find('=');
             if (eq == std::string::npos || eq == 0) {

@@ -131,7 +131,7 @@ struct FunctionEmitter {
     // Whether the value is simple enough to repeat rather than give a variable.
     bool trivial(ValueId v) const {
         const Instr& in = f.body[v];
-        return in.op == Op::Param || (in.op == Op::Const && in.type.is_scalar());
+        return in.op == Op::Param || in.op == Op::Input || (in.op == Op::Const && in.type.is_scalar());
     }
 
     // A value used more than once gets a variable when recomputing it would cost real work (a call, a
@@ -185,6 +185,7 @@ struct FunctionEmitter {
         switch (in.op) {
             case Op::Const: return constant(in.type, in.data);
             case Op::Param: return var[v];
+            case Op::Input: return in.aux == 0 ? "iTime" : "(iMouse.xy / iResolution.xy)";
             case Op::Copy: return plain(0);
             case Op::Add: return a(0) + " + " + a(1);
             case Op::Sub: return a(0) + " - " + a(1);

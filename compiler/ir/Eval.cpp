@@ -145,7 +145,7 @@ Value run_builtin(const Instr& in, const std::vector<const Value*>& a) {
 
 }  // namespace
 
-std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value>& args) {
+std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& inputs) {
     const Function& f = m.functions[size_t(fn)];
     std::vector<Value> vals(f.body.size());
     for (size_t i = 0; i < f.body.size(); ++i) {
@@ -157,6 +157,10 @@ std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value
         switch (in.op) {
             case Op::Const: r.v = in.data; break;
             case Op::Param: r.v = args.at(size_t(in.aux)).v; break;
+            case Op::Input:
+                if (in.aux == 0) r.v = {inputs.time};
+                else r.v = {inputs.mouse[0], inputs.mouse[1]};
+                break;
             case Op::Copy: r.v = a[0]->v; break;
             case Op::Add: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x + y; }); break;
             case Op::Sub: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x - y; }); break;
@@ -224,7 +228,7 @@ std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value
             case Op::Call: {
                 std::vector<Value> cargs;
                 for (auto* x : a) cargs.push_back(*x);
-                r = evaluate(m, in.aux, cargs);
+                r = evaluate(m, in.aux, cargs, inputs);
                 break;
             }
         }
@@ -233,8 +237,8 @@ std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value
     return vals;
 }
 
-Value evaluate(const Module& m, int fn, const std::vector<Value>& args) {
-    auto all = evaluate_all(m, fn, args);
+Value evaluate(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& inputs) {
+    auto all = evaluate_all(m, fn, args, inputs);
     return all[m.functions[size_t(fn)].result];
 }
 

@@ -18,10 +18,16 @@ struct Value {
     double operator[](size_t i) const { return v[i]; }
 };
 
+// The reserved inputs (`time`, `mouse`).
+struct EvalInputs {
+    double time = 0;
+    double mouse[2] = {0, 0};
+};
+
 // Evaluates function `fn` of `m` with the given arguments; returns every value of its body (index = ValueId).
-std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value>& args);
+std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& in = {});
 // Evaluates and returns the function's result.
-Value evaluate(const Module& m, int fn, const std::vector<Value>& args);
+Value evaluate(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& in = {});
 
 // Math helpers shared with scene assembly.
 std::vector<double> mat_inverse(const std::vector<double>& a, int n, bool* singular);

@@ -69,6 +69,8 @@ Type result_type(Op op, const std::vector<Type>& a, int aux) {
         case Op::Call:
         case Op::Construct:
             return {};  // carried by the instruction itself
+        case Op::Input:
+            return aux == 0 ? Type::scalar() : aux == 1 ? Type::vector(2) : Type{};
         case Op::Copy:
             return a[0];
         case Op::Add:
@@ -146,6 +148,7 @@ static std::string instr_text(const Function& f, const Instr& in, const Module* 
             break;
         }
         case Op::Param: s += fmt::format(" #{} {}", in.aux, f.params[size_t(in.aux)].name); break;
+        case Op::Input: s += in.aux == 0 ? " time" : " mouse"; break;
         case Op::Builtin: s += fmt::format(" {}", builtin(in.aux).name); break;
         case Op::Call:
             s += " " + (m && in.aux < int(m->functions.size()) ? m->functions[size_t(in.aux)].name

@@ -44,7 +44,8 @@ namespace iqc::ir {
     X(And, 2)                                                                            \
     X(Or, 2)                                                                             \
     X(Select, 3)      /* cond ? a : b */                                                 \
-    X(Call, -1)       /* aux: callee function index */
+    X(Call, -1)       /* aux: callee function index */                                  \
+    X(Input, 0)       /* aux: 0 time (ℝ, seconds), 1 mouse (ℝ², [0,1]² of the view) */
 
 enum class Op : uint8_t {
 #define X(name, n) name,

@@ -25,6 +25,7 @@ struct Env {
     std::vector<ValueId> locals;                 // local function parameters
     std::vector<ValueId> captures;               // local function captures
     const LocalFunction* fn = nullptr;           // when lowering a local function
+    std::map<std::string, int> sum_index;        // ∑ indices being unrolled -> current 0-based value
 
     ValueId emit(Op op, Type t, std::vector<ValueId> args, int aux = 0, Span span = {}) {
         Instr in;
@@ -108,6 +109,8 @@ struct Env {
                     case R_Local: return locals[size_t(e.aux)];
                     case R_Capture: return captures[size_t(e.aux)];
                     case R_Pi: return f.scalar(M_PI);
+                    case R_Input: return emit(Op::Input, e.type, {}, e.aux, e.span);
+                    case R_SumIndex: return f.scalar(double(sum_index.at(e.text) + 1));
                     default: throw std::logic_error("lowering: unresolved name " + e.text);
                 }
             case ExprKind::Call: {
@@ -165,8 +168,12 @@ struct Env {
             case ExprKind::Index: {
                 ValueId a = lower(*e.args[0]);
                 const Type& t = type_of(a);
-                if (t.is_vector()) return emit(Op::Extract, Type::scalar(), {a}, e.indices[0].value, e.span);
-                int r = e.indices[0].value, c = e.indices[1].value;
+                auto index = [&](size_t k) {
+                    const IndexItem& it = e.indices[k];
+                    return it.value == -2 ? sum_index.at(it.expr->text) : it.value;
+                };
+                if (t.is_vector()) return emit(Op::Extract, Type::scalar(), {a}, index(0), e.span);
+                int r = index(0), c = index(1);
                 if (r < 0 && c < 0) return a;
                 if (r < 0) return emit(Op::Column, Type::vector(t.rows), {a}, c, e.span);
                 if (c < 0) return emit(Op::Row, Type::vector(t.cols), {a}, r, e.span);
@@ -178,11 +185,49 @@ struct Env {
                 return emit(Op::Construct, e.type, std::move(items), 0, e.span);
             }
             case ExprKind::Matrix: {
+                // Element by element, row-major, from the blocks (sized by the checker).
+                std::vector<std::vector<ValueId>> blocks;
+                for (auto& row : e.rows) {
+                    blocks.emplace_back();
+                    for (auto& a : row)
+                        blocks.back().push_back(a->resolved == R_BlockZero || a->resolved == R_BlockOnes ||
+                                                        a->resolved == R_BlockIdentity
+                                                    ? ValueId(-1)
+                                                    : lower(*a));
+                }
                 std::vector<ValueId> items;
-                for (auto& row : e.rows)
-                    for (auto& a : row) items.push_back(lower(*a));
+                ValueId zero = ValueId(-1), one = ValueId(-1);
+                auto konst = [&](double v) {
+                    ValueId& slot = v == 0 ? zero : one;
+                    if (slot == ValueId(-1)) slot = f.scalar(v);
+                    return slot;
+                };
+                for (size_t br = 0; br < e.rows.size(); ++br)
+                    for (int i = 0; i < e.block_rows[br]; ++i)
+                        for (size_t bc = 0; bc < e.rows[br].size(); ++bc)
+                            for (int j = 0; j < e.block_cols[bc]; ++j) {
+                                const Expr& item = *e.rows[br][bc];
+                                ValueId v = blocks[br][bc];
+                                if (item.resolved == R_BlockZero) items.push_back(konst(0));
+                                else if (item.resolved == R_BlockOnes) items.push_back(konst(1));
+                                else if (item.resolved == R_BlockIdentity) items.push_back(konst(i == j ? 1 : 0));
+                                else if (type_of(v).is_scalar()) items.push_back(v);
+                                else if (type_of(v).is_vector()) items.push_back(emit(Op::Extract, Type::scalar(), {v}, i, item.span));
+                                else items.push_back(emit(Op::Extract, Type::scalar(), {v}, i * type_of(v).cols + j, item.span));
+                            }
                 if (items.size() == 1) return items[0];
                 return emit(Op::Construct, e.type, std::move(items), 0, e.span);
+            }
+            case ExprKind::Sum: {
+                // Unrolled: the range is a vector's or matrix's size, known when checking.
+                ValueId acc = ValueId(-1);
+                for (int k = 0; k < e.aux; ++k) {
+                    sum_index[e.text] = k;
+                    ValueId term = lower(*e.args[0]);
+                    acc = acc == ValueId(-1) ? term : emit(Op::Add, e.type, {acc, term}, 0, e.span);
+                }
+                sum_index.erase(e.text);
+                return acc;
             }
             case ExprKind::Norm:
             case ExprKind::Abs: {

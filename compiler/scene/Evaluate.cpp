@@ -120,7 +120,7 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
     ir::Module irm;
     LowerContext ctx{irm, {}};
     int fn = lower_module(*m, name, name, ctx);
-    auto all = ir::evaluate_all(irm, fn, args);
+    auto all = ir::evaluate_all(irm, fn, args, req.inputs);
     const ir::Function& F = irm.functions[size_t(fn)];
     // Outputs in source order.
     std::vector<std::pair<uint32_t, EvalOutput>> ordered;

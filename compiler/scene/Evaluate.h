@@ -15,6 +15,7 @@ struct EvalRequest {
     std::string path;                                       // a module file (.iql), or a document/scene with `module`
     std::string module;                                     // which module of a .md/.iq (empty: the file's only one)
     std::vector<std::pair<std::string, std::string>> sets;  // NAME=VALUE, VALUE in the language's own literals
+    ir::EvalInputs inputs;                                  // the reserved `time` and `mouse`
 };
 
 struct EvalOutput {

@@ -82,7 +82,7 @@ std::vector<std::string> ModuleLibrary::names() const {
 
 std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& src, const std::string& name, bool transform) {
     ParseOptions po;
-    for (const auto& b : builtins()) po.known_names.insert(b.name);
+    for (const auto& n : known_names()) po.known_names.insert(n);
     CheckOptions co;
     if (transform) {
         po.allow_header = false;

@@ -73,6 +73,14 @@ std::optional<int> find_builtin(std::string_view name) {
     return std::nullopt;
 }
 
+std::vector<std::string> known_names() {
+    std::vector<std::string> v;
+    for (const auto& b : builtins()) v.push_back(b.name);
+    v.push_back("time");
+    v.push_back("mouse");
+    return v;
+}
+
 bool is_builtin_module(std::string_view name) { return name == "trigonometry"; }
 
 BuiltinCheck check_builtin(int id, const std::vector<Type>& args) {

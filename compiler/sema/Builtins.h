@@ -36,6 +36,10 @@ const std::vector<BuiltinInfo>& builtins();
 std::optional<int> find_builtin(std::string_view name);
 inline const BuiltinInfo& builtin(int id) { return builtins()[size_t(id)]; }
 
+// Multi-letter names the language knows without a declaration (built-in functions and the reserved
+// inputs `time` and `mouse`), so the parser does not split them into letters.
+std::vector<std::string> known_names();
+
 // Modules made only of built-ins (e.g. `trigonometry`), for import checking.
 bool is_builtin_module(std::string_view name);
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
+#include <functional>
 #include <set>
 
 #include "ir/IR.h"
@@ -147,6 +148,9 @@ private:
         std::map<std::string, int> locals;
     };
     Scope* scope_ = nullptr;
+    std::vector<std::pair<std::string, int>> sums_;  // enclosing ∑ indices and their ranges
+
+    int sum_range(const Expr& body, const std::string& index);
 
     void collect_declarations();
     void collect_imports();
@@ -453,6 +457,11 @@ Type Checker::value_type_for_scope(const std::string& name, Type t, Expr& e, int
 
 Type Checker::check_name(Expr& e) {
     const std::string& n = e.text;
+    for (auto it = sums_.rbegin(); it != sums_.rend(); ++it)
+        if (it->first == n) {
+            e.resolved = R_SumIndex;
+            return Type::integer();
+        }
     if (scope_) {
         if (auto it = scope_->locals.find(n); it != scope_->locals.end()) {
             e.resolved = R_Local;
@@ -466,6 +475,11 @@ Type Checker::check_name(Expr& e) {
     if (n == "π") {
         e.resolved = R_Pi;
         return Type::scalar();
+    }
+    if (n == "time" || n == "mouse") {  // reserved inputs (a declaration of the same name wins)
+        e.resolved = R_Input;
+        e.aux = n == "time" ? 0 : 1;
+        return n == "time" ? Type::scalar() : Type::vector(2);
     }
     if (m_.find_function(n) >= 0 || std::any_of(m_.imports.begin(), m_.imports.end(), [&](auto& im) { return im.name == n; })) {
         d_.error(e.span, fmt::format("'{}' is a function: call it with arguments, as in {}(x)", n, n));
@@ -747,6 +761,13 @@ Type Checker::check(Expr& e) {
                     idx.push_back(-1);
                     continue;
                 }
+                if (it.expr->kind == ExprKind::Name &&
+                    std::any_of(sums_.begin(), sums_.end(), [&](auto& s) { return s.first == it.expr->text; })) {
+                    check(*it.expr);
+                    it.value = -2;  // bound by the enclosing ∑ (its range fits: see sum_range)
+                    idx.push_back(0);
+                    continue;
+                }
                 auto c = const_eval(*it.expr);
                 if (!c || c->size() != 1 || (*c)[0] != std::floor((*c)[0])) {
                     d_.error(it.span, "a subscript must be a whole number such as p_1 (or * for a whole row or column)");
@@ -807,27 +828,100 @@ Type Checker::check(Expr& e) {
             break;
         }
         case ExprKind::Matrix: {
-            size_t cols = e.rows[0].size();
+            // Entries may be scalars, vectors (columns) or matrices (blocks); 0, 1 and I are blocks sized
+            // from their neighbours in the same block row and column.
+            size_t ncols = e.rows[0].size();
             bool ok = true;
-            for (auto& row : e.rows) {
-                for (auto& item : row) {
-                    Type it = check(*item);
-                    if (it.valid() && !it.is_scalar()) {
-                        d_.error(item->span, fmt::format("matrix entries must be scalars, not {} (block matrices are not "
-                                                         "supported yet)", it.str()));
-                        ok = false;
-                    }
-                    ok &= it.valid();
-                }
-                if (row.size() != cols) {
+            size_t nrows = e.rows.size();
+            std::vector<std::vector<std::pair<int, int>>> size(nrows);
+            for (size_t r = 0; r < nrows; ++r) {
+                auto& row = e.rows[r];
+                if (row.size() != ncols) {
                     d_.error(Span::join(row.front()->span, row.back()->span),
-                             fmt::format("this row has {} entries but the first row has {}", row.size(), cols));
+                             fmt::format("this row has {} entries but the first row has {}", row.size(), ncols));
                     ok = false;
+                }
+                for (auto& item : row) {
+                    bool declared_I = m_.find_param("I") >= 0 || assigns_.count("I") || (scope_ && scope_->locals.count("I"));
+                    if (item->kind == ExprKind::Number && (item->number == 0 || item->number == 1)) {
+                        item->resolved = item->number == 0 ? R_BlockZero : R_BlockOnes;
+                        item->type = Type::scalar();
+                        size[r].push_back({-1, -1});
+                        continue;
+                    }
+                    if (item->kind == ExprKind::Name && item->text == "I" && !declared_I) {
+                        item->resolved = R_BlockIdentity;
+                        size[r].push_back({-1, -1});
+                        continue;
+                    }
+                    Type it = check(*item);
+                    if (!it.valid()) { ok = false; size[r].push_back({1, 1}); continue; }
+                    if (it.is_scalar()) size[r].push_back({1, 1});
+                    else if (it.is_vector()) size[r].push_back({it.rows, 1});
+                    else if (it.is_matrix()) size[r].push_back({it.rows, it.cols});
+                    else { d_.error(item->span, fmt::format("a matrix entry cannot be a {}", it.str())); ok = false; size[r].push_back({1, 1}); }
                 }
             }
             if (!ok) break;
-            int r = int(e.rows.size()), c = int(cols);
-            t = c == 1 ? Type::vector(r) : Type::matrix(r, c);
+            std::vector<int> heights(nrows, -1), widths(ncols, -1);
+            for (size_t r = 0; r < nrows; ++r)
+                for (size_t c = 0; c < ncols; ++c) {
+                    auto [h, w] = size[r][c];
+                    if (h >= 0) {
+                        if (heights[r] >= 0 && heights[r] != h) {
+                            d_.error(e.rows[r][c]->span, fmt::format("this block has {} rows but the blocks beside it have {}", h, heights[r]));
+                            ok = false;
+                        }
+                        heights[r] = h;
+                    }
+                    if (w >= 0) {
+                        if (widths[c] >= 0 && widths[c] != w) {
+                            d_.error(e.rows[r][c]->span, fmt::format("this block has {} columns but the blocks above or below it have {}", w, widths[c]));
+                            ok = false;
+                        }
+                        widths[c] = w;
+                    }
+                }
+            // I is square: it can size its row from its column and the other way round.
+            for (int pass = 0; pass < 2; ++pass)
+                for (size_t r = 0; r < nrows; ++r)
+                    for (size_t c = 0; c < ncols; ++c)
+                        if (e.rows[r][c]->resolved == R_BlockIdentity) {
+                            if (heights[r] < 0 && widths[c] >= 0) heights[r] = widths[c];
+                            if (widths[c] < 0 && heights[r] >= 0) widths[c] = heights[r];
+                        }
+            for (auto& h : heights) if (h < 0) h = 1;
+            for (auto& w : widths) if (w < 0) w = 1;
+            for (size_t r = 0; r < nrows; ++r)
+                for (size_t c = 0; c < ncols; ++c)
+                    if (e.rows[r][c]->resolved == R_BlockIdentity && heights[r] != widths[c]) {
+                        d_.error(e.rows[r][c]->span, fmt::format("I must be square here, but its place is {}×{}", heights[r], widths[c]));
+                        ok = false;
+                    }
+            if (!ok) break;
+            e.block_rows = heights;
+            e.block_cols = widths;
+            int R = 0, C = 0;
+            for (int h : heights) R += h;
+            for (int w : widths) C += w;
+            t = C == 1 ? Type::vector(R) : Type::matrix(R, C);
+            break;
+        }
+        case ExprKind::Sum: {
+            int n = sum_range(*e.args[0], e.text);
+            if (n <= 0) {
+                if (n == 0)
+                    d_.error(e.span, fmt::format("cannot tell the range of ∑_{}: subscript a vector or matrix with {} in the summand",
+                                                 e.text, e.text));
+                break;
+            }
+            e.aux = n;
+            sums_.push_back({e.text, n});
+            Type b = check(*e.args[0]);
+            sums_.pop_back();
+            if (!b.valid()) break;
+            if (!b.is_numeric()) d_.error(e.args[0]->span, "a sum needs numbers to add");
+            else t = b.is_scalar() ? Type::scalar() : b;
             break;
         }
         case ExprKind::Norm: {
@@ -903,6 +997,38 @@ Type Checker::check(Expr& e) {
     }
     e.type = t;
     return t;
+}
+
+// The range of a ∑ index: the size of what it subscripts (every use must agree). 0 when unused,
+// -1 after reporting a disagreement.
+int Checker::sum_range(const Expr& body, const std::string& index) {
+    int n = 0;
+    bool bad = false;
+    std::function<void(const Expr&)> walk = [&](const Expr& x) {
+        if (x.kind == ExprKind::Index) {
+            for (size_t k = 0; k < x.indices.size(); ++k) {
+                const auto& it = x.indices[k];
+                if (!it.expr || it.expr->kind != ExprKind::Name || it.expr->text != index) continue;
+                // The size of the subscripted thing: check it (its type does not depend on the index).
+                Type bt = check(const_cast<Expr&>(*x.args[0]));
+                int size = 0;
+                if (bt.is_vector()) size = bt.rows;
+                else if (bt.is_matrix()) size = k == 0 ? bt.rows : bt.cols;
+                if (size == 0) continue;
+                if (n && n != size && !bad) {
+                    d_.error(it.span, fmt::format("∑_{} runs over {} here but over {} elsewhere in the sum", index, size, n));
+                    bad = true;
+                }
+                n = size;
+            }
+        }
+        for (const auto& a : x.args) walk(*a);
+        for (const auto& r : x.rows)
+            for (const auto& a : r) walk(*a);
+        if (x.otherwise) walk(*x.otherwise);
+    };
+    walk(body);
+    return bad ? -1 : n;
 }
 
 void Checker::run() {

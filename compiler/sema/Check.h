@@ -37,6 +37,11 @@ enum Resolved : int {
     R_Length,     // ‖vector‖
     R_AbsValue,   // |x|, ‖scalar‖
     R_Det,        // |matrix|
+    R_Input,      // a reserved input: aux 0 = time (seconds), 1 = mouse (ℝ², [0,1]² of the view)
+    R_SumIndex,   // the index of an enclosing ∑ (1-based)
+    R_BlockZero,  // a 0 block of a block matrix, sized from its neighbours
+    R_BlockOnes,  // a 1 block of a block matrix
+    R_BlockIdentity,  // I in a block matrix
 };
 
 struct ParamInfo {

@@ -33,6 +33,7 @@ enum class ExprKind {
     Compare,    // args[0] op args[1]  (=, ≠, <, ≤, >, ≥) — only in piecewise conditions
     Logic,      // and / or
     Piecewise,  // cases: values[i] if conds[i]; otherwise
+    Sum,        // ∑_text args[0]: a sum over the index `text` (range from the sizes it subscripts)
 };
 
 enum class BinOp {
@@ -68,6 +69,7 @@ struct Expr {
     std::vector<ExprPtr> args;
     std::vector<std::vector<ExprPtr>> rows;  // Matrix rows; Piecewise: {value, condition} per case
     std::vector<IndexItem> indices;          // Index
+    std::vector<int> block_rows, block_cols; // Matrix: heights and widths of the block rows/columns
     ExprPtr otherwise;                       // Piecewise
     // Filled by the checker.
     Type type;

@@ -653,7 +653,7 @@ bool Parser::starts_juxtaposed_operand() {
     if (ctx_.back() == Ctx::Bracket && t.space_before) return false;
     switch (t.kind) {
         case Tok::Number: case Tok::Backtick: case Tok::LParen: case Tok::LFloor: case Tok::LCeil:
-        case Tok::Sqrt: case Tok::Fraction: case Tok::Norm: case Tok::DoubleBar:
+        case Tok::Sqrt: case Tok::Fraction: case Tok::Norm: case Tok::DoubleBar: case Tok::Sum:
             return !(ctx_.back() == Ctx::Bars && (t.kind == Tok::Norm || t.kind == Tok::DoubleBar));
         case Tok::Bar: return ctx_.back() != Ctx::Bars;
         case Tok::Word: return !kKeywords.count(t.text);
@@ -971,6 +971,25 @@ ExprPtr Parser::parse_primary() {
         case Tok::Bar: return parse_delimited(ExprKind::Abs, Tok::Bar, advance().span, "the absolute value");
         case Tok::LFloor: return parse_delimited(ExprKind::Floor, Tok::RFloor, advance().span, "the floor");
         case Tok::LCeil: return parse_delimited(ExprKind::Ceil, Tok::RCeil, advance().span, "the ceiling");
+        case Tok::Sum: {
+            // ∑_i term: the summand is a multiplicative term, so ∑_i a_i b_i + c is (∑_i a_i b_i) + c.
+            Span s = advance().span;
+            std::string index;
+            if (at(Tok::Sub)) {
+                index = advance().text;
+            } else if (at(Tok::Underscore)) {
+                advance();
+                if (!is_name_token(cur())) fail(cur().span, fmt::format("expected the summation index after '∑_', found {}", describe(cur())));
+                index = advance().text;
+            } else {
+                fail(cur().span, "expected a summation index, as in ∑_i v_i");
+            }
+            ExprPtr body = parse_mult();
+            auto e = make(ExprKind::Sum, Span::join(s, body->span));
+            e->text = index;
+            e->args.push_back(std::move(body));
+            return e;
+        }
         case Tok::Sqrt: {
             Span s = advance().span;
             ExprPtr inner = parse_postfix();
