@@ -176,3 +176,39 @@ TEST_CASE("the reserved inputs time and mouse", "[lang]") {
     REQUIRE(d.ok);
     CHECK(d.text["y"] == "3");
 }
+
+TEST_CASE("recurrences: sequences defined by a first element and a step, run as one loop", "[lang]") {
+    Evaluated e = eval_module("z_1 = 1\nz_(k+1) = 2z_k + k for k ∈ 1..4\ns_1 = (0, 0)\ns_(k+1) = s_k + (1, z_k) for k ∈ 1..4\n"
+                              "w = z_5 + c\nwhere\nc ∈ ℝ default = 100\n");
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(e.text["z_5"] == "42");
+    CHECK(e.text["s_5"] == "(4, 31)");  // s uses z_k before z steps
+    CHECK(e.text["w"] == "142");
+    // Value times a parenthesised list: s(1, 1, 1) is s·(1, 1, 1).
+    Evaluated f = eval_module("q_1 = p\nq_(k+1) = (|q_k_1|, |q_k_2|, |q_k_3|) - s(1, 1, 1)/k for k ∈ 1..3\nD = ‖q_4‖\n"
+                              "where\np ∈ ℝ³ default = (0.5, 0.2, 0.1)\ns ∈ ℝ default = 0.4\n");
+    INFO(f.diagnostics);
+    REQUIRE(f.ok);
+    CHECK(f.outputs["q_4"].v[0] == Approx(-0.1 / 3));
+    CHECK(f.outputs["q_4"].v[1] == Approx(-0.4 / 3));
+}
+
+TEST_CASE("recurrence errors", "[lang]") {
+    auto err = [](const std::string& src) {
+        Evaluated e = eval_module(src);
+        REQUIRE_FALSE(e.ok);
+        return e.diagnostics;
+    };
+    CHECK_THAT(err("z_(k+1) = z_k + 1 for k ∈ 1..3\ny = z_4\n"),
+               Catch::Contains("test.iql:1:1: error: the sequence 'z' has no first element: add 'z_1 = …'"));
+    CHECK_THAT(err("z_1 = 0\nz_(k+1) = z_k + 1 for k ∈ 1..3\ny = z_3\n"),
+               Catch::Contains("test.iql:3:7: error: only the first and the last elements of 'z' exist outside its recurrence: z_1 and z_4"));
+    CHECK_THAT(err("z_1 = 0\nz_(k+1) = z_4 + 1 for k ∈ 1..3\ny = z_4\n"),
+               Catch::Contains("test.iql:2:13: error: z_4 is the result of this recurrence and cannot be used inside it"));
+    CHECK_THAT(err("z_1 = 0\nz_(k+2) = z_k for k ∈ 1..3\ny = z_4\n"),
+               Catch::Contains("test.iql:2:3: error: a recurrence defines the next element: write z_(k+1) = … for k ∈ …"));
+    CHECK_THAT(err("z_1 = 0\nz_(k+1) = (z_k, 1) for k ∈ 1..3\ny = z_4\n"),
+               Catch::Contains("test.iql:2:11: error: the recurrence gives ℝ² but 'z' starts as ℝ"));
+    CHECK_THAT(err("z_1 = 0\nz_(k+1) = z_k for k ∈ 3..1\ny = z_4\n"), Catch::Contains("error: the range 3..1 is empty"));
+}

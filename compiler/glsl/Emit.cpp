@@ -77,8 +77,13 @@ std::vector<int> Emitter::closure(const std::vector<int>& roots) const {
     std::function<void(int)> visit = [&](int fn) {
         if (seen.count(fn)) return;
         seen.insert(fn);
-        for (const Instr& in : m_.functions[size_t(fn)].body)
-            if (in.op == Op::Call) visit(in.aux);
+        std::function<void(int)> scan = [&](int g) {
+            for (const Instr& in : m_.functions[size_t(g)].body) {
+                if (in.op == Op::Call) visit(in.aux);
+                if (in.op == Op::Loop) scan(in.aux);  // bodies are emitted inline, their callees are not
+            }
+        };
+        scan(fn);
         order.push_back(fn);
     };
     for (int r : roots) visit(r);
@@ -113,6 +118,7 @@ struct FunctionEmitter {
     std::vector<int> uses;
     std::vector<bool> live;
     std::vector<std::string> var;  // GLSL variable holding the value, if materialised
+    std::map<ValueId, std::vector<std::string>> loop_states;  // a Loop's state variables
     bool failed = false;
 
     FunctionEmitter(const ir::Module& mod, const ir::Function& fn, Emitter& e, Diagnostics& d, const Namer& globals)
@@ -131,7 +137,8 @@ struct FunctionEmitter {
     // Whether the value is simple enough to repeat rather than give a variable.
     bool trivial(ValueId v) const {
         const Instr& in = f.body[v];
-        return in.op == Op::Param || in.op == Op::Input || (in.op == Op::Const && in.type.is_scalar());
+        return in.op == Op::Param || in.op == Op::Input || in.op == Op::Member ||
+               (in.op == Op::Const && in.type.is_scalar());
     }
 
     // A value used more than once gets a variable when recomputing it would cost real work (a call, a
@@ -186,6 +193,8 @@ struct FunctionEmitter {
             case Op::Const: return constant(in.type, in.data);
             case Op::Param: return var[v];
             case Op::Input: return in.aux == 0 ? "iTime" : "(iMouse.xy / iResolution.xy)";
+            case Op::Member: return loop_states.at(in.args[0]).at(size_t(in.aux));
+            case Op::Loop: return "/* loop */";
             case Op::Copy: return plain(0);
             case Op::Add: return a(0) + " + " + a(1);
             case Op::Sub: return a(0) + " - " + a(1);
@@ -274,13 +283,16 @@ struct FunctionEmitter {
         return "0.0";
     }
 
-    std::string run(const std::string& name, const std::string& comment) {
+    // Marks what `roots` need (liveness) and counts uses.
+    void analyze(const std::vector<ValueId>& roots) {
         size_t n = f.body.size();
         uses.assign(n, 0);
         live.assign(n, false);
         var.assign(n, "");
-        // Liveness from the result backwards.
-        live[f.result] = true;
+        for (ValueId r : roots) {
+            live[r] = true;
+            uses[r]++;
+        }
         for (size_t i = n; i-- > 0;) {
             if (!live[i]) continue;
             for (ValueId a : f.body[i].args) {
@@ -288,6 +300,97 @@ struct FunctionEmitter {
                 uses[a]++;
             }
         }
+    }
+
+    // One statement per live named value, shared costly value and loop; `skip` is left as an expression.
+    std::string statements(const std::string& indent, ValueId skip) {
+        std::string out;
+        for (size_t i = 0; i < f.body.size(); ++i) {
+            const Instr& in = f.body[i];
+            if (!live[i] || in.op == Op::Param || in.op == Op::Member) continue;
+            if (in.op == Op::Loop) {
+                out += loop(ValueId(i), indent);
+                continue;
+            }
+            bool named = !in.name.empty();
+            bool shared = uses[i] > 1 && !trivial(ValueId(i)) && worth_a_variable(ValueId(i));
+            if (i == skip && !named) continue;
+            if (!named && !shared) continue;
+            if (in.op == Op::Construct && !named && in.type.is_vector()) {
+                // A shared broadcast such as vec3(x) is cheap: keep it inline.
+                bool same = true;
+                for (ValueId x : in.args) same &= x == in.args[0];
+                if (same) continue;
+            }
+            out += materialize(ValueId(i), named ? in.name : "tmp", indent, named ? in.source : "");
+        }
+        return out;
+    }
+
+    std::string materialize(ValueId v, const std::string& name, const std::string& indent, const std::string& source) {
+        const Instr& in = f.body[v];
+        std::string value = expr(v);
+        std::string vn = locals.unique(name);
+        std::string out = fmt::format("{}{} {} = {};", indent, type_of(in.type, in.span), vn, value);
+        if (!source.empty()) out += " // " + one_line(source);
+        var[v] = vn;
+        return out + "\n";
+    }
+
+    // A recurrence: its states as variables, then a for loop computing the next states.
+    std::string loop(ValueId v, const std::string& indent) {
+        const Instr& in = f.body[v];
+        const ir::Function& body = m.functions[size_t(in.aux)];
+        size_t states = body.outputs.size();
+        std::string out;
+        // Captured values are read every iteration: give costly ones a variable first.
+        for (size_t k = states; k < in.args.size(); ++k) {
+            ValueId a = in.args[k];
+            if (var[a].empty() && !trivial(a) && f.body[a].op != Op::Member) out += materialize(a, "tmp", indent, "");
+        }
+        std::vector<std::string> names;
+        for (size_t j = 0; j < states; ++j) {
+            const Type& t = body.params[j + 1].type;
+            std::string n = locals.unique(body.outputs[j].first);
+            out += fmt::format("{}{} {} = {};\n", indent, type_of(t, in.span), n, expr(in.args[j]));
+            names.push_back(n);
+        }
+        loop_states[v] = names;
+        std::string k = locals.unique(body.params[0].name);
+        out += fmt::format("{}for (int {} = {}; {} <= {}; {}++) {{  // {}\n", indent, k, int(in.data[0]), k,
+                           int(in.data[1]), k, one_line(in.source));
+        FunctionEmitter be(m, body, em, diags, locals);
+        std::vector<ValueId> roots;
+        for (auto& o : body.outputs) roots.push_back(o.second);
+        be.analyze(roots);
+        for (size_t p = 0; p < body.body.size(); ++p) {
+            const Instr& pi = body.body[p];
+            if (pi.op != Op::Param) continue;
+            if (pi.aux == 0) be.var[p] = "float(" + k + ")";
+            else if (size_t(pi.aux) <= states) be.var[p] = names[size_t(pi.aux) - 1];
+            else be.var[p] = operand(in.args[size_t(pi.aux) - 1]);
+        }
+        std::string inner = indent + "    ";
+        out += be.statements(inner, ValueId(-1));
+        if (states == 1) {
+            out += fmt::format("{}{} = {};\n", inner, names[0], be.expr(body.outputs[0].second));
+        } else {
+            std::vector<std::string> next;
+            for (size_t j = 0; j < states; ++j) {
+                ValueId o = body.outputs[j].second;
+                next.push_back(be.locals.unique(names[j] + "_next"));
+                out += fmt::format("{}{} {} = {}; // {}\n", inner, type_of(body.body[o].type, in.span), next[j], be.expr(o),
+                                   one_line(body.body[o].source));
+            }
+            for (size_t j = 0; j < states; ++j) out += fmt::format("{}{} = {};\n", inner, names[j], next[j]);
+        }
+        out += indent + "}\n";
+        return out;
+    }
+
+    std::string run(const std::string& name, const std::string& comment) {
+        size_t n = f.body.size();
+        analyze({f.result});
         std::string out;
         if (!comment.empty()) out += "// " + comment + "\n";
         std::vector<std::string> params;
@@ -298,27 +401,7 @@ struct FunctionEmitter {
                 if (f.body[k].op == Op::Param && f.body[k].aux == int(i)) var[k] = pn;
         }
         out += fmt::format("{} {}({}) {{\n", type_of(f.result_type(), {}), name, fmt::join(params, ", "));
-        std::set<std::string> commented;
-        for (size_t i = 0; i < n; ++i) {
-            const Instr& in = f.body[i];
-            if (!live[i] || in.op == Op::Param) continue;
-            bool named = !in.name.empty();
-            bool shared = uses[i] > 1 && !trivial(ValueId(i)) && worth_a_variable(ValueId(i));
-            if (i == f.result && !named) continue;
-            if (!named && !shared) continue;
-            if (in.op == Op::Construct && !named && in.type.is_vector()) {
-                // A shared broadcast such as vec3(x) is cheap: keep it inline.
-                bool same = true;
-                for (ValueId x : in.args) same &= x == in.args[0];
-                if (same) continue;
-            }
-            std::string value = expr(ValueId(i));
-            std::string vn = locals.unique(named ? in.name : "tmp");
-            out += fmt::format("    {} {} = {};", type_of(in.type, in.span), vn, value);
-            if (named && !in.source.empty()) out += " // " + one_line(in.source);
-            out += "\n";
-            var[i] = vn;
-        }
+        out += statements("    ", f.result);
         const Instr& r = f.body[f.result];
         std::string rv = expr(f.result);
         out += fmt::format("    return {};", rv);

@@ -225,6 +225,28 @@ std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value
             case Op::And: r.v = {(a[0]->v[0] != 0 && a[1]->v[0] != 0) ? 1.0 : 0.0}; break;
             case Op::Or: r.v = {(a[0]->v[0] != 0 || a[1]->v[0] != 0) ? 1.0 : 0.0}; break;
             case Op::Select: r.v = a[0]->v[0] != 0 ? a[1]->v : a[2]->v; break;
+            case Op::Loop: {
+                const Function& body = m.functions[size_t(in.aux)];
+                size_t states = body.outputs.size();
+                std::vector<Value> bargs(1 + a.size());
+                for (size_t k = 0; k < a.size(); ++k) bargs[k + 1] = *a[k];
+                for (double k = in.data[0]; k <= in.data[1]; k += 1) {
+                    bargs[0] = {Type::integer(), {k}};
+                    auto res = evaluate_all(m, in.aux, bargs, inputs);
+                    for (size_t j = 0; j < states; ++j) bargs[j + 1] = res[body.outputs[j].second];
+                }
+                r.v.clear();
+                for (size_t j = 0; j < states; ++j) r.v.insert(r.v.end(), bargs[j + 1].v.begin(), bargs[j + 1].v.end());
+                break;
+            }
+            case Op::Member: {
+                const Instr& loop = f.body[in.args[0]];
+                const Function& body = m.functions[size_t(loop.aux)];
+                size_t off = 0;
+                for (int j = 0; j < in.aux; ++j) off += size_t(body.body[body.outputs[size_t(j)].second].type.components());
+                r.v.assign(a[0]->v.begin() + long(off), a[0]->v.begin() + long(off) + in.type.components());
+                break;
+            }
             case Op::Call: {
                 std::vector<Value> cargs;
                 for (auto* x : a) cargs.push_back(*x);

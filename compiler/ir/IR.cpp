@@ -21,6 +21,7 @@ std::string Type::str() const {
         case Bool: return "condition";
         case Vector: return "ℝ" + sup(rows);
         case Matrix: return fmt::format("ℝ^({}×{})", rows, cols);
+        case Tuple: return fmt::format("tuple({})", rows);
     }
     return "?";
 }
@@ -71,6 +72,9 @@ Type result_type(Op op, const std::vector<Type>& a, int aux) {
             return {};  // carried by the instruction itself
         case Op::Input:
             return aux == 0 ? Type::scalar() : aux == 1 ? Type::vector(2) : Type{};
+        case Op::Loop:
+        case Op::Member:
+            return {};  // checked against the body function by the verifier
         case Op::Copy:
             return a[0];
         case Op::Add:
@@ -149,6 +153,11 @@ static std::string instr_text(const Function& f, const Instr& in, const Module* 
         }
         case Op::Param: s += fmt::format(" #{} {}", in.aux, f.params[size_t(in.aux)].name); break;
         case Op::Input: s += in.aux == 0 ? " time" : " mouse"; break;
+        case Op::Loop:
+            s += fmt::format(" {}..{} ", in.data.size() > 1 ? in.data[0] : 0, in.data.size() > 1 ? in.data[1] : 0) +
+                 (m && in.aux < int(m->functions.size()) ? m->functions[size_t(in.aux)].name : fmt::format("@{}", in.aux));
+            break;
+        case Op::Member: s += fmt::format(" .{}", in.aux); break;
         case Op::Builtin: s += fmt::format(" {}", builtin(in.aux).name); break;
         case Op::Call:
             s += " " + (m && in.aux < int(m->functions.size()) ? m->functions[size_t(in.aux)].name
@@ -213,6 +222,26 @@ std::string verify(const Function& f, const Module& m) {
                 int n = 0;
                 for (auto& t : types) n += t.components();
                 if (n != in.type.components()) return fault("constructed components do not add up");
+                break;
+            }
+            case Op::Loop: {
+                if (in.aux < 0 || size_t(in.aux) >= m.functions.size() || in.data.size() != 2) return fault("bad loop");
+                const Function& body = m.functions[size_t(in.aux)];
+                size_t states = body.outputs.size();
+                if (in.type != Type::tuple(int(states))) return fault("loop type does not match its body's outputs");
+                if (body.params.size() != 1 + in.args.size() || in.args.size() < states) return fault("loop arity mismatch");
+                for (size_t k = 0; k < in.args.size(); ++k)
+                    if (body.params[k + 1].type != types[k] && !(body.params[k + 1].type.is_scalar() && types[k].is_scalar()))
+                        return fault("loop argument type mismatch");
+                break;
+            }
+            case Op::Member: {
+                const Instr& loop = f.body[in.args[0]];
+                if (loop.op != Op::Loop) return fault("member of a non-loop");
+                const Function& body = m.functions[size_t(loop.aux)];
+                if (in.aux < 0 || size_t(in.aux) >= body.outputs.size()) return fault("member out of range");
+                Type t = body.body[body.outputs[size_t(in.aux)].second].type;
+                if (t != in.type && !(t.is_scalar() && in.type.is_scalar())) return fault("member type mismatch");
                 break;
             }
             case Op::Call: {

@@ -1,6 +1,7 @@
 #include "ir/Lower.h"
 
 #include <cmath>
+#include <fmt/format.h>
 #include <stdexcept>
 
 #include "sema/Builtins.h"
@@ -26,6 +27,31 @@ struct Env {
     std::vector<ValueId> captures;               // local function captures
     const LocalFunction* fn = nullptr;           // when lowering a local function
     std::map<std::string, int> sum_index;        // ∑ indices being unrolled -> current 0-based value
+    // Sequences: final and first values (module level); in a recurrence body, the parent environment,
+    // the loop index and current states, and outer values captured as extra body parameters.
+    std::map<int, ValueId> seq_first, seq_last;
+    Env* parent = nullptr;
+    ValueId loop_index = 0;
+    std::map<int, ValueId> seq_current;
+    std::map<ValueId, ValueId> captured;  // parent value -> body parameter
+    std::vector<ValueId> capture_args;    // parent values, in parameter order
+
+    ValueId capture(ValueId outer) {
+        if (auto it = captured.find(outer); it != captured.end()) return it->second;
+        const Instr& oi = parent->f.body[outer];
+        f.params.push_back({oi.name.empty() ? fmt::format("c{}", captured.size()) : oi.name, oi.type});
+        Instr in;
+        in.op = Op::Param;
+        in.type = oi.type;
+        in.aux = int(f.params.size() - 1);
+        in.name = f.params.back().name;
+        ValueId v = f.add(std::move(in));
+        captured[outer] = v;
+        capture_args.push_back(outer);
+        return v;
+    }
+
+    void lower_group(const LoopGroup& g);
 
     ValueId emit(Op op, Type t, std::vector<ValueId> args, int aux = 0, Span span = {}) {
         Instr in;
@@ -46,6 +72,7 @@ struct Env {
 
     // The value of a name that a local function captures, as seen from this environment.
     ValueId lookup_capture(const std::string& name) {
+        if (parent) return capture(parent->lookup_capture(name));
         if (fn)
             for (size_t i = 0; i < fn->captures.size(); ++i)
                 if (fn->captures[i].first == name) return captures[i];
@@ -103,7 +130,11 @@ struct Env {
         switch (e.kind) {
             case ExprKind::Number: return f.scalar(e.number);
             case ExprKind::Name:
+                if (parent && (e.resolved == R_Param || e.resolved == R_Value || e.resolved == R_Local ||
+                               e.resolved == R_Capture))
+                    return capture(parent->lower(e));
                 switch (e.resolved) {
+                    case R_LoopIndex: return loop_index;
                     case R_Param: return params[size_t(e.aux)];
                     case R_Value: return values.at(e.text);
                     case R_Local: return locals[size_t(e.aux)];
@@ -166,6 +197,11 @@ struct Env {
                 return emit(Op::Transpose, e.type, {a}, 0, e.span);
             }
             case ExprKind::Index: {
+                if (e.resolved == R_SeqCurrent) return seq_current.at(e.aux);
+                if (e.resolved == R_SeqFirst || e.resolved == R_SeqLast) {
+                    if (parent) return capture(parent->lower(e));
+                    return (e.resolved == R_SeqFirst ? seq_first : seq_last).at(e.aux);
+                }
                 ValueId a = lower(*e.args[0]);
                 const Type& t = type_of(a);
                 auto index = [&](size_t k) {
@@ -286,6 +322,63 @@ struct Env {
     }
 };
 
+ValueId add_param(ir::Function& f, const std::string& name, Type t);
+
+// Recurrences z_(k+1) = f(z_k) for k ∈ lo..hi become one Loop whose body is a function of its own.
+void Env::lower_group(const LoopGroup& g) {
+    std::vector<ValueId> inits;
+    for (int si : g.sequences) {
+        const Sequence& seq = m.sequences[size_t(si)];
+        ValueId v = lower(*seq.init->value);
+        inits.push_back(v);
+        seq_first[si] = v;
+    }
+    ir::Function body;
+    body.name = f.name + ".loop_" + m.sequences[size_t(g.sequences[0])].name;
+    body.glsl_name = body.name;
+    int idx = int(ctx.module.functions.size());
+    ctx.module.functions.emplace_back();
+    Env child{m, ctx, body};
+    child.parent = this;
+    child.loop_index = add_param(body, g.var, Type::integer());
+    for (size_t j = 0; j < g.sequences.size(); ++j) {
+        const Sequence& seq = m.sequences[size_t(g.sequences[j])];
+        child.seq_current[g.sequences[j]] = add_param(body, seq.name, seq.type);
+    }
+    for (int si : g.sequences) {
+        const Sequence& seq = m.sequences[size_t(si)];
+        ValueId next = child.lower(*seq.rec->value);
+        if (body.body[next].op == Op::Param || !body.body[next].name.empty()) {
+            Instr cp;
+            cp.op = Op::Copy;
+            cp.type = body.body[next].type;
+            cp.args = {next};
+            next = body.add(std::move(cp));
+        }
+        body.body[next].source = seq.rec->source_line;
+        body.outputs.push_back({seq.name, next});
+    }
+    body.result = body.outputs[0].second;
+    std::vector<ValueId> args = inits;
+    args.insert(args.end(), child.capture_args.begin(), child.capture_args.end());
+    ctx.module.functions[size_t(idx)] = std::move(body);
+    Instr loop;
+    loop.op = Op::Loop;
+    loop.type = Type::tuple(int(g.sequences.size()));
+    loop.args = std::move(args);
+    loop.aux = idx;
+    loop.data = {double(g.lo), double(g.hi)};
+    loop.span = g.leader->span;
+    loop.source = g.leader->source_line;
+    ValueId lv = f.add(std::move(loop));
+    for (size_t j = 0; j < g.sequences.size(); ++j) {
+        const Sequence& seq = m.sequences[size_t(g.sequences[j])];
+        ValueId mv = emit(Op::Member, seq.type, {lv}, int(j), g.leader->span);
+        seq_last[g.sequences[j]] = mv;
+        f.outputs.push_back({fmt::format("{}_{}", seq.name, g.hi + 1), mv});
+    }
+}
+
 ValueId add_param(ir::Function& f, const std::string& name, Type t) {
     f.params.push_back({name, t});
     Instr in;
@@ -332,6 +425,11 @@ int lower_module(const CheckedModule& m, const std::string& name, const std::str
     ValueId result = 0;
     bool have_result = false;
     for (const Stmt* s : m.order) {
+        if (s->kind == StmtKind::Recurrence) {
+            for (const auto& g : m.groups)
+                if (g.leader == s) env.lower_group(g);
+            continue;
+        }
         ValueId v = env.name_value(env.lower(*s->value), *s);
         if (s->kind == StmtKind::Assign) {
             env.values[s->name] = v;

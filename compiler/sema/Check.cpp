@@ -19,6 +19,12 @@ int CheckedModule::find_param(const std::string& n) const {
     return -1;
 }
 
+int CheckedModule::find_sequence(const std::string& n) const {
+    for (size_t i = 0; i < sequences.size(); ++i)
+        if (sequences[i].name == n) return int(i);
+    return -1;
+}
+
 int CheckedModule::find_function(const std::string& n) const {
     for (size_t i = 0; i < functions.size(); ++i)
         if (functions[i].stmt->name == n) return int(i);
@@ -148,6 +154,8 @@ private:
         std::map<std::string, int> locals;
     };
     Scope* scope_ = nullptr;
+    const LoopGroup* loop_ = nullptr;  // the recurrence group whose bodies are being checked
+    std::map<std::string, const Stmt*> seq_leader_;  // sequence name -> its group's leader
     std::vector<std::pair<std::string, int>> sums_;  // enclosing ∑ indices and their ranges
 
     int sum_range(const Expr& body, const std::string& index);
@@ -156,6 +164,11 @@ private:
     void collect_imports();
     void collect_statements();
     void order_statements();
+    void collect_sequences(const std::vector<const Stmt*>& inits, const std::vector<const Stmt*>& recs);
+    void check_group(const LoopGroup& g);
+    Type check_sequence_index(Expr& e);
+    Type check_vector_items(Expr& e);
+    std::vector<const Expr*> statement_values(const Stmt& s) const;
     void check_function(LocalFunction& f, Span call_site);
     Type check(Expr& e);
     Type check_name(Expr& e);
@@ -194,7 +207,8 @@ void Checker::collect_declarations() {
     std::set<std::string> used_at_module;
     std::set<std::string> fn_params;
     for (const auto& s : m_.ast.stmts) {
-        if (s.kind == StmtKind::Assign || s.kind == StmtKind::Return) {
+        if (s.kind == StmtKind::Assign || s.kind == StmtKind::Return || s.kind == StmtKind::SeqInit ||
+            s.kind == StmtKind::Recurrence) {
             std::vector<std::pair<std::string, Span>> names;
             collect_names(*s.value, names);
             for (auto& n : names) used_at_module.insert(n.first);
@@ -328,6 +342,12 @@ void Checker::collect_imports() {
 void Checker::collect_statements() {
     std::map<std::string, Span> defined;
     for (auto& [n, s] : decl_spans_) defined[n] = s.second;
+    std::vector<const Stmt*> inits, recs;
+    for (const auto& s : m_.ast.stmts) {
+        if (s.kind == StmtKind::SeqInit) inits.push_back(&s);
+        if (s.kind == StmtKind::Recurrence) recs.push_back(&s);
+    }
+    for (const auto* r : recs) defined.emplace(r->name, r->name_span);
     for (const auto& s : m_.ast.stmts) {
         if (s.kind == StmtKind::Assign || s.kind == StmtKind::Function) {
             if (auto it = defined.find(s.name); it != defined.end()) {
@@ -354,21 +374,113 @@ void Checker::collect_statements() {
             m_.ret = &s;
         }
     }
+    collect_sequences(inits, recs);
+}
+
+void Checker::collect_sequences(const std::vector<const Stmt*>& inits, const std::vector<const Stmt*>& recs) {
+    auto const_int = [&](const Expr& x, const char* what) -> std::optional<int> {
+        auto v = const_eval(x);
+        if (!v || v->size() != 1 || (*v)[0] != std::floor((*v)[0])) {
+            d_.error(x.span, fmt::format("the {} of a recurrence's range must be a whole number", what));
+            return std::nullopt;
+        }
+        return int((*v)[0]);
+    };
+    for (const Stmt* r : recs) {
+        if (m_.find_sequence(r->name) >= 0) {
+            auto& e = d_.error(r->name_span, fmt::format("the sequence '{}' has two recurrences", r->name));
+            Diagnostics::note(e, m_.sequences[size_t(m_.find_sequence(r->name))].rec->name_span, "the first one is here");
+            continue;
+        }
+        // The left side must be the next element: z_(k+1).
+        const Expr& ix = *r->index;
+        bool next = ix.kind == ExprKind::Binary && ix.op == BinOp::Add && ix.args[0]->kind == ExprKind::Name &&
+                    ix.args[0]->text == r->loop_var && ix.args[1]->kind == ExprKind::Number && ix.args[1]->number == 1;
+        if (!next) {
+            d_.error(ix.span, fmt::format("a recurrence defines the next element: write {}_({}+1) = … for {} ∈ …", r->name,
+                                          r->loop_var, r->loop_var));
+            continue;
+        }
+        auto lo = const_int(*r->range_lo, "start");
+        auto hi = const_int(*r->range_hi, "end");
+        if (!lo || !hi) continue;
+        if (*hi < *lo) {
+            d_.error(Span::join(r->range_lo->span, r->range_hi->span), fmt::format("the range {}..{} is empty", *lo, *hi));
+            continue;
+        }
+        const Stmt* init = nullptr;
+        for (const Stmt* i : inits)
+            if (i->name == r->name) init = i;
+        if (!init) {
+            d_.error(r->name_span, fmt::format("the sequence '{}' has no first element: add '{}_{} = …'", r->name, r->name, *lo));
+            continue;
+        }
+        auto first = const_eval(*init->index);
+        if (!first || first->size() != 1 || (*first)[0] != *lo) {
+            d_.error(init->index->span, fmt::format("the recurrence for '{}' starts at {}, so its first element is {}_{}",
+                                                    r->name, *lo, r->name, *lo));
+            continue;
+        }
+        Sequence seq;
+        seq.name = r->name;
+        seq.init = init;
+        seq.rec = r;
+        int gi = -1;
+        for (size_t g = 0; g < m_.groups.size(); ++g)
+            if (m_.groups[g].var == r->loop_var && m_.groups[g].lo == *lo && m_.groups[g].hi == *hi) gi = int(g);
+        if (gi < 0) {
+            LoopGroup g;
+            g.var = r->loop_var;
+            g.lo = *lo;
+            g.hi = *hi;
+            g.leader = r;
+            m_.groups.push_back(g);
+            gi = int(m_.groups.size() - 1);
+        }
+        seq.group = gi;
+        m_.groups[size_t(gi)].sequences.push_back(int(m_.sequences.size()));
+        m_.sequences.push_back(seq);
+        seq_leader_[r->name] = m_.groups[size_t(gi)].leader;
+    }
+    for (const Stmt* i : inits)
+        if (m_.find_sequence(i->name) < 0 && !seq_leader_.count(i->name)) {
+            bool has_rec = std::any_of(recs.begin(), recs.end(), [&](const Stmt* r) { return r->name == i->name; });
+            if (!has_rec)
+                d_.error(i->name_span, fmt::format("'{}' is not a sequence: define it with '{}_(k+1) = … for k ∈ 1..N'",
+                                                   i->name, i->name));
+        }
+}
+
+std::vector<const Expr*> Checker::statement_values(const Stmt& s) const {
+    if (s.kind != StmtKind::Recurrence) return {s.value.get()};
+    std::vector<const Expr*> v;
+    for (const auto& g : m_.groups)
+        if (g.leader == &s)
+            for (int si : g.sequences) {
+                v.push_back(m_.sequences[size_t(si)].init->value.get());
+                v.push_back(m_.sequences[size_t(si)].rec->value.get());
+            }
+    return v;
 }
 
 void Checker::order_statements() {
     // Depth-first topological sort in source order; reports the first cycle.
     std::map<const Stmt*, int> state;  // 0 new, 1 visiting, 2 done
     std::vector<const Stmt*> stack;
+    auto node_of = [&](const std::string& n) -> const Stmt* {
+        if (auto it = assigns_.find(n); it != assigns_.end()) return it->second;
+        if (auto it = seq_leader_.find(n); it != seq_leader_.end()) return it->second;
+        return nullptr;
+    };
     std::function<std::set<std::string>(const Stmt&)> deps_of = [&](const Stmt& s) {
         std::vector<std::pair<std::string, Span>> names;
-        collect_names(*s.value, names);
+        for (const Expr* v : statement_values(s)) collect_names(*v, names);
         std::set<std::string> deps;
         std::set<std::string> seen_fn;
         // Names used through local functions count too.
         for (size_t i = 0; i < names.size(); ++i) {
             const std::string& n = names[i].first;
-            if (assigns_.count(n)) deps.insert(n);
+            if (const Stmt* dep = node_of(n); dep && dep != &s) deps.insert(n);
             int fi = m_.find_function(n);
             if (fi >= 0 && !seen_fn.count(n)) {
                 seen_fn.insert(n);
@@ -400,15 +512,17 @@ void Checker::order_statements() {
         }
         state[s] = 1;
         stack.push_back(s);
-        for (const auto& dep : deps_of(*s)) visit(assigns_[dep]);
+        for (const auto& dep : deps_of(*s)) visit(node_of(dep));
         stack.pop_back();
         state[s] = 2;
         m_.order.push_back(s);
     };
-    for (const auto& s : m_.ast.stmts)
+    for (const auto& s : m_.ast.stmts) {
         if (s.kind == StmtKind::Assign && assigns_.count(s.name) && assigns_[s.name] == &s) visit(&s);
+        if (s.kind == StmtKind::Recurrence && seq_leader_.count(s.name) && seq_leader_[s.name] == &s) visit(&s);
+    }
     if (m_.ret) {
-        for (const auto& dep : deps_of(*m_.ret)) visit(assigns_[dep]);
+        for (const auto& dep : deps_of(*m_.ret)) visit(node_of(dep));
         m_.order.push_back(m_.ret);
     }
     if (reported) m_.order.clear();
@@ -469,7 +583,16 @@ Type Checker::check_name(Expr& e) {
             return scope_->fn->params[size_t(it->second)].second;
         }
     }
+    if (loop_ && n == loop_->var) {
+        e.resolved = R_LoopIndex;
+        return Type::integer();
+    }
     if (int pi = m_.find_param(n); pi >= 0) return value_type_for_scope(n, m_.params[size_t(pi)].type, e, R_Param, pi);
+    if (m_.find_sequence(n) >= 0) {
+        const auto& g = m_.groups[size_t(m_.sequences[size_t(m_.find_sequence(n))].group)];
+        d_.error(e.span, fmt::format("'{}' is a sequence: use an element such as {}_{} or {}_{}", n, n, g.lo, n, g.hi + 1));
+        return {};
+    }
     if (auto it = m_.values.find(n); it != m_.values.end()) return value_type_for_scope(n, it->second, e, R_Value, 0);
     if (assigns_.count(n)) return {};  // defined, but its own statement failed to check: already reported
     if (n == "π") {
@@ -568,13 +691,20 @@ Type Checker::check_call(Expr& e) {
         callee->aux = name_expr.aux;
         callee->type = vt;
         if (e.args.size() != 1) {
-            d_.error(e.span, fmt::format("'{}' is a value, not a function: it cannot take {} arguments", n, e.args.size()));
-            return {};
+            // s(1, 2, 3) is s times the vector (1, 2, 3).
+            Span vs = Span::join(e.args.front()->span, e.args.back()->span);
+            auto vec = std::make_unique<Expr>(ExprKind::Vector, vs);
+            vec->args = std::move(e.args);
+            e.args.clear();
+            vec->type = check_vector_items(*vec);
+            e.args.push_back(std::move(vec));
         }
         Expr& arg = *e.args[0];
         e.args.insert(e.args.begin(), std::move(callee));
         if (!vt.valid() || !arg.type.valid()) return {};
-        return mul_type(e, vt, arg.type, false);
+        Type t = mul_type(e, vt, arg.type, false);
+        e.resolved = R_Scale;  // mul_type marks products; lowering needs to know this call is one
+        return t;
     }
     if (int fi = m_.find_function(n); fi >= 0) {
         LocalFunction& f = m_.functions[size_t(fi)];
@@ -751,6 +881,11 @@ Type Checker::check(Expr& e) {
             break;
         }
         case ExprKind::Index: {
+            if (e.args[0]->kind == ExprKind::Name && m_.find_sequence(e.args[0]->text) >= 0 &&
+                !(scope_ && scope_->locals.count(e.args[0]->text))) {
+                t = check_sequence_index(e);
+                break;
+            }
             Type a = check(*e.args[0]);
             if (!a.valid()) break;
             std::vector<int> idx;
@@ -811,22 +946,7 @@ Type Checker::check(Expr& e) {
             }
             break;
         }
-        case ExprKind::Vector: {
-            int n = 0;
-            bool ok = true;
-            for (auto& a : e.args) {
-                Type at = check(*a);
-                if (!at.valid()) { ok = false; continue; }
-                if (at.is_scalar()) n += 1;
-                else if (at.is_vector()) n += at.rows;
-                else {
-                    d_.error(a->span, fmt::format("a vector's items must be scalars or vectors, not {}", at.str()));
-                    ok = false;
-                }
-            }
-            if (ok) t = Type::vector(n);
-            break;
-        }
+        case ExprKind::Vector: t = check_vector_items(e); break;
         case ExprKind::Matrix: {
             // Entries may be scalars, vectors (columns) or matrices (blocks); 0, 1 and I are blocks sized
             // from their neighbours in the same block row and column.
@@ -999,6 +1119,79 @@ Type Checker::check(Expr& e) {
     return t;
 }
 
+// (a, b, ...): scalars and vectors concatenated. The items were already checked when they carry a type.
+Type Checker::check_vector_items(Expr& e) {
+    int n = 0;
+    bool ok = true;
+    for (auto& a : e.args) {
+        Type at = a->type.valid() ? a->type : check(*a);
+        if (!at.valid()) { ok = false; continue; }
+        if (at.is_scalar()) n += 1;
+        else if (at.is_vector()) n += at.rows;
+        else {
+            d_.error(a->span, fmt::format("a vector's items must be scalars or vectors, not {}", at.str()));
+            ok = false;
+        }
+    }
+    return ok ? Type::vector(n) : Type{};
+}
+
+void Checker::check_group(const LoopGroup& g) {
+    for (int si : g.sequences) {
+        Sequence& seq = m_.sequences[size_t(si)];
+        seq.type = check(*seq.init->value);
+        if (seq.type.is_scalar()) seq.type = Type::scalar();
+    }
+    loop_ = &g;
+    for (int si : g.sequences) {
+        Sequence& seq = m_.sequences[size_t(si)];
+        Type t = check(*seq.rec->value);
+        if (!t.valid() || !seq.type.valid()) continue;
+        if (!(t.is_scalar() && seq.type.is_scalar()) && t != seq.type)
+            d_.error(seq.rec->value->span, fmt::format("the recurrence gives {} but '{}' starts as {}", t.str(), seq.name,
+                                                       seq.type.str()));
+    }
+    loop_ = nullptr;
+}
+
+// z_k (inside the recurrence), z_1 (the first element) or z_(N+1) (the last).
+Type Checker::check_sequence_index(Expr& e) {
+    int si = m_.find_sequence(e.args[0]->text);
+    const Sequence& seq = m_.sequences[size_t(si)];
+    const LoopGroup& g = m_.groups[size_t(seq.group)];
+    e.aux = si;
+    if (e.indices.size() != 1 || !e.indices[0].expr) {
+        d_.error(e.span, fmt::format("a sequence element takes one subscript, as in {}_{}", seq.name, g.lo));
+        return {};
+    }
+    const Expr& ix = *e.indices[0].expr;
+    if (loop_ == &g && ix.kind == ExprKind::Name && ix.text == g.var) {
+        e.resolved = R_SeqCurrent;
+        return seq.type;
+    }
+    auto c = const_eval(ix);
+    if (c && c->size() == 1 && (*c)[0] == g.lo) {
+        e.resolved = R_SeqFirst;
+        return seq.type;
+    }
+    if (c && c->size() == 1 && (*c)[0] == g.hi + 1) {
+        if (loop_ == &g) {
+            d_.error(e.indices[0].span, fmt::format("{}_{} is the result of this recurrence and cannot be used inside it",
+                                                    seq.name, g.hi + 1));
+            return {};
+        }
+        e.resolved = R_SeqLast;
+        return seq.type;
+    }
+    if (loop_ == &g)
+        d_.error(e.indices[0].span, fmt::format("inside its recurrence, '{}' can be used as {}_{} (the current element) or "
+                                                "{}_{} (the first)", seq.name, seq.name, g.var, seq.name, g.lo));
+    else
+        d_.error(e.indices[0].span, fmt::format("only the first and the last elements of '{}' exist outside its recurrence: "
+                                                "{}_{} and {}_{}", seq.name, seq.name, g.lo, seq.name, g.hi + 1));
+    return {};
+}
+
 // The range of a ∑ index: the size of what it subscripts (every use must agree). 0 when unused,
 // -1 after reporting a disagreement.
 int Checker::sum_range(const Expr& body, const std::string& index) {
@@ -1039,6 +1232,11 @@ void Checker::run() {
     // Statements in dependency order; a local function is checked at its first call (its captured values
     // are typed by then), and uncalled ones afterwards.
     for (const Stmt* s : m_.order) {
+        if (s->kind == StmtKind::Recurrence) {
+            for (const auto& g : m_.groups)
+                if (g.leader == s) check_group(g);
+            continue;
+        }
         Type t = check(*s->value);
         if (s->kind == StmtKind::Assign && t.valid()) m_.values[s->name] = t;
     }

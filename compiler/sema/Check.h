@@ -42,6 +42,10 @@ enum Resolved : int {
     R_BlockZero,  // a 0 block of a block matrix, sized from its neighbours
     R_BlockOnes,  // a 1 block of a block matrix
     R_BlockIdentity,  // I in a block matrix
+    R_LoopIndex,  // the index variable of the enclosing recurrence (ℤ)
+    R_SeqCurrent, // z_k inside its recurrence: the current element, aux = sequence
+    R_SeqFirst,   // z_1: the sequence's first element, aux = sequence
+    R_SeqLast,    // z_(N+1): the element the recurrence ends with, aux = sequence
 };
 
 struct ParamInfo {
@@ -76,6 +80,23 @@ struct ImportedFunction {
     int builtin = -1;                     // for built-in modules
 };
 
+// A sequence defined by a first element and a recurrence: z_1 = p; z_(k+1) = f(z_k) for k ∈ 1..N.
+struct Sequence {
+    std::string name;
+    const ast::Stmt* init = nullptr;
+    const ast::Stmt* rec = nullptr;
+    Type type;
+    int group = -1;
+};
+
+// Recurrences with one index variable and one range run together, as one loop.
+struct LoopGroup {
+    std::string var;
+    int lo = 1, hi = 0;  // var runs over lo..hi; the sequences end at element hi + 1
+    std::vector<int> sequences;
+    const ast::Stmt* leader = nullptr;  // its first recurrence (stands for the group in `order`)
+};
+
 struct CheckedModule {
     ast::Module ast;
     std::vector<ParamInfo> params;             // free parameters, in declaration order
@@ -84,6 +105,9 @@ struct CheckedModule {
     std::vector<LocalFunction> functions;
     std::vector<ImportedFunction> imports;
     const ast::Stmt* ret = nullptr;            // the bare expression, if any
+    std::vector<Sequence> sequences;
+    std::vector<LoopGroup> groups;
+    int find_sequence(const std::string& n) const;
     std::string primary;                       // "D" (shape), "C" (material) or "" (the bare expression)
     Type primary_type;
     bool ok = false;

@@ -6,7 +6,7 @@
 namespace iqc {
 
 struct Type {
-    enum Kind : unsigned char { Invalid, Scalar, Integer, Vector, Matrix, Bool } kind = Invalid;
+    enum Kind : unsigned char { Invalid, Scalar, Integer, Vector, Matrix, Bool, Tuple } kind = Invalid;
     int rows = 1, cols = 1;  // Vector: rows = size; Matrix: rows × cols
 
     static Type invalid() { return {}; }
@@ -15,6 +15,7 @@ struct Type {
     static Type boolean() { return {Bool, 1, 1}; }
     static Type vector(int n) { return n == 1 ? scalar() : Type{Vector, n, 1}; }
     static Type matrix(int r, int c) { return {Matrix, r, c}; }
+    static Type tuple(int n) { return {Tuple, n, 1}; }  // a loop's results (IR only)
 
     bool valid() const { return kind != Invalid; }
     bool is_scalar() const { return kind == Scalar || kind == Integer; }

@@ -104,7 +104,9 @@ struct Decl {
     Span span;
 };
 
-enum class StmtKind { Assign, Function, Return, Import };
+// Assign: name = value. Function: name(params) = value. Return: a bare expression. Import: names from module.
+// SeqInit: name_<index> = value (a sequence's first element). Recurrence: name_(var+1) = value for var ∈ lo..hi.
+enum class StmtKind { Assign, Function, Return, Import, SeqInit, Recurrence };
 
 struct Stmt {
     StmtKind kind = StmtKind::Assign;
@@ -116,6 +118,10 @@ struct Stmt {
     std::vector<std::pair<std::string, Span>> imports;  // Import: names
     std::string from;                                   // Import: module
     Span from_span;
+    ExprPtr index;                  // SeqInit / Recurrence: the subscript on the left
+    std::string loop_var;           // Recurrence: the index variable
+    Span loop_var_span;
+    ExprPtr range_lo, range_hi;     // Recurrence: var ∈ lo..hi
     Span span;
     std::string source_line;  // the statement as written, for comments in the generated code
 };

@@ -32,8 +32,8 @@ const char* ast::binop_spelling(BinOp op) {
 
 namespace {
 
-const std::set<std::string> kKeywords = {"where", "given", "from", "if", "otherwise", "and", "or",
-                                         "in", "default", "shape", "material", "scalar", "vector", "matrix"};
+const std::set<std::string> kKeywords = {"where", "given", "from", "if", "otherwise", "and", "or", "in",
+                                         "default", "shape", "material", "scalar", "vector", "matrix", "for"};
 
 bool is_name_token(const Token& t) { return t.kind == Tok::Word || t.kind == Tok::Backtick; }
 bool is_kw(const Token& t, const char* kw) { return t.kind == Tok::Word && t.text == kw; }
@@ -59,6 +59,13 @@ std::vector<std::pair<size_t, size_t>> letter_units(const std::string& w) {
 // Pre-scan: names the module assigns, declares, defines as functions or imports.
 std::set<std::string> prescan(const std::vector<Token>& toks) {
     std::set<std::string> known;
+    // Sequences (`z_(k+1) = ... for k ∈ 1..N`): their elements `z_1`, `z_9` stay subscripts.
+    std::set<std::string> sequences;
+    for (size_t k = 0; k + 2 < toks.size(); ++k)
+        if (toks[k].line_start && is_name_token(toks[k]) && toks[k + 1].kind == Tok::Underscore &&
+            toks[k + 2].kind == Tok::LParen)
+            for (size_t j = k; j < toks.size() && toks[j].kind != Tok::Newline && toks[j].kind != Tok::End; ++j)
+                if (is_kw(toks[j], "for")) sequences.insert(toks[k].text);
     size_t i = 0;
     while (i < toks.size()) {
         size_t line_end = i;
@@ -76,7 +83,8 @@ std::set<std::string> prescan(const std::vector<Token>& toks) {
             while (k < line_end && is_name_token(toks[k])) {
                 std::string n = toks[k].text;
                 if (k + 2 < line_end && toks[k + 1].kind == Tok::Underscore && !toks[k + 1].space_before &&
-                    (is_name_token(toks[k + 2]) || toks[k + 2].kind == Tok::Number) && !toks[k + 2].space_before) {
+                    (is_name_token(toks[k + 2]) || toks[k + 2].kind == Tok::Number) && !toks[k + 2].space_before &&
+                    !sequences.count(n)) {
                     names.push_back(n);
                     n += "_" + toks[k + 2].text;
                     k += 2;
@@ -224,6 +232,8 @@ private:
     bool line_is_import();
     void parse_line(Module& m);
     Stmt parse_statement();
+    bool indexed_assignment();
+    Stmt parse_indexed_assignment(std::pair<std::string, Span> name, Span start);
     Decl parse_decl();
     TypeSpec parse_type();
     std::vector<std::pair<std::string, Span>> parse_name_list();
@@ -467,6 +477,8 @@ Stmt Parser::parse_statement() {
         auto name = parse_name();
         if (at(Tok::Eq)) {
             assign = true;
+        } else if ((at(Tok::Underscore) || at(Tok::Sub)) && !cur().space_before && indexed_assignment()) {
+            return parse_indexed_assignment(name, start);
         } else if (at(Tok::LParen) && !cur().space_before) {
             // NAME ( NAME {, NAME} ) =
             size_t k = pos_ + 1;
@@ -511,6 +523,66 @@ Stmt Parser::parse_statement() {
             break;
         }
     }
+    return s;
+}
+
+// Looks ahead from a subscript after a name: `_1 =`, `₁ =`, `_(k+1) =`.
+bool Parser::indexed_assignment() {
+    size_t k = pos_;
+    if (toks_[k].kind == Tok::Sub) return toks_[k + 1].kind == Tok::Eq;
+    ++k;  // '_'
+    if (toks_[k].kind == Tok::Number || is_name_token(toks_[k])) return toks_[k + 1].kind == Tok::Eq;
+    if (toks_[k].kind != Tok::LParen) return false;
+    int depth = 0;
+    for (; toks_[k].kind != Tok::Newline && toks_[k].kind != Tok::End; ++k) {
+        if (toks_[k].kind == Tok::LParen) ++depth;
+        if (toks_[k].kind == Tok::RParen && --depth == 0) return toks_[k + 1].kind == Tok::Eq;
+    }
+    return false;
+}
+
+// sequence := NAME _ INDEX = expr                         (its first element, e.g. z_1 = p)
+//           | NAME _ ( VAR + 1 ) = expr for VAR (∈ | = | in) lo .. hi   (the recurrence)
+Stmt Parser::parse_indexed_assignment(std::pair<std::string, Span> name, Span start) {
+    Stmt s;
+    s.name = name.first;
+    s.name_span = name.second;
+    if (at(Tok::Sub)) {
+        const Token& t = advance();
+        s.index = make(std::isdigit(static_cast<unsigned char>(t.text[0])) ? ExprKind::Number : ExprKind::Name, t.span);
+        s.index->text = t.text;
+        s.index->number = std::atof(t.text.c_str());
+        s.index->name_span = t.span;
+    } else {
+        advance();  // _
+        if (at(Tok::LParen)) {
+            Span open = advance().span;
+            ctx_.push_back(Ctx::Paren);
+            s.index = parse_expr();
+            ctx_.pop_back();
+            s.index->span = Span::join(open, expect(Tok::RParen, "to close the subscript").span);
+        } else {
+            s.index = parse_primary();
+        }
+    }
+    expect(Tok::Eq, "");
+    s.value = parse_expr();
+    s.span = Span::join(start, s.value->span);
+    s.kind = StmtKind::SeqInit;
+    if (at_kw("for")) {
+        s.kind = StmtKind::Recurrence;
+        advance();
+        auto var = parse_name();
+        s.loop_var = var.first;
+        s.loop_var_span = var.second;
+        if (!(accept(Tok::In) || accept(Tok::Eq) || (at_kw("in") && (advance(), true))))
+            fail(cur().span, fmt::format("expected '∈' after the index of 'for', as in 'for {} ∈ 1..8', found {}", s.loop_var, describe(cur())));
+        s.range_lo = parse_expr();
+        if (!accept(Tok::Ellipsis)) fail(cur().span, fmt::format("expected '..' or '…' in the range, found {}", describe(cur())));
+        s.range_hi = parse_expr();
+        s.span = Span::join(start, s.range_hi->span);
+    }
+    s.source_line = statement_text(s.span);
     return s;
 }
 
@@ -653,7 +725,7 @@ bool Parser::starts_juxtaposed_operand() {
     if (ctx_.back() == Ctx::Bracket && t.space_before) return false;
     switch (t.kind) {
         case Tok::Number: case Tok::Backtick: case Tok::LParen: case Tok::LFloor: case Tok::LCeil:
-        case Tok::Sqrt: case Tok::Fraction: case Tok::Norm: case Tok::DoubleBar: case Tok::Sum:
+        case Tok::Sqrt: case Tok::Fraction: case Tok::Norm: case Tok::DoubleBar: case Tok::Sum: case Tok::LBracket:
             return !(ctx_.back() == Ctx::Bars && (t.kind == Tok::Norm || t.kind == Tok::DoubleBar));
         case Tok::Bar: return ctx_.back() != Ctx::Bars;
         case Tok::Word: return !kKeywords.count(t.text);
