@@ -56,3 +56,21 @@ TEST_CASE("eval errors: unknown parameter, wrong size, bad value, invalid module
     CHECK(e.exit_code == 1);
     CHECK_THAT(e.err, Catch::Contains("bad.iql:1:8: error: expected an expression, found the end of the line"));
 }
+
+TEST_CASE("eval binds symbolic sizes from --set values and checks integers", "[eval]") {
+    auto f = write_temp("sym.iql", "y = ‖v‖ + f(w)\nf(x) = ∑_i x_i where x ∈ ℝ^m\nwhere\nv ∈ ℝ^n\nw ∈ ℝ^n\n");
+    RunResult r = run_iqc("eval " + f.string() + " --set 'v=(3, 4)' --set 'w=(1, 2)'");
+    INFO(r.err);
+    CHECK(r.out == "y = 8\n");
+    RunResult bad = run_iqc("eval " + f.string() + " --set 'v=(3, 4)' --set 'w=(1, 2, 3)'");
+    CHECK(bad.exit_code == 1);
+    CHECK_THAT(bad.err, Catch::Contains("sym.iql:5:1: error: the size n is 3 for 'w' but 2 elsewhere"));
+    RunResult unknown = run_iqc("eval " + f.string());
+    CHECK(unknown.exit_code == 1);
+    CHECK_THAT(unknown.err, Catch::Contains("sym.iql:4:5: error: the size n of 'v' is not known"));
+    auto g = write_temp("int.iql", "x_1 = 0\nx_(i+1) = x_i + i for i ∈ 1..N\ny = x_(N+1)\nwhere\nN ∈ ℤ\n");
+    CHECK(run_iqc("eval " + g.string() + " --set N=4").out == "x_(N+1) = 10\ny = 10\n");
+    RunResult frac = run_iqc("eval " + g.string() + " --set N=2.5");
+    CHECK(frac.exit_code == 1);
+    CHECK_THAT(frac.err, Catch::Contains("--set N: 'N' is ℤ, but the value 2.5 is not a whole number"));
+}

@@ -344,7 +344,7 @@ struct FunctionEmitter {
         size_t states = body.outputs.size();
         std::string out;
         // Captured values are read every iteration: give costly ones a variable first.
-        for (size_t k = states; k < in.args.size(); ++k) {
+        for (size_t k = states + 1; k < in.args.size(); ++k) {
             ValueId a = in.args[k];
             if (var[a].empty() && !trivial(a) && f.body[a].op != Op::Member) out += materialize(a, "tmp", indent, "");
         }
@@ -352,13 +352,15 @@ struct FunctionEmitter {
         for (size_t j = 0; j < states; ++j) {
             const Type& t = body.params[j + 1].type;
             std::string n = locals.unique(body.outputs[j].first);
-            out += fmt::format("{}{} {} = {};\n", indent, type_of(t, in.span), n, expr(in.args[j]));
+            out += fmt::format("{}{} {} = {};\n", indent, type_of(t, in.span), n, expr(in.args[j + 1]));
             names.push_back(n);
         }
         loop_states[v] = names;
         std::string k = locals.unique(body.params[0].name);
-        out += fmt::format("{}for (int {} = {}; {} <= {}; {}++) {{  // {}\n", indent, k, int(in.data[0]), k,
-                           int(in.data[1]), k, one_line(in.source));
+        const Instr& hi = f.body[in.args[0]];
+        std::string hi_text = hi.op == Op::Const ? std::to_string(int(hi.data[0])) : "int(" + expr(in.args[0]) + ")";
+        out += fmt::format("{}for (int {} = {}; {} <= {}; {}++) {{  // {}\n", indent, k, int(in.data[0]), k, hi_text, k,
+                           one_line(in.source));
         FunctionEmitter be(m, body, em, diags, locals);
         std::vector<ValueId> roots;
         for (auto& o : body.outputs) roots.push_back(o.second);
@@ -368,7 +370,7 @@ struct FunctionEmitter {
             if (pi.op != Op::Param) continue;
             if (pi.aux == 0) be.var[p] = "float(" + k + ")";
             else if (size_t(pi.aux) <= states) be.var[p] = names[size_t(pi.aux) - 1];
-            else be.var[p] = operand(in.args[size_t(pi.aux) - 1]);
+            else be.var[p] = operand(in.args[size_t(pi.aux)]);
         }
         std::string inner = indent + "    ";
         out += be.statements(inner, ValueId(-1));

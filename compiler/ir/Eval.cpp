@@ -228,9 +228,10 @@ std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value
             case Op::Loop: {
                 const Function& body = m.functions[size_t(in.aux)];
                 size_t states = body.outputs.size();
-                std::vector<Value> bargs(1 + a.size());
-                for (size_t k = 0; k < a.size(); ++k) bargs[k + 1] = *a[k];
-                for (double k = in.data[0]; k <= in.data[1]; k += 1) {
+                std::vector<Value> bargs(a.size());
+                for (size_t k = 1; k < a.size(); ++k) bargs[k] = *a[k];
+                double hi = std::floor(a[0]->v[0] + 0.5);
+                for (double k = in.data[0]; k <= hi; k += 1) {
                     bargs[0] = {Type::integer(), {k}};
                     auto res = evaluate_all(m, in.aux, bargs, inputs);
                     for (size_t j = 0; j < states; ++j) bargs[j + 1] = res[body.outputs[j].second];

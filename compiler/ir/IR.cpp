@@ -154,7 +154,7 @@ static std::string instr_text(const Function& f, const Instr& in, const Module* 
         case Op::Param: s += fmt::format(" #{} {}", in.aux, f.params[size_t(in.aux)].name); break;
         case Op::Input: s += in.aux == 0 ? " time" : " mouse"; break;
         case Op::Loop:
-            s += fmt::format(" {}..{} ", in.data.size() > 1 ? in.data[0] : 0, in.data.size() > 1 ? in.data[1] : 0) +
+            s += fmt::format(" from {} ", in.data.empty() ? 0 : in.data[0]) +
                  (m && in.aux < int(m->functions.size()) ? m->functions[size_t(in.aux)].name : fmt::format("@{}", in.aux));
             break;
         case Op::Member: s += fmt::format(" .{}", in.aux); break;
@@ -225,13 +225,15 @@ std::string verify(const Function& f, const Module& m) {
                 break;
             }
             case Op::Loop: {
-                if (in.aux < 0 || size_t(in.aux) >= m.functions.size() || in.data.size() != 2) return fault("bad loop");
+                if (in.aux < 0 || size_t(in.aux) >= m.functions.size() || in.data.size() != 1) return fault("bad loop");
                 const Function& body = m.functions[size_t(in.aux)];
                 size_t states = body.outputs.size();
                 if (in.type != Type::tuple(int(states))) return fault("loop type does not match its body's outputs");
-                if (body.params.size() != 1 + in.args.size() || in.args.size() < states) return fault("loop arity mismatch");
-                for (size_t k = 0; k < in.args.size(); ++k)
-                    if (body.params[k + 1].type != types[k] && !(body.params[k + 1].type.is_scalar() && types[k].is_scalar()))
+                // args: the last index, the initial states, the captures; body params: the index, the states, the captures.
+                if (body.params.size() != in.args.size() || in.args.size() < states + 1) return fault("loop arity mismatch");
+                if (!types[0].is_scalar()) return fault("loop end is not a scalar");
+                for (size_t k = 1; k < in.args.size(); ++k)
+                    if (body.params[k].type != types[k] && !(body.params[k].type.is_scalar() && types[k].is_scalar()))
                         return fault("loop argument type mismatch");
                 break;
             }

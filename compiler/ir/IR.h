@@ -46,7 +46,7 @@ namespace iqc::ir {
     X(Select, 3)      /* cond ? a : b */                                                 \
     X(Call, -1)       /* aux: callee function index */                                  \
     X(Input, 0)       /* aux: 0 time (ℝ, seconds), 1 mouse (ℝ², [0,1]² of the view) */  \
-    X(Loop, -1)       /* aux: body function; data: {lo, hi}; args: initial states, then captures */ \
+    X(Loop, -1)       /* aux: body function; data: {lo}; args: hi, initial states, captures */    \
     X(Member, 1)      /* aux: which result of a Loop */
 
 enum class Op : uint8_t {
@@ -107,8 +107,9 @@ std::string print(const Module& m);
 // Checks operand counts, SSA order and types; returns "" when valid, else a description of the first fault.
 std::string verify(const Function& f, const Module& m);
 
-// A Loop runs its body function for k = lo..hi: the body's parameters are (k, the states, the captured
-// outer values) and its outputs are the next states, in order. The Loop's value is the tuple of final
+// A Loop runs its body function for k = lo..hi (lo in data; operands: hi, the initial states, the captured
+// outer values): the body's parameters are (k, the states, the captured outer values) and its outputs
+// are the next states, in order. The Loop's value is the tuple of final
 // states; Member picks one. Bodies are functions of the module that are never called on their own.
 //
 // The result type of `op` applied to operands of the given types, or Invalid (the rules the verifier,

@@ -1,6 +1,7 @@
 #include "ir/Lower.h"
 
 #include <cmath>
+#include <functional>
 #include <fmt/format.h>
 #include <stdexcept>
 
@@ -15,7 +16,7 @@ using ir::ValueId;
 
 namespace {
 
-int lower_local_function(const CheckedModule& m, int fi, LowerContext& ctx);
+int lower_local_function(const CheckedModule& m, int fi, const std::vector<Type>& arg_types, LowerContext& ctx);
 
 struct Env {
     const CheckedModule& m;
@@ -64,6 +65,15 @@ struct Env {
     }
     const Type& type_of(ValueId v) const { return f.body[v].type; }
 
+    // Types come from the operands, not from the AST: a local function with symbolic sizes (ℝ^n) is
+    // lowered once per use with other sizes, and the checker's annotations are those of its last use.
+    ValueId op2(Op op, ValueId a, ValueId b, Span span) {
+        Type t = ir::result_type(op, {type_of(a), type_of(b)}, 0);
+        if (!t.valid()) throw std::logic_error(std::string("lowering: operand types do not fit ") + ir::op_name(op));
+        return emit(op, t, {a, b}, 0, span);
+    }
+    static Type scalar_or(const Type& t) { return t.is_scalar() ? Type::scalar() : t; }
+
     // A scalar operand widened to `t` (a vector), for built-ins whose GLSL overloads need equal types.
     ValueId broadcast(ValueId v, const Type& t) {
         if (!t.is_vector() || !type_of(v).is_scalar()) return v;
@@ -82,6 +92,27 @@ struct Env {
         return it->second;
     }
 
+    // The range of ∑_index: the size of what it subscripts (the checker made sure all uses agree).
+    int sum_range(const Expr& body, const std::string& index) {
+        int n = 0;
+        std::function<void(const Expr&)> walk = [&](const Expr& x) {
+            if (x.kind == ExprKind::Index && x.resolved == R_None)
+                for (size_t k = 0; k < x.indices.size(); ++k) {
+                    const auto& it = x.indices[k];
+                    if (!it.expr || it.expr->kind != ExprKind::Name || it.expr->text != index) continue;
+                    const Type& t = type_of(lower(*x.args[0]));
+                    if (t.is_vector()) n = t.rows;
+                    else if (t.is_matrix()) n = k == 0 ? t.rows : t.cols;
+                }
+            for (const auto& a : x.args) walk(*a);
+            for (const auto& r : x.rows)
+                for (const auto& a : r) walk(*a);
+            if (x.otherwise) walk(*x.otherwise);
+        };
+        walk(body);
+        return n;
+    }
+
     ValueId power(ValueId base, const Expr& ex, Span span) {
         auto c = const_eval(ex);
         if (c && c->size() == 1 && std::fabs((*c)[0]) <= 4 && (*c)[0] == std::floor((*c)[0])) {
@@ -93,27 +124,28 @@ struct Env {
             return r;
         }
         ValueId e = lower(ex);
-        return emit(Op::Builtin, Type::scalar(), {base, e}, *find_builtin("pow"), span);
+        return builtin("pow", {base, e}, span);
     }
 
-    ValueId builtin(const char* name, std::vector<ValueId> args, Type t, Span span) {
+    ValueId builtin(const char* name, std::vector<ValueId> args, Span span) {
         int id = *find_builtin(name);
         const BuiltinInfo& b = iqc::builtin(id);
         if (b.sig == Sig::Nary && args.size() > 2) {
-            ValueId acc = builtin(name, {args[0], args[1]}, t, span);
-            for (size_t i = 2; i < args.size(); ++i) acc = builtin(name, {acc, args[i]}, t, span);
+            ValueId acc = builtin(name, {args[0], args[1]}, span);
+            for (size_t i = 2; i < args.size(); ++i) acc = builtin(name, {acc, args[i]}, span);
             return acc;
         }
+        Type t;
         if (b.sig == Sig::Elementwise2 || b.sig == Sig::Nary || b.sig == Sig::Clamp || b.sig == Sig::Mix) {
             Type common = Type::scalar();
             for (ValueId a : args)
                 if (type_of(a).is_vector()) common = type_of(a);
             if (common.is_vector())
                 for (auto& a : args) a = broadcast(a, common);
-            std::vector<Type> ts;
-            for (ValueId a : args) ts.push_back(type_of(a));
-            t = check_builtin(id, ts).type;
         }
+        std::vector<Type> ts;
+        for (ValueId a : args) ts.push_back(type_of(a));
+        t = check_builtin(id, ts).type;
         return emit(Op::Builtin, t, std::move(args), id, span);
     }
 
@@ -140,7 +172,7 @@ struct Env {
                     case R_Local: return locals[size_t(e.aux)];
                     case R_Capture: return captures[size_t(e.aux)];
                     case R_Pi: return f.scalar(M_PI);
-                    case R_Input: return emit(Op::Input, e.type, {}, e.aux, e.span);
+                    case R_Input: return emit(Op::Input, e.aux == 0 ? Type::scalar() : Type::vector(2), {}, e.aux, e.span);
                     case R_SumIndex: return f.scalar(double(sum_index.at(e.text) + 1));
                     default: throw std::logic_error("lowering: unresolved name " + e.text);
                 }
@@ -148,7 +180,7 @@ struct Env {
                 if (e.resolved == R_Scale) return mul(lower(*e.args[0]), lower(*e.args[1]), e.span);
                 std::vector<ValueId> args;
                 for (auto& a : e.args) args.push_back(lower(*a));
-                if (e.resolved == R_Builtin) return builtin(iqc::builtin(e.aux).name, std::move(args), e.type, e.span);
+                if (e.resolved == R_Builtin) return builtin(iqc::builtin(e.aux).name, std::move(args), e.span);
                 const CheckedModule* owner = &m;
                 int fi = e.aux;
                 if (e.resolved == R_ImportFn) {
@@ -166,35 +198,39 @@ struct Env {
                         args.push_back(f.constant(cap.second, owner->params[size_t(pi)].value));
                     }
                 }
-                int idx = lower_local_function(*owner, fi, ctx);
-                // Scalar arguments of integer type pass as they are.
-                return emit(Op::Call, callee.result, std::move(args), idx, e.span);
+                std::vector<Type> arg_types;
+                for (size_t k = 0; k < e.args.size(); ++k) arg_types.push_back(scalar_or(type_of(args[k])));
+                int idx = lower_local_function(*owner, fi, arg_types, ctx);
+                return emit(Op::Call, ctx.module.functions[size_t(idx)].result_type(), std::move(args), idx, e.span);
             }
             case ExprKind::Binary: {
                 ValueId a = lower(*e.args[0]);
                 ValueId b = lower(*e.args[1]);
                 switch (e.op) {
-                    case BinOp::Add: return emit(Op::Add, e.type, {a, b}, 0, e.span);
-                    case BinOp::Sub: return emit(Op::Sub, e.type, {a, b}, 0, e.span);
-                    case BinOp::Div: return emit(Op::Div, e.type, {a, b}, 0, e.span);
-                    case BinOp::Hadamard:
-                        return emit(e.type.is_scalar() ? Op::Mul : Op::Hadamard, e.type, {a, b}, 0, e.span);
-                    case BinOp::Cross: return emit(Op::Cross, e.type, {a, b}, 0, e.span);
+                    case BinOp::Add: return op2(Op::Add, a, b, e.span);
+                    case BinOp::Sub: return op2(Op::Sub, a, b, e.span);
+                    case BinOp::Div: return op2(Op::Div, a, b, e.span);
+                    case BinOp::Hadamard: return op2(type_of(a).is_scalar() ? Op::Mul : Op::Hadamard, a, b, e.span);
+                    case BinOp::Cross: return op2(Op::Cross, a, b, e.span);
                     default:
-                        if (e.resolved == R_DotProduct) return emit(Op::Dot, Type::scalar(), {a, b}, 0, e.span);
+                        if (e.op == BinOp::Dot && type_of(a).is_vector() && type_of(a) == type_of(b))
+                            return emit(Op::Dot, Type::scalar(), {a, b}, 0, e.span);
                         return mul(a, b, e.span);
                 }
             }
-            case ExprKind::Negate: return emit(Op::Neg, e.type, {lower(*e.args[0])}, 0, e.span);
+            case ExprKind::Negate: {
+                ValueId a = lower(*e.args[0]);
+                return emit(Op::Neg, scalar_or(type_of(a)), {a}, 0, e.span);
+            }
             case ExprKind::Power: {
                 ValueId base = lower(*e.args[0]);
-                if (e.resolved == R_Inverse) return emit(Op::Inverse, e.type, {base}, 0, e.span);
+                if (type_of(base).is_matrix()) return emit(Op::Inverse, type_of(base), {base}, 0, e.span);
                 return power(base, *e.args[1], e.span);
             }
             case ExprKind::Transpose: {
                 ValueId a = lower(*e.args[0]);
                 if (type_of(a).is_scalar()) return a;
-                return emit(Op::Transpose, e.type, {a}, 0, e.span);
+                return emit(Op::Transpose, ir::result_type(Op::Transpose, {type_of(a)}, 0), {a}, 0, e.span);
             }
             case ExprKind::Index: {
                 if (e.resolved == R_SeqCurrent) return seq_current.at(e.aux);
@@ -217,8 +253,12 @@ struct Env {
             }
             case ExprKind::Vector: {
                 std::vector<ValueId> items;
-                for (auto& a : e.args) items.push_back(lower(*a));
-                return emit(Op::Construct, e.type, std::move(items), 0, e.span);
+                int n = 0;
+                for (auto& a : e.args) {
+                    items.push_back(lower(*a));
+                    n += type_of(items.back()).components();
+                }
+                return emit(Op::Construct, Type::vector(n), std::move(items), 0, e.span);
             }
             case ExprKind::Matrix: {
                 // Element by element, row-major, from the blocks (sized by the checker).
@@ -252,15 +292,19 @@ struct Env {
                                 else items.push_back(emit(Op::Extract, Type::scalar(), {v}, i * type_of(v).cols + j, item.span));
                             }
                 if (items.size() == 1) return items[0];
-                return emit(Op::Construct, e.type, std::move(items), 0, e.span);
+                int R = 0, C = 0;
+                for (int h : e.block_rows) R += h;
+                for (int w : e.block_cols) C += w;
+                return emit(Op::Construct, C == 1 ? Type::vector(R) : Type::matrix(R, C), std::move(items), 0, e.span);
             }
             case ExprKind::Sum: {
                 // Unrolled: the range is a vector's or matrix's size, known when checking.
                 ValueId acc = ValueId(-1);
-                for (int k = 0; k < e.aux; ++k) {
+                int n = sum_range(*e.args[0], e.text);
+                for (int k = 0; k < n; ++k) {
                     sum_index[e.text] = k;
                     ValueId term = lower(*e.args[0]);
-                    acc = acc == ValueId(-1) ? term : emit(Op::Add, e.type, {acc, term}, 0, e.span);
+                    acc = acc == ValueId(-1) ? term : op2(Op::Add, acc, term, e.span);
                 }
                 sum_index.erase(e.text);
                 return acc;
@@ -268,12 +312,12 @@ struct Env {
             case ExprKind::Norm:
             case ExprKind::Abs: {
                 ValueId a = lower(*e.args[0]);
-                if (e.resolved == R_Det) return emit(Op::Det, Type::scalar(), {a}, 0, e.span);
-                return builtin(e.resolved == R_Length ? "length" : "abs", {a}, e.type, e.span);
+                if (type_of(a).is_matrix()) return emit(Op::Det, Type::scalar(), {a}, 0, e.span);
+                return builtin(e.kind == ExprKind::Norm && type_of(a).is_vector() ? "length" : "abs", {a}, e.span);
             }
-            case ExprKind::Floor: return builtin("floor", {lower(*e.args[0])}, e.type, e.span);
-            case ExprKind::Ceil: return builtin("ceil", {lower(*e.args[0])}, e.type, e.span);
-            case ExprKind::Sqrt: return builtin("sqrt", {lower(*e.args[0])}, e.type, e.span);
+            case ExprKind::Floor: return builtin("floor", {lower(*e.args[0])}, e.span);
+            case ExprKind::Ceil: return builtin("ceil", {lower(*e.args[0])}, e.span);
+            case ExprKind::Sqrt: return builtin("sqrt", {lower(*e.args[0])}, e.span);
             case ExprKind::Compare: {
                 ValueId a = lower(*e.args[0]);
                 ValueId b = lower(*e.args[1]);
@@ -295,12 +339,16 @@ struct Env {
             }
             case ExprKind::Piecewise: {
                 // Cases are tried in order: the first true condition wins.
-                ValueId acc = e.otherwise ? lower(*e.otherwise)
-                                          : f.constant(e.type, std::vector<double>(size_t(e.type.components()), 0.0));
+                ValueId acc = ValueId(-1);
+                if (e.otherwise) acc = lower(*e.otherwise);
                 for (size_t i = e.rows.size(); i-- > 0;) {
                     ValueId v = lower(*e.rows[i][0]);
                     ValueId c = lower(*e.rows[i][1]);
-                    acc = emit(Op::Select, e.type, {c, v, acc}, 0, e.span);
+                    if (acc == ValueId(-1)) {  // no `otherwise`: 0
+                        Type t = scalar_or(type_of(v));
+                        acc = f.constant(t, std::vector<double>(size_t(t.components()), 0.0));
+                    }
+                    acc = emit(Op::Select, scalar_or(type_of(v)), {c, v, acc}, 0, e.span);
                 }
                 return acc;
             }
@@ -359,7 +407,9 @@ void Env::lower_group(const LoopGroup& g) {
         body.outputs.push_back({seq.name, next});
     }
     body.result = body.outputs[0].second;
-    std::vector<ValueId> args = inits;
+    ValueId hi = g.hi_name.empty() ? f.scalar(double(g.hi)) : lower(*g.leader->range_hi);
+    std::vector<ValueId> args = {hi};
+    args.insert(args.end(), inits.begin(), inits.end());
     args.insert(args.end(), child.capture_args.begin(), child.capture_args.end());
     ctx.module.functions[size_t(idx)] = std::move(body);
     Instr loop;
@@ -367,7 +417,7 @@ void Env::lower_group(const LoopGroup& g) {
     loop.type = Type::tuple(int(g.sequences.size()));
     loop.args = std::move(args);
     loop.aux = idx;
-    loop.data = {double(g.lo), double(g.hi)};
+    loop.data = {double(g.lo)};
     loop.span = g.leader->span;
     loop.source = g.leader->source_line;
     ValueId lv = f.add(std::move(loop));
@@ -375,7 +425,7 @@ void Env::lower_group(const LoopGroup& g) {
         const Sequence& seq = m.sequences[size_t(g.sequences[j])];
         ValueId mv = emit(Op::Member, seq.type, {lv}, int(j), g.leader->span);
         seq_last[g.sequences[j]] = mv;
-        f.outputs.push_back({fmt::format("{}_{}", seq.name, g.hi + 1), mv});
+        f.outputs.push_back({fmt::format("{}_{}", seq.name, g.last()), mv});
     }
 }
 
@@ -389,8 +439,8 @@ ValueId add_param(ir::Function& f, const std::string& name, Type t) {
     return f.add(std::move(in));
 }
 
-int lower_local_function(const CheckedModule& m, int fi, LowerContext& ctx) {
-    auto key = std::make_pair(&m, fi);
+int lower_local_function(const CheckedModule& m, int fi, const std::vector<Type>& arg_types, LowerContext& ctx) {
+    auto key = std::make_tuple(&m, fi, arg_types);
     if (auto it = ctx.functions.find(key); it != ctx.functions.end()) return it->second;
     const LocalFunction& lf = m.functions[size_t(fi)];
     ir::Function fn;
@@ -402,7 +452,7 @@ int lower_local_function(const CheckedModule& m, int fi, LowerContext& ctx) {
     ctx.module.functions.emplace_back();
     Env env{m, ctx, fn};
     env.fn = &lf;
-    for (auto& [n, t] : lf.params) env.locals.push_back(add_param(fn, n, t));
+    for (size_t k = 0; k < lf.params.size(); ++k) env.locals.push_back(add_param(fn, lf.params[k].first, arg_types[k]));
     for (auto& [n, t] : lf.captures) env.captures.push_back(add_param(fn, n, t));
     ValueId r = env.lower(*lf.stmt->value);
     Instr& ri = fn.body[r];

@@ -10,6 +10,8 @@
 
 #include <map>
 #include <string>
+#include <tuple>
+#include <vector>
 
 #include "ir/IR.h"
 #include "sema/Check.h"
@@ -18,7 +20,9 @@ namespace iqc {
 
 struct LowerContext {
     ir::Module& module;
-    std::map<std::pair<const CheckedModule*, int>, int> functions;  // (module, local function) -> IR index
+    // (module, local function, argument types) -> IR index: a function with symbolic sizes (ℝ^n) gets one
+    // IR function per combination of sizes it is used with.
+    std::map<std::tuple<const CheckedModule*, int, std::vector<Type>>, int> functions;
 };
 
 // Returns the index of the new function in ctx.module.

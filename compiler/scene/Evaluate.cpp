@@ -1,6 +1,7 @@
 #include "scene/Evaluate.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <cerrno>
 #include <cstring>
@@ -87,16 +88,26 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
         lib.add(scene.modules.back());
         name = ms.name;
     }
-    const CheckedModule* m = lib.get(name, {});
+    // The values set from the command line first: their types bind symbolic sizes (v ∈ ℝ^n).
+    std::map<std::string, ir::Value> given;
+    std::map<std::string, Type> given_types;
+    for (const auto& [sname, stext] : req.sets) {
+        ir::Value v;
+        if (!parse_value(sname, stext, sm, d, v)) continue;
+        given[sname] = v;
+        given_types[sname] = v.type;
+    }
+    if (d.error_count() != before) return false;
+    std::unique_ptr<CheckedModule> checked = lib.check_with(name, given_types);
+    const CheckedModule* m = checked.get();
     if (!m) {
-        auto& e = d.error_nospan(fmt::format("no module named '{}' in '{}'", name, req.path));
-        (void)e;
+        d.error_nospan(fmt::format("no module named '{}' in '{}'", name, req.path));
         return false;
     }
     if (!m->ok || d.error_count() != before) return false;
     std::vector<ir::Value> args;
     for (const auto& p : m->params) args.push_back({p.type, p.value});
-    for (const auto& [sname, stext] : req.sets) {
+    for (const auto& [sname, v] : given) {
         int pi = m->find_param(sname);
         if (pi < 0) {
             std::vector<std::string> cands;
@@ -107,11 +118,13 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
             d.error_nospan(msg);
             continue;
         }
-        ir::Value v;
-        if (!parse_value(sname, stext, sm, d, v)) continue;
         const Type& want = m->params[size_t(pi)].type;
         if (v.type != want && !(want.is_scalar() && v.type.is_scalar())) {
             d.error_nospan(fmt::format("--set {}: '{}' is {}, but the value is {}", sname, sname, want.str(), v.type.str()));
+            continue;
+        }
+        if (want.kind == Type::Integer && v.v[0] != std::floor(v.v[0])) {
+            d.error_nospan(fmt::format("--set {}: '{}' is ℤ, but the value {} is not a whole number", sname, sname, v.v[0]));
             continue;
         }
         args[size_t(pi)] = {want, v.v};

@@ -80,10 +80,21 @@ std::vector<std::string> ModuleLibrary::names() const {
     return names;
 }
 
-std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& src, const std::string& name, bool transform) {
+std::unique_ptr<CheckedModule> ModuleLibrary::check_with(const std::string& name,
+                                                        const std::map<std::string, Type>& given_types) {
+    const ModuleSource* src = find_source(name);
+    if (!src) return nullptr;
+    auto m = parse_check(*src, name, false, given_types);
+    m->ast.span = src->where;
+    return m;
+}
+
+std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& src, const std::string& name, bool transform,
+                                                         const std::map<std::string, Type>& given_types) {
     ParseOptions po;
     for (const auto& n : known_names()) po.known_names.insert(n);
     CheckOptions co;
+    co.given_types = given_types;
     if (transform) {
         po.allow_header = false;
         for (auto& [n, mod] : transform_imports()) po.known_names.insert(n);

@@ -27,7 +27,10 @@ public:
     // The checked module of that name, or null when there is none (unknown names are the caller's to report).
     const CheckedModule* get(const std::string& name, Span where);
     // Parses and checks a module's text; `transform` gives it the implicit transformation imports.
-    std::unique_ptr<CheckedModule> parse_check(const ModuleSource& src, const std::string& name, bool transform);
+    std::unique_ptr<CheckedModule> parse_check(const ModuleSource& src, const std::string& name, bool transform,
+                                               const std::map<std::string, Type>& given_types = {});
+    // Checks the named module afresh (not cached) with parameter types known from outside; null if none.
+    std::unique_ptr<CheckedModule> check_with(const std::string& name, const std::map<std::string, Type>& given_types);
     // Every module name that lookup can find, for "did you mean".
     std::vector<std::string> names() const;
 

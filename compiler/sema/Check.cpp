@@ -154,6 +154,9 @@ private:
         std::map<std::string, int> locals;
     };
     Scope* scope_ = nullptr;
+    std::map<std::string, int> sizes_;  // symbolic sizes bound at this point (ℝ^n)
+    // Binds the symbols of `ts` from a value's type; false (and an error at `where`) on a conflict.
+    bool bind_sizes(const TypeSpec& ts, const Type& t, const std::string& name, Span where);
     const LoopGroup* loop_ = nullptr;  // the recurrence group whose bodies are being checked
     std::map<std::string, const Stmt*> seq_leader_;  // sequence name -> its group's leader
     std::vector<std::pair<std::string, int>> sums_;  // enclosing ∑ indices and their ranges
@@ -169,7 +172,7 @@ private:
     Type check_sequence_index(Expr& e);
     Type check_vector_items(Expr& e);
     std::vector<const Expr*> statement_values(const Stmt& s) const;
-    void check_function(LocalFunction& f, Span call_site);
+    void check_function(LocalFunction& f, Span call_site, const std::vector<Type>* args = nullptr);
     Type check(Expr& e);
     Type check_name(Expr& e);
     Type check_call(Expr& e);
@@ -182,23 +185,48 @@ private:
 };
 
 Type Checker::param_type(const TypeSpec& ts, const std::string& name) {
-    if (!ts.sym_rows.empty() || !ts.sym_cols.empty()) {
-        d_.error(ts.span, fmt::format("symbolic sizes such as ℝ^{} are not supported yet for '{}'; write the size",
-                                      ts.sym_rows.empty() ? ts.sym_cols : ts.sym_rows, name));
-        return {};
+    int rows = ts.rows, cols = ts.cols;
+    for (auto [sym, dim] : {std::pair<const std::string*, int*>{&ts.sym_rows, &rows}, {&ts.sym_cols, &cols}}) {
+        if (sym->empty()) continue;
+        auto it = sizes_.find(*sym);
+        if (it == sizes_.end()) {
+            d_.error(ts.span, fmt::format("the size {} of '{}' is not known: write the size, or give '{}' a value of "
+                                          "its size (iqc eval --set {}=…)", *sym, name, name, name));
+            return {};
+        }
+        *dim = it->second;
     }
     switch (ts.kind) {
         case TypeSpec::Scalar: return Type::scalar();
         case TypeSpec::Integer: return Type::integer();
-        case TypeSpec::Vector: return Type::vector(ts.rows);
+        case TypeSpec::Vector: return Type::vector(rows);
         case TypeSpec::Matrix:
-            if (ts.cols == 1) return Type::vector(ts.rows);
-            return Type::matrix(ts.rows, ts.cols);
+            if (cols == 1) return Type::vector(rows);
+            return Type::matrix(rows, cols);
         case TypeSpec::Function:
             d_.error(ts.span, fmt::format("function parameters such as '{}' are not supported yet", name));
             return {};
     }
     return {};
+}
+
+bool Checker::bind_sizes(const TypeSpec& ts, const Type& t, const std::string& name, Span where) {
+    auto bind = [&](const std::string& sym, int value) {
+        if (sym.empty()) return true;
+        auto [it, fresh] = sizes_.emplace(sym, value);
+        if (!fresh && it->second != value) {
+            d_.error(where, fmt::format("the size {} is {} for '{}' but {} elsewhere", sym, value, name, it->second));
+            return false;
+        }
+        return true;
+    };
+    if (ts.kind == TypeSpec::Vector) return bind(ts.sym_rows, t.is_vector() ? t.rows : 1);
+    if (ts.kind == TypeSpec::Matrix) {
+        int r = t.is_matrix() ? t.rows : t.is_vector() ? t.rows : 1;
+        int c = t.is_matrix() ? t.cols : 1;
+        return bind(ts.sym_rows, r) && bind(ts.sym_cols, c);
+    }
+    return true;
 }
 
 void Checker::collect_declarations() {
@@ -228,6 +256,12 @@ void Checker::collect_declarations() {
                 if (!own.count(n.first)) used_at_module.insert(n.first);
         }
     }
+    // Sizes given from outside (a value set for a parameter declared ℝ^n) bind their symbols first.
+    for (auto& decl : m_.ast.decls)
+        for (auto& [name, span] : decl.names)
+            if (auto it = opts_.given_types.find(name);
+                it != opts_.given_types.end() && (!decl.type.sym_rows.empty() || !decl.type.sym_cols.empty()))
+                bind_sizes(decl.type, it->second, name, span);
     for (auto& decl : m_.ast.decls) {
         for (auto& [name, span] : decl.names) {
             if (decl_spans_.count(name)) {
@@ -402,9 +436,16 @@ void Checker::collect_sequences(const std::vector<const Stmt*>& inits, const std
             continue;
         }
         auto lo = const_int(*r->range_lo, "start");
-        auto hi = const_int(*r->range_hi, "end");
+        std::optional<int> hi;
+        std::string hi_name;
+        if (r->range_hi->kind == ExprKind::Name && !const_eval(*r->range_hi)) {
+            hi_name = r->range_hi->text;  // a ℤ parameter: checked with the group
+            hi = 0;
+        } else {
+            hi = const_int(*r->range_hi, "end");
+        }
         if (!lo || !hi) continue;
-        if (*hi < *lo) {
+        if (hi_name.empty() && *hi < *lo) {
             d_.error(Span::join(r->range_lo->span, r->range_hi->span), fmt::format("the range {}..{} is empty", *lo, *hi));
             continue;
         }
@@ -427,12 +468,15 @@ void Checker::collect_sequences(const std::vector<const Stmt*>& inits, const std
         seq.rec = r;
         int gi = -1;
         for (size_t g = 0; g < m_.groups.size(); ++g)
-            if (m_.groups[g].var == r->loop_var && m_.groups[g].lo == *lo && m_.groups[g].hi == *hi) gi = int(g);
+            if (m_.groups[g].var == r->loop_var && m_.groups[g].lo == *lo && m_.groups[g].hi == *hi &&
+                m_.groups[g].hi_name == hi_name)
+                gi = int(g);
         if (gi < 0) {
             LoopGroup g;
             g.var = r->loop_var;
             g.lo = *lo;
             g.hi = *hi;
+            g.hi_name = hi_name;
             g.leader = r;
             m_.groups.push_back(g);
             gi = int(m_.groups.size() - 1);
@@ -480,7 +524,9 @@ void Checker::order_statements() {
         // Names used through local functions count too.
         for (size_t i = 0; i < names.size(); ++i) {
             const std::string& n = names[i].first;
-            if (const Stmt* dep = node_of(n); dep && dep != &s) deps.insert(n);
+            // A recurrence group's own sequences are not dependencies of the group; anything else, the
+            // statement itself included (a = a + 1), is.
+            if (const Stmt* dep = node_of(n); dep && !(s.kind == StmtKind::Recurrence && dep == &s)) deps.insert(n);
             int fi = m_.find_function(n);
             if (fi >= 0 && !seen_fn.count(n)) {
                 seen_fn.insert(n);
@@ -590,7 +636,7 @@ Type Checker::check_name(Expr& e) {
     if (int pi = m_.find_param(n); pi >= 0) return value_type_for_scope(n, m_.params[size_t(pi)].type, e, R_Param, pi);
     if (m_.find_sequence(n) >= 0) {
         const auto& g = m_.groups[size_t(m_.sequences[size_t(m_.find_sequence(n))].group)];
-        d_.error(e.span, fmt::format("'{}' is a sequence: use an element such as {}_{} or {}_{}", n, n, g.lo, n, g.hi + 1));
+        d_.error(e.span, fmt::format("'{}' is a sequence: use an element such as {}_{} or {}_{}", n, n, g.lo, n, g.last()));
         return {};
     }
     if (auto it = m_.values.find(n); it != m_.values.end()) return value_type_for_scope(n, it->second, e, R_Value, 0);
@@ -612,24 +658,46 @@ Type Checker::check_name(Expr& e) {
     return {};
 }
 
-void Checker::check_function(LocalFunction& f, Span call_site) {
-    if (f.checked) return;
-    if (f.checking) {
-        d_.error(call_site, fmt::format("'{}' calls itself: recursion is not supported (use an iteration)", f.stmt->name));
-        return;
-    }
-    f.checking = true;
+void Checker::check_function(LocalFunction& f, Span call_site, const std::vector<Type>* args) {
     const Stmt& s = *f.stmt;
-    Scope scope{&f, {}};
-    f.params.clear();
+    std::vector<const Decl*> decls;
     for (size_t i = 0; i < s.params.size(); ++i) {
-        const auto& [pname, pspan] = s.params[i];
+        const std::string& pname = s.params[i].first;
         const Decl* decl = nullptr;
         for (auto& ld : s.local_decls)
             for (auto& nm : ld.names)
                 if (nm.first == pname) decl = &ld;
         if (!decl)
             if (auto it = decls_.find(pname); it != decls_.end()) decl = it->second;
+        decls.push_back(decl);
+        if (decl && (!decl->type.sym_rows.empty() || !decl->type.sym_cols.empty())) f.generic = true;
+    }
+    std::vector<Type> key;
+    if (f.generic) {
+        if (!args) return;  // checked at each use, with the sizes of its arguments
+        for (const Type& t : *args) key.push_back(t.is_scalar() ? Type::scalar() : t);
+        if (auto it = f.instances.find(key); it != f.instances.end()) {
+            f.params = it->second.first;
+            f.result = it->second.second;
+            return;
+        }
+    } else if (f.checked) {
+        return;
+    }
+    if (f.checking) {
+        d_.error(call_site, fmt::format("'{}' calls itself: recursion is not supported (use an iteration)", f.stmt->name));
+        return;
+    }
+    f.checking = true;
+    Scope scope{&f, {}};
+    f.params.clear();
+    auto saved_sizes = sizes_;
+    if (f.generic)
+        for (size_t i = 0; i < s.params.size() && i < key.size(); ++i)
+            if (decls[i]) bind_sizes(decls[i]->type, key[i], s.params[i].first, call_site);
+    for (size_t i = 0; i < s.params.size(); ++i) {
+        const auto& [pname, pspan] = s.params[i];
+        const Decl* decl = decls[i];
         Type t;
         if (!decl) {
             d_.error(pspan, fmt::format("the parameter '{}' of '{}' has no type: add 'where {} ∈ ℝ' (or its type)", pname,
@@ -646,8 +714,10 @@ void Checker::check_function(LocalFunction& f, Span call_site) {
     scope_ = &scope;
     f.result = check(*s.value);
     scope_ = saved;
+    sizes_ = saved_sizes;
     f.checking = false;
     f.checked = true;
+    if (f.generic) f.instances[key] = {f.params, f.result};
 }
 
 Type Checker::check_call(Expr& e) {
@@ -708,7 +778,8 @@ Type Checker::check_call(Expr& e) {
     }
     if (int fi = m_.find_function(n); fi >= 0) {
         LocalFunction& f = m_.functions[size_t(fi)];
-        check_function(f, e.name_span);
+        if (!args_ok) return {};
+        check_function(f, e.name_span, &at);
         e.resolved = R_LocalFn;
         e.aux = fi;
         std::vector<Type> pt;
@@ -728,6 +799,11 @@ Type Checker::check_call(Expr& e) {
         if (im.name != n) continue;
         if (im.builtin >= 0) break;  // handled below as a built-in
         const LocalFunction& f = im.from->functions[size_t(im.function)];
+        if (f.generic) {
+            d_.error(e.name_span, fmt::format("'{}' from '{}' has symbolic sizes (ℝ^n): such functions can only be used in "
+                                              "their own module for now", n, im.module));
+            return {};
+        }
         e.resolved = R_ImportFn;
         e.aux = int(ii);
         std::vector<Type> pt;
@@ -802,7 +878,8 @@ Type Checker::check_binary(Expr& e) {
             if (!numeric(a, *e.args[0]) || !numeric(b, *e.args[1])) return {};
             if (a.is_scalar() && b.is_scalar()) return Type::scalar();
             if (a != b) {
-                d_.error(e.span, fmt::format("cannot {} {} and {}", e.op == BinOp::Add ? "add" : "subtract", a.str(), b.str()));
+                if (e.op == BinOp::Add) d_.error(e.span, fmt::format("cannot add {} and {}", a.str(), b.str()));
+                else d_.error(e.span, fmt::format("cannot subtract {} from {}", b.str(), a.str()));
                 return {};
             }
             return a;
@@ -910,6 +987,11 @@ Type Checker::check(Expr& e) {
                     continue;
                 }
                 it.value = int((*c)[0]) - 1;
+                if (it.value < 0) {
+                    d_.error(it.span, fmt::format("subscript {} is out of range: subscripts start at 1", int((*c)[0])));
+                    ok = false;
+                    continue;
+                }
                 idx.push_back(it.value);
             }
             if (!ok) break;
@@ -958,7 +1040,8 @@ Type Checker::check(Expr& e) {
                 auto& row = e.rows[r];
                 if (row.size() != ncols) {
                     d_.error(Span::join(row.front()->span, row.back()->span),
-                             fmt::format("this row has {} entries but the first row has {}", row.size(), ncols));
+                             fmt::format("this row has {} entr{} but the first row has {}", row.size(),
+                                         row.size() == 1 ? "y" : "ies", ncols));
                     ok = false;
                 }
                 for (auto& item : row) {
@@ -1137,6 +1220,12 @@ Type Checker::check_vector_items(Expr& e) {
 }
 
 void Checker::check_group(const LoopGroup& g) {
+    if (!g.hi_name.empty()) {
+        Type t = check(*g.leader->range_hi);
+        if (t.valid() && t.kind != Type::Integer)
+            d_.error(g.leader->range_hi->span, fmt::format("the end of a recurrence's range must be a whole number or a "
+                                                           "ℤ parameter, but '{}' is {}", g.hi_name, t.str()));
+    }
     for (int si : g.sequences) {
         Sequence& seq = m_.sequences[size_t(si)];
         seq.type = check(*seq.init->value);
@@ -1174,10 +1263,14 @@ Type Checker::check_sequence_index(Expr& e) {
         e.resolved = R_SeqFirst;
         return seq.type;
     }
-    if (c && c->size() == 1 && (*c)[0] == g.hi + 1) {
+    bool last = g.hi_name.empty() ? (c && c->size() == 1 && (*c)[0] == g.hi + 1)
+                                  : (ix.kind == ExprKind::Binary && ix.op == BinOp::Add && ix.args[0]->kind == ExprKind::Name &&
+                                     ix.args[0]->text == g.hi_name && ix.args[1]->kind == ExprKind::Number &&
+                                     ix.args[1]->number == 1);
+    if (last) {
         if (loop_ == &g) {
             d_.error(e.indices[0].span, fmt::format("{}_{} is the result of this recurrence and cannot be used inside it",
-                                                    seq.name, g.hi + 1));
+                                                    seq.name, g.last()));
             return {};
         }
         e.resolved = R_SeqLast;
@@ -1188,7 +1281,7 @@ Type Checker::check_sequence_index(Expr& e) {
                                                 "{}_{} (the first)", seq.name, seq.name, g.var, seq.name, g.lo));
     else
         d_.error(e.indices[0].span, fmt::format("only the first and the last elements of '{}' exist outside its recurrence: "
-                                                "{}_{} and {}_{}", seq.name, seq.name, g.lo, seq.name, g.hi + 1));
+                                                "{}_{} and {}_{}", seq.name, seq.name, g.lo, seq.name, g.last()));
     return {};
 }
 
@@ -1245,6 +1338,28 @@ void Checker::run() {
     if (m_.ast.kind == ModuleKind::Shape || m_.ast.kind == ModuleKind::Material) {
         const char* out = m_.ast.kind == ModuleKind::Shape ? "D" : "C";
         m_.primary = out;
+        // The renderer binds a shape's query point and a material's surface point, normal and eye: they
+        // must be ℝ³ (by name p, N̂, I, or else the first parameters in order).
+        auto require_vec3 = [&](std::vector<std::string> names, size_t position, const char* what) {
+            int pi = -1;
+            for (const auto& n : names)
+                if (pi < 0) pi = m_.find_param(n);
+            if (pi < 0 && position < m_.params.size()) pi = int(position);
+            if (pi < 0) {
+                d_.error(m_.ast.span, fmt::format("{} '{}' needs {} as a parameter", m_.ast.kind == ModuleKind::Shape ? "shape" : "material",
+                                                  m_.ast.name, what));
+            } else if (m_.params[size_t(pi)].type != Type::vector(3)) {
+                d_.error(m_.params[size_t(pi)].span, fmt::format("'{}' is {} ({}) and must be ℝ³", m_.params[size_t(pi)].name, what,
+                                                                  m_.params[size_t(pi)].type.str()));
+            }
+        };
+        if (m_.ast.kind == ModuleKind::Shape) {
+            require_vec3({"p"}, 0, "the query point");
+        } else {
+            require_vec3({"p"}, 0, "the surface point");
+            require_vec3({"N̂", "N", "n̂", "n"}, 1, "the unit normal");
+            require_vec3({"I", "eye", "E"}, 2, "the eye position");
+        }
         if (!assigns_.count(out)) {
             d_.error(m_.ast.span, fmt::format("{} '{}' does not assign '{}' ({})", m_.ast.kind == ModuleKind::Shape ? "shape" : "material",
                                               m_.ast.name, out,

@@ -69,6 +69,10 @@ struct LocalFunction {
     std::vector<std::pair<std::string, Type>> captures;
     bool checked = false;
     bool checking = false;  // recursion detection
+    // A parameter with a symbolic size (x ∈ ℝ^n) makes the function generic: it is checked once per
+    // combination of argument types it is called with (params/result above are those of the last one).
+    bool generic = false;
+    std::map<std::vector<Type>, std::pair<std::vector<std::pair<std::string, Type>>, Type>> instances;
 };
 
 struct ImportedFunction {
@@ -93,6 +97,8 @@ struct Sequence {
 struct LoopGroup {
     std::string var;
     int lo = 1, hi = 0;  // var runs over lo..hi; the sequences end at element hi + 1
+    std::string hi_name; // when the end is a ℤ parameter (hi is then unknown until run time)
+    std::string last() const { return hi_name.empty() ? std::to_string(hi + 1) : "(" + hi_name + "+1)"; }
     std::vector<int> sequences;
     const ast::Stmt* leader = nullptr;  // its first recurrence (stands for the group in `order`)
 };
@@ -122,6 +128,8 @@ using ModuleLookup = std::function<const CheckedModule*(const std::string& name,
 struct CheckOptions {
     // Names imported without an import line (the scene's transforms get T, R_x, ... from transformations).
     std::vector<std::pair<std::string, std::string>> implicit_imports;  // name, module
+    // Types of parameters known from outside (e.g. `iqc eval --set`), which bind symbolic sizes (ℝ^n).
+    std::map<std::string, Type> given_types;
 };
 
 std::unique_ptr<CheckedModule> check_module(ast::Module module, const ModuleLookup& lookup,

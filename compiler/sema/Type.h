@@ -25,6 +25,9 @@ struct Type {
     int components() const { return kind == Vector ? rows : kind == Matrix ? rows * cols : 1; }
     bool operator==(const Type& o) const { return kind == o.kind && rows == o.rows && cols == o.cols; }
     bool operator!=(const Type& o) const { return !(*this == o); }
+    bool operator<(const Type& o) const {
+        return kind != o.kind ? kind < o.kind : rows != o.rows ? rows < o.rows : cols < o.cols;
+    }
     // Math spelling: ℝ, ℤ, ℝ³, ℝ^(3×4), bool.
     std::string str() const;
 };

@@ -220,6 +220,21 @@ private:
     }
 
     ExprPtr make(ExprKind k, Span s) { return std::make_unique<Expr>(k, s); }
+    static ExprPtr clone_expr(const Expr& x) {
+        auto e = std::make_unique<Expr>(x.kind, x.span);
+        e->number = x.number;
+        e->text = x.text;
+        e->name_span = x.name_span;
+        e->op = x.op;
+        for (const auto& a : x.args) e->args.push_back(clone_expr(*a));
+        for (const auto& r : x.rows) {
+            e->rows.emplace_back();
+            for (const auto& a : r) e->rows.back().push_back(clone_expr(*a));
+        }
+        for (const auto& i : x.indices) e->indices.push_back({i.expr ? clone_expr(*i.expr) : nullptr, i.span, i.value});
+        if (x.otherwise) e->otherwise = clone_expr(*x.otherwise);
+        return e;
+    }
     ExprPtr binary(BinOp op, ExprPtr a, ExprPtr b) {
         auto e = make(ExprKind::Binary, Span::join(a->span, b->span));
         e->op = op;
@@ -638,23 +653,79 @@ Module Parser::parse(std::string name, bool allow_header) {
     return m;
 }
 
-// condition := comparison {(and | or) comparison}
+// condition := conjunction {or conjunction}       conjunction := comparison {and comparison}
 ExprPtr Parser::parse_condition() {
-    ExprPtr lhs = parse_comparison();
-    while (at_kw("and") || at_kw("or")) {
-        BinOp op = cur().text == "and" ? BinOp::And : BinOp::Or;
+    auto conjunction = [&]() {
+        ExprPtr lhs = parse_comparison();
+        while (at_kw("and")) {
+            advance();
+            ExprPtr rhs = parse_comparison();
+            auto e = binary(BinOp::And, std::move(lhs), std::move(rhs));
+            e->kind = ExprKind::Logic;
+            lhs = std::move(e);
+        }
+        return lhs;
+    };
+    ExprPtr lhs = conjunction();
+    while (at_kw("or")) {
         advance();
-        ExprPtr rhs = parse_comparison();
-        auto e = binary(op, std::move(lhs), std::move(rhs));
+        ExprPtr rhs = conjunction();
+        auto e = binary(BinOp::Or, std::move(lhs), std::move(rhs));
         e->kind = ExprKind::Logic;
         lhs = std::move(e);
     }
     return lhs;
 }
 
-// comparison := expr (= | ≠ | < | ≤ | > | ≥) expr
+// comparison := expr (= | ≠ | < | ≤ | > | ≥) expr | expr (∈ | ∉) interval
+//   interval := ([ | () expr , expr (] | ))     — closed or open at either end
 ExprPtr Parser::parse_comparison() {
     ExprPtr lhs = parse_expr();
+    if (at(Tok::In) || at(Tok::NotIn) || at_kw("in")) {
+        bool negate = at(Tok::NotIn);
+        advance();
+        if (!at(Tok::LBracket) && !at(Tok::LParen))
+            fail(cur().span, fmt::format("expected an interval such as [0, 1] after '∈', found {}", describe(cur())));
+        bool lo_closed = at(Tok::LBracket);
+        Span open = advance().span;
+        ctx_.push_back(Ctx::Paren);
+        ExprPtr lo = parse_expr();
+        expect(Tok::Comma, "between the interval's bounds");
+        ExprPtr hi = parse_expr();
+        ctx_.pop_back();
+        if (!at(Tok::RBracket) && !at(Tok::RParen)) {
+            auto& d = diags_.error(cur().span, fmt::format("expected ']' or ')' to close the interval, found {}", describe(cur())));
+            Diagnostics::note(d, open, "opened here");
+            throw Bail{};
+        }
+        bool hi_closed = at(Tok::RBracket);
+        Span close = advance().span;
+        // x ∈ [a, b] is a ≤ x and x ≤ b; x ∉ [a, b] is x < a or x > b. The value is shared, not copied:
+        // the checker and lowering see it twice through the Compare nodes' clones.
+        auto clone = [&](const Expr& x) {
+            // Comparisons need the value twice; re-parse is not possible, so build a Name-free copy by
+            // wrapping: lowering evaluates both sides once each (CSE merges them).
+            return clone_expr(x);
+        };
+        auto cmp = [&](BinOp op, ExprPtr a, ExprPtr b) {
+            auto e = binary(op, std::move(a), std::move(b));
+            e->kind = ExprKind::Compare;
+            return e;
+        };
+        ExprPtr x2 = clone(*lhs);
+        ExprPtr left, right;
+        if (!negate) {
+            left = cmp(lo_closed ? BinOp::Le : BinOp::Lt, std::move(lo), std::move(lhs));
+            right = cmp(hi_closed ? BinOp::Le : BinOp::Lt, std::move(x2), std::move(hi));
+        } else {
+            left = cmp(lo_closed ? BinOp::Lt : BinOp::Le, std::move(lhs), std::move(lo));
+            right = cmp(hi_closed ? BinOp::Gt : BinOp::Ge, std::move(x2), std::move(hi));
+        }
+        auto e = binary(negate ? BinOp::Or : BinOp::And, std::move(left), std::move(right));
+        e->kind = ExprKind::Logic;
+        e->span = Span::join(e->span, close);
+        return e;
+    }
     BinOp op;
     switch (cur().kind) {
         case Tok::Eq: op = BinOp::Eq; break;
@@ -939,6 +1010,12 @@ ExprPtr Parser::parse_matrix(Span open) {
         }
         if (t.kind == Tok::Newline || t.kind == Tok::Semicolon) { advance(); end_row(); continue; }
         if (t.kind == Tok::Comma) { advance(); continue; }
+        // A new statement (`y = …`) inside an unclosed matrix: report the bracket, not the `=`.
+        if (t.kind == Tok::Eq || (t.line_start && is_name_token(t) && peek_raw(1).kind == Tok::Eq) || at_kw("where")) {
+            auto& d = diags_.error(t.span, fmt::format("expected ']' to close the matrix, found {}", describe(t)));
+            Diagnostics::note(d, open, "opened here");
+            throw Bail{};
+        }
         row.push_back(parse_expr());
     }
     end_row();
