@@ -79,3 +79,31 @@ TEST_CASE("a module whose every statement is wrong reports each error and does n
     CHECK_THAT(d, Catch::Contains("3:7: error: subscript 9 is out of range"));
     CHECK_THAT(d, Catch::Contains("4:5: error: undefined name 'f'"));
 }
+
+TEST_CASE("type errors carry notes at the declarations involved", "[diag]") {
+    std::string d = errors_of("y = a + q\nq = (1, 2)\nwhere\na ∈ ℝ³\n");
+    CHECK_THAT(d, Catch::Contains("test.iql:1:5: error: cannot add ℝ³ and ℝ²"));
+    CHECK_THAT(d, Catch::Contains("test.iql:4:1: note: 'a' is declared here as ℝ³"));
+    CHECK_THAT(d, Catch::Contains("test.iql:2:1: note: 'q' is defined here as ℝ²"));
+}
+
+TEST_CASE("GLSL's size limit is a located error", "[diag]") {
+    Compiled c = compile_text("five.md", "❤: blob\n```iheartla\nshape\nv = (p, 1, 2)\nD = ‖v‖ - 1\nwhere\np ∈ ℝ³\n```\n"
+                                         "```scene\n[[shapes]]\ntype = \"blob\"\n```\n");
+    CHECK(c.result.exit_code == 1);
+    CHECK_THAT(c.diagnostics, Catch::Contains("five.md:4:1: error: cannot generate GLSL: ℝ⁵ is larger than GLSL's largest vector (vec4)"));
+}
+
+TEST_CASE("imports from module files beside the input, and import cycles", "[diag]") {
+    write_temp("helpers.iql", "sq(x) = x² where x ∈ ℝ\n");
+    auto user = write_temp("user.iql", "sq from helpers\ny = sq(3)\n");
+    RunResult r = run_iqc("eval " + user.string());
+    INFO(r.err);
+    CHECK(r.out == "y = 9\n");
+    write_temp("cyc_a.iql", "g from cyc_b\nf(x) = x where x ∈ ℝ\n");
+    write_temp("cyc_b.iql", "f from cyc_a\ng(x) = x where x ∈ ℝ\n");
+    auto top = write_temp("cyc_top.iql", "f from cyc_a\ny = f(1)\n");
+    RunResult c = run_iqc("eval " + top.string());
+    CHECK(c.exit_code == 1);
+    CHECK_THAT(c.err, Catch::Contains("cyc_b.iql:1:8: error: module 'cyc_a' imports itself (an import cycle)"));
+}

@@ -4,6 +4,11 @@
 // generated GLSL that glslang rejects; nothing is written then).
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <malloc.h>
+#include <sys/mman.h>
+#include <unistd.h>
 #include <chrono>
 #include <cstdio>
 #include <fmt/format.h>
@@ -17,6 +22,27 @@
 #include "scene/Evaluate.h"
 
 namespace {
+
+// The front end allocates many small nodes; in a fresh process most of its time went to page faults
+// (14,000 for a 5,000-line module). Growing the heap in large steps backed by transparent huge pages
+// (where the kernel allows it on request) cuts that to a few hundred. Harmless where unsupported.
+void tune_allocator() {
+#if defined(__GLIBC__) && defined(M_TOP_PAD)
+    const size_t pad = size_t(64) << 20;
+    mallopt(M_TOP_PAD, int(pad));
+    mallopt(M_TRIM_THRESHOLD, int(pad * 4));  // keep what is freed for reuse
+    mallopt(M_MMAP_THRESHOLD, int(pad * 2));  // large vectors come from the same heap
+    // Grow the heap once by `pad`, mark that range for huge pages, and give it back to malloc.
+    void* probe = std::malloc(pad);
+    if (!probe) return;
+    char* top = static_cast<char*>(sbrk(0));
+    const uintptr_t huge = uintptr_t(2) << 20;
+    uintptr_t begin = (reinterpret_cast<uintptr_t>(probe) + huge - 1) & ~(huge - 1);
+    uintptr_t end = reinterpret_cast<uintptr_t>(top) & ~(huge - 1);
+    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+    std::free(probe);
+#endif
+}
 
 int write_output(const std::string& path, const std::string& text) {
     if (path.empty() || path == "-") {
@@ -43,6 +69,7 @@ int write_output(const std::string& path, const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    tune_allocator();
     CLI::App app{
         "iqc — compiles math written as papers print it (I♥LA / I♥IQ) and a scene into a standalone fragment "
         "shader.\n\n"
@@ -89,6 +116,8 @@ int main(int argc, char** argv) {
     double e_time = 0;
     std::vector<double> e_mouse;
     eval->add_option("--time", e_time, "the value of the reserved name `time` (seconds, default 0)");
+    bool e_time_passes = false;
+    eval->add_flag("--time-passes", e_time_passes, "print the time of each phase to standard error");
     eval->add_option("--mouse", e_mouse, "the value of `mouse` (two numbers in [0,1], default 0 0)")->expected(2);
     try {
         app.parse(argc, argv);
@@ -118,7 +147,10 @@ int main(int argc, char** argv) {
             req.sets.push_back({n, s.substr(eq + 1)});
         }
         std::vector<iqc::EvalOutput> outs;
+        std::vector<std::pair<std::string, double>> timings;
+        if (e_time_passes) req.timings = &timings;
         bool ok = iqc::evaluate_module_file(req, sm, diags, outs);
+        for (auto& [name, ms] : timings) std::fprintf(stderr, "iqc: %-28s %8.3f ms\n", name.c_str(), ms);
         std::string text = diags.render();
         if (!text.empty()) std::fputs(text.c_str(), stderr);
         if (!ok) return 1;

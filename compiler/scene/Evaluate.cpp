@@ -1,6 +1,7 @@
 #include "scene/Evaluate.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <cerrno>
@@ -47,6 +48,12 @@ bool parse_value(const std::string& name, const std::string& text, SourceManager
 
 bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics& d, std::vector<EvalOutput>& out) {
     size_t before = d.error_count();
+    auto clock = std::chrono::steady_clock::now();
+    auto lap = [&](const char* name) {
+        auto now = std::chrono::steady_clock::now();
+        if (req.timings) req.timings->push_back({name, std::chrono::duration<double, std::milli>(now - clock).count()});
+        clock = now;
+    };
     std::string ext = fs::path(req.path).extension().string();
     SceneDesc scene;
     std::string dir = fs::path(req.path).parent_path().string();
@@ -88,6 +95,7 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
         lib.add(scene.modules.back());
         name = ms.name;
     }
+    lap("read");
     // The values set from the command line first: their types bind symbolic sizes (v ∈ ℝ^n).
     std::map<std::string, ir::Value> given;
     std::map<std::string, Type> given_types;
@@ -99,6 +107,7 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
     }
     if (d.error_count() != before) return false;
     std::unique_ptr<CheckedModule> checked = lib.check_with(name, given_types);
+    lap("lex + parse + check");
     const CheckedModule* m = checked.get();
     if (!m) {
         d.error_nospan(fmt::format("no module named '{}' in '{}'", name, req.path));
@@ -133,7 +142,9 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
     ir::Module irm;
     LowerContext ctx{irm, {}};
     int fn = lower_module(*m, name, name, ctx);
+    lap("lower to IR");
     auto all = ir::evaluate_all(irm, fn, args, req.inputs);
+    lap("evaluate");
     const ir::Function& F = irm.functions[size_t(fn)];
     // Outputs in source order.
     std::vector<std::pair<uint32_t, EvalOutput>> ordered;

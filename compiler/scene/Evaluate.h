@@ -16,6 +16,7 @@ struct EvalRequest {
     std::string module;                                     // which module of a .md/.iq (empty: the file's only one)
     std::vector<std::pair<std::string, std::string>> sets;  // NAME=VALUE, VALUE in the language's own literals
     ir::EvalInputs inputs;                                  // the reserved `time` and `mouse`
+    std::vector<std::pair<std::string, double>>* timings = nullptr;  // filled with ms per phase when set
 };
 
 struct EvalOutput {

@@ -125,8 +125,8 @@ std::optional<std::vector<double>> const_eval(const Expr& e) {
 namespace {
 
 // Free names an expression refers to (syntactically), excluding `bound` ones.
-void collect_names(const Expr& e, std::vector<std::pair<std::string, Span>>& out) {
-    if (e.kind == ExprKind::Name || e.kind == ExprKind::Call) out.push_back({e.text, e.name_span});
+void collect_names(const Expr& e, std::vector<const Expr*>& out) {
+    if (e.kind == ExprKind::Name || e.kind == ExprKind::Call) out.push_back(&e);
     for (const auto& a : e.args) collect_names(*a, out);
     for (const auto& r : e.rows)
         for (const auto& a : r) collect_names(*a, out);
@@ -171,6 +171,7 @@ private:
     void check_group(const LoopGroup& g);
     Type check_sequence_index(Expr& e);
     Type check_vector_items(Expr& e);
+    void note_operands(Diagnostic& d, const Expr& e);
     std::vector<const Expr*> statement_values(const Stmt& s) const;
     void check_function(LocalFunction& f, Span call_site, const std::vector<Type>* args = nullptr);
     Type check(Expr& e);
@@ -237,9 +238,9 @@ void Checker::collect_declarations() {
     for (const auto& s : m_.ast.stmts) {
         if (s.kind == StmtKind::Assign || s.kind == StmtKind::Return || s.kind == StmtKind::SeqInit ||
             s.kind == StmtKind::Recurrence) {
-            std::vector<std::pair<std::string, Span>> names;
+            std::vector<const Expr*> names;
             collect_names(*s.value, names);
-            for (auto& n : names) used_at_module.insert(n.first);
+            for (auto* n : names) used_at_module.insert(n->text);
         } else if (s.kind == StmtKind::Function) {
             for (auto& p : s.params) {
                 bool local = false;
@@ -248,12 +249,12 @@ void Checker::collect_declarations() {
                 if (!local) fn_params.insert(p.first);
             }
             // A function body may capture module parameters.
-            std::vector<std::pair<std::string, Span>> names;
+            std::vector<const Expr*> names;
             collect_names(*s.value, names);
             std::set<std::string> own;
             for (auto& p : s.params) own.insert(p.first);
-            for (auto& n : names)
-                if (!own.count(n.first)) used_at_module.insert(n.first);
+            for (auto* n : names)
+                if (!own.count(n->text)) used_at_module.insert(n->text);
         }
     }
     // Sizes given from outside (a value set for a parameter declared ℝ^n) bind their symbols first.
@@ -516,14 +517,15 @@ void Checker::order_statements() {
         if (auto it = seq_leader_.find(n); it != seq_leader_.end()) return it->second;
         return nullptr;
     };
-    std::function<std::set<std::string>(const Stmt&)> deps_of = [&](const Stmt& s) {
-        std::vector<std::pair<std::string, Span>> names;
+    // Dependencies by name (sorted: the order statements come out in is deterministic).
+    std::function<std::set<std::string_view>(const Stmt&)> deps_of = [&](const Stmt& s) {
+        std::vector<const Expr*> names;
         for (const Expr* v : statement_values(s)) collect_names(*v, names);
-        std::set<std::string> deps;
-        std::set<std::string> seen_fn;
+        std::set<std::string_view> deps;
+        std::set<std::string_view> seen_fn;
         // Names used through local functions count too.
         for (size_t i = 0; i < names.size(); ++i) {
-            const std::string& n = names[i].first;
+            const std::string& n = names[i]->text;
             // A recurrence group's own sequences are not dependencies of the group; anything else, the
             // statement itself included (a = a + 1), is.
             if (const Stmt* dep = node_of(n); dep && !(s.kind == StmtKind::Recurrence && dep == &s)) deps.insert(n);
@@ -531,11 +533,11 @@ void Checker::order_statements() {
             if (fi >= 0 && !seen_fn.count(n)) {
                 seen_fn.insert(n);
                 const Stmt& fs = *m_.functions[size_t(fi)].stmt;
-                std::vector<std::pair<std::string, Span>> inner;
+                std::vector<const Expr*> inner;
                 collect_names(*fs.value, inner);
-                for (auto& in : inner) {
+                for (auto* in : inner) {
                     bool own = false;
-                    for (auto& p : fs.params) own |= p.first == in.first;
+                    for (auto& p : fs.params) own |= p.first == in->text;
                     if (!own) names.push_back(in);
                 }
             }
@@ -558,7 +560,7 @@ void Checker::order_statements() {
         }
         state[s] = 1;
         stack.push_back(s);
-        for (const auto& dep : deps_of(*s)) visit(node_of(dep));
+        for (const auto& dep : deps_of(*s)) visit(node_of(std::string(dep)));
         stack.pop_back();
         state[s] = 2;
         m_.order.push_back(s);
@@ -568,7 +570,7 @@ void Checker::order_statements() {
         if (s.kind == StmtKind::Recurrence && seq_leader_.count(s.name) && seq_leader_[s.name] == &s) visit(&s);
     }
     if (m_.ret) {
-        for (const auto& dep : deps_of(*m_.ret)) visit(node_of(dep));
+        for (const auto& dep : deps_of(*m_.ret)) visit(node_of(std::string(dep)));
         m_.order.push_back(m_.ret);
     }
     if (reported) m_.order.clear();
@@ -835,6 +837,21 @@ Type Checker::check_call(Expr& e) {
     return {};
 }
 
+// Adds a note at the declaration or definition of each operand that is a plain name, with its type.
+void Checker::note_operands(Diagnostic& d, const Expr& e) {
+    for (const auto& a : e.args) {
+        const Expr* x = a.get();
+        if (x->kind != ExprKind::Name || !x->type.valid()) continue;
+        if (x->resolved == R_Param || (x->resolved == R_Capture && m_.find_param(x->text) >= 0)) {
+            const ParamInfo& p = m_.params[size_t(m_.find_param(x->text))];
+            Diagnostics::note(d, p.span, fmt::format("'{}' is declared here as {}", p.name, p.type.str()));
+        } else if (x->resolved == R_Value || x->resolved == R_Capture) {
+            if (auto it = assigns_.find(x->text); it != assigns_.end())
+                Diagnostics::note(d, it->second->name_span, fmt::format("'{}' is defined here as {}", x->text, x->type.str()));
+        }
+    }
+}
+
 Type Checker::mul_type(Expr& e, const Type& a, const Type& b, bool dot) {
     e.resolved = R_Mul;
     if (a.is_scalar()) return b.is_scalar() ? Type::scalar() : b;
@@ -845,17 +862,17 @@ Type Checker::mul_type(Expr& e, const Type& a, const Type& b, bool dot) {
             return Type::scalar();
         }
         if (dot) {
-            d_.error(e.span, fmt::format("cannot take the dot product of {} and {}: the sizes differ", a.str(), b.str()));
+            note_operands(d_.error(e.span, fmt::format("cannot take the dot product of {} and {}: the sizes differ", a.str(), b.str())), e);
             return {};
         }
-        d_.error(e.span, fmt::format("cannot multiply {} by {}: use ⋅ for the dot product, ∘ for the elementwise "
+        note_operands(d_.error(e.span, fmt::format("cannot multiply {} by {}: use ⋅ for the dot product, ∘ for the elementwise "
                                      "product, or ᵀ for a matrix product",
-                                     a.str(), b.str()));
+                                     a.str(), b.str())), e);
         return {};
     }
     Type t = ir::result_type(ir::Op::Mul, {a, b}, 0);
     if (!t.valid()) {
-        d_.error(e.span, fmt::format("cannot multiply {} by {}: the inner sizes differ", a.str(), b.str()));
+        note_operands(d_.error(e.span, fmt::format("cannot multiply {} by {}: the inner sizes differ", a.str(), b.str())), e);
         return {};
     }
     return t;
@@ -878,8 +895,8 @@ Type Checker::check_binary(Expr& e) {
             if (!numeric(a, *e.args[0]) || !numeric(b, *e.args[1])) return {};
             if (a.is_scalar() && b.is_scalar()) return Type::scalar();
             if (a != b) {
-                if (e.op == BinOp::Add) d_.error(e.span, fmt::format("cannot add {} and {}", a.str(), b.str()));
-                else d_.error(e.span, fmt::format("cannot subtract {} from {}", b.str(), a.str()));
+                if (e.op == BinOp::Add) note_operands(d_.error(e.span, fmt::format("cannot add {} and {}", a.str(), b.str())), e);
+                else note_operands(d_.error(e.span, fmt::format("cannot subtract {} from {}", b.str(), a.str())), e);
                 return {};
             }
             return a;
@@ -891,7 +908,7 @@ Type Checker::check_binary(Expr& e) {
         case BinOp::Div:
             if (!numeric(a, *e.args[0]) || !numeric(b, *e.args[1])) return {};
             if (!b.is_scalar()) {
-                d_.error(e.args[1]->span, fmt::format("cannot divide by {}: '/' needs a scalar divisor", b.str()));
+                note_operands(d_.error(e.args[1]->span, fmt::format("cannot divide by {}: '/' needs a scalar divisor", b.str())), e);
                 return {};
             }
             return a.is_scalar() ? Type::scalar() : a;
@@ -899,13 +916,13 @@ Type Checker::check_binary(Expr& e) {
             if (!numeric(a, *e.args[0]) || !numeric(b, *e.args[1])) return {};
             if (a.is_scalar() && b.is_scalar()) return Type::scalar();
             if (a != b) {
-                d_.error(e.span, fmt::format("the elementwise product ∘ needs equal sizes, not {} and {}", a.str(), b.str()));
+                note_operands(d_.error(e.span, fmt::format("the elementwise product ∘ needs equal sizes, not {} and {}", a.str(), b.str())), e);
                 return {};
             }
             return a;
         case BinOp::Cross:
             if (a != Type::vector(3) || b != Type::vector(3)) {
-                d_.error(e.span, fmt::format("the cross product × needs two ℝ³ vectors, not {} and {}", a.str(), b.str()));
+                note_operands(d_.error(e.span, fmt::format("the cross product × needs two ℝ³ vectors, not {} and {}", a.str(), b.str())), e);
                 return {};
             }
             return a;

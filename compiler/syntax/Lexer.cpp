@@ -261,6 +261,9 @@ struct Lexer {
 
 std::vector<Token> lex(const SourceManager& sm, FileId file, const std::vector<TextRange>& ranges) {
     Lexer lx{sm, file, sm.text(file), {}};
+    size_t bytes = 0;
+    for (const auto& r : ranges) bytes += r.end - r.begin;
+    lx.out.reserve(bytes / 3 + 8);
     for (const auto& r : ranges) {
         lx.line_start = true;
         lx.space = false;

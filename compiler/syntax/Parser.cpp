@@ -36,6 +36,9 @@ const std::set<std::string> kKeywords = {"where", "given", "from", "if", "otherw
                                          "default", "shape", "material", "scalar", "vector", "matrix", "for"};
 
 bool is_name_token(const Token& t) { return t.kind == Tok::Word || t.kind == Tok::Backtick; }
+
+// Whether a word is a keyword (a length filter first: most words are one letter).
+bool is_keyword(const std::string& w) { return w.size() >= 2 && w.size() <= 9 && kKeywords.count(w) > 0; }
 bool is_kw(const Token& t, const char* kw) { return t.kind == Tok::Word && t.text == kw; }
 
 // Splits a letter run into letter units: a base letter and the combining marks after it.
@@ -126,11 +129,11 @@ std::set<std::string> prescan(const std::vector<Token>& toks) {
 // Replaces each Word token by the names it spells (see the header comment).
 std::vector<Token> split_words(const std::vector<Token>& toks, const std::set<std::string>& known) {
     std::vector<Token> out;
-    out.reserve(toks.size());
+    out.reserve(toks.size() + toks.size() / 4);
     for (size_t i = 0; i < toks.size(); ++i) {
         const Token& t = toks[i];
         bool after_from = i > 0 && is_kw(toks[i - 1], "from");
-        if (t.kind != Tok::Word || kKeywords.count(t.text) || known.count(t.text) || after_from) {
+        if (t.kind != Tok::Word || is_keyword(t.text) || known.count(t.text) || after_from) {
             out.push_back(t);
             continue;
         }
@@ -277,7 +280,7 @@ std::string Parser::statement_text(Span s) const { return std::string(sm_.slice(
 std::pair<std::string, Span> Parser::parse_name() {
     const Token& t = cur();
     if (!is_name_token(t)) fail(t.span, fmt::format("expected a name, found {}", describe(t)));
-    if (t.kind == Tok::Word && kKeywords.count(t.text))
+    if (t.kind == Tok::Word && is_keyword(t.text))
         fail(t.span, fmt::format("'{}' is a keyword and cannot be used as a name", t.text));
     std::string n = t.text;
     Span s = t.span;
@@ -613,9 +616,15 @@ void Parser::parse_line(Module& m) {
         s.imports = parse_name_list();
         advance();  // from
         if (!is_name_token(cur())) fail(cur().span, fmt::format("expected a module name after 'from', found {}", describe(cur())));
+        // A module name is a file name: letters, digits and underscores written together (my_shapes2).
         s.from = cur().text;
         s.from_span = cur().span;
         advance();
+        while ((is_name_token(cur()) || at(Tok::Underscore) || at(Tok::Number)) && !cur().space_before) {
+            s.from += at(Tok::Underscore) ? "_" : cur().text;
+            s.from_span = Span::join(s.from_span, cur().span);
+            advance();
+        }
         s.span = Span::join(start, s.from_span);
         m.stmts.push_back(std::move(s));
     } else if (line_is_decl()) {
@@ -799,7 +808,7 @@ bool Parser::starts_juxtaposed_operand() {
         case Tok::Sqrt: case Tok::Fraction: case Tok::Norm: case Tok::DoubleBar: case Tok::Sum: case Tok::LBracket:
             return !(ctx_.back() == Ctx::Bars && (t.kind == Tok::Norm || t.kind == Tok::DoubleBar));
         case Tok::Bar: return ctx_.back() != Ctx::Bars;
-        case Tok::Word: return !kKeywords.count(t.text);
+        case Tok::Word: return !is_keyword(t.text);
         default: return false;
     }
 }
@@ -1083,7 +1092,7 @@ ExprPtr Parser::parse_primary() {
         }
         case Tok::Word:
         case Tok::Backtick: {
-            if (t.kind == Tok::Word && kKeywords.count(t.text))
+            if (t.kind == Tok::Word && is_keyword(t.text))
                 fail(t.span, fmt::format("unexpected keyword '{}' in an expression", t.text));
             auto e = make(ExprKind::Name, t.span);
             auto [n, s] = parse_name();
@@ -1161,6 +1170,7 @@ ast::Module parse_module(const SourceManager& sm, FileId file, const std::vector
     std::set<std::string> known = prescan(raw);
     known.insert(opts.known_names.begin(), opts.known_names.end());
     std::vector<Token> toks = split_words(raw, known);
+    std::vector<Token>().swap(raw);  // free the unsplit tokens before the AST is built
     Parser p(sm, std::move(toks), std::move(known), diags);
     return p.parse(std::move(name), opts.allow_header);
 }
