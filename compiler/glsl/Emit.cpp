@@ -26,7 +26,11 @@ std::string type_name(const Type& t, std::string* why) {
             if (t.rows > 4) return fail(fmt::format("{} is larger than GLSL's largest vector (vec4)", t.str()));
             return fmt::format("vec{}", t.rows);
         case Type::Matrix:
-            if (t.rows == 1) return fail(fmt::format("GLSL has no row-vector type for {}", t.str()));
+            // A row vector (1×n) is a vecN: GLSL's v * M already treats v as a row.
+            if (t.rows == 1) {
+                if (t.cols > 4) return fail(fmt::format("{} is larger than GLSL's largest vector (vec4)", t.str()));
+                return fmt::format("vec{}", t.cols);
+            }
             if (t.rows > 4 || t.cols > 4)
                 return fail(fmt::format("{} is larger than GLSL's largest matrix (mat4)", t.str()));
             if (t.rows == t.cols) return fmt::format("mat{}", t.rows);
@@ -199,20 +203,25 @@ struct FunctionEmitter {
             case Op::Add: return a(0) + " + " + a(1);
             case Op::Sub: return a(0) + " - " + a(1);
             case Op::Mul: {
+                const Type& lt = f.body[in.args[0]].type;
                 const Type& rt = f.body[in.args[1]].type;
-                const Instr& rhs = f.body[in.args[1]];
-                if (f.body[in.args[0]].type.is_vector() && rt.is_matrix() && rt.rows == 1 && rhs.op == Op::Transpose)
-                    return fmt::format("outerProduct({}, {})", plain(0), expr(rhs.args[0]));
+                bool lrow = lt.is_matrix() && lt.rows == 1, rrow = rt.is_matrix() && rt.rows == 1;
+                if (lrow && rt.is_vector()) return fmt::format("dot({}, {})", plain(0), plain(1));  // row · column
+                if (lt.is_vector() && rrow) return fmt::format("outerProduct({}, {})", plain(0), plain(1));
                 return a(0) + " * " + a(1);
             }
             case Op::Div: return a(0) + " / " + a(1);
             case Op::Neg: return "-" + a(0);
             case Op::Hadamard:
-                if (in.type.is_matrix()) return fmt::format("matrixCompMult({}, {})", plain(0), plain(1));
+                if (in.type.is_matrix() && in.type.rows > 1) return fmt::format("matrixCompMult({}, {})", plain(0), plain(1));
                 return a(0) + " * " + a(1);
             case Op::Dot: return fmt::format("dot({}, {})", plain(0), plain(1));
             case Op::Cross: return fmt::format("cross({}, {})", plain(0), plain(1));
-            case Op::Transpose: return fmt::format("transpose({})", plain(0));
+            case Op::Transpose: {
+                const Type& at = f.body[in.args[0]].type;
+                if (at.is_vector() || (at.is_matrix() && at.rows == 1)) return expr(in.args[0]);  // column <-> row: the same vecN
+                return fmt::format("transpose({})", plain(0));
+            }
             case Op::Inverse: return fmt::format("inverse({})", plain(0));
             case Op::Det: return fmt::format("determinant({})", plain(0));
             case Op::Builtin: {
@@ -256,12 +265,13 @@ struct FunctionEmitter {
             }
             case Op::Extract: {
                 const Type& st = f.body[in.args[0]].type;
-                if (st.is_vector()) return postfix_base(in.args[0]) + "." + kSwizzle[in.aux];
+                if (st.is_vector() || (st.is_matrix() && st.rows == 1)) return postfix_base(in.args[0]) + "." + kSwizzle[in.aux];
                 return fmt::format("{}[{}][{}]", postfix_base(in.args[0]), in.aux % st.cols, in.aux / st.cols);
             }
             case Op::Column: return fmt::format("{}[{}]", postfix_base(in.args[0]), in.aux);
             case Op::Row: {
                 const Type& st = f.body[in.args[0]].type;
+                if (st.rows == 1) return expr(in.args[0]);
                 std::vector<std::string> parts;
                 std::string base = postfix_base(in.args[0]);
                 for (int c = 0; c < st.cols; ++c) parts.push_back(fmt::format("{}[{}][{}]", base, c, in.aux));
