@@ -212,3 +212,13 @@ TEST_CASE("recurrence errors", "[lang]") {
                Catch::Contains("test.iql:2:11: error: the recurrence gives ℝ² but 'z' starts as ℝ"));
     CHECK_THAT(err("z_1 = 0\nz_(k+1) = z_k for k ∈ 3..1\ny = z_4\n"), Catch::Contains("error: the range 3..1 is empty"));
 }
+
+TEST_CASE("a recurrence whose step is a piecewise definition over two lines", "[lang]") {
+    Evaluated e = eval_module("g(x, y) = x y_1 where x ∈ ℝ, y ∈ ℝ³\nq = g(2, (3, 4, 5))\nz_1 = c\n"
+                              "z_(k+1) = { z_k if ‖z_k‖ > 2\n    z_k∘z_k + c otherwise for k ∈ 1..5\nw = z_6\n"
+                              "where\nc ∈ ℝ² default = (0.5, 0.5)\n");
+    INFO(e.diagnostics);
+    REQUIRE(e.ok);
+    CHECK(e.text["q"] == "6");
+    CHECK(e.text["w"] == "(1.62890625, 1.62890625)");  // escaped after three steps, then held
+}

@@ -62,13 +62,22 @@ std::vector<std::pair<size_t, size_t>> letter_units(const std::string& w) {
 // Pre-scan: names the module assigns, declares, defines as functions or imports.
 std::set<std::string> prescan(const std::vector<Token>& toks) {
     std::set<std::string> known;
-    // Sequences (`z_(k+1) = ... for k ∈ 1..N`): their elements `z_1`, `z_9` stay subscripts.
+    // Sequences (`z_(k+1) = ... for k ∈ 1..N`, the `for` possibly on a later line after a piecewise
+    // step): their elements `z_1`, `z_9` stay subscripts.
     std::set<std::string> sequences;
-    for (size_t k = 0; k + 2 < toks.size(); ++k)
-        if (toks[k].line_start && is_name_token(toks[k]) && toks[k + 1].kind == Tok::Underscore &&
-            toks[k + 2].kind == Tok::LParen)
-            for (size_t j = k; j < toks.size() && toks[j].kind != Tok::Newline && toks[j].kind != Tok::End; ++j)
-                if (is_kw(toks[j], "for")) sequences.insert(toks[k].text);
+    for (size_t k = 0; k + 2 < toks.size(); ++k) {
+        if (!toks[k].line_start || !is_name_token(toks[k]) || toks[k + 1].kind != Tok::Underscore ||
+            toks[k + 2].kind != Tok::LParen)
+            continue;
+        int depth = 0;
+        for (size_t j = k + 2; j < toks.size() && toks[j].kind != Tok::Newline && toks[j].kind != Tok::End; ++j) {
+            if (toks[j].kind == Tok::LParen) ++depth;
+            if (toks[j].kind == Tok::RParen && --depth == 0) {
+                if (toks[j + 1].kind == Tok::Eq) sequences.insert(toks[k].text);
+                break;
+            }
+        }
+    }
     size_t i = 0;
     while (i < toks.size()) {
         size_t line_end = i;
