@@ -66,11 +66,11 @@ struct Compiled {
 };
 inline RunResult run_iqc(const std::string& args) { return run_iqc_env("", args); }
 
-inline Compiled compile_path(const std::filesystem::path& p) {
+inline Compiled compile_path(const std::filesystem::path& p, const CompileOptions& opts = {}) {
     SourceManager sm;
     Diagnostics d(sm);
     Compiled c;
-    c.result = compile_file(p.string(), sm, d, {});
+    c.result = compile_file(p.string(), sm, d, opts);
     c.diagnostics = d.render();
     return c;
 }

@@ -1,8 +1,11 @@
-// Golden tests: every example and every input under golden/ compiles to exactly the expected shader,
-// byte for byte, and the expected file itself passes glslang under Shadertoy's wrapper.
+// Golden tests: every example and every input under golden/ compiles, for every target, to exactly the
+// expected shader, byte for byte, and the expected file itself passes glslang (Shadertoy's wrapper for
+// shadertoy; ES 3.00 for webgl2; core 3.30 for glsl330).
 //
-// Inputs: examples/<name>.{md,iq}  ->  golden/examples/<name>.shadertoy.expected
-//         golden/<area>/<name>.{md,iq,iql} -> golden/<area>/<name>.shadertoy.expected
+// Inputs: examples/<name>.{md,iq}  ->  golden/examples/<name>.<target>.expected
+//         golden/<area>/<name>.{md,iq,iql} -> golden/<area>/<name>.<target>.expected
+// (golden/effects/ holds one scene per effect and its effect-off twin; tests/effects_test.cpp checks that
+// the twin contains none of the effect's code.)
 // Regenerate (then review every diff as code):  IQC_UPDATE_GOLDEN=1 ./build/tests/iqc_tests "[golden]"
 //                                          or:  scripts/update-goldens.sh
 #include <catch2/catch.hpp>
@@ -20,7 +23,10 @@ namespace {
 
 struct GoldenCase {
     fs::path input, expected;
+    Target target;
 };
+
+const Target kTargets[] = {Target::Shadertoy, Target::WebGL2, Target::GLSL330};
 
 std::vector<GoldenCase> golden_cases() {
     std::vector<GoldenCase> cases;
@@ -29,16 +35,18 @@ std::vector<GoldenCase> golden_cases() {
         auto e = p.extension();
         return e == ".md" || e == ".iq" || e == ".iql";
     };
+    auto add = [&](const fs::path& input, const fs::path& dir) {
+        for (Target t : kTargets)
+            cases.push_back({input, dir / (input.stem().string() + "." + target_name(t) + ".expected"), t});
+    };
     for (auto& e : fs::directory_iterator(root / "examples"))
-        if (is_input(e.path()) && e.path().filename() != "README.md")
-            cases.push_back({e.path(), root / "golden" / "examples" / (e.path().stem().string() + ".shadertoy.expected")});
+        if (is_input(e.path()) && e.path().filename() != "README.md") add(e.path(), root / "golden" / "examples");
     for (auto& area : fs::directory_iterator(root / "golden")) {
         if (!area.is_directory()) continue;
         for (auto& e : fs::directory_iterator(area.path()))
-            if (is_input(e.path()))
-                cases.push_back({e.path(), area.path() / (e.path().stem().string() + ".shadertoy.expected")});
+            if (is_input(e.path())) add(e.path(), area.path());
     }
-    std::sort(cases.begin(), cases.end(), [](auto& a, auto& b) { return a.input < b.input; });
+    std::sort(cases.begin(), cases.end(), [](auto& a, auto& b) { return a.expected < b.expected; });
     return cases;
 }
 
@@ -60,10 +68,12 @@ std::string unified_diff(const fs::path& expected, const std::string& actual) {
 TEST_CASE("golden: every example compiles to its expected shader", "[golden]") {
     bool update = std::getenv("IQC_UPDATE_GOLDEN") != nullptr;
     auto cases = golden_cases();
-    REQUIRE(cases.size() >= 4);
+    REQUIRE(cases.size() >= 12);
     for (const auto& c : cases) {
-        SECTION(c.input.filename().string()) {
-            Compiled r = compile_path(c.input);
+        SECTION(c.expected.filename().string()) {
+            CompileOptions opts;
+            opts.target = c.target;
+            Compiled r = compile_path(c.input, opts);
             INFO(c.input.string() << "\n" << r.diagnostics << r.result.internal);
             REQUIRE(r.result.exit_code == 0);
             // Paths in the output are file names only, so goldens do not depend on where the repo is.
@@ -75,7 +85,9 @@ TEST_CASE("golden: every example compiles to its expected shader", "[golden]") {
             std::string expected = read_text(c.expected);
             INFO("golden mismatch; the diff (expected -> actual):\n" << unified_diff(c.expected, r.result.code));
             CHECK(r.result.code == expected);
-            auto v = glsl::validate_fragment(glsl::wrap_shadertoy(expected), glsl::Profile::Es300);
+            auto v = c.target == Target::Shadertoy ? glsl::validate_fragment(glsl::wrap_shadertoy(expected), glsl::Profile::Es300)
+                     : c.target == Target::WebGL2  ? glsl::validate_fragment(expected, glsl::Profile::Es300)
+                                                   : glsl::validate_fragment(expected, glsl::Profile::Core330);
             INFO(v.log);
             CHECK(v.ok);
         }
@@ -85,7 +97,7 @@ TEST_CASE("golden: every example compiles to its expected shader", "[golden]") {
 TEST_CASE("golden: output is deterministic", "[golden]") {
     auto cases = golden_cases();
     REQUIRE(!cases.empty());
-    Compiled a = compile_path(cases[0].input);
-    Compiled b = compile_path(cases[0].input);
+    Compiled a = compile_path(cases[0].input, {});
+    Compiled b = compile_path(cases[0].input, {});
     CHECK(a.result.code == b.result.code);
 }

@@ -86,8 +86,13 @@ int main(int argc, char** argv) {
     bool dump_ir = false, time = false;
     app.add_option("input", input, "scene (.iq), document (.md) or shape module (.iql)");
     app.add_option("-o,--output", output, "where to write the shader (default: standard output)");
-    app.add_option("--target", target, "output kind: shadertoy (default)")
-        ->check(CLI::IsMember({"shadertoy"}));
+    app.add_option("--target", target,
+                   "output kind: shadertoy (default: mainImage, parameters as constants), webgl2 (GLSL ES 3.00 with a "
+                   "uniform per parameter), glsl330 (desktop core profile, uniforms)")
+        ->check(CLI::IsMember({"shadertoy", "webgl2", "glsl330"}));
+    std::string meta;
+    app.add_option("--meta", meta, "also write a JSON description of every parameter (instance, module, role, "
+                                   "uniform or constant name, type, bounds, default, description)");
     app.add_flag("--dump-ir", dump_ir, "print the typed IR of every function to standard error");
     app.add_flag("--time", time, "print the compile time to standard error");
     bool time_passes = false;
@@ -166,6 +171,8 @@ int main(int argc, char** argv) {
     iqc::Diagnostics diags(sm);
     iqc::CompileOptions opts;
     opts.dump_ir = dump_ir;
+    opts.target = target == "webgl2" ? iqc::Target::WebGL2 : target == "glsl330" ? iqc::Target::GLSL330 : iqc::Target::Shadertoy;
+    if (render->parsed()) opts.target = iqc::Target::Shadertoy;
     iqc::CompileResult r = iqc::compile_file(render->parsed() ? r_input : input, sm, diags, opts);
     std::string rendered = diags.render();
     if (!rendered.empty()) std::fputs(rendered.c_str(), stderr);
@@ -222,6 +229,10 @@ int main(int argc, char** argv) {
                          [&] { double s = 0; for (double x : times) s += x; return s; }());
     }
     int rc = write_output(output, r.code);
+    if (rc == 0 && !meta.empty()) {
+        rc = write_output(meta, r.meta);
+        if (rc == 0) std::fprintf(stderr, "iqc: wrote %s\n", meta.c_str());
+    }
     if (time) {
         double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         std::fprintf(stderr, "iqc: compiled in %.2f ms\n", ms);

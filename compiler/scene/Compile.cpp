@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
 #include <memory>
 #include <set>
 
@@ -15,6 +17,7 @@
 #include "ir/Lower.h"
 #include "ir/passes/CSE.h"
 #include "scene/Modules.h"
+#include "scene/Template.h"
 #include "resources/Embedded.h"
 #include "sema/Builtins.h"
 #include "sema/Check.h"
@@ -75,11 +78,15 @@ struct InstancePlan {
     int material_fn = -1;
     int roles[3] = {-1, -1, -1};  // material parameters bound to the surface point, normal and eye
     std::vector<std::vector<double>> material_values;
-    std::map<std::string, std::string> constants;  // "shape.t" -> GLSL constant name
+    std::map<std::string, std::string> constants;  // "shape.t" -> GLSL constant or uniform name
     bool has_transform = false;
-    std::vector<double> inv_linear, inv_offset;  // world -> object
+    std::vector<double> inv_linear, inv_offset;  // world -> object, at the parameters' values
     double scale = 1;                            // 1 / Lipschitz factor of the world -> object map
     std::string transform_comment;
+    // A transform evaluated per pixel (its parameters are uniforms, or it uses time or mouse).
+    const CheckedModule* transform = nullptr;
+    int transform_fn = -1;
+    bool transform_runtime = false;
 };
 
 class SceneCompiler {
@@ -105,7 +112,8 @@ private:
                          const std::vector<int>& bound, std::vector<std::vector<double>>& values);
     bool plan_transform(const InstanceDesc& inst, InstancePlan& plan);
     int lower(const CheckedModule* m);
-    std::string assemble(std::vector<InstancePlan>& plans);
+    bool uses_inputs(int fn) const;
+    std::string assemble(std::vector<InstancePlan>& plans, std::string& meta);
 };
 
 bool SceneCompiler::apply_overrides(const std::vector<ParamOverride>& ovs, const CheckedModule& m, const char* role,
@@ -166,6 +174,9 @@ bool SceneCompiler::plan_transform(const InstanceDesc& inst, InstancePlan& plan)
         return false;
     }
     int fn = lower_module(*m, plan.name + ".transform", plan.name + "_transform", lower_);
+    plan.transform = m.get();
+    plan.transform_fn = fn;
+    plan.transform_runtime = opts_.target != Target::Shadertoy || uses_inputs(fn);
     std::vector<ir::Value> args;
     std::vector<std::string> settings;
     for (const auto& p : m->params) {
@@ -287,6 +298,15 @@ bool SceneCompiler::plan_instance(const InstanceDesc& inst, InstancePlan& plan, 
     return ok;
 }
 
+// Whether a function (or anything it calls or loops over) reads `time` or `mouse`.
+bool SceneCompiler::uses_inputs(int fn) const {
+    for (const ir::Instr& in : ir_.functions[size_t(fn)].body) {
+        if (in.op == ir::Op::Input) return true;
+        if ((in.op == ir::Op::Call || in.op == ir::Op::Loop) && uses_inputs(in.aux)) return true;
+    }
+    return false;
+}
+
 int SceneCompiler::lower(const CheckedModule* m) {
     if (auto it = lowered_.find(m); it != lowered_.end()) return it->second;
     int fn = lower_module(*m, m->ast.name, m->ast.name, lower_);
@@ -307,28 +327,92 @@ std::string param_comment(const ParamInfo& p) {
     return s;
 }
 
-void replace_all(std::string& s, const std::string& key, const std::string& value) {
-    for (size_t pos = s.find(key); pos != std::string::npos; pos = s.find(key, pos + value.size()))
-        s.replace(pos, key.size(), value);
-}
 
 std::string vec3_literal(const std::array<double, 3>& v) { return glsl::constant(Type::vector(3), {v[0], v[1], v[2]}); }
 
-std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans) {
+// The renderer's conventions for material parameters (docs/scene.md).
+const char* kLightPosition = "P_L";
+const char* kLightColor = "C_L";
+const char* kReflectivity = "k_r";
+const char* kTransmission = "k_t";
+const char* kRefractiveIndex = "η";
+
+// Uniform vectors a GLSL type takes (WebGL2 counts in vec4 slots).
+int uniform_vectors(const Type& t) { return t.is_matrix() ? t.cols : 1; }
+
+std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::string& meta) {
+    const bool shadertoy = opts_.target == Target::Shadertoy;
+    const RenderDesc& render = s_.render;
+    const EffectsDesc& fx = s_.effects;
+    March march = opts_.march.value_or(render.march);
+    Normals normals = opts_.normals.value_or(render.normals);
+    double hit = opts_.hit.value_or(render.hit);
+    int max_steps = opts_.max_steps.value_or(render.max_steps);
+    bool lights = !s_.lights.empty();
     glsl::Namer globals;
     glsl::Emitter em(ir_, globals, d_);
-    // Functions: every shape and material used, with what they call (callees first).
+    // Functions: every shape and material used, runtime transforms, and what they call (callees first).
     std::vector<int> roots;
     for (auto& p : plans) {
         roots.push_back(p.shape_fn);
         if (p.material) roots.push_back(p.material_fn);
+        if (p.transform_runtime) roots.push_back(p.transform_fn);
     }
     std::vector<int> fns = em.closure(roots);
     for (int f : fns) em.function_name(f);
-    // Parameter constants.
+    nlohmann::ordered_json jparams = nlohmann::ordered_json::array();
+    std::map<std::string, int> budget;  // instance -> uniform vectors
+    auto declare = [&](const std::string& name, const Type& t, const std::vector<double>& value, const std::string& comment) {
+        if (shadertoy) return fmt::format("const {} {} = {};  // {}\n", glsl::type_name(t), name, glsl::constant(t, value), comment);
+        return fmt::format("uniform {} {};  // {} (default {})\n", glsl::type_name(t), name, comment, join_values(value));
+    };
+    auto describe = [&](const std::string& instance, const std::string& module, const char* role, const ParamInfo& pi,
+                        const std::vector<double>& value, const std::string& glsl_name) {
+        nlohmann::ordered_json j;
+        j["instance"] = instance;
+        j["module"] = module;
+        j["role"] = role;
+        j["name"] = pi.name;
+        j[shadertoy ? "constant" : "uniform"] = glsl_name;
+        j["type"] = glsl::type_name(pi.type);
+        j["components"] = pi.type.components();
+        if (pi.bounded) {
+            nlohmann::ordered_json b = nlohmann::ordered_json::array();
+            for (size_t i = 0; i < pi.lo.size(); ++i) b.push_back({pi.lo[i], pi.hi[i]});
+            j["bounds"] = b;
+        } else {
+            j["bounds"] = nullptr;
+        }
+        j["default"] = value;
+        j["description"] = pi.description;
+        jparams.push_back(j);
+        budget[instance] += uniform_vectors(pi.type);
+    };
+    // Lights (bound to materials' `P_L` and `C_L`).
+    std::string light_decls;
+    std::vector<std::pair<std::string, std::string>> light_names;  // position, colour
+    nlohmann::ordered_json jlights = nlohmann::ordered_json::array();
+    for (const auto& l : s_.lights) {
+        std::string pos = globals.unique(l.name + "_position"), col = globals.unique(l.name + "_color");
+        ParamInfo pp{"position", l.span, Type::vector(3), false, {}, {}, {l.position[0], l.position[1], l.position[2]}, true, "light position"};
+        ParamInfo pc{"color", l.span, Type::vector(3), false, {}, {}, {l.color[0], l.color[1], l.color[2]}, true, "light colour"};
+        light_decls += declare(pos, pp.type, pp.value, l.name + " position");
+        light_decls += declare(col, pc.type, pc.value, l.name + " colour");
+        describe(l.name, "", "light", pp, pp.value, pos);
+        describe(l.name, "", "light", pc, pc.value, col);
+        light_names.push_back({pos, col});
+        nlohmann::ordered_json jl;
+        jl["name"] = l.name;
+        jl["position"] = pos;
+        jl["color"] = col;
+        jlights.push_back(jl);
+    }
+    if (!light_decls.empty()) light_decls = "// ---- lights ----\n" + light_decls + "\n";
+    // Parameters: constants on Shadertoy, uniforms elsewhere.
     std::string params;
+    glsl::Namer prefixes;  // instance prefixes are parts of names, not names: unique among themselves
     for (auto& p : plans) {
-        p.glsl = globals.unique(p.name);
+        p.glsl = prefixes.unique(p.name);
         std::string block;
         auto emit_params = [&](const CheckedModule& m, const std::vector<std::vector<double>>& values, const char* role,
                                const std::vector<int>& bound) {
@@ -337,16 +421,50 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans) {
                 const ParamInfo& pi = m.params[i];
                 std::string n = globals.unique(fmt::format("{}_{}_{}", p.glsl, role, glsl::identifier(pi.name)));
                 p.constants[std::string(role) + "." + pi.name] = n;
-                std::string ty = glsl::type_name(pi.type);
-                block += fmt::format("const {} {} = {};  // {}\n", ty, n, glsl::constant(pi.type, values[i]), param_comment(pi));
+                block += declare(n, pi.type, values[i], param_comment(pi));
+                describe(p.name, m.ast.name, role, pi, values[i], n);
             }
         };
         emit_params(*p.shape, p.shape_values, "shape", {p.query});
-        if (p.material) emit_params(*p.material, p.material_values, "material", {p.roles[0], p.roles[1], p.roles[2]});
-        if (!block.empty()) params += fmt::format("// {}: {}{}\n{}", p.name, p.desc->type,
-                                                  p.material ? " with " + p.desc->material : std::string(), block);
+        if (p.material) {
+            std::vector<int> bound = {p.roles[0], p.roles[1], p.roles[2]};
+            if (lights) {
+                for (const char* n : {kLightPosition, kLightColor})
+                    if (int pi = p.material->find_param(n); pi >= 0 && p.material->params[size_t(pi)].type == Type::vector(3))
+                        bound.push_back(pi);
+            }
+            emit_params(*p.material, p.material_values, "material", bound);
+        }
+        if (p.transform_runtime)
+            for (size_t i = 0; i < p.transform->params.size(); ++i) {
+                const ParamInfo& pi = p.transform->params[i];
+                std::string n = globals.unique(fmt::format("{}_transform_{}", p.glsl, glsl::identifier(pi.name)));
+                p.constants["transform." + pi.name] = n;
+                block += declare(n, pi.type, pi.value, param_comment(pi));
+                describe(p.name, "transform", "transform", pi, pi.value, n);
+            }
+        if (!block.empty())
+            params += fmt::format("// {}: {}{}\n{}", p.name, p.desc->type, p.material ? " with " + p.desc->material : std::string(), block);
     }
-    if (!params.empty()) params = "// ---- parameters (Shadertoy has no sliders: edit the values here) ----\n" + params;
+    if (!params.empty())
+        params = (shadertoy ? "// ---- parameters (Shadertoy has no sliders: edit the values here) ----\n"
+                            : "// ---- parameters (uniforms; defaults in the comments and the --meta JSON) ----\n") + params + "\n";
+    // WebGL2's uniform budget.
+    if (opts_.target == Target::WebGL2) {
+        int total = 4;  // iResolution, iTime, iMouse, iFrame
+        for (auto& [n, v] : budget) total += v;
+        if (total > 224) {
+            std::vector<std::pair<int, std::string>> users;
+            for (auto& [n, v] : budget) users.push_back({-v, n});
+            std::sort(users.begin(), users.end());
+            std::string list;
+            for (size_t i = 0; i < users.size() && i < 5; ++i) list += fmt::format("{}{} ({})", i ? ", " : "", users[i].second, -users[i].first);
+            d_.error(plans.empty() ? Span{s_.file, 0, 1} : plans[0].desc->span,
+                     fmt::format("the scene needs {} uniform vectors, more than WebGL2's 224; the biggest users: {}. Use "
+                                 "--target shadertoy (constants) or fewer instances", total, list));
+            return "";
+        }
+    }
     std::string functions;
     for (int f : fns) {
         const ir::Function& fn = ir_.functions[size_t(f)];
@@ -354,17 +472,33 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans) {
         for (auto& p : plans) {
             if (p.shape_fn == f) comment = "shape " + p.shape->ast.name;
             if (p.material && p.material_fn == f) comment = "material " + p.material->ast.name;
+            if (p.transform_runtime && p.transform_fn == f) comment = "transform of " + p.name;
         }
         if (comment.empty()) comment = fn.name;
         functions += "\n" + em.function(f, comment);
     }
     if (!functions.empty()) functions = "// ---- modules ----" + functions;
     // Transforms, scene body, materials.
-    std::string transforms, body, shade;
+    std::string transforms, prepare, body, shade, gradient, reflect, transmit;
+    bool lipschitz = false;
     for (size_t i = 0; i < plans.size(); ++i) {
         InstancePlan& p = plans[i];
-        std::string q = "p";
-        if (p.has_transform) {
+        std::string q = "p", scale;
+        if (p.has_transform && p.transform_runtime) {
+            std::string lin = globals.unique(p.glsl + "_to_object");
+            std::string off = globals.unique(p.glsl + "_offset");
+            std::string sc = globals.unique(p.glsl + "_scale");
+            transforms += fmt::format("// {}: {} (evaluated per pixel in iqc_prepare)\nmat3 {};\nvec3 {};\nfloat {};\n", p.name,
+                                      p.transform_comment, lin, off, sc);
+            std::vector<std::string> targs;
+            for (const auto& pi : p.transform->params) targs.push_back(p.constants.at("transform." + pi.name));
+            prepare += fmt::format("    {{\n        mat4 inv = inverse({}({}));  // {}\n        {} = mat3(inv);\n        {} = inv[3].xyz;\n"
+                                   "        {} = 1.0 / iqc_max_singular({});\n    }}\n",
+                                   em.function_name(p.transform_fn), fmt::join(targs, ", "), p.name, lin, off, sc, lin);
+            lipschitz = true;
+            q = lin + " * p + " + off;
+            scale = sc;
+        } else if (p.has_transform) {
             transforms += fmt::format("// {}: {}\n", p.name, p.transform_comment);
             bool identity = true;
             for (int r = 0; r < 3; ++r)
@@ -381,71 +515,127 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans) {
                 q += " + " + off;
             }
             if (p.scale != 1.0) {
-                std::string sc = globals.unique(p.glsl + "_scale");
+                scale = globals.unique(p.glsl + "_scale");
                 transforms += fmt::format("const float {} = {};  // 1 / Lipschitz factor: keeps distances conservative\n",
-                                          sc, glsl::float_literal(p.scale));
-                p.transform_comment = sc;
-            } else {
-                p.transform_comment.clear();
+                                          scale, glsl::float_literal(p.scale));
             }
         }
         std::vector<std::string> args;
         const auto& sp = p.shape->params;
-        for (size_t k = 0; k < sp.size(); ++k)
-            args.push_back(int(k) == p.query ? q
-                                             : p.constants.at("shape." + sp[k].name));
+        for (size_t k = 0; k < sp.size(); ++k) args.push_back(int(k) == p.query ? q : p.constants.at("shape." + sp[k].name));
         std::string call = fmt::format("{}({})", em.function_name(p.shape_fn), fmt::join(args, ", "));
-        if (!p.transform_comment.empty()) call += " * " + p.transform_comment;
+        if (!scale.empty()) call += " * " + scale;
         body += fmt::format("    d = {};  // {}\n", call, p.name);
         body += fmt::format("    if (d < res.x) res = vec2(d, {});\n", glsl::float_literal(double(i)));
         if (p.material) {
-            std::vector<std::string> margs;
             const auto& mp = p.material->params;
-            for (size_t k = 0; k < mp.size(); ++k) {
-                if (int(k) == p.roles[0]) margs.push_back("p");
-                else if (int(k) == p.roles[1]) margs.push_back("N");
-                else if (int(k) == p.roles[2]) margs.push_back("eye");
-                else margs.push_back(p.constants.at("material." + mp[k].name));
+            int pl = p.material->find_param(kLightPosition), cl = p.material->find_param(kLightColor);
+            bool per_light = lights && pl >= 0 && mp[size_t(pl)].type == Type::vector(3);
+            auto material_call = [&](const std::string& light_pos, const std::string& light_col) {
+                std::vector<std::string> margs;
+                for (size_t k = 0; k < mp.size(); ++k) {
+                    if (int(k) == p.roles[0]) margs.push_back("p");
+                    else if (int(k) == p.roles[1]) margs.push_back("N");
+                    else if (int(k) == p.roles[2]) margs.push_back("eye");
+                    else if (per_light && int(k) == pl) margs.push_back(light_pos);
+                    else if (per_light && int(k) == cl && mp[k].type == Type::vector(3)) margs.push_back(light_col);
+                    else margs.push_back(p.constants.at("material." + mp[k].name));
+                }
+                return fmt::format("{}({})", em.function_name(p.material_fn), fmt::join(margs, ", "));
+            };
+            if (!per_light) {
+                shade += fmt::format("    if (id == {}) return {};  // {}\n", i, material_call("", ""), p.name);
+            } else {
+                shade += fmt::format("    if (id == {}) {{  // {}: {} once per light\n        vec3 c = vec3(0.0);\n", i, p.name,
+                                     p.material->ast.name);
+                for (const auto& [pos, col] : light_names) {
+                    std::string term = material_call(pos, col);
+                    if (fx.shadows != Shadows::None) term += fmt::format(" * iqc_shadow(p, N, {})", pos);
+                    shade += fmt::format("        c += {};\n", term);
+                }
+                shade += "        return c;\n    }\n";
             }
-            shade += fmt::format("    if (id == {}) return {}({});  // {}\n", i, em.function_name(p.material_fn),
-                                 fmt::join(margs, ", "), p.name);
+            auto vec3_of = [&](const char* name) -> std::string {
+                int k = p.material->find_param(name);
+                if (k < 0) return "";
+                const std::string& n = p.constants.count(std::string("material.") + name) ? p.constants.at(std::string("material.") + name) : "";
+                if (n.empty()) return "";
+                return mp[size_t(k)].type.is_scalar() ? fmt::format("vec3({})", n) : mp[size_t(k)].type == Type::vector(3) ? n : "";
+            };
+            if (std::string kr = vec3_of(kReflectivity); !kr.empty())
+                reflect += fmt::format("    if (id == {}) return {};  // {}\n", i, kr, p.name);
+            if (std::string kt = vec3_of(kTransmission); !kt.empty()) {
+                int ek = p.material->find_param(kRefractiveIndex);
+                if (ek < 0) ek = p.material->find_param("eta");
+                std::string eta = ek >= 0 && mp[size_t(ek)].type.is_scalar() ? p.constants.at("material." + mp[size_t(ek)].name) : "1.5";
+                transmit += fmt::format("    if (id == {}) return vec4({}, {});  // {}\n", i, kt, eta, p.name);
+            }
         }
+        (void)gradient;
     }
     if (!transforms.empty()) transforms += "\n";
-    // Camera basis, computed once here.
-    auto sub = [](std::array<double, 3> a, std::array<double, 3> b) { return std::array<double, 3>{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
-    auto cross = [](std::array<double, 3> a, std::array<double, 3> b) {
-        return std::array<double, 3>{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    };
-    auto normalize = [](std::array<double, 3> a) {
-        double l = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-        return std::array<double, 3>{a[0] / l, a[1] / l, a[2] / l};
-    };
-    auto fwd = normalize(sub(s_.camera.target, s_.camera.position));
-    std::array<double, 3> up{0, 1, 0};
-    if (std::fabs(fwd[1]) > 0.999) up = {0, 0, 1};
-    auto right = normalize(cross(up, fwd));
-    auto cam_up = cross(fwd, right);
-    std::vector<double> basis = {right[0], cam_up[0], fwd[0], right[1], cam_up[1], fwd[1], right[2], cam_up[2], fwd[2]};
+    auto fmt_vec = [](const std::array<double, 3>& v) { return vec3_literal(v); };
     double focal = 1.0 / std::tan(s_.camera.fov * M_PI / 360.0);
-
-    std::string out(*embedded_file("runtime_templates/shadertoy.glsl"));
-    replace_all(out, "{{TITLE}}", s_.title);
-    replace_all(out, "{{VERSION}}", IQC_VERSION);
-    replace_all(out, "{{SOURCE}}", std::filesystem::path(s_.path).filename().string());
-    replace_all(out, "{{MAX_STEPS}}", std::to_string(s_.render.max_steps));
-    replace_all(out, "{{MAX_DIST}}", glsl::float_literal(s_.render.max_dist));
-    replace_all(out, "{{HIT}}", glsl::float_literal(s_.render.hit));
-    replace_all(out, "{{BACKGROUND}}", vec3_literal(s_.render.background));
-    replace_all(out, "{{CAMERA_POSITION}}", vec3_literal(s_.camera.position));
-    replace_all(out, "{{CAMERA_BASIS}}", glsl::constant(Type::matrix(3, 3), basis));
-    replace_all(out, "{{CAMERA_FOCAL}}", glsl::float_literal(focal));
-    replace_all(out, "{{PARAMETERS}}", params);
-    replace_all(out, "{{FUNCTIONS}}", functions);
-    replace_all(out, "{{TRANSFORMS}}", transforms);
-    replace_all(out, "{{SCENE_BODY}}", body);
-    replace_all(out, "{{SHADE_BODY}}", shade);
-    return out;
+    TemplateArgs ta;
+    auto& V = ta.values;
+    auto& F = ta.flags;
+    V["TITLE"] = s_.title;
+    V["VERSION"] = IQC_VERSION;
+    V["SOURCE"] = std::filesystem::path(s_.path).filename().string();
+    V["TARGET"] = target_name(opts_.target);
+    V["MAX_STEPS"] = std::to_string(max_steps);
+    V["MAX_DIST"] = glsl::float_literal(render.max_dist);
+    V["HIT"] = glsl::float_literal(hit);
+    V["HIT_DOC"] = render.hit_relative ? "hit tolerance per unit of distance along the ray" : "hit tolerance (world units)";
+    V["BACKGROUND"] = fmt_vec(render.background);
+    V["CAMERA_POSITION"] = fmt_vec(s_.camera.position);
+    V["CAMERA_TARGET"] = fmt_vec(s_.camera.target);
+    V["CAMERA_FOCAL"] = glsl::float_literal(focal);
+    V["FIXED_STEP"] = glsl::float_literal(render.step > 0 ? render.step : render.max_dist / max_steps);
+    V["RELAXATION"] = glsl::float_literal(render.relaxation);
+    V["SHADOW_K"] = glsl::float_literal(fx.shadow_softness);
+    V["FOG"] = glsl::float_literal(fx.fog);
+    V["FOG_COLOR"] = fmt_vec(fx.fog_color.value_or(render.background));
+    V["BOUNCES"] = std::to_string(fx.reflections + (fx.refraction ? 2 : 0));
+    V["AA"] = std::to_string(fx.antialias);
+    V["PARAMETERS"] = params;
+    V["LIGHTS"] = light_decls;
+    V["FUNCTIONS"] = functions;
+    V["TRANSFORMS"] = transforms;
+    V["PREPARE_BODY"] = prepare;
+    V["SCENE_BODY"] = body;
+    V["SHADE_BODY"] = shade;
+    V["GRADIENT_BODY"] = gradient;
+    V["REFLECT_BODY"] = reflect;
+    V["TRANSMIT_BODY"] = transmit;
+    F.insert(opts_.target == Target::Shadertoy ? "SHADERTOY" : opts_.target == Target::WebGL2 ? "WEBGL2" : "GLSL330");
+    static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO"};
+    F.insert(marches[int(march)]);
+    static const char* normal_flags[] = {"NORMALS_CENTRAL", "NORMALS_FORWARD", "NORMALS_TETRAHEDRON", "NORMALS_ANALYTIC"};
+    F.insert(normal_flags[int(normals)]);
+    if (render.hit_relative) F.insert("HIT_RELATIVE");
+    if (fx.shadows == Shadows::Hard && lights) F.insert("SHADOWS_HARD");
+    if (fx.shadows == Shadows::Soft && lights) F.insert("SHADOWS_SOFT");
+    if (fx.ao) F.insert("AO");
+    if (fx.fog > 0) F.insert("FOG");
+    if (fx.reflections > 0 && !reflect.empty()) F.insert("REFLECTIONS");
+    if (fx.refraction && !transmit.empty()) F.insert("REFRACTION");
+    if (F.count("REFLECTIONS") || F.count("REFRACTION")) F.insert("BOUNCES");
+    if (fx.antialias > 1) F.insert("AA");
+    static const char* debug_flags[] = {"", "DEBUG_NORMALS", "DEBUG_STEPS", "DEBUG_DEPTH"};
+    if (render.debug != DebugView::None) F.insert(debug_flags[int(render.debug)]);
+    if (s_.camera.orbit) F.insert("ORBIT");
+    if (!prepare.empty()) F.insert("PREPARE");
+    if (lipschitz) F.insert("LIPSCHITZ");
+    if (opts_.instrument) F.insert("INSTRUMENT");
+    nlohmann::ordered_json j;
+    j["title"] = s_.title;
+    j["target"] = target_name(opts_.target);
+    j["inputs"] = nlohmann::ordered_json::array({"iResolution", "iTime", "iMouse", "iFrame"});
+    j["parameters"] = jparams;
+    j["lights"] = jlights;
+    meta = j.dump(2) + "\n";
+    return expand_template(std::string(*embedded_file("runtime_templates/scene.glsl")), ta);
 }
 
 CompileResult SceneCompiler::run() {
@@ -494,12 +684,15 @@ CompileResult SceneCompiler::run() {
     }
     if (opts_.dump_ir) res.ir = ir::print(ir_);
     lap("lower + verify IR");
-    std::string code = assemble(plans);
+    std::string code = assemble(plans, res.meta);
     lap("GLSL backend + assembly");
     if (d_.error_count() != before) return res;
     // Fault injection for the test of the internal-error path: a shader glslang must reject.
     if (std::getenv("IQC_INJECT_GLSL_FAULT")) code += "\nthis line is not GLSL;\n";
-    glsl::ValidationResult v = glsl::validate_fragment(glsl::wrap_shadertoy(code), glsl::Profile::Es300);
+    glsl::ValidationResult v =
+        opts_.target == Target::Shadertoy ? glsl::validate_fragment(glsl::wrap_shadertoy(code), glsl::Profile::Es300)
+        : opts_.target == Target::WebGL2  ? glsl::validate_fragment(code, glsl::Profile::Es300)
+                                          : glsl::validate_fragment(code, glsl::Profile::Core330);
     lap("glslang validation");
     if (!v.ok) {
         res.exit_code = 3;
@@ -513,6 +706,15 @@ CompileResult SceneCompiler::run() {
 }
 
 }  // namespace
+
+const char* target_name(Target t) {
+    switch (t) {
+        case Target::Shadertoy: return "shadertoy";
+        case Target::WebGL2: return "webgl2";
+        case Target::GLSL330: return "glsl330";
+    }
+    return "?";
+}
 
 CompileResult compile_scene(const SceneDesc& scene, SourceManager& sm, Diagnostics& diags, const CompileOptions& opts) {
     SceneCompiler c(scene, sm, diags, opts);

@@ -8,6 +8,7 @@
 // factor so sphere tracing stays conservative.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,11 +17,20 @@
 
 namespace iqc {
 
-enum class Target { Shadertoy };
+enum class Target { Shadertoy, WebGL2, GLSL330 };
+
+const char* target_name(Target t);
 
 struct CompileOptions {
     Target target = Target::Shadertoy;
     bool dump_ir = false;
+    // Counts scene evaluations per pixel into the alpha channel (for `iqc render --stats` and `iqc bench`).
+    bool instrument = false;
+    // Overrides of [render] for benchmark sweeps (unset: the scene's own values).
+    std::optional<March> march;
+    std::optional<Normals> normals;
+    std::optional<double> hit;
+    std::optional<int> max_steps;
 };
 
 struct CompileResult {
@@ -28,6 +38,7 @@ struct CompileResult {
     std::string code;      // the shader (only when exit_code == 0)
     std::string ir;        // the IR, when dump_ir
     std::string internal;  // the internal error's text
+    std::string meta;      // JSON describing every parameter (instance, module, role, uniform, bounds, ...)
     std::vector<std::pair<std::string, double>> pass_ms;  // wall time per phase, for --time-passes
 };
 

@@ -48,7 +48,11 @@ bool read_file(const std::string& path, std::string& out, std::string& err) {
 const std::vector<std::string> kTopKeys = {"title", "include", "modules", "camera", "render", "effects", "lights", "shapes"};
 const std::vector<std::string> kShapeKeys = {"name", "type", "material", "transform", "shape_params", "material_params"};
 const std::vector<std::string> kCameraKeys = {"position", "target", "fov", "orbit"};
-const std::vector<std::string> kRenderKeys = {"march", "max_steps", "max_dist", "hit", "normals", "background"};
+const std::vector<std::string> kRenderKeys = {"march", "max_steps", "max_dist", "hit", "hit_mode", "normals",
+                                              "background", "relaxation", "step", "debug"};
+const std::vector<std::string> kEffectKeys = {"shadows", "shadow_softness", "ao", "fog", "fog_color", "reflections",
+                                              "refraction", "antialias"};
+const std::vector<std::string> kLightKeys = {"name", "position", "color"};
 
 class SceneReader {
 public:
@@ -97,6 +101,32 @@ private:
             if (auto s = did_you_mean(key, allowed)) Diagnostics::note(e, span_of(k.source()), fmt::format("did you mean '{}'?", *s));
         }
     }
+    // A string that must be one of `choices`; returns its index.
+    std::optional<size_t> get_choice(const toml::node& n, const std::string& key, const std::vector<std::string>& choices) {
+        auto v = get_string(n, key);
+        if (!v) return std::nullopt;
+        for (size_t i = 0; i < choices.size(); ++i)
+            if (*v == choices[i]) return i;
+        std::string list;
+        for (size_t i = 0; i < choices.size(); ++i) list += (i ? ", " : "") + choices[i];
+        auto& e = d_.error(span_of(n), fmt::format("unknown {} '{}': choose one of {}", key, *v, list));
+        if (auto s = did_you_mean(*v, choices)) Diagnostics::note(e, span_of(n), fmt::format("did you mean '{}'?", *s));
+        return std::nullopt;
+    }
+    std::optional<bool> get_bool(const toml::node& n, const std::string& key) {
+        if (n.is_boolean()) return *n.value<bool>();
+        wrong_type(n, key, "true or false");
+        return std::nullopt;
+    }
+    std::optional<int> get_int(const toml::node& n, const std::string& key, int lo, int hi) {
+        if (!n.is_integer() || *n.value<int64_t>() < lo || *n.value<int64_t>() > hi) {
+            if (!n.is_integer()) wrong_type(n, key, "a whole number");
+            else d_.error(span_of(n), fmt::format("'{}' must be from {} to {}", key, lo, hi));
+            return std::nullopt;
+        }
+        return int(*n.value<int64_t>());
+    }
+
     std::optional<std::string> get_string(const toml::node& n, const std::string& key) {
         if (auto v = n.value<std::string>(); v && n.is_string()) return *v;
         wrong_type(n, key, "a string");
@@ -237,10 +267,8 @@ void SceneReader::read(std::string_view text) {
                     else s_.camera.fov = *v;
                 }
             }
-            if (auto* x = t.get("orbit")) {
-                if (!x->is_boolean()) wrong_type(*x, "orbit", "true or false");
-                else if (*x->value<bool>()) d_.warning(span_of(*x), "'orbit' is not implemented yet: the camera stays fixed");
-            }
+            if (auto* x = t.get("orbit"))
+                if (auto v = get_bool(*x, "orbit")) s_.camera.orbit = *v;
             if (s_.camera.position == s_.camera.target)
                 d_.error(span_of(*n), "the camera's position and target are the same point");
         }
@@ -251,11 +279,8 @@ void SceneReader::read(std::string_view text) {
         } else {
             auto& t = *n->as_table();
             check_keys(t, kRenderKeys, " in [render]");
-            if (auto* x = t.get("max_steps")) {
-                if (!x->is_integer() || *x->value<int64_t>() < 1 || *x->value<int64_t>() > 100000)
-                    d_.error(span_of(*x), "'max_steps' must be a whole number from 1 to 100000");
-                else s_.render.max_steps = int(*x->value<int64_t>());
-            }
+            if (auto* x = t.get("max_steps"))
+                if (auto v = get_int(*x, "max_steps", 1, 100000)) s_.render.max_steps = *v;
             if (auto* x = t.get("max_dist"))
                 if (auto v = get_number(*x, "max_dist")) {
                     if (*v <= 0) d_.error(span_of(*x), "'max_dist' must be positive");
@@ -268,15 +293,87 @@ void SceneReader::read(std::string_view text) {
                 }
             if (auto* x = t.get("background")) get_vec3(*x, "background", s_.render.background);
             if (auto* x = t.get("march"))
-                if (auto v = get_string(*x, "march"); v && *v != "sphere")
-                    d_.warning(span_of(*x), fmt::format("march method '{}' is not implemented yet: using 'sphere'", *v));
+                if (auto v = get_choice(*x, "march method", {"fixed", "sphere", "relaxed", "auto"})) s_.render.march = March(*v);
             if (auto* x = t.get("normals"))
-                if (auto v = get_string(*x, "normals"); v && *v != "tetrahedron")
-                    d_.warning(span_of(*x), fmt::format("normals method '{}' is not implemented yet: using 'tetrahedron'", *v));
+                if (auto v = get_choice(*x, "normals method", {"central", "forward", "tetrahedron", "analytic"}))
+                    s_.render.normals = Normals(*v);
+            if (auto* x = t.get("hit_mode"))
+                if (auto v = get_choice(*x, "hit_mode", {"absolute", "relative"})) s_.render.hit_relative = *v == 1;
+            if (auto* x = t.get("relaxation"))
+                if (auto v = get_number(*x, "relaxation")) {
+                    if (*v < 1 || *v >= 2) d_.error(span_of(*x), "'relaxation' must be in [1, 2)");
+                    else s_.render.relaxation = *v;
+                }
+            if (auto* x = t.get("step"))
+                if (auto v = get_number(*x, "step")) {
+                    if (*v <= 0) d_.error(span_of(*x), "'step' must be positive");
+                    else s_.render.step = *v;
+                }
+            if (auto* x = t.get("debug"))
+                if (auto v = get_choice(*x, "debug view", {"none", "normals", "steps", "depth"})) s_.render.debug = DebugView(*v);
         }
     }
-    for (const char* k : {"effects", "lights"})
-        if (auto* n = root.get(k)) d_.warning(span_of(*n), fmt::format("[{}] is not implemented yet and is ignored", k));
+    if (auto* n = root.get("effects")) {
+        if (!n->is_table()) {
+            wrong_type(*n, "effects", "a table");
+        } else {
+            auto& t = *n->as_table();
+            check_keys(t, kEffectKeys, " in [effects]");
+            auto& e = s_.effects;
+            if (auto* x = t.get("shadows")) {
+                // shadows = "soft" (or true for soft, false for none)
+                if (x->is_boolean()) e.shadows = *x->value<bool>() ? Shadows::Soft : Shadows::None;
+                else if (auto v = get_choice(*x, "shadows", {"none", "hard", "soft"})) e.shadows = Shadows(*v);
+            }
+            if (auto* x = t.get("shadow_softness"))
+                if (auto v = get_number(*x, "shadow_softness")) {
+                    if (*v <= 0) d_.error(span_of(*x), "'shadow_softness' must be positive");
+                    else e.shadow_softness = *v;
+                }
+            if (auto* x = t.get("ao"))
+                if (auto v = get_bool(*x, "ao")) e.ao = *v;
+            if (auto* x = t.get("fog")) {
+                if (x->is_boolean()) e.fog = *x->value<bool>() ? 0.02 : 0.0;
+                else if (auto v = get_number(*x, "fog")) {
+                    if (*v < 0) d_.error(span_of(*x), "'fog' (a density) cannot be negative");
+                    else e.fog = *v;
+                }
+            }
+            if (auto* x = t.get("fog_color")) {
+                std::array<double, 3> c;
+                if (get_vec3(*x, "fog_color", c)) e.fog_color = c;
+            }
+            if (auto* x = t.get("reflections")) {
+                if (x->is_boolean()) e.reflections = *x->value<bool>() ? 1 : 0;
+                else if (auto v = get_int(*x, "reflections", 0, 16)) e.reflections = *v;
+            }
+            if (auto* x = t.get("refraction"))
+                if (auto v = get_bool(*x, "refraction")) e.refraction = *v;
+            if (auto* x = t.get("antialias")) {
+                if (x->is_boolean()) e.antialias = *x->value<bool>() ? 2 : 1;
+                else if (auto v = get_int(*x, "antialias", 1, 8)) e.antialias = *v;
+            }
+        }
+    }
+    if (auto* n = root.get("lights")) {
+        if (!n->is_array_of_tables()) {
+            wrong_type(*n, "lights", "an array of tables ([[lights]])");
+        } else {
+            for (auto& item : *n->as_array()) {
+                auto& t = *item.as_table();
+                check_keys(t, kLightKeys, " in [[lights]]");
+                LightDesc l;
+                l.span = span_of(item);
+                l.name = fmt::format("light_{}", s_.lights.size() + 1);
+                if (auto* x = t.get("name"))
+                    if (auto v = get_string(*x, "name")) l.name = *v;
+                if (auto* x = t.get("position")) get_vec3(*x, "position", l.position);
+                else d_.error(l.span, "this [[lights]] entry has no 'position'");
+                if (auto* x = t.get("color")) get_vec3(*x, "color", l.color);
+                s_.lights.push_back(l);
+            }
+        }
+    }
     auto* shapes = root.get("shapes");
     if (!shapes) {
         d_.error({file_, base_, base_ + 1}, "the scene has no [[shapes]]: add at least one, e.g. [[shapes]] type = \"sphere\"");

@@ -45,13 +45,43 @@ struct CameraDesc {
     std::array<double, 3> position{0, 0, -1};
     std::array<double, 3> target{0, 0, 5};
     double fov = 60;  // vertical, degrees
+    bool orbit = false;
 };
 
+enum class March { Fixed, Sphere, Relaxed, Auto };
+enum class Normals { Central, Forward, Tetrahedron, Analytic };
+enum class DebugView { None, Normals, Steps, Depth };
+enum class Shadows { None, Hard, Soft };
+
 struct RenderDesc {
+    March march = March::Sphere;
     int max_steps = 128;
     double max_dist = 100;
     double hit = 1e-3;
+    bool hit_relative = false;  // hit_mode = "relative": the tolerance grows with distance (hit · t)
+    Normals normals = Normals::Tetrahedron;
     std::array<double, 3> background{0.05, 0.05, 0.08};
+    double relaxation = 1.6;    // ω of the relaxed method
+    double step = 0;            // the fixed method's step (0: max_dist / max_steps)
+    DebugView debug = DebugView::None;
+};
+
+struct EffectsDesc {
+    Shadows shadows = Shadows::None;
+    double shadow_softness = 16;  // k of the soft-shadow penumbra
+    bool ao = false;
+    double fog = 0;               // density; 0 is off
+    std::optional<std::array<double, 3>> fog_color;  // default: the background
+    int reflections = 0;          // bounces
+    bool refraction = false;
+    int antialias = 1;            // samples per pixel side
+};
+
+struct LightDesc {
+    std::string name;
+    std::array<double, 3> position{0, 0, 0};
+    std::array<double, 3> color{1, 1, 1};
+    Span span;
 };
 
 struct SceneDesc {
@@ -62,6 +92,8 @@ struct SceneDesc {
     std::vector<InstanceDesc> instances;
     CameraDesc camera;
     RenderDesc render;
+    EffectsDesc effects;
+    std::vector<LightDesc> lights;
 };
 
 // Reads and parses `path` into `out`; reports problems to `diags` (returns false on error).
