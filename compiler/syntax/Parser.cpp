@@ -184,6 +184,9 @@ private:
     std::vector<Token> toks_;
     std::set<std::string> known_;
     Diagnostics& diags_;
+public:
+    std::set<std::string> functions_;  // names defined as local functions or imported
+private:
     size_t pos_ = 0;
     std::vector<Ctx> ctx_{Ctx::Top};
     bool failed_ = false;  // an error in the current statement: skip to its end
@@ -274,7 +277,7 @@ private:
     ExprPtr parse_operand();  // operand of an explicit operator: allows a leading sign
     ExprPtr parse_elem();
     ExprPtr parse_power();
-    ExprPtr parse_postfix();
+    ExprPtr parse_postfix(bool exponent = false);
     ExprPtr parse_primary();
     ExprPtr parse_matrix(Span open);
     ExprPtr parse_piecewise(Span open);
@@ -888,11 +891,11 @@ ExprPtr Parser::parse_power() {
             ExprPtr ex;
             if (at(Tok::Minus)) {
                 Span s = advance().span;
-                ExprPtr inner = parse_postfix();
+                ExprPtr inner = parse_postfix(true);
                 ex = make(ExprKind::Negate, Span::join(s, inner->span));
                 ex->args.push_back(std::move(inner));
             } else {
-                ex = parse_postfix();
+                ex = parse_postfix(true);
             }
             auto e = make(ExprKind::Power, Span::join(base->span, ex->span));
             e->args.push_back(std::move(base));
@@ -906,7 +909,8 @@ ExprPtr Parser::parse_power() {
 }
 
 // postfix := primary {_ index [, index] | SUBSCRIPT | (args)}
-ExprPtr Parser::parse_postfix() {
+// In an exponent, a one-letter value is not called: x^α(1, 2) is x^α · (1, 2), but e^f(x) calls f.
+ExprPtr Parser::parse_postfix(bool exponent) {
     ExprPtr e = parse_primary();
     while (true) {
         if (at(Tok::Sub)) {
@@ -968,7 +972,8 @@ ExprPtr Parser::parse_postfix() {
             e = std::move(idx);
             continue;
         }
-        if (at(Tok::LParen) && !cur().space_before && e->kind == ExprKind::Name) {
+        bool callable = !exponent || functions_.count(e->text) || letter_units(e->text).size() > 1;
+        if (at(Tok::LParen) && !cur().space_before && e->kind == ExprKind::Name && callable) {
             Span open = advance().span;
             ctx_.push_back(Ctx::Paren);
             auto call = make(ExprKind::Call, e->span);
@@ -1177,10 +1182,26 @@ ast::Module parse_module(const SourceManager& sm, FileId file, const std::vector
                          std::string name, const ParseOptions& opts, Diagnostics& diags) {
     std::vector<Token> raw = lex(sm, file, ranges);
     std::set<std::string> known = prescan(raw);
+    std::vector<std::string> raw_functions;
+    for (size_t i = 0; i + 1 < raw.size(); ++i) {
+        if (raw[i].line_start && is_name_token(raw[i]) && raw[i + 1].kind == Tok::LParen && !raw[i + 1].space_before)
+            for (size_t j = i + 2; j < raw.size() && raw[j].kind != Tok::Newline && raw[j].kind != Tok::End; ++j)
+                if (raw[j].kind == Tok::RParen) {
+                    if (raw[j + 1].kind == Tok::Eq) raw_functions.push_back(raw[i].text);
+                    break;
+                }
+        if (is_kw(raw[i], "from"))
+            for (size_t j = i; j-- > 0 && raw[j].kind != Tok::Newline;)
+                if (is_name_token(raw[j])) raw_functions.push_back(raw[j].text);
+    }
+    for (const auto& n : opts.known_names) raw_functions.push_back(n);  // built-ins and implicit imports
     known.insert(opts.known_names.begin(), opts.known_names.end());
     std::vector<Token> toks = split_words(raw, known);
     std::vector<Token>().swap(raw);  // free the unsplit tokens before the AST is built
     Parser p(sm, std::move(toks), std::move(known), diags);
+    // Functions: `NAME(params) =` at a line start, and imported names.
+    for (size_t i = 0; i + 1 < raw_functions.size(); ++i) p.functions_.insert(raw_functions[i]);
+    if (!raw_functions.empty()) p.functions_.insert(raw_functions.back());
     return p.parse(std::move(name), opts.allow_header);
 }
 
