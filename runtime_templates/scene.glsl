@@ -241,11 +241,23 @@ vec3 iqc_normal(vec3 p, float t, int id) {
 }
 {{/if}}
 {{#if NORMALS_ANALYTIC}}
+// Tetrahedron differences of the scene: for shapes without an analytic gradient, and where the gradient
+// vanishes (a sphere's centre, a box's edge taken exactly).
+vec3 iqc_tetrahedron_gradient(vec3 p, float t) {
+    const vec3 k[4] = vec3[4](vec3(1.0, -1.0, -1.0), vec3(-1.0, -1.0, 1.0), vec3(-1.0, 1.0, -1.0), vec3(1.0, 1.0, 1.0));
+    float h = 0.5 * iqc_eps(t);
+    vec3 n = vec3(0.0);
+    for (int i = min(iFrame, 0); i < 4; i++) n += k[i] * iqc_scene(p + h * k[i]).x;
+    return n;
+}
+{{/if}}
+{{#if NORMALS_ANALYTIC}}
 // Normal from the gradient the compiler derived from the hit instance's distance (forward-mode
 // differentiation of the IR): exact up to rounding, one gradient evaluation.
 vec3 iqc_normal(vec3 p, float t, int id) {
     vec3 g = vec3(0.0, 1.0, 0.0);
-{{GRADIENT_BODY}}    return normalize(g);
+{{GRADIENT_BODY}}    if (dot(g, g) < 1.0e-24) g = iqc_tetrahedron_gradient(p, t);
+    return dot(g, g) > 0.0 ? normalize(g) : vec3(0.0, 1.0, 0.0);
 }
 {{/if}}
 

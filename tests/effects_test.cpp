@@ -29,6 +29,7 @@ const std::vector<std::pair<std::string, std::vector<std::string>>> kEffects = {
     {"march_auto", {"Bálint & Valasek", "2.0 * d / (1.0 - m)"}},
     {"normals_central", {"Normal by central differences"}},
     {"normals_forward", {"Normal by forward differences"}},
+    {"normals_analytic", {"gradient of shape ball (derived by iqc)", "ball_gradient(", "iqc_tetrahedron_gradient"}},
     {"hit_relative", {"IQC_HIT * max(t, 1.0e-3)"}},
 };
 

@@ -220,6 +220,17 @@ struct FunctionEmitter {
             case Op::Transpose: {
                 const Type& at = f.body[in.args[0]].type;
                 if (at.is_vector() || (at.is_matrix() && at.rows == 1)) return expr(in.args[0]);  // column <-> row: the same vecN
+                // The transpose of a matrix built from rows is the matrix with them as columns.
+                const Instr& src = f.body[in.args[0]];
+                if (var[in.args[0]].empty() && src.op == Op::Construct && at.is_matrix() && int(src.args.size()) == at.rows) {
+                    bool rows = true;
+                    for (ValueId a : src.args) rows &= f.body[a].type == Type::vector(at.cols);
+                    if (rows) {
+                        std::vector<std::string> cols;
+                        for (ValueId a : src.args) cols.push_back(expr(a));
+                        return fmt::format("{}({})", type_of(in.type, in.span), fmt::join(cols, ", "));
+                    }
+                }
                 return fmt::format("transpose({})", plain(0));
             }
             case Op::Inverse: return fmt::format("inverse({})", plain(0));
@@ -254,10 +265,25 @@ struct FunctionEmitter {
                     if (swz) return postfix_base(src) + "." + sel;
                 }
                 std::vector<std::string> args;
-                if (in.type.is_matrix()) {
-                    // Row-major entries -> GLSL's column-major constructor.
+                if (in.type.is_matrix() && in.type.rows > 1) {
+                    bool rows = true;
+                    for (ValueId a : in.args) rows &= f.body[a].type == Type::vector(in.type.cols);
+                    if (rows && int(in.args.size()) == in.type.rows && in.type.cols > 1) {
+                        // Whole rows: a matrix with them as columns, transposed.
+                        for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
+                        Type cols_as_rows = Type::matrix(in.type.cols, in.type.rows);
+                        return fmt::format("transpose({}({}))", type_of(cols_as_rows, in.span), fmt::join(args, ", "));
+                    }
+                    // Row-major components (scalars, or vectors' components) -> GLSL's column-major constructor.
+                    std::vector<std::string> comps;
+                    for (size_t i = 0; i < in.args.size(); ++i) {
+                        const Type& t = f.body[in.args[i]].type;
+                        if (t.is_scalar()) comps.push_back(plain(i));
+                        else
+                            for (int k = 0; k < t.components(); ++k) comps.push_back(postfix_base(in.args[i]) + "." + kSwizzle[k]);
+                    }
                     for (int c = 0; c < in.type.cols; ++c)
-                        for (int r = 0; r < in.type.rows; ++r) args.push_back(plain(size_t(r * in.type.cols + c)));
+                        for (int r = 0; r < in.type.rows; ++r) args.push_back(comps[size_t(r * in.type.cols + c)]);
                 } else {
                     for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
                 }

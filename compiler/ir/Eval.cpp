@@ -145,6 +145,115 @@ Value run_builtin(const Instr& in, const std::vector<const Value*>& a) {
 
 }  // namespace
 
+Value eval_instr(const Module& m, const Function& f, const Instr& in, const std::vector<const Value*>& a,
+                 const std::vector<Value>& args, const EvalInputs& inputs) {
+    Value r;
+    r.type = in.type;
+    switch (in.op) {
+        case Op::Const: r.v = in.data; break;
+        case Op::Param: r.v = args.at(size_t(in.aux)).v; break;
+        case Op::Input:
+            if (in.aux == 0) r.v = {inputs.time};
+            else r.v = {inputs.mouse[0], inputs.mouse[1]};
+            break;
+        case Op::Copy: r.v = a[0]->v; break;
+        case Op::Add: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x + y; }); break;
+        case Op::Sub: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x - y; }); break;
+        case Op::Hadamard: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x * y; }); break;
+        case Op::Div: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x / y; }); break;
+        case Op::Neg:
+            r.v = a[0]->v;
+            for (auto& x : r.v) x = -x;
+            break;
+        case Op::Mul: r = multiply(in.type, *a[0], *a[1]); break;
+        case Op::Dot: {
+            double s = 0;
+            for (size_t k = 0; k < a[0]->v.size(); ++k) s += a[0]->v[k] * a[1]->v[k];
+            r.v = {s};
+            break;
+        }
+        case Op::Cross: {
+            const auto& x = a[0]->v;
+            const auto& y = a[1]->v;
+            r.v = {x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
+            break;
+        }
+        case Op::Transpose: {
+            const Type& at = a[0]->type;
+            if (at.is_vector()) { r.v = a[0]->v; break; }
+            r.v.resize(a[0]->v.size());
+            for (int i2 = 0; i2 < at.rows; ++i2)
+                for (int j = 0; j < at.cols; ++j) r.v[size_t(j * at.rows + i2)] = a[0]->v[size_t(i2 * at.cols + j)];
+            break;
+        }
+        case Op::Inverse: r.v = mat_inverse(a[0]->v, a[0]->type.rows, nullptr); break;
+        case Op::Det: r.v = {mat_det(a[0]->v, a[0]->type.rows)}; break;
+        case Op::Builtin: r = run_builtin(in, a); break;
+        case Op::Construct:
+            for (auto* x : a) r.v.insert(r.v.end(), x->v.begin(), x->v.end());
+            break;
+        case Op::Extract: r.v = {a[0]->v[size_t(in.aux)]}; break;
+        case Op::Row: {
+            int c = a[0]->type.cols;
+            r.v.assign(a[0]->v.begin() + in.aux * c, a[0]->v.begin() + (in.aux + 1) * c);
+            break;
+        }
+        case Op::Column: {
+            int rows = a[0]->type.rows, c = a[0]->type.cols;
+            for (int k = 0; k < rows; ++k) r.v.push_back(a[0]->v[size_t(k * c + in.aux)]);
+            break;
+        }
+        case Op::Compare: {
+            double x = a[0]->v[0], y = a[1]->v[0];
+            bool b = false;
+            switch (CompareKind(in.aux)) {
+                case CompareKind::Eq: b = x == y; break;
+                case CompareKind::Ne: b = x != y; break;
+                case CompareKind::Lt: b = x < y; break;
+                case CompareKind::Le: b = x <= y; break;
+                case CompareKind::Gt: b = x > y; break;
+                case CompareKind::Ge: b = x >= y; break;
+            }
+            r.v = {b ? 1.0 : 0.0};
+            break;
+        }
+        case Op::And: r.v = {(a[0]->v[0] != 0 && a[1]->v[0] != 0) ? 1.0 : 0.0}; break;
+        case Op::Or: r.v = {(a[0]->v[0] != 0 || a[1]->v[0] != 0) ? 1.0 : 0.0}; break;
+        case Op::Select: r.v = a[0]->v[0] != 0 ? a[1]->v : a[2]->v; break;
+        case Op::Loop: {
+            const Function& body = m.functions[size_t(in.aux)];
+            size_t states = body.outputs.size();
+            std::vector<Value> bargs(a.size());
+            for (size_t k = 1; k < a.size(); ++k) bargs[k] = *a[k];
+            double hi = std::floor(a[0]->v[0] + 0.5);
+            for (double k = in.data[0]; k <= hi; k += 1) {
+                bargs[0] = {Type::integer(), {k}};
+                auto res = evaluate_all(m, in.aux, bargs, inputs);
+                for (size_t j = 0; j < states; ++j) bargs[j + 1] = res[body.outputs[j].second];
+            }
+            r.v.clear();
+            for (size_t j = 0; j < states; ++j) r.v.insert(r.v.end(), bargs[j + 1].v.begin(), bargs[j + 1].v.end());
+            break;
+        }
+        case Op::Member: {
+            const Instr& loop = f.body[in.args[0]];
+            const Function& body = m.functions[size_t(loop.aux)];
+            size_t off = 0;
+            for (int j = 0; j < in.aux; ++j) off += size_t(body.body[body.outputs[size_t(j)].second].type.components());
+            r.v.assign(a[0]->v.begin() + long(off), a[0]->v.begin() + long(off) + in.type.components());
+            break;
+        }
+        case Op::Call: {
+            std::vector<Value> cargs;
+            for (auto* x : a) cargs.push_back(*x);
+            r = evaluate(m, in.aux, cargs, inputs);
+            break;
+        }
+    }
+    r.type = in.type;
+    return r;
+}
+
 std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& inputs) {
     const Function& f = m.functions[size_t(fn)];
     std::vector<Value> vals(f.body.size());
@@ -152,110 +261,7 @@ std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value
         const Instr& in = f.body[i];
         std::vector<const Value*> a;
         for (ValueId id : in.args) a.push_back(&vals[id]);
-        Value& r = vals[i];
-        r.type = in.type;
-        switch (in.op) {
-            case Op::Const: r.v = in.data; break;
-            case Op::Param: r.v = args.at(size_t(in.aux)).v; break;
-            case Op::Input:
-                if (in.aux == 0) r.v = {inputs.time};
-                else r.v = {inputs.mouse[0], inputs.mouse[1]};
-                break;
-            case Op::Copy: r.v = a[0]->v; break;
-            case Op::Add: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x + y; }); break;
-            case Op::Sub: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x - y; }); break;
-            case Op::Hadamard: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x * y; }); break;
-            case Op::Div: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x / y; }); break;
-            case Op::Neg:
-                r.v = a[0]->v;
-                for (auto& x : r.v) x = -x;
-                break;
-            case Op::Mul: r = multiply(in.type, *a[0], *a[1]); break;
-            case Op::Dot: {
-                double s = 0;
-                for (size_t k = 0; k < a[0]->v.size(); ++k) s += a[0]->v[k] * a[1]->v[k];
-                r.v = {s};
-                break;
-            }
-            case Op::Cross: {
-                const auto& x = a[0]->v;
-                const auto& y = a[1]->v;
-                r.v = {x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
-                break;
-            }
-            case Op::Transpose: {
-                const Type& at = a[0]->type;
-                if (at.is_vector()) { r.v = a[0]->v; break; }
-                r.v.resize(a[0]->v.size());
-                for (int i2 = 0; i2 < at.rows; ++i2)
-                    for (int j = 0; j < at.cols; ++j) r.v[size_t(j * at.rows + i2)] = a[0]->v[size_t(i2 * at.cols + j)];
-                break;
-            }
-            case Op::Inverse: r.v = mat_inverse(a[0]->v, a[0]->type.rows, nullptr); break;
-            case Op::Det: r.v = {mat_det(a[0]->v, a[0]->type.rows)}; break;
-            case Op::Builtin: r = run_builtin(in, a); break;
-            case Op::Construct:
-                for (auto* x : a) r.v.insert(r.v.end(), x->v.begin(), x->v.end());
-                break;
-            case Op::Extract: r.v = {a[0]->v[size_t(in.aux)]}; break;
-            case Op::Row: {
-                int c = a[0]->type.cols;
-                r.v.assign(a[0]->v.begin() + in.aux * c, a[0]->v.begin() + (in.aux + 1) * c);
-                break;
-            }
-            case Op::Column: {
-                int rows = a[0]->type.rows, c = a[0]->type.cols;
-                for (int k = 0; k < rows; ++k) r.v.push_back(a[0]->v[size_t(k * c + in.aux)]);
-                break;
-            }
-            case Op::Compare: {
-                double x = a[0]->v[0], y = a[1]->v[0];
-                bool b = false;
-                switch (CompareKind(in.aux)) {
-                    case CompareKind::Eq: b = x == y; break;
-                    case CompareKind::Ne: b = x != y; break;
-                    case CompareKind::Lt: b = x < y; break;
-                    case CompareKind::Le: b = x <= y; break;
-                    case CompareKind::Gt: b = x > y; break;
-                    case CompareKind::Ge: b = x >= y; break;
-                }
-                r.v = {b ? 1.0 : 0.0};
-                break;
-            }
-            case Op::And: r.v = {(a[0]->v[0] != 0 && a[1]->v[0] != 0) ? 1.0 : 0.0}; break;
-            case Op::Or: r.v = {(a[0]->v[0] != 0 || a[1]->v[0] != 0) ? 1.0 : 0.0}; break;
-            case Op::Select: r.v = a[0]->v[0] != 0 ? a[1]->v : a[2]->v; break;
-            case Op::Loop: {
-                const Function& body = m.functions[size_t(in.aux)];
-                size_t states = body.outputs.size();
-                std::vector<Value> bargs(a.size());
-                for (size_t k = 1; k < a.size(); ++k) bargs[k] = *a[k];
-                double hi = std::floor(a[0]->v[0] + 0.5);
-                for (double k = in.data[0]; k <= hi; k += 1) {
-                    bargs[0] = {Type::integer(), {k}};
-                    auto res = evaluate_all(m, in.aux, bargs, inputs);
-                    for (size_t j = 0; j < states; ++j) bargs[j + 1] = res[body.outputs[j].second];
-                }
-                r.v.clear();
-                for (size_t j = 0; j < states; ++j) r.v.insert(r.v.end(), bargs[j + 1].v.begin(), bargs[j + 1].v.end());
-                break;
-            }
-            case Op::Member: {
-                const Instr& loop = f.body[in.args[0]];
-                const Function& body = m.functions[size_t(loop.aux)];
-                size_t off = 0;
-                for (int j = 0; j < in.aux; ++j) off += size_t(body.body[body.outputs[size_t(j)].second].type.components());
-                r.v.assign(a[0]->v.begin() + long(off), a[0]->v.begin() + long(off) + in.type.components());
-                break;
-            }
-            case Op::Call: {
-                std::vector<Value> cargs;
-                for (auto* x : a) cargs.push_back(*x);
-                r = evaluate(m, in.aux, cargs, inputs);
-                break;
-            }
-        }
-        r.type = in.type;
+        vals[i] = eval_instr(m, f, in, a, args, inputs);
     }
     return vals;
 }

@@ -29,6 +29,10 @@ std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value
 // Evaluates and returns the function's result.
 Value evaluate(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& in = {});
 
+// One instruction applied to its operands' values (args: the function's arguments, for Param).
+Value eval_instr(const Module& m, const Function& f, const Instr& in, const std::vector<const Value*>& operands,
+                 const std::vector<Value>& args, const EvalInputs& inputs);
+
 // Math helpers shared with scene assembly.
 std::vector<double> mat_inverse(const std::vector<double>& a, int n, bool* singular);
 double mat_det(const std::vector<double>& a, int n);

@@ -16,6 +16,7 @@
 #include "ir/Eval.h"
 #include "ir/Lower.h"
 #include "ir/passes/CSE.h"
+#include "ir/passes/Differentiate.h"
 #include "scene/Modules.h"
 #include "scene/Template.h"
 #include "resources/Embedded.h"
@@ -87,6 +88,7 @@ struct InstancePlan {
     const CheckedModule* transform = nullptr;
     int transform_fn = -1;
     bool transform_runtime = false;
+    int gradient_fn = -1;  // analytic normals: the shape's gradient function (-1: differences instead)
 };
 
 class SceneCompiler {
@@ -357,6 +359,7 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
         roots.push_back(p.shape_fn);
         if (p.material) roots.push_back(p.material_fn);
         if (p.transform_runtime) roots.push_back(p.transform_fn);
+        if (p.gradient_fn >= 0 && normals == Normals::Analytic) roots.push_back(p.gradient_fn);
     }
     std::vector<int> fns = em.closure(roots);
     for (int f : fns) em.function_name(f);
@@ -473,6 +476,7 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
             if (p.shape_fn == f) comment = "shape " + p.shape->ast.name;
             if (p.material && p.material_fn == f) comment = "material " + p.material->ast.name;
             if (p.transform_runtime && p.transform_fn == f) comment = "transform of " + p.name;
+            if (p.gradient_fn == f) comment = "gradient of shape " + p.shape->ast.name + " (derived by iqc)";
         }
         if (comment.empty()) comment = fn.name;
         functions += "\n" + em.function(f, comment);
@@ -525,6 +529,19 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
         for (size_t k = 0; k < sp.size(); ++k) args.push_back(int(k) == p.query ? q : p.constants.at("shape." + sp[k].name));
         std::string call = fmt::format("{}({})", em.function_name(p.shape_fn), fmt::join(args, ", "));
         if (!scale.empty()) call += " * " + scale;
+        if (normals == Normals::Analytic) {
+            if (p.gradient_fn >= 0) {
+                // ∇(d ∘ world→object) = Lᵀ ∇d (L the linear part); the scale does not change the direction.
+                std::string grad = fmt::format("{}({})", em.function_name(p.gradient_fn), fmt::join(args, ", "));
+                std::string lin = q.substr(0, q.find(" * p"));
+                bool has_linear = q.find(" * p") != std::string::npos;
+                gradient += fmt::format("    if (id == {}) g = {};  // {}\n", i,
+                                        has_linear ? fmt::format("transpose({}) * {}", lin, grad) : grad, p.name);
+            } else {
+                gradient += fmt::format("    if (id == {}) g = iqc_tetrahedron_gradient(p, t);  // {}\n", i, p.name);
+
+            }
+        }
         body += fmt::format("    d = {};  // {}\n", call, p.name);
         body += fmt::format("    if (d < res.x) res = vec2(d, {});\n", glsl::float_literal(double(i)));
         if (p.material) {
@@ -571,7 +588,6 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
                 transmit += fmt::format("    if (id == {}) return vec4({}, {});  // {}\n", i, kt, eta, p.name);
             }
         }
-        (void)gradient;
     }
     if (!transforms.empty()) transforms += "\n";
     auto fmt_vec = [](const std::array<double, 3>& v) { return vec3_literal(v); };
@@ -627,6 +643,7 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     if (s_.camera.orbit) F.insert("ORBIT");
     if (!prepare.empty()) F.insert("PREPARE");
     if (lipschitz) F.insert("LIPSCHITZ");
+
     if (opts_.instrument) F.insert("INSTRUMENT");
     nlohmann::ordered_json j;
     j["title"] = s_.title;
@@ -672,6 +689,22 @@ CompileResult SceneCompiler::run() {
     for (auto& p : plans) {
         p.shape_fn = lower(p.shape);
         if (p.material) p.material_fn = lower(p.material);
+    }
+    if (opts_.normals.value_or(s_.render.normals) == Normals::Analytic) {
+        // One gradient function per shape module, derived from its IR.
+        std::map<int, int> gradients;
+        for (auto& p : plans) {
+            auto it = gradients.find(p.shape_fn);
+            if (it == gradients.end()) {
+                std::string why;
+                int g = ir::differentiate(ir_, p.shape_fn, p.query, p.shape->ast.name + "_gradient", &why);
+                if (g < 0)
+                    d_.warning(p.desc->type_span, fmt::format("no analytic normal for shape '{}' ({}): its normals use "
+                                                              "tetrahedron differences", p.shape->ast.name, why));
+                it = gradients.emplace(p.shape_fn, g).first;
+            }
+            p.gradient_fn = it->second;
+        }
     }
     for (auto& f : ir_.functions) ir::eliminate_common_subexpressions(f);
     for (size_t f = 0; f < ir_.functions.size(); ++f) {

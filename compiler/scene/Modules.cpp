@@ -100,10 +100,13 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
         for (auto& [n, mod] : transform_imports()) po.known_names.insert(n);
         co.implicit_imports = transform_imports();
     }
+    size_t before = d_.error_count();
     ast::Module ast = parse_module(sm_, src.file, src.ranges, name, po, d_);
     if (!src.ranges.empty()) ast.span = {src.file, src.ranges[0].begin, src.ranges[0].begin + 1};
     ModuleLookup lookup = [this](const std::string& n, Span where) { return get(n, where); };
-    return check_module(std::move(ast), lookup, co, d_);
+    auto m = check_module(std::move(ast), lookup, co, d_);
+    if (d_.error_count() != before) m->ok = false;  // syntax errors too
+    return m;
 }
 
 const CheckedModule* ModuleLibrary::get(const std::string& name, Span where) {

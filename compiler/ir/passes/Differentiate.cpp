@@ -1,0 +1,391 @@
+#include "ir/passes/Differentiate.h"
+
+#include <fmt/format.h>
+#include <stdexcept>
+
+#include "ir/passes/Fold.h"
+#include "sema/Builtins.h"
+
+namespace iqc::ir {
+
+namespace {
+
+// Appends callee's body to `out` with its parameters bound to `args`; returns the result's new id.
+ValueId inline_into(const Module& m, const Function& callee, const std::vector<ValueId>& args, Function& out) {
+    std::vector<ValueId> map(callee.body.size());
+    for (size_t i = 0; i < callee.body.size(); ++i) {
+        const Instr& in = callee.body[i];
+        if (in.op == Op::Param) {
+            map[i] = args[size_t(in.aux)];
+            continue;
+        }
+        std::vector<ValueId> a;
+        for (ValueId x : in.args) a.push_back(map[x]);
+        if (in.op == Op::Call) {
+            map[i] = inline_into(m, m.functions[size_t(in.aux)], a, out);
+            continue;
+        }
+        Instr c = in;
+        c.args = std::move(a);
+        c.name.clear();  // inlined values keep no names (the caller's names stay readable)
+        map[i] = out.add(std::move(c));
+    }
+    return map[callee.result];
+}
+
+}  // namespace
+
+Function inline_calls(const Module& m, const Function& f) {
+    Function out;
+    out.name = f.name;
+    out.glsl_name = f.glsl_name;
+    out.params = f.params;
+    std::vector<ValueId> map(f.body.size());
+    for (size_t i = 0; i < f.body.size(); ++i) {
+        const Instr& in = f.body[i];
+        std::vector<ValueId> a;
+        for (ValueId x : in.args) a.push_back(map[x]);
+        if (in.op == Op::Call) {
+            map[i] = inline_into(m, m.functions[size_t(in.aux)], a, out);
+            if (!in.name.empty()) {  // keep the caller's named statement
+                Instr cp;
+                cp.op = Op::Copy;
+                cp.type = in.type;
+                cp.args = {map[i]};
+                cp.name = in.name;
+                cp.source = in.source;
+                cp.span = in.span;
+                map[i] = out.add(std::move(cp));
+            }
+            continue;
+        }
+        Instr c = in;
+        c.args = std::move(a);
+        map[i] = out.add(std::move(c));
+    }
+    out.result = map[f.result];
+    for (const auto& [n, v] : f.outputs) out.outputs.push_back({n, map[v]});
+    return out;
+}
+
+namespace {
+
+constexpr ValueId kZero = ValueId(-1);
+
+struct Unsupported {
+    std::string why;
+};
+
+struct Differentiator {
+    Function& g;
+    std::vector<ValueId> primal;   // F's value -> G's value
+    std::vector<ValueId> tangent;  // F's value -> G's tangent value, or kZero
+
+    ValueId emit(Op op, Type t, std::vector<ValueId> args, int aux = 0) {
+        Instr in;
+        in.op = op;
+        in.type = t;
+        in.args = std::move(args);
+        in.aux = aux;
+        if (!t.valid()) throw std::logic_error(fmt::format("differentiate: invalid type for {}", op_name(op)));
+        return g.add(std::move(in));
+    }
+    const Type& type(ValueId v) const { return g.body[v].type; }
+    ValueId scalar(double x) { return g.scalar(x); }
+    static Type tangent_type(const Type& t) {
+        if (t.is_scalar()) return Type::vector(3);
+        if (t.is_vector()) return Type::matrix(t.rows, 3);
+        return {};
+    }
+    ValueId zero_of(const Type& tt) { return g.constant(tt, std::vector<double>(size_t(tt.components()), 0.0)); }
+    // The tangent of primal value `v` (of type pt) as a value, materialising zeros.
+    ValueId dense(ValueId t, const Type& pt) { return t == kZero ? zero_of(tangent_type(pt)) : t; }
+
+    ValueId op2(Op op, ValueId a, ValueId b) { return emit(op, result_type(op, {type(a), type(b)}, 0), {a, b}); }
+    ValueId add(ValueId a, ValueId b) {
+        if (a == kZero) return b;
+        if (b == kZero) return a;
+        return op2(Op::Add, a, b);
+    }
+    ValueId sub(ValueId a, ValueId b) {
+        if (b == kZero) return a;
+        if (a == kZero) return emit(Op::Neg, type(b), {b});
+        return op2(Op::Sub, a, b);
+    }
+    ValueId mul(ValueId a, ValueId b) {  // any IR product
+        if (a == kZero || b == kZero) return kZero;
+        return op2(Op::Mul, a, b);
+    }
+    ValueId builtin(const char* name, std::vector<ValueId> args) {
+        int id = *find_builtin(name);
+        std::vector<Type> ts;
+        for (ValueId a : args) ts.push_back(type(a));
+        return emit(Op::Builtin, check_builtin(id, ts).type, std::move(args), id);
+    }
+    // v ⊗ ∇s: the Jacobian of v·s's dependence through s (v ∈ ℝⁿ, ∇s ∈ ℝ³).
+    ValueId outer(ValueId v, ValueId grad) {
+        if (grad == kZero) return kZero;
+        ValueId row = emit(Op::Transpose, Type::matrix(1, 3), {grad});
+        return op2(Op::Mul, v, row);
+    }
+    // diag(v) J: row i of J scaled by v_i.
+    ValueId scale_rows(ValueId v, ValueId J) {
+        if (J == kZero) return kZero;
+        int n = type(v).rows;
+        std::vector<ValueId> rows;
+        for (int i = 0; i < n; ++i) {
+            ValueId vi = emit(Op::Extract, Type::scalar(), {v}, i);
+            ValueId ri = emit(Op::Row, Type::vector(3), {J}, i);
+            rows.push_back(op2(Op::Mul, vi, ri));
+        }
+        return emit(Op::Construct, Type::matrix(n, 3), rows);
+    }
+    // f'(x) applied to a tangent: scalar x -> f'·∇x; vector x -> diag(f') J.
+    ValueId chain(ValueId fprime, ValueId x_primal, ValueId t) {
+        if (t == kZero) return kZero;
+        if (type(x_primal).is_scalar()) return op2(Op::Mul, fprime, t);
+        return scale_rows(fprime, t);
+    }
+    // Component-wise choice between two tangents by a condition per component (min, max, clamp).
+    ValueId select_rows(ValueId a, ValueId b, const Type& pt, CompareKind k, ValueId ta, ValueId tb) {
+        if (ta == kZero && tb == kZero) return kZero;
+        ValueId da = dense(ta, pt), db = dense(tb, pt);
+        if (pt.is_scalar()) {
+            ValueId c = emit(Op::Compare, Type::boolean(), {a, b}, int(k));
+            return emit(Op::Select, Type::vector(3), {c, da, db});
+        }
+        std::vector<ValueId> rows;
+        for (int i = 0; i < pt.rows; ++i) {
+            ValueId ai = emit(Op::Extract, Type::scalar(), {a}, i);
+            ValueId bi = emit(Op::Extract, Type::scalar(), {b}, i);
+            ValueId c = emit(Op::Compare, Type::boolean(), {ai, bi}, int(k));
+            rows.push_back(emit(Op::Select, Type::vector(3), {c, emit(Op::Row, Type::vector(3), {da}, i),
+                                                              emit(Op::Row, Type::vector(3), {db}, i)}));
+        }
+        return emit(Op::Construct, Type::matrix(pt.rows, 3), rows);
+    }
+    ValueId elementwise_const(const Type& t, double x) {
+        return t.is_scalar() ? scalar(x) : g.constant(t, std::vector<double>(size_t(t.components()), x));
+    }
+
+    ValueId rule(const Module& m, const Function& f, size_t i) {
+        const Instr& in = f.body[i];
+        auto P = [&](size_t k) { return primal[in.args[k]]; };
+        auto T = [&](size_t k) { return tangent[in.args[k]]; };
+        auto PT = [&](size_t k) { return f.body[in.args[k]].type; };
+        bool all_zero = true;
+        for (size_t k = 0; k < in.args.size(); ++k) all_zero &= T(k) == kZero;
+        if (in.op != Op::Param && all_zero) return kZero;
+        auto no_rule = [&](const std::string& what) -> ValueId {
+            throw Unsupported{fmt::format("{} depends on the query point", what)};
+        };
+        switch (in.op) {
+            case Op::Const:
+            case Op::Input:
+            case Op::Compare:
+            case Op::And:
+            case Op::Or:
+                return kZero;
+            case Op::Param: return kZero;  // the query point is seeded by the caller
+            case Op::Copy: return T(0);
+            case Op::Add: return add(T(0), T(1));
+            case Op::Sub: return sub(T(0), T(1));
+            case Op::Neg: return emit(Op::Neg, type(T(0)), {T(0)});
+            case Op::Mul: {
+                const Type &a = PT(0), &b = PT(1);
+                if (a.is_scalar() && b.is_scalar()) return add(mul(P(0), T(1)), mul(P(1), T(0)));
+                if (a.is_scalar() && b.is_vector()) return add(outer(P(1), T(0)), mul(P(0), T(1)));
+                if (a.is_vector() && b.is_scalar()) return add(outer(P(0), T(1)), mul(P(1), T(0)));
+                if (a.is_matrix() && b.is_vector() && T(0) == kZero) return mul(P(0), T(1));
+                return no_rule("a matrix product");
+            }
+            case Op::Div: {
+                // (∂a·s - a ⊗ ∂s) / s²
+                const Type& a = PT(0);
+                ValueId s = P(1);
+                ValueId num = a.is_scalar() ? sub(mul(s, T(0)), mul(P(0), T(1))) : sub(mul(s, T(0)), outer(P(0), T(1)));
+                if (num == kZero) return kZero;
+                return op2(Op::Div, num, op2(Op::Mul, s, s));
+            }
+            case Op::Hadamard: return add(scale_rows(P(1), T(0)), scale_rows(P(0), T(1)));
+            case Op::Dot: {
+                ValueId r = kZero;
+                if (T(0) != kZero) r = add(r, op2(Op::Mul, emit(Op::Transpose, Type::matrix(3, PT(0).rows), {T(0)}), P(1)));
+                if (T(1) != kZero) r = add(r, op2(Op::Mul, emit(Op::Transpose, Type::matrix(3, PT(1).rows), {T(1)}), P(0)));
+                return r;
+            }
+            case Op::Cross: {
+                // d(a × b) = [a]× ∂b - [b]× ∂a, with [v]× the cross-product matrix of v.
+                auto skew = [&](ValueId v) {
+                    ValueId x = emit(Op::Extract, Type::scalar(), {v}, 0), y = emit(Op::Extract, Type::scalar(), {v}, 1),
+                            z = emit(Op::Extract, Type::scalar(), {v}, 2);
+                    ValueId o = scalar(0);
+                    auto neg = [&](ValueId s) { return emit(Op::Neg, Type::scalar(), {s}); };
+                    return emit(Op::Construct, Type::matrix(3, 3), {o, neg(z), y, z, o, neg(x), neg(y), x, o});
+                };
+                return sub(mul(skew(P(0)), T(1)), mul(skew(P(1)), T(0)));
+            }
+            case Op::Transpose:
+            case Op::Inverse:
+            case Op::Det:
+                return no_rule("a matrix");
+            case Op::Construct: {
+                if (in.type.is_matrix()) return no_rule("a matrix");
+                std::vector<ValueId> rows;
+                for (size_t k = 0; k < in.args.size(); ++k) {
+                    const Type& t = PT(k);
+                    if (t.is_scalar()) {
+                        rows.push_back(dense(T(k), t));
+                    } else {
+                        ValueId J = dense(T(k), t);
+                        for (int r = 0; r < t.rows; ++r) rows.push_back(emit(Op::Row, Type::vector(3), {J}, r));
+                    }
+                }
+                return emit(Op::Construct, Type::matrix(in.type.rows, 3), rows);
+            }
+            case Op::Extract:
+                if (PT(0).is_vector()) return emit(Op::Row, Type::vector(3), {T(0)}, in.aux);
+                return no_rule("a matrix");
+            case Op::Row:
+            case Op::Column:
+                return no_rule("a matrix");
+            case Op::Select: {
+                Type pt = in.type;
+                return emit(Op::Select, tangent_type(pt), {P(0), dense(T(1), pt), dense(T(2), pt)});
+            }
+            case Op::Builtin: {
+                const BuiltinInfo& b = iqc::builtin(in.aux);
+                std::string n = b.name;
+                const Type& t = in.type;
+                ValueId x = P(0), r = primal[i];
+                auto one = [&] { return elementwise_const(PT(0), 1.0); };
+                auto sq = [&](ValueId v) { return op2(t.is_scalar() ? Op::Mul : Op::Hadamard, v, v); };
+                auto recip = [&](ValueId v) {  // 1 / v, elementwise
+                    if (t.is_scalar()) return op2(Op::Div, scalar(1), v);
+                    std::vector<ValueId> c;
+                    for (int k = 0; k < t.rows; ++k)
+                        c.push_back(op2(Op::Div, scalar(1), emit(Op::Extract, Type::scalar(), {v}, k)));
+                    return emit(Op::Construct, t, c);
+                };
+                if (n == "sin") return chain(builtin("cos", {x}), x, T(0));
+                if (n == "cos") return chain(emit(Op::Neg, t, {builtin("sin", {x})}), x, T(0));
+                if (n == "tan") return chain(op2(Op::Add, one(), sq(r)), x, T(0));
+                if (n == "asin") return chain(recip(builtin("sqrt", {op2(Op::Sub, one(), sq(x))})), x, T(0));
+                if (n == "acos") return chain(emit(Op::Neg, t, {recip(builtin("sqrt", {op2(Op::Sub, one(), sq(x))}))}), x, T(0));
+                if (n == "atan") return chain(recip(op2(Op::Add, one(), sq(x))), x, T(0));
+                if (n == "sinh") return chain(builtin("cosh", {x}), x, T(0));
+                if (n == "cosh") return chain(builtin("sinh", {x}), x, T(0));
+                if (n == "tanh") return chain(op2(Op::Sub, one(), sq(r)), x, T(0));
+                if (n == "exp") return chain(r, x, T(0));
+                if (n == "log" || n == "ln") return chain(recip(x), x, T(0));
+                if (n == "sqrt") {
+                    // 1 / (2√x), guarded at 0 (the derivative's limit is infinite; a huge finite slope keeps
+                    // the normal's direction)
+                    ValueId safe = builtin("max", {r, elementwise_const(t, 1e-12)});
+                    return chain(recip(op2(t.is_scalar() ? Op::Mul : Op::Mul, scalar(2), safe)), x, T(0));
+                }
+                if (n == "abs") return chain(builtin("sign", {x}), x, T(0));
+                if (n == "floor" || n == "ceil" || n == "sign" || n == "step") return kZero;
+                if (n == "fract") return T(0);
+                if (n == "mod") return T(0) == kZero ? kZero : T(0);  // for a constant modulus (repetition)
+                if (n == "min" || n == "max") {
+                    // At a tie, the first argument's derivative (a subgradient; never 0 where both sides have one).
+                    CompareKind k = n == "min" ? CompareKind::Le : CompareKind::Ge;
+                    return select_rows(P(0), P(1), t, k, T(0), T(1));
+                }
+                if (n == "pow") {
+                    if (T(1) != kZero) {
+                        // d(a^b) = b a^(b-1) ∂a + a^b ln(a) ∂b (a > 0)
+                        if (!t.is_scalar()) return no_rule("a vector power with a varying exponent");
+                        ValueId da = T(0) == kZero ? kZero
+                                                   : mul(op2(Op::Mul, P(1), builtin("pow", {x, op2(Op::Sub, P(1), scalar(1))})), T(0));
+                        return add(da, mul(op2(Op::Mul, r, builtin("log", {x})), T(1)));
+                    }
+                    ValueId e1 = op2(Op::Sub, P(1), elementwise_const(PT(1), 1.0));
+                    return chain(op2(t.is_scalar() ? Op::Mul : Op::Hadamard, P(1), builtin("pow", {x, e1})), x, T(0));
+                }
+                if (n == "atan2") {
+                    // (x ∂y - y ∂x) / (x² + y²), scalars
+                    if (!t.is_scalar()) return no_rule("atan2 of vectors");
+                    ValueId y = P(0), xx = P(1);
+                    ValueId num = sub(mul(xx, T(0)), mul(y, T(1)));
+                    ValueId den = builtin("max", {op2(Op::Add, op2(Op::Mul, xx, xx), op2(Op::Mul, y, y)), scalar(1e-30)});
+                    return op2(Op::Div, num, den);
+                }
+                if (n == "clamp") {
+                    ValueId inner = select_rows(P(0), P(2), t, CompareKind::Gt, T(2), T(0));  // x > hi ? ∂hi : ∂x
+                    ValueId lo_c = P(0);
+                    if (t.is_scalar()) {
+                        ValueId c = emit(Op::Compare, Type::boolean(), {lo_c, P(1)}, int(CompareKind::Lt));
+                        return emit(Op::Select, Type::vector(3), {c, dense(T(1), t), dense(inner, t)});
+                    }
+                    return no_rule("clamp of vectors");
+                }
+                if (n == "mix") {
+                    // (1 - s) ∂a + s ∂b + (b - a) ⊗ ∂s
+                    const Type& st = PT(2);
+                    if (!st.is_scalar() && !t.is_scalar()) return no_rule("mix with a vector weight");
+                    ValueId s = P(2), one_minus = op2(Op::Sub, scalar(1), s);
+                    ValueId r1 = add(mul(one_minus, T(0)), mul(s, T(1)));
+                    ValueId diff = op2(Op::Sub, P(1), P(0));
+                    return add(r1, t.is_scalar() ? mul(diff, T(2)) : outer(diff, T(2)));
+                }
+                if (n == "length") {
+                    // Jᵀ v / ‖v‖ (0 at v = 0)
+                    ValueId Jt = emit(Op::Transpose, Type::matrix(3, PT(0).rows), {T(0)});
+                    ValueId safe = builtin("max", {r, scalar(1e-30)});
+                    return op2(Op::Div, op2(Op::Mul, Jt, x), safe);
+                }
+                if (n == "normalize") {
+                    // (J - n ⊗ (Jᵀ n)) / ‖v‖
+                    ValueId len = builtin("max", {builtin("length", {x}), scalar(1e-30)});
+                    ValueId Jt = emit(Op::Transpose, Type::matrix(3, PT(0).rows), {T(0)});
+                    ValueId proj = outer(r, op2(Op::Mul, Jt, r));
+                    return op2(Op::Div, op2(Op::Sub, T(0), proj), len);
+                }
+                return no_rule(fmt::format("the built-in '{}'", n));
+            }
+            case Op::Call: return no_rule("a call");  // inlined before
+            case Op::Loop:
+            case Op::Member:
+                return no_rule("a recurrence (its loop)");
+        }
+        return no_rule("an operation");
+    }
+};
+
+}  // namespace
+
+int differentiate(Module& m, int fn, int wrt_param, const std::string& name, std::string* why) {
+    Function f = inline_calls(m, m.functions[size_t(fn)]);
+    Function g;
+    g.name = name;
+    g.glsl_name = name;
+    g.params = f.params;
+    Differentiator d{g, std::vector<ValueId>(f.body.size()), std::vector<ValueId>(f.body.size(), kZero)};
+    try {
+        for (size_t i = 0; i < f.body.size(); ++i) {
+            const Instr& in = f.body[i];
+            Instr c = in;
+            for (ValueId& a : c.args) a = d.primal[a];
+            d.primal[i] = g.add(std::move(c));
+            if (in.op == Op::Param && in.aux == wrt_param) {
+                d.tangent[i] = g.constant(Type::matrix(3, 3), {1, 0, 0, 0, 1, 0, 0, 0, 1});
+                continue;
+            }
+            d.tangent[i] = d.rule(m, f, i);
+        }
+    } catch (const Unsupported& u) {
+        if (why) *why = u.why;
+        return -1;
+    }
+    ValueId r = d.tangent[f.result];
+    if (r == kZero) r = g.constant(Type::vector(3), {0, 0, 0});
+    g.result = r;
+    // The seed is the identity: fold it away (and what it makes constant).
+    fold_constants(m, g);
+    m.functions.push_back(std::move(g));
+    return int(m.functions.size() - 1);
+}
+
+}  // namespace iqc::ir

@@ -1,0 +1,96 @@
+#include "ir/passes/Fold.h"
+
+#include "ir/Eval.h"
+
+namespace iqc::ir {
+
+namespace {
+
+bool is_const(const Function& f, ValueId v) { return f.body[v].op == Op::Const; }
+
+bool all_equal(const Function& f, ValueId v, double x) {
+    if (!is_const(f, v)) return false;
+    for (double c : f.body[v].data)
+        if (c != x) return false;
+    return true;
+}
+
+bool is_identity(const Function& f, ValueId v) {
+    const Instr& in = f.body[v];
+    if (in.op != Op::Const || !in.type.is_matrix() || in.type.rows != in.type.cols) return false;
+    for (int r = 0; r < in.type.rows; ++r)
+        for (int c = 0; c < in.type.cols; ++c)
+            if (in.data[size_t(r * in.type.cols + c)] != (r == c ? 1.0 : 0.0)) return false;
+    return true;
+}
+
+bool foldable(Op op) {
+    switch (op) {
+        case Op::Const: case Op::Param: case Op::Input: case Op::Call: case Op::Loop: case Op::Member: return false;
+        default: return true;
+    }
+}
+
+}  // namespace
+
+int fold_constants(const Module& m, Function& f) {
+    std::vector<ValueId> remap(f.body.size());
+    int changed = 0;
+    for (size_t i = 0; i < f.body.size(); ++i) {
+        remap[i] = ValueId(i);
+        Instr& in = f.body[i];
+        for (ValueId& a : in.args) a = remap[a];
+        if (!foldable(in.op) || in.type.kind == Type::Tuple) continue;
+        bool consts = !in.args.empty();
+        for (ValueId a : in.args) consts &= is_const(f, a);
+        if (consts && in.type.kind != Type::Bool) {
+            std::vector<Value> vals;
+            for (ValueId a : in.args) vals.push_back({f.body[a].type, f.body[a].data});
+            std::vector<const Value*> ptrs;
+            for (auto& v : vals) ptrs.push_back(&v);
+            Value r = eval_instr(m, f, in, ptrs, {}, {});
+            std::string name = in.name, source = in.source;
+            Span span = in.span;
+            in = Instr{};
+            in.op = Op::Const;
+            in.type = r.type;
+            in.data = r.v;
+            in.name = name;
+            in.source = source;
+            in.span = span;
+            ++changed;
+            continue;
+        }
+        if (!in.name.empty()) continue;  // named statements keep their own instruction
+        auto redirect = [&](ValueId to) {
+            remap[i] = to;
+            ++changed;
+        };
+        switch (in.op) {
+            case Op::Mul:
+                if (is_identity(f, in.args[0]) && f.body[in.args[1]].type == in.type) redirect(in.args[1]);
+                else if (is_identity(f, in.args[1]) && f.body[in.args[0]].type == in.type) redirect(in.args[0]);
+                else if (all_equal(f, in.args[0], 1.0) && f.body[in.args[0]].type.is_scalar() && f.body[in.args[1]].type == in.type)
+                    redirect(in.args[1]);
+                else if (all_equal(f, in.args[1], 1.0) && f.body[in.args[1]].type.is_scalar() && f.body[in.args[0]].type == in.type)
+                    redirect(in.args[0]);
+                break;
+            case Op::Add:
+                if (all_equal(f, in.args[0], 0.0) && f.body[in.args[1]].type == in.type) redirect(in.args[1]);
+                else if (all_equal(f, in.args[1], 0.0) && f.body[in.args[0]].type == in.type) redirect(in.args[0]);
+                break;
+            case Op::Sub:
+                if (all_equal(f, in.args[1], 0.0) && f.body[in.args[0]].type == in.type) redirect(in.args[0]);
+                break;
+            case Op::Transpose:
+                if (is_identity(f, in.args[0])) redirect(in.args[0]);
+                break;
+            default: break;
+        }
+    }
+    f.result = remap[f.result];
+    for (auto& [name, v] : f.outputs) v = remap[v];
+    return changed;
+}
+
+}  // namespace iqc::ir
