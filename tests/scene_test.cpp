@@ -1,0 +1,181 @@
+// The scene compiler and runtime: targets and their inputs, the --meta description, the uniform budget,
+// march and normal methods agreeing, the camera inside a shape, time-driven transforms, lights, and the
+// scene's error paths.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "TestUtil.h"
+#include "glsl/ShadertoyWrapper.h"
+#include "render/Render.h"
+
+using namespace iqc;
+using namespace iqc::test;
+
+namespace {
+
+const std::string kBall = "❤: ball\n```iheartla\nshape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ [0,3] default = 1: radius\n```\n";
+
+render::Image render_code(const std::string& code, int w = 96, int h = 54, float time = 0) {
+    render::RenderOptions o;
+    o.width = w;
+    o.height = h;
+    o.time = time;
+    auto r = render::render_shadertoy(code, o);
+    INFO(r.error);
+    REQUIRE(r.ok);
+    return r.image;
+}
+
+int nan_pixels(const render::Image& img) {
+    int n = 0;
+    for (float v : img.rgba) n += !std::isfinite(v);
+    return n;
+}
+
+double mean_abs_diff(const render::Image& a, const render::Image& b) {
+    double s = 0;
+    for (size_t i = 0; i < a.rgba.size(); i += 4)
+        for (int c = 0; c < 3; ++c) s += std::fabs(a.rgba[i + size_t(c)] - b.rgba[i + size_t(c)]);
+    return s / double(a.rgba.size() / 4 * 3);
+}
+
+std::string scene_with(const std::string& render_table) {
+    return read_text(std::filesystem::path(IQC_SOURCE_DIR) / "golden" / "effects" / "base.iq") + "\n" + render_table;
+}
+
+}  // namespace
+
+TEST_CASE("webgl2 and glsl330 take a uniform per parameter and describe them in --meta", "[scene]") {
+    auto in = std::filesystem::path(IQC_SOURCE_DIR) / "examples" / "gallery.iq";
+    auto meta = temp_dir() / "gallery.json";
+    RunResult r = run_iqc(in.string() + " --target webgl2 --meta " + meta.string() + " -o " + (temp_dir() / "g.frag").string());
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    std::string code = read_text(temp_dir() / "g.frag");
+    CHECK_THAT(code, Catch::StartsWith("#version 300 es"));
+    CHECK_THAT(code, Catch::Contains("uniform float ball_shape_r;"));
+    CHECK_THAT(code, Catch::Contains("uniform float ring_transform_theta;"));
+    CHECK_THAT(code, Catch::Contains("void iqc_prepare()"));  // transforms with uniforms are inverted per pixel
+    auto j = nlohmann::json::parse(read_text(meta));
+    CHECK(j["target"] == "webgl2");
+    bool found = false;
+    for (auto& p : j["parameters"]) {
+        if (p["uniform"] == "ring_transform_theta") {
+            found = true;
+            CHECK(p["instance"] == "ring");
+            CHECK(p["role"] == "transform");
+            CHECK(p["type"] == "float");
+            CHECK(p["bounds"][0][0] == Approx(-3.14));
+            CHECK(p["default"][0] == Approx(1.2));
+            CHECK(p["description"] == "tilt");
+        }
+    }
+    CHECK(found);
+    RunResult g = run_iqc(in.string() + " --target glsl330");
+    CHECK(g.exit_code == 0);
+    CHECK_THAT(g.out, Catch::StartsWith("#version 330 core"));
+}
+
+TEST_CASE("WebGL2's uniform budget is checked and names the biggest users", "[scene]") {
+    std::string s = kBall + "```scene\n";
+    for (int i = 0; i < 60; ++i)
+        s += "[[shapes]]\ntype = \"ball\"\ntransform = \"\"\"T(X)⋅`R_x`(a)⋅`R_y`(b)⋅`R_z`(c)\nwhere\nX ∈ ℝ³\na, b, c ∈ ℝ\"\"\"\n";
+    s += "```\n";
+    auto in = write_temp("budget.md", s);
+    RunResult r = run_iqc(in.string() + " --target webgl2");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("error: the scene needs 304 uniform vectors, more than WebGL2's 224; the biggest users:"));
+    CHECK(run_iqc(in.string()).exit_code == 0);  // Shadertoy: constants
+}
+
+TEST_CASE("every march method finds the same picture", "[scene][render]") {
+    auto sphere = compile_text("m_sphere.iq", scene_with("[render]\nmarch = \"sphere\"\n"));
+    REQUIRE(sphere.result.exit_code == 0);
+    render::Image ref = render_code(sphere.result.code);
+    for (const char* m : {"relaxed", "auto", "fixed"}) {
+        std::string extra = std::string("[render]\nmarch = \"") + m + "\"\n" + (std::string(m) == "fixed" ? "max_steps = 2000\nstep = 0.01\n" : "");
+        auto c = compile_text(std::string("m_") + m + ".iq", scene_with(extra));
+        INFO(m << c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        render::Image img = render_code(c.result.code);
+        CHECK(nan_pixels(img) == 0);
+        CHECK(mean_abs_diff(img, ref) < 0.01);
+    }
+}
+
+TEST_CASE("every normal method shades the same", "[scene][render]") {
+    auto tet = compile_text("n_t.iq", scene_with(""));
+    render::Image ref = render_code(tet.result.code);
+    for (const char* n : {"central", "forward", "analytic"}) {
+        auto c = compile_text(std::string("n_") + n + ".iq", scene_with(std::string("[render]\nnormals = \"") + n + "\"\n"));
+        REQUIRE(c.result.exit_code == 0);
+        render::Image img = render_code(c.result.code);
+        INFO(n);
+        CHECK(nan_pixels(img) == 0);
+        CHECK(mean_abs_diff(img, ref) < 0.01);
+    }
+}
+
+TEST_CASE("a camera inside a shape still renders: the inner wall, no NaN", "[scene][render]") {
+    auto c = compile_text("inside.md", kBall + "```scene\n[camera]\nposition = [0, 0, 0]\ntarget = [0, 0, 1]\n"
+                                                "[[shapes]]\ntype = \"ball\"\nshape_params = { r = 2 }\n```\n");
+    REQUIRE(c.result.exit_code == 0);
+    render::Image img = render_code(c.result.code);
+    CHECK(nan_pixels(img) == 0);
+    const float* px = img.pixel(48, 27);  // looking at the wall along +z: its normal faces us, (0, 0, -1)
+    CHECK(px[0] == Approx(0.5f).margin(0.02));
+    CHECK(px[2] == Approx(0.0f).margin(0.02));
+}
+
+TEST_CASE("a transform that uses time is evaluated per pixel, even on Shadertoy", "[scene][render]") {
+    auto c = compile_text("timed.md", kBall + "```scene\n[[shapes]]\ntype = \"ball\"\ntransform = \"T((time, 0, 5))\"\n"
+                                               "shape_params = { r = 0.5 }\n```\n");
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.result.code, Catch::Contains("void iqc_prepare()"));
+    CHECK_THAT(c.result.code, Catch::Contains("iTime"));
+    render::Image at0 = render_code(c.result.code, 96, 54, 0.0f);
+    render::Image at1 = render_code(c.result.code, 96, 54, 1.0f);
+    // The ball moves right: the centre pixel is lit at t = 0 and background at t = 1.
+    CHECK(at0.pixel(48, 27)[0] != at1.pixel(48, 27)[0]);
+}
+
+TEST_CASE("global lights bind to P_L and C_L; each light adds its term", "[scene][render]") {
+    std::string mat =
+        "❤: lambert\n```iheartla\nmaterial\nC = `C_L`max(0, L̂⋅N̂)\nL̂ = (`P_L` - p)/‖`P_L` - p‖\nwhere\np ∈ ℝ³\nN̂ ∈ ℝ³\nI ∈ ℝ³\n"
+        "`P_L` ∈ ℝ³\n`C_L` ∈ ℝ³\n```\n";
+    auto one = compile_text("one_light.md", kBall + mat + "```scene\n[[lights]]\nposition = [0, 0, -10]\ncolor = [0.5, 0, 0]\n"
+                                                          "[[shapes]]\ntype = \"ball\"\nmaterial = \"lambert\"\ntransform = \"T((0,0,5))\"\n```\n");
+    auto two = compile_text("two_lights.md", kBall + mat + "```scene\n[[lights]]\nposition = [0, 0, -10]\ncolor = [0.5, 0, 0]\n"
+                                                           "[[lights]]\nposition = [0, 0, -10]\ncolor = [0, 0.25, 0]\n"
+                                                           "[[shapes]]\ntype = \"ball\"\nmaterial = \"lambert\"\ntransform = \"T((0,0,5))\"\n```\n");
+    REQUIRE(one.result.exit_code == 0);
+    REQUIRE(two.result.exit_code == 0);
+    CHECK_THAT(one.result.code, Catch::Contains("lambert(p, N, eye, light_1_position, light_1_color)"));
+    render::Image ia = render_code(one.result.code), ib = render_code(two.result.code);
+    const float* a = ia.pixel(48, 27);
+    const float* b = ib.pixel(48, 27);
+    CHECK(a[0] == Approx(0.5f).margin(0.01));  // facing the light: max(0, L̂⋅N̂) = 1
+    CHECK(b[1] == Approx(0.25f).margin(0.01));
+}
+
+TEST_CASE("scene error paths are located", "[scene]") {
+    RunResult m = run_iqc(write_temp("march.iq", scene_with("[render]\nmarch = \"spere\"\n")).string());
+    CHECK(m.exit_code == 1);
+    CHECK_THAT(m.err, Catch::Contains("error: unknown march method 'spere': choose one of fixed, sphere, relaxed, auto"));
+    CHECK_THAT(m.err, Catch::Contains("note: did you mean 'sphere'?"));
+    RunResult n = run_iqc(write_temp("normals.iq", scene_with("[render]\nnormals = \"analytical\"\n")).string());
+    CHECK(n.exit_code == 1);
+    CHECK_THAT(n.err, Catch::Contains("error: unknown normals method 'analytical'"));
+    CHECK_THAT(n.err, Catch::Contains("did you mean 'analytic'?"));
+    RunResult e = run_iqc(write_temp("effects.iq", scene_with("[effects]\nshadow = \"soft\"\nao = 1\n")).string());
+    CHECK(e.exit_code == 1);
+    CHECK_THAT(e.err, Catch::Contains("error: unknown field 'shadow' in [effects]"));
+    CHECK_THAT(e.err, Catch::Contains("did you mean 'shadows'?"));
+    CHECK_THAT(e.err, Catch::Contains("error: 'ao' must be true or false, not an integer"));
+    RunResult l = run_iqc(write_temp("light.iq", scene_with("[[lights]]\ncolor = [1, 1]\n")).string());
+    CHECK(l.exit_code == 1);
+    CHECK_THAT(l.err, Catch::Contains("error: this [[lights]] entry has no 'position'"));
+    CHECK_THAT(l.err, Catch::Contains("error: 'color' must have 3 components, not 2"));
+}
