@@ -205,8 +205,8 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "iqc: error: %s\n", err.c_str());
             return 1;
         }
-        std::fprintf(stderr, "iqc: rendered %s (%dx%d, %s, %.1f ms)\n", r_output.c_str(), ro.width, ro.height,
-                     rr.renderer.c_str(), rr.frame_ms);
+        std::fprintf(stderr, "iqc: rendered %s (%dx%d, %s, shader compile %.1f ms, frame %.1f ms)\n", r_output.c_str(),
+                     ro.width, ro.height, rr.renderer.c_str(), rr.compile_ms, rr.frame_ms);
         return 0;
     }
     if (repeat > 0) {
