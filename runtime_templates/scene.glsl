@@ -53,7 +53,8 @@ const int IQC_AA = {{AA}};  // samples per pixel side
 // ---- scene ----
 {{TRANSFORMS}}
 {{#if INSTRUMENT}}
-int iqc_evals = 0;  // scene evaluations in this pixel (instrumented build)
+int iqc_evals = 0;           // scene evaluations in this pixel (instrumented build)
+int iqc_primary_steps = -1;  // march steps of the first ray from the camera
 {{/if}}
 // Distance to the nearest surface (x) and that instance's id (y).
 vec2 iqc_scene(vec3 p) {
@@ -367,6 +368,9 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{/if}}
         int id, steps;
         float t = iqc_march(ro, rd, id, steps);
+{{#if INSTRUMENT}}
+        if (iqc_primary_steps < 0) iqc_primary_steps = steps;
+{{/if}}
 {{#if DEBUG_STEPS}}
         return mix(vec3(0.0, 0.0, 0.4), vec3(1.0, 0.2, 0.0), float(steps) / float(IQC_MAX_STEPS));
 {{/if}}
@@ -453,6 +457,15 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     vec3 up = abs(forward.y) > 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(0.0, 1.0, 0.0);
     vec3 right = normalize(cross(up, forward));
     mat3 basis = mat3(right, cross(forward, right), forward);
+{{#if GEOMETRY}}
+    // Geometry probe (tests): the primary ray's distance (-1: no hit) and the unit normal, unclamped.
+    vec2 uv0 = (2.0 * fragCoord - iResolution.xy) / iResolution.y;
+    vec3 rd0 = normalize(basis * vec3(uv0, IQC_CAMERA_FOCAL));
+    int gid, gsteps;
+    float gt = iqc_march(eye, rd0, gid, gsteps);
+    fragColor = gid < 0 ? vec4(-1.0, 0.0, 0.0, 0.0) : vec4(gt, iqc_normal(eye + gt * rd0, gt, gid));
+    return;
+{{/if}}
 {{#if AA}}
     vec3 col = vec3(0.0);
     for (int i = 0; i < IQC_AA; i++)
@@ -467,7 +480,9 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     vec3 col = iqc_trace(eye, normalize(basis * vec3(uv, IQC_CAMERA_FOCAL)));
 {{/if}}
 {{#if INSTRUMENT}}
-    fragColor = vec4(clamp(col, 0.0, 1.0), float(iqc_evals));
+    // Instrumented build: march steps of the camera ray, scene evaluations in the pixel, NaN flag.
+    bool bad = any(isnan(col)) || any(isinf(col));
+    fragColor = vec4(float(iqc_primary_steps), float(iqc_evals), bad ? 1.0 : 0.0, 1.0);
 {{#else}}
     fragColor = vec4(clamp(col, 0.0, 1.0), 1.0);
 {{/if}}

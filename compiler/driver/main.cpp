@@ -4,6 +4,8 @@
 // generated GLSL that glslang rejects; nothing is written then).
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
+#include <functional>
 #include <cstdint>
 #include <cstdlib>
 #include <malloc.h>
@@ -42,6 +44,114 @@ void tune_allocator() {
     if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
     std::free(probe);
 #endif
+}
+
+// The PNG path of frame k of an animation: out.png -> out_0007.png.
+std::string frame_path(const std::string& out, int k, int frames) {
+    if (frames <= 1) return out;
+    size_t dot = out.rfind('.');
+    std::string stem = dot == std::string::npos ? out : out.substr(0, dot);
+    std::string ext = dot == std::string::npos ? ".png" : out.substr(dot);
+    return fmt::format("{}_{:04d}{}", stem, k, ext);
+}
+
+double percentile(std::vector<float> v, double q) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v[size_t(q * double(v.size() - 1) + 0.5)];
+}
+
+int render_command(const std::string& code, const std::vector<std::pair<std::string, std::vector<double>>>& uniforms,
+                   const std::string& output, const std::string& size, float time, int frames, float fps, bool stats,
+                   const std::function<iqc::CompileResult()>& instrumented) {
+    iqc::render::RenderOptions ro;
+    if (std::sscanf(size.c_str(), "%dx%d", &ro.width, &ro.height) != 2 || ro.width < 1 || ro.height < 1 ||
+        ro.width > 16384 || ro.height > 16384) {
+        std::fprintf(stderr, "iqc: error: --size must look like 640x360\n");
+        return 2;
+    }
+    for (const auto& [n, v] : uniforms) ro.uniforms.push_back({n, std::vector<float>(v.begin(), v.end())});
+    bool webgl2 = !uniforms.empty() || code.rfind("#version", 0) == 0;
+    std::string source = webgl2 ? code : iqc::glsl::wrap_shadertoy(code);
+    std::string err;
+    auto renderer = iqc::render::Renderer::create(&err);
+    if (!renderer) {
+        std::fprintf(stderr, "iqc: error: no headless renderer: %s\n", err.c_str());
+        return 1;
+    }
+    bool tty = isatty(2);
+    long long pixels = (long long)ro.width * ro.height;
+    if (pixels > 2000000) ro.band_rows = std::max(1, int(400000 / ro.width));  // long renders: bands, with progress
+    if (tty && ro.band_rows > 0)
+        ro.progress = [&](int done, int total) { std::fprintf(stderr, "\riqc: rendering %3d%%", 100 * done / total); };
+    iqc::render::RenderResult last;
+    std::vector<double> frame_ms;
+    for (int k = 0; k < frames; ++k) {
+        ro.time = time + float(k) / fps;
+        ro.frame = k;
+        last = renderer->render(source, ro);
+        if (!last.ok) {
+            std::fprintf(stderr, "%siqc: error: rendering failed: %s\n", tty ? "\n" : "", last.error.c_str());
+            return 1;
+        }
+        frame_ms.push_back(last.frame_ms);
+        std::string path = frame_path(output, k, frames);
+        if (!iqc::render::write_png(path, last.image, &err)) {
+            std::fprintf(stderr, "iqc: error: %s\n", err.c_str());
+            return 1;
+        }
+        if (frames > 1 && tty) std::fprintf(stderr, "\riqc: frame %d/%d", k + 1, frames);
+    }
+    if (tty && (frames > 1 || ro.band_rows > 0)) std::fprintf(stderr, "\n");
+    std::sort(frame_ms.begin(), frame_ms.end());
+    std::fprintf(stderr, "iqc: rendered %s (%dx%d%s, %s, shader compile %.1f ms, frame %.1f ms%s)\n",
+                 frame_path(output, 0, frames).c_str(), ro.width, ro.height,
+                 frames > 1 ? fmt::format(", {} frames", frames).c_str() : "", last.renderer.c_str(), last.compile_ms,
+                 frame_ms[frame_ms.size() / 2], frames > 1 ? " median" : "");
+    if (!stats) return 0;
+    // NaN/Inf in the colour image, and the instrumented build's counts.
+    long nan = 0;
+    for (int y = 0; y < last.image.height; ++y)
+        for (int x = 0; x < last.image.width; ++x) {
+            const float* p = last.image.pixel(x, y);
+            nan += !(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) && std::isfinite(p[3]));
+        }
+    iqc::CompileResult ic = instrumented();
+    if (ic.exit_code != 0) {
+        std::fprintf(stderr, "iqc: error: the instrumented shader failed to compile\n");
+        return 3;
+    }
+    iqc::render::RenderOptions io = ro;
+    io.progress = nullptr;
+    io.time = time;
+    io.frame = 0;
+    std::string isource = webgl2 ? ic.code : iqc::glsl::wrap_shadertoy(ic.code);
+    iqc::render::RenderResult ir = renderer->render(isource, io);
+    if (!ir.ok) {
+        std::fprintf(stderr, "iqc: error: rendering the instrumented shader failed: %s\n", ir.error.c_str());
+        return 1;
+    }
+    std::vector<float> steps, evals;
+    long flagged = 0;
+    for (int y = 0; y < ir.image.height; ++y)
+        for (int x = 0; x < ir.image.width; ++x) {
+            const float* p = ir.image.pixel(x, y);
+            steps.push_back(p[0]);
+            evals.push_back(p[1]);
+            flagged += p[2] > 0.5f;
+        }
+    double sm = 0, em = 0;
+    for (float v : steps) sm += v;
+    for (float v : evals) em += v;
+    std::printf("nan_pixels: %ld\n", std::max(nan, flagged));
+    std::printf("steps_mean: %.3f\n", sm / double(steps.size()));
+    std::printf("steps_p99: %.0f\n", percentile(steps, 0.99));
+    std::printf("evals_mean: %.3f\n", em / double(evals.size()));
+    std::printf("evals_p99: %.0f\n", percentile(evals, 0.99));
+    std::printf("frame_ms: %.3f\n", frame_ms[frame_ms.size() / 2]);
+    std::printf("compile_ms: %.3f\n", last.compile_ms);
+    std::printf("renderer: %s\n", last.renderer.c_str());
+    return 0;
 }
 
 int write_output(const std::string& path, const std::string& text) {
@@ -104,12 +214,19 @@ int main(int argc, char** argv) {
     app.add_flag("--time-passes", time_passes, "print the time of each compiler phase to standard error");
 
     CLI::App* render = app.add_subcommand("render", "render the scene headlessly to a PNG (no GPU or display needed)");
-    std::string r_input, r_output, r_size = "640x360";
-    float r_time = 0;
+    std::string r_input, r_output, r_size = "640x360", r_target = "shadertoy";
+    float r_time = 0, r_fps = 30;
+    int r_frames = 1;
+    bool r_stats = false;
     render->add_option("input", r_input, "scene (.iq), document (.md) or shape module (.iql)")->required();
-    render->add_option("-o,--output", r_output, "the PNG to write")->required();
+    render->add_option("-o,--output", r_output, "the PNG to write (with --frames: numbered, out_0000.png, ...)")->required();
     render->add_option("--size", r_size, "image size WxH (default 640x360)");
     render->add_option("--time", r_time, "iTime in seconds (default 0)");
+    render->add_option("--frames", r_frames, "render an animation of N frames")->check(CLI::Range(1, 100000));
+    render->add_option("--fps", r_fps, "frames per second of the animation (default 30)")->check(CLI::PositiveNumber);
+    render->add_option("--target", r_target, "which shader to run: shadertoy (default) or webgl2 (its uniforms at their defaults)")
+        ->check(CLI::IsMember({"shadertoy", "webgl2"}));
+    render->add_flag("--stats", r_stats, "print nan_pixels, steps_mean, steps_p99, evals_mean, evals_p99, frame_ms, renderer");
     CLI::App* eval = app.add_subcommand(
         "eval", "evaluate a module in double precision and print every output (a graphing calculator)");
     std::string e_input, e_module;
@@ -172,7 +289,7 @@ int main(int argc, char** argv) {
     iqc::CompileOptions opts;
     opts.dump_ir = dump_ir;
     opts.target = target == "webgl2" ? iqc::Target::WebGL2 : target == "glsl330" ? iqc::Target::GLSL330 : iqc::Target::Shadertoy;
-    if (render->parsed()) opts.target = iqc::Target::Shadertoy;
+    if (render->parsed()) opts.target = r_target == "webgl2" ? iqc::Target::WebGL2 : iqc::Target::Shadertoy;
     iqc::CompileResult r = iqc::compile_file(render->parsed() ? r_input : input, sm, diags, opts);
     std::string rendered = diags.render();
     if (!rendered.empty()) std::fputs(rendered.c_str(), stderr);
@@ -187,28 +304,14 @@ int main(int argc, char** argv) {
         if (diags.error_count() > 1) std::fprintf(stderr, "%zu errors\n", diags.error_count());
         return 1;
     }
-    if (render->parsed()) {
-        iqc::render::RenderOptions ro;
-        if (std::sscanf(r_size.c_str(), "%dx%d", &ro.width, &ro.height) != 2 || ro.width < 1 || ro.height < 1 ||
-            ro.width > 16384 || ro.height > 16384) {
-            std::fprintf(stderr, "iqc: error: --size must look like 640x360\n");
-            return 2;
-        }
-        ro.time = r_time;
-        iqc::render::RenderResult rr = iqc::render::render_shadertoy(r.code, ro);
-        if (!rr.ok) {
-            std::fprintf(stderr, "iqc: error: rendering failed: %s\n", rr.error.c_str());
-            return 1;
-        }
-        std::string err;
-        if (!iqc::render::write_png(r_output, rr.image, &err)) {
-            std::fprintf(stderr, "iqc: error: %s\n", err.c_str());
-            return 1;
-        }
-        std::fprintf(stderr, "iqc: rendered %s (%dx%d, %s, shader compile %.1f ms, frame %.1f ms)\n", r_output.c_str(),
-                     ro.width, ro.height, rr.renderer.c_str(), rr.compile_ms, rr.frame_ms);
-        return 0;
-    }
+    if (render->parsed()) return render_command(r.code, r.uniform_defaults, r_output, r_size, r_time, r_frames, r_fps, r_stats,
+                                                [&]() {
+                                                    iqc::SourceManager sm2;
+                                                    iqc::Diagnostics d2(sm2);
+                                                    iqc::CompileOptions o2 = opts;
+                                                    o2.instrument = true;
+                                                    return iqc::compile_file(r_input, sm2, d2, o2);
+                                                });
     if (repeat > 0) {
         std::vector<double> times;
         for (int i = 0; i < repeat; ++i) {

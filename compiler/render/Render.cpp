@@ -533,6 +533,20 @@ RenderResult render_current(const Renderer::State& st, const std::string& fs_sou
 
     glUseProgram(gl.program);
     set_shadertoy_uniforms(gl.program, o);
+    for (const auto& [name, v] : o.uniforms) {
+        GLint l = glGetUniformLocation(gl.program, name.c_str());
+        if (l == -1) continue;
+        switch (v.size()) {
+            case 1: glUniform1f(l, v[0]); break;
+            case 2: glUniform2fv(l, 1, v.data()); break;
+            case 3: glUniform3fv(l, 1, v.data()); break;
+            case 4: glUniform4fv(l, 1, v.data()); break;
+            case 9: glUniformMatrix3fv(l, 1, GL_FALSE, v.data()); break;
+            case 16: glUniformMatrix4fv(l, 1, GL_FALSE, v.data()); break;
+            default: break;
+        }
+    }
+    drain_gl_errors();
 
     // Draw. A tiled renderer (for drivers with watchdogs) would loop here over glScissor rectangles,
     // with a glFinish after each tile.
@@ -546,8 +560,21 @@ RenderResult render_current(const Renderer::State& st, const std::string& fs_sou
     glClearColor(0, 0, 0, 0);
     glClear(GL_COLOR_BUFFER_BIT);
     const auto t_frame = Clock::now();
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    glFinish();
+    if (o.band_rows <= 0 || o.band_rows >= h) {
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glFinish();
+        if (o.progress) o.progress(h, h);
+    } else {
+        glEnable(GL_SCISSOR_TEST);
+        for (int y0 = 0; y0 < h; y0 += o.band_rows) {
+            int rows = std::min(o.band_rows, h - y0);
+            glScissor(0, h - y0 - rows, w, rows);  // top band first
+            glDrawArrays(GL_TRIANGLES, 0, 3);
+            glFinish();
+            if (o.progress) o.progress(y0 + rows, h);
+        }
+        glDisable(GL_SCISSOR_TEST);
+    }
     res.frame_ms = ms_since(t_frame);
     if (GLenum err = drain_gl_errors(); err != GL_NO_ERROR) {
         res.error = fmt::format("draw failed: {}", gl_error_name(err));

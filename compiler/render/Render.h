@@ -18,6 +18,7 @@
 // render() and releases it afterwards, so it may be used from any thread, but by one thread at a time.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -40,6 +41,13 @@ struct RenderOptions {
     float time = 0;                     // iTime, seconds
     float mouse[4] = {0, 0, 0, 0};      // iMouse (Shadertoy: xy = current/last drag position, zw = click)
     int frame = 0;                      // iFrame
+    // Extra uniforms (a webgl2-target shader's parameters): name -> components (1..16 floats; 9 and 16
+    // are mat3 and mat4). Unknown names are ignored.
+    std::vector<std::pair<std::string, std::vector<float>>> uniforms;
+    // Draw in horizontal bands of this many rows (0: one draw), reporting progress after each band —
+    // long renders then show progress, and drivers with watchdogs get short draws.
+    int band_rows = 0;
+    std::function<void(int rows_done, int rows_total)> progress;
 };
 
 struct RenderResult {

@@ -116,6 +116,7 @@ private:
     int lower(const CheckedModule* m);
     bool uses_inputs(int fn) const;
     std::string assemble(std::vector<InstancePlan>& plans, std::string& meta);
+    std::vector<std::pair<std::string, std::vector<double>>> uniform_defaults_;
 };
 
 bool SceneCompiler::apply_overrides(const std::vector<ParamOverride>& ovs, const CheckedModule& m, const char* role,
@@ -389,6 +390,14 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
         j["default"] = value;
         j["description"] = pi.description;
         jparams.push_back(j);
+        if (!shadertoy) {
+            // GLSL matrices are column-major.
+            std::vector<double> v = value;
+            if (pi.type.is_matrix())
+                for (int r = 0; r < pi.type.rows; ++r)
+                    for (int c = 0; c < pi.type.cols; ++c) v[size_t(c * pi.type.rows + r)] = value[size_t(r * pi.type.cols + c)];
+            uniform_defaults_.push_back({glsl_name, v});
+        }
         budget[instance] += uniform_vectors(pi.type);
     };
     // Lights (bound to materials' `P_L` and `C_L`).
@@ -645,6 +654,7 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     if (lipschitz) F.insert("LIPSCHITZ");
 
     if (opts_.instrument) F.insert("INSTRUMENT");
+    if (opts_.geometry) F.insert("GEOMETRY");
     nlohmann::ordered_json j;
     j["title"] = s_.title;
     j["target"] = target_name(opts_.target);
@@ -735,6 +745,25 @@ CompileResult SceneCompiler::run() {
     }
     res.code = std::move(code);
     res.exit_code = 0;
+    res.uniform_defaults = uniform_defaults_;
+    // The same scene in double precision, for references.
+    auto model = std::make_shared<SceneModel>();
+    model->ir = ir_;
+    model->camera = s_.camera;
+    model->render = s_.render;
+    for (const auto& p : plans) {
+        SceneModel::Instance in;
+        in.shape_fn = p.shape_fn;
+        in.query = p.query;
+        for (size_t k = 0; k < p.shape->params.size(); ++k) in.args.push_back({p.shape->params[k].type, p.shape_values[k]});
+        if (p.has_transform) {
+            for (int k = 0; k < 9; ++k) in.linear[size_t(k)] = p.inv_linear[size_t(k)];
+            for (int k = 0; k < 3; ++k) in.offset[size_t(k)] = p.inv_offset[size_t(k)];
+            in.scale = p.scale;
+        }
+        model->instances.push_back(std::move(in));
+    }
+    res.model = std::move(model);
     return res;
 }
 

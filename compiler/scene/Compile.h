@@ -8,11 +8,13 @@
 // factor so sphere tracing stays conservative.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "scene/Reference.h"
 #include "scene/Scene.h"
 
 namespace iqc {
@@ -24,8 +26,11 @@ const char* target_name(Target t);
 struct CompileOptions {
     Target target = Target::Shadertoy;
     bool dump_ir = false;
-    // Counts scene evaluations per pixel into the alpha channel (for `iqc render --stats` and `iqc bench`).
+    // Instrumented build: each pixel is (march steps of the camera ray, scene evaluations, NaN flag, 1)
+    // instead of a colour (for `iqc render --stats` and `iqc bench`).
     bool instrument = false;
+    // Geometry probe: each pixel is (distance along the camera ray or -1, unit normal) (tests).
+    bool geometry = false;
     // Overrides of [render] for benchmark sweeps (unset: the scene's own values).
     std::optional<March> march;
     std::optional<Normals> normals;
@@ -40,6 +45,9 @@ struct CompileResult {
     std::string internal;  // the internal error's text
     std::string meta;      // JSON describing every parameter (instance, module, role, uniform, bounds, ...)
     std::vector<std::pair<std::string, double>> pass_ms;  // wall time per phase, for --time-passes
+    std::shared_ptr<const SceneModel> model;  // the scene in double precision (when the compile succeeded)
+    // webgl2/glsl330: every uniform parameter with its default value (what a host sets first).
+    std::vector<std::pair<std::string, std::vector<double>>> uniform_defaults;
 };
 
 CompileResult compile_scene(const SceneDesc& scene, SourceManager& sm, Diagnostics& diags, const CompileOptions& opts);
