@@ -206,6 +206,10 @@ int main(int argc, char** argv) {
     app.add_flag("--dump-ir", dump_ir, "print the typed IR of every function to standard error");
     app.add_flag("--time", time, "print the compile time to standard error");
     bool time_passes = false;
+    bool strict_ranges = false;
+    app.add_flag("--strict-ranges", strict_ranges,
+                 "treat range-analysis warnings (a slider can push an operation out of its domain, e.g. a division by "
+                 "a value that can be 0) as errors");
     int repeat = 0;
     app.add_option("--repeat", repeat,
                    "benchmark: compile N more times in this process and print the median time (the first compile "
@@ -288,6 +292,7 @@ int main(int argc, char** argv) {
     iqc::Diagnostics diags(sm);
     iqc::CompileOptions opts;
     opts.dump_ir = dump_ir;
+    opts.strict_ranges = strict_ranges;
     opts.target = target == "webgl2" ? iqc::Target::WebGL2 : target == "glsl330" ? iqc::Target::GLSL330 : iqc::Target::Shadertoy;
     if (render->parsed()) opts.target = r_target == "webgl2" ? iqc::Target::WebGL2 : iqc::Target::Shadertoy;
     iqc::CompileResult r = iqc::compile_file(render->parsed() ? r_input : input, sm, diags, opts);

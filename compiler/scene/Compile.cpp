@@ -17,6 +17,7 @@
 #include "ir/Lower.h"
 #include "ir/passes/CSE.h"
 #include "ir/passes/Differentiate.h"
+#include "ir/passes/Ranges.h"
 #include "scene/Modules.h"
 #include "scene/Template.h"
 #include "resources/Embedded.h"
@@ -699,6 +700,47 @@ CompileResult SceneCompiler::run() {
     for (auto& p : plans) {
         p.shape_fn = lower(p.shape);
         if (p.material) p.material_fn = lower(p.material);
+    }
+    // Range analysis: guards where the math has a continuous limit, warnings where a slider can leave an
+    // operation's domain. Module functions know their parameters' bounds; everything else is unknown.
+    {
+        std::map<int, std::vector<ir::ParamRange>> ranges;
+        auto module_ranges = [](const CheckedModule& m, const std::vector<int>& inputs) {
+            std::vector<ir::ParamRange> pr;
+            for (size_t k = 0; k < m.params.size(); ++k) {
+                const ParamInfo& p = m.params[k];
+                if (std::find(inputs.begin(), inputs.end(), int(k)) != inputs.end()) {
+                    pr.push_back(std::nullopt);
+                    continue;
+                }
+                std::vector<ir::Interval> iv(size_t(p.type.components()));
+                if (p.bounded)
+                    for (size_t c = 0; c < iv.size(); ++c) iv[c] = {p.lo[c], p.hi[c]};
+                pr.push_back(iv);
+            }
+            return pr;
+        };
+        for (const auto& p : plans) {
+            ranges[p.shape_fn] = module_ranges(*p.shape, {p.query});
+            if (p.material) {
+                std::vector<int> inputs = {p.roles[0], p.roles[1], p.roles[2]};
+                if (!s_.lights.empty())
+                    for (const char* n : {"P_L", "C_L"})
+                        if (int k = p.material->find_param(n); k >= 0) inputs.push_back(k);
+                ranges[p.material_fn] = module_ranges(*p.material, inputs);
+            }
+            if (p.transform) ranges[p.transform_fn] = module_ranges(*p.transform, {});
+        }
+        size_t n_functions = ir_.functions.size();
+        for (size_t fi = 0; fi < n_functions; ++fi) {
+            std::vector<ir::ParamRange> pr(ir_.functions[fi].params.size(), std::nullopt);
+            if (auto it = ranges.find(int(fi)); it != ranges.end()) pr = it->second;
+            for (const auto& issue : ir::analyze_ranges(ir_, int(fi), pr, true)) {
+                if (opts_.strict_ranges) d_.error(issue.span, issue.message + " (--strict-ranges)");
+                else d_.warning(issue.span, issue.message);
+            }
+        }
+        if (d_.error_count() != before) return res;
     }
     if (opts_.normals.value_or(s_.render.normals) == Normals::Analytic) {
         // One gradient function per shape module, derived from its IR.

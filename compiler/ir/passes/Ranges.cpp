@@ -1,0 +1,332 @@
+#include "ir/passes/Ranges.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+
+#include "sema/Builtins.h"
+
+namespace iqc::ir {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct Range {
+    std::vector<Interval> c;  // per component
+    bool known = false;       // derived from constants and parameters only
+    bool unit = false;        // a unit vector (normalize, v/‖v‖)
+};
+
+Interval hull(Interval a, Interval b) { return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)}; }
+Interval add(Interval a, Interval b) { return {a.lo + b.lo, a.hi + b.hi}; }
+Interval neg(Interval a) { return {-a.hi, -a.lo}; }
+Interval mul(Interval a, Interval b) {
+    double p[4] = {a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi};
+    Interval r{kInf, -kInf};
+    for (double x : p) {
+        if (std::isnan(x)) x = 0;  // 0·∞: the product of a zero bound with an infinite one
+        r.lo = std::min(r.lo, x);
+        r.hi = std::max(r.hi, x);
+    }
+    return r;
+}
+bool contains_zero(Interval a) { return a.lo <= 0 && a.hi >= 0; }
+Interval unknown() { return {}; }
+
+std::string fmt_interval(Interval a) {
+    auto n = [](double x) { return std::isinf(x) ? std::string(x > 0 ? "∞" : "-∞") : fmt::format("{:.4g}", x); };
+    return fmt::format("[{}, {}]", n(a.lo), n(a.hi));
+}
+
+Interval monotone(Interval a, double (*f)(double)) { return {f(a.lo), f(a.hi)}; }
+
+struct Analyzer {
+    const Module& m;
+    const Function& f;
+    std::vector<Range> r;
+    std::vector<RangeIssue> issues;
+
+    Range all_unknown(const Type& t) {
+        Range x;
+        x.c.assign(size_t(std::max(1, t.components())), unknown());
+        return x;
+    }
+    Interval comp(ValueId v, size_t k) const {
+        const auto& c = r[v].c;
+        return c.size() == 1 ? c[0] : c[k];
+    }
+    bool known(const Instr& in) const {
+        for (ValueId a : in.args)
+            if (!r[a].known) return false;
+        return true;
+    }
+    void warn(const Instr& in, std::string msg) { issues.push_back({in.span, std::move(msg)}); }
+
+    Range builtin(const Instr& in) {
+        const BuiltinInfo& b = iqc::builtin(in.aux);
+        std::string n = b.name;
+        Range x = all_unknown(in.type);
+        x.known = known(in);
+        size_t comps = size_t(std::max(1, in.type.components()));
+        auto each = [&](auto fn) {
+            for (size_t k = 0; k < comps; ++k) x.c[k] = fn(k);
+        };
+        if (n == "sin" || n == "cos") each([&](size_t) { return Interval{-1, 1}; });
+        else if (n == "tanh") each([&](size_t) { return Interval{-1, 1}; });
+        else if (n == "exp") each([&](size_t k) { return monotone(comp(in.args[0], k), [](double v) { return std::exp(v); }); });
+        else if (n == "abs")
+            each([&](size_t k) {
+                Interval a = comp(in.args[0], k);
+                if (a.lo >= 0) return a;
+                if (a.hi <= 0) return neg(a);
+                return Interval{0, std::max(-a.lo, a.hi)};
+            });
+        else if (n == "sqrt") each([&](size_t k) {
+            Interval a = comp(in.args[0], k);
+            return Interval{std::sqrt(std::max(a.lo, 0.0)), std::sqrt(std::max(a.hi, 0.0))};
+        });
+        else if (n == "floor" || n == "ceil")
+            each([&](size_t k) { Interval a = comp(in.args[0], k); return Interval{std::floor(a.lo), std::ceil(a.hi)}; });
+        else if (n == "fract") each([&](size_t) { return Interval{0, 1}; });
+        else if (n == "sign") each([&](size_t) { return Interval{-1, 1}; });
+        else if (n == "min" || n == "max")
+            each([&](size_t k) {
+                Interval a = comp(in.args[0], k), c = comp(in.args[1], k);
+                return n == "min" ? Interval{std::min(a.lo, c.lo), std::min(a.hi, c.hi)}
+                                  : Interval{std::max(a.lo, c.lo), std::max(a.hi, c.hi)};
+            });
+        else if (n == "clamp")
+            each([&](size_t k) {
+                Interval a = comp(in.args[0], k), lo = comp(in.args[1], k), hi = comp(in.args[2], k);
+                return Interval{std::max(std::min(a.lo, hi.lo), lo.lo), std::min(std::max(a.hi, lo.hi), hi.hi)};
+            });
+        else if (n == "length") {
+            double lo2 = 0, hi2 = 0;
+            for (size_t k = 0; k < r[in.args[0]].c.size(); ++k) {
+                Interval a = comp(in.args[0], k);
+                double m_lo = contains_zero(a) ? 0 : std::min(std::fabs(a.lo), std::fabs(a.hi));
+                double m_hi = std::max(std::fabs(a.lo), std::fabs(a.hi));
+                lo2 += m_lo * m_lo;
+                hi2 += m_hi * m_hi;
+            }
+            x.c = {{std::sqrt(lo2), std::sqrt(hi2)}};
+        } else if (n == "normalize") {
+            each([&](size_t) { return Interval{-1, 1}; });
+            x.unit = true;
+        } else if (n == "atan" || n == "atan2") each([&](size_t) { return Interval{-M_PI, M_PI}; });
+        else if (n == "asin") each([&](size_t) { return Interval{-M_PI / 2, M_PI / 2}; });
+        else if (n == "acos") each([&](size_t) { return Interval{0, M_PI}; });
+        return x;
+    }
+
+    Range eval(size_t i, const std::vector<ParamRange>& params) {
+        const Instr& in = f.body[i];
+        Range x = all_unknown(in.type);
+        x.known = known(in);
+        size_t comps = size_t(std::max(1, in.type.components()));
+        switch (in.op) {
+            case Op::Const:
+                x.known = true;
+                x.c.clear();
+                for (double v : in.data) x.c.push_back({v, v});
+                if (x.c.empty()) x.c.push_back({0, 0});
+                return x;
+            case Op::Param: {
+                const ParamRange& pr = params[size_t(in.aux)];
+                if (!pr) return all_unknown(in.type);  // the renderer's input: not a slider
+                x.known = true;
+                x.c = *pr;
+                if (x.c.size() != comps) x.c.assign(comps, unknown());
+                return x;
+            }
+            case Op::Copy: return r[in.args[0]];
+            case Op::Input:
+            case Op::Loop:
+            case Op::Member:
+            case Op::Call:
+                return all_unknown(in.type);
+            case Op::Add:
+            case Op::Sub:
+                for (size_t k = 0; k < comps; ++k)
+                    x.c[k] = in.op == Op::Add ? add(comp(in.args[0], k), comp(in.args[1], k))
+                                              : add(comp(in.args[0], k), neg(comp(in.args[1], k)));
+                return x;
+            case Op::Neg:
+                for (size_t k = 0; k < comps; ++k) x.c[k] = neg(comp(in.args[0], k));
+                x.unit = r[in.args[0]].unit;
+                return x;
+            case Op::Mul:
+            case Op::Hadamard: {
+                const Type &a = f.body[in.args[0]].type, &b = f.body[in.args[1]].type;
+                if ((a.is_scalar() || b.is_scalar() || in.op == Op::Hadamard) && !in.type.is_matrix())
+                    for (size_t k = 0; k < comps; ++k) x.c[k] = mul(comp(in.args[0], k), comp(in.args[1], k));
+                return x;
+            }
+            case Op::Div: {
+                Interval d = comp(in.args[1], 0);
+                if (contains_zero(d)) {
+                    if (r[in.args[1]].known)
+                        warn(in, fmt::format("division by a value that can be 0: with the parameters' bounds it ranges over {}",
+                                             fmt_interval(d)));
+                    return all_unknown(in.type);
+                }
+                Interval inv = {1 / d.hi, 1 / d.lo};
+                for (size_t k = 0; k < comps; ++k) x.c[k] = mul(comp(in.args[0], k), inv);
+                // v / ‖v‖ is a unit vector.
+                const Instr& den = f.body[in.args[1]];
+                if (in.type.is_vector() && den.op == Op::Builtin && std::string(iqc::builtin(den.aux).name) == "length" &&
+                    den.args[0] == in.args[0])
+                    x.unit = true;
+                return x;
+            }
+            case Op::Dot: {
+                if (r[in.args[0]].unit && r[in.args[1]].unit) {
+                    x.c = {{-1, 1}};
+                    return x;
+                }
+                Interval s{0, 0};
+                for (size_t k = 0; k < r[in.args[0]].c.size(); ++k) s = add(s, mul(comp(in.args[0], k), comp(in.args[1], k)));
+                x.c = {s};
+                return x;
+            }
+            case Op::Construct: {
+                x.c.clear();
+                for (ValueId a : in.args)
+                    for (const auto& c : r[a].c) x.c.push_back(c);
+                if (x.c.size() != comps) x.c.assign(comps, unknown());
+                return x;
+            }
+            case Op::Extract:
+                x.c = {comp(in.args[0], size_t(in.aux))};
+                return x;
+            case Op::Select:
+                for (size_t k = 0; k < comps; ++k) x.c[k] = hull(comp(in.args[1], k), comp(in.args[2], k));
+                x.unit = r[in.args[1]].unit && r[in.args[2]].unit;
+                return x;
+            case Op::Builtin: return builtin(in);
+            default: return x;
+        }
+    }
+};
+
+}  // namespace
+
+std::vector<RangeIssue> analyze_ranges(Module& m, int fn, const std::vector<ParamRange>& params, bool guard) {
+    Function& f = m.functions[size_t(fn)];
+    Analyzer a{m, f, {}, {}};
+    a.r.resize(f.body.size());
+    // Analysis and warnings.
+    std::vector<int> needs;  // per instruction: 0 none, else the guard kind
+    needs.assign(f.body.size(), 0);
+    enum { kNone, kClampUnit, kNonNegative, kPowBase, kAtan2 };
+    for (size_t i = 0; i < f.body.size(); ++i) {
+        const Instr& in = f.body[i];
+        if (in.op == Op::Builtin) {
+            std::string n = builtin(in.aux).name;
+            auto arg = [&](size_t k) { return a.r[in.args[k]]; };
+            auto any = [&](const Range& x, auto pred) {
+                for (const auto& c : x.c)
+                    if (pred(c)) return true;
+                return false;
+            };
+            Range x = arg(0);
+            if (n == "acos" || n == "asin") {
+                if (any(x, [](Interval c) { return c.lo < -1 || c.hi > 1; })) {
+                    needs[i] = kClampUnit;
+                    if (x.known)
+                        a.warn(in, fmt::format("{} of a value outside [-1, 1]: with the parameters' bounds it ranges over {}", n,
+                                               fmt_interval(x.c[0])));
+                }
+            } else if (n == "sqrt") {
+                if (any(x, [](Interval c) { return c.lo < 0; })) {
+                    needs[i] = kNonNegative;
+                    if (x.known && any(x, [](Interval c) { return c.lo < 0; }))
+                        a.warn(in, fmt::format("square root of a value that can be negative: it ranges over {}", fmt_interval(x.c[0])));
+                }
+            } else if (n == "log" || n == "ln") {
+                if (x.known && any(x, [](Interval c) { return c.lo <= 0; }))
+                    a.warn(in, fmt::format("logarithm of a value that can be 0 or negative: it ranges over {}", fmt_interval(x.c[0])));
+            } else if (n == "pow") {
+                if (any(x, [](Interval c) { return c.lo < 0; })) {
+                    needs[i] = kPowBase;
+                    if (x.known)
+                        a.warn(in, fmt::format("a power of a base that can be negative: it ranges over {}", fmt_interval(x.c[0])));
+                }
+            } else if (n == "normalize") {
+                bool zero = true;
+                for (const auto& c : x.c) zero &= contains_zero(c);
+                if (x.known && zero) a.warn(in, "normalize of a vector that can be zero");
+            } else if (n == "mod") {
+                Range y = arg(1);
+                if (y.known && any(y, [](Interval c) { return contains_zero(c); }))
+                    a.warn(in, fmt::format("mod by a value that can be 0: it ranges over {}", fmt_interval(y.c[0])));
+            } else if (n == "atan2") {
+                Range y = arg(0), xx = arg(1);
+                if (any(y, [](Interval c) { return contains_zero(c); }) && any(xx, [](Interval c) { return contains_zero(c); }))
+                    needs[i] = kAtan2;
+            }
+        }
+        a.r[i] = a.eval(i, params);
+        // A guarded operation's result is in range.
+        if (needs[i] == kNonNegative)
+            for (auto& c : a.r[i].c) c.lo = std::max(c.lo, 0.0);
+    }
+    if (!guard) return a.issues;
+    // Rewrite with guards.
+    Function g = f;
+    g.body.clear();
+    std::vector<ValueId> map(f.body.size());
+    auto emit = [&](Instr in) { return g.add(std::move(in)); };
+    auto konst = [&](const Type& t, double v) {
+        Instr c;
+        c.op = Op::Const;
+        c.type = t.is_scalar() ? Type::scalar() : t;
+        c.data.assign(size_t(std::max(1, t.components())), v);
+        return emit(std::move(c));
+    };
+    auto call = [&](const char* name, std::vector<ValueId> args, const Type& t, Span span) {
+        Instr b;
+        b.op = Op::Builtin;
+        b.aux = *find_builtin(name);
+        b.type = t;
+        b.args = std::move(args);
+        b.span = span;
+        return emit(std::move(b));
+    };
+    for (size_t i = 0; i < f.body.size(); ++i) {
+        Instr in = f.body[i];
+        for (ValueId& x : in.args) x = map[x];
+        const Type& at = in.args.empty() ? in.type : g.body[in.args[0]].type;
+        switch (needs[i]) {
+            case kClampUnit: in.args[0] = call("clamp", {in.args[0], konst(at, -1), konst(at, 1)}, at, in.span); break;
+            case kNonNegative:
+            case kPowBase: in.args[0] = call("max", {in.args[0], konst(at, 0)}, at, in.span); break;
+            case kAtan2: {
+                // atan2(0, 0) = 0: select(y = 0 and x = 0, 0, atan2(y, x)) (scalars)
+                if (!in.type.is_scalar()) break;
+                ValueId y = in.args[0], x = in.args[1], zero = konst(Type::scalar(), 0);
+                Instr cy{Op::Compare, Type::boolean(), {y, zero}, {}, int(CompareKind::Eq), "", "", in.span};
+                Instr cx{Op::Compare, Type::boolean(), {x, zero}, {}, int(CompareKind::Eq), "", "", in.span};
+                ValueId a1 = emit(cy), a2 = emit(cx);
+                Instr both{Op::And, Type::boolean(), {a1, a2}, {}, 0, "", "", in.span};
+                ValueId both_v = emit(both);
+                std::string name = in.name, source = in.source;
+                in.name.clear();
+                in.source.clear();
+                ValueId at2 = emit(in);
+                Instr sel{Op::Select, Type::scalar(), {both_v, zero, at2}, {}, 0, name, source, in.span};
+                map[i] = emit(sel);
+                continue;
+            }
+            default: break;
+        }
+        map[i] = emit(std::move(in));
+    }
+    g.result = map[f.result];
+    for (auto& [n, v] : g.outputs) v = map[v];
+    f = std::move(g);
+    return a.issues;
+}
+
+}  // namespace iqc::ir

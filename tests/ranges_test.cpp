@@ -1,0 +1,61 @@
+// Range analysis: guards where the math has a continuous limit, located warnings where a slider can push
+// an operation out of its domain, and --strict-ranges.
+#include <catch2/catch.hpp>
+
+#include "TestUtil.h"
+
+using namespace iqc;
+using namespace iqc::test;
+
+namespace {
+std::string doc(const std::string& shape_body, const std::string& decls) {
+    return "❤: s\n```iheartla\nshape\n" + shape_body + "\nwhere\np ∈ ℝ³\n" + decls + "```\n```scene\n[[shapes]]\ntype = \"s\"\n```\n";
+}
+}  // namespace
+
+TEST_CASE("a division by a slider range containing 0 is warned, located", "[ranges]") {
+    Compiled c = compile_text("div.md", doc("D = ‖p‖ - 1/(r - 1)", "r ∈ [0,2] default = 0.5\n"));
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("div.md:4:11: warning: division by a value that can be 0: with the parameters' "
+                                              "bounds it ranges over [-1, 1]"));
+    Compiled safe = compile_text("div_ok.md", doc("D = ‖p‖ - 1/(r + 1)", "r ∈ [0,2] default = 0.5\n"));
+    CHECK(safe.diagnostics.empty());
+    // --strict-ranges: the warning is an error.
+    auto f = write_temp("div_strict.md", doc("D = ‖p‖ - 1/(r - 1)", "r ∈ [0,2] default = 0.5\n"));
+    RunResult r = run_iqc("--strict-ranges " + f.string());
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("error: division by a value that can be 0"));
+}
+
+TEST_CASE("sqrt, acos and pow get guards; warnings only for slider ranges", "[ranges]") {
+    // acos of a dot product of unknown vectors: guarded (a rounding error can exceed 1), no warning.
+    Compiled a = compile_text("acos.md", doc("acos from trigonometry\nD = ‖p‖ - 1 + 0.01acos(p_1/‖p‖)", ""));
+    REQUIRE(a.result.exit_code == 0);
+    CHECK(a.diagnostics.empty());
+    CHECK_THAT(a.result.code, Catch::Contains("acos(clamp("));
+    // sqrt of a slider range that can be negative: warned and guarded.
+    Compiled s = compile_text("sqrt.md", doc("D = ‖p‖ - √k", "k ∈ [-1,1] default = 0.5\n"));
+    REQUIRE(s.result.exit_code == 0);
+    CHECK_THAT(s.diagnostics, Catch::Contains("sqrt.md:4:11: warning: square root of a value that can be negative: it ranges over [-1, 1]"));
+    CHECK_THAT(s.result.code, Catch::Contains("sqrt(max(k, 0.0))"));
+    // pow of an unknown base with a fractional exponent: guarded, no warning.
+    Compiled p = compile_text("pow.md", doc("D = ‖p‖ - 1 + 0.1|p_1|^0.5 + 0.01p_2^a", "a ∈ [0.5,2] default = 1.5\n"));
+    REQUIRE(p.result.exit_code == 0);
+    CHECK(p.diagnostics.empty());
+    CHECK_THAT(p.result.code, Catch::Contains("pow(max(p.y, 0.0), a)"));
+    CHECK_THAT(p.result.code, !Catch::Contains("pow(max(abs("));  // |p_1| ≥ 0: no guard needed
+}
+
+TEST_CASE("log, mod and normalize of slider ranges are warned", "[ranges]") {
+    Compiled l = compile_text("log.md", doc("D = ‖p‖ - 1 + 0.1ln(k) + 0.1mod(p_1, m) + normalize(v)_1", "k ∈ [0,1]\nm ∈ [-1,1]\nv ∈ [-1,1]x[-1,1]x[-1,1]\n"));
+    REQUIRE(l.result.exit_code == 0);
+    CHECK_THAT(l.diagnostics, Catch::Contains("warning: logarithm of a value that can be 0 or negative: it ranges over [0, 1]"));
+    CHECK_THAT(l.diagnostics, Catch::Contains("warning: mod by a value that can be 0: it ranges over [-1, 1]"));
+    CHECK_THAT(l.diagnostics, Catch::Contains("warning: normalize of a vector that can be zero"));
+}
+
+TEST_CASE("atan2(0, 0) is 0 in the shader as in the evaluator", "[ranges]") {
+    Compiled a = compile_text("atan.md", doc("atan2 from trigonometry\nD = ‖p‖ - 1 + 0.01atan2(p_2, p_1)", ""));
+    REQUIRE(a.result.exit_code == 0);
+    CHECK_THAT(a.result.code, Catch::Contains("(p.y == 0.0) && (p.x == 0.0)"));
+}
