@@ -701,6 +701,7 @@ CompileResult SceneCompiler::run() {
         p.shape_fn = lower(p.shape);
         if (p.material) p.material_fn = lower(p.material);
     }
+    for (auto& f : ir_.functions) ir::eliminate_common_subexpressions(f);  // shared values are one value for the analysis
     // Range analysis: guards where the math has a continuous limit, warnings where a slider can leave an
     // operation's domain. Module functions know their parameters' bounds; everything else is unknown.
     {

@@ -219,7 +219,7 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, const std::vector<Para
     // Analysis and warnings.
     std::vector<int> needs;  // per instruction: 0 none, else the guard kind
     needs.assign(f.body.size(), 0);
-    enum { kNone, kClampUnit, kNonNegative, kPowBase, kAtan2 };
+    enum { kNone, kClampUnit, kNonNegative, kPowBase, kAtan2, kNormalize, kDivLength };
     for (size_t i = 0; i < f.body.size(); ++i) {
         const Instr& in = f.body[i];
         if (in.op == Op::Builtin) {
@@ -256,6 +256,7 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, const std::vector<Para
             } else if (n == "normalize") {
                 bool zero = true;
                 for (const auto& c : x.c) zero &= contains_zero(c);
+                if (zero) needs[i] = kNormalize;  // 0 / 0: the zero vector instead of NaN
                 if (x.known && zero) a.warn(in, "normalize of a vector that can be zero");
             } else if (n == "mod") {
                 Range y = arg(1);
@@ -266,6 +267,13 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, const std::vector<Para
                 if (any(y, [](Interval c) { return contains_zero(c); }) && any(xx, [](Interval c) { return contains_zero(c); }))
                     needs[i] = kAtan2;
             }
+        }
+        // v / ‖v‖ where v can be 0: the zero vector instead of NaN (the same guard as normalize).
+        if (in.op == Op::Div && in.type.is_vector()) {
+            const Instr& den = f.body[in.args[1]];
+            if (den.op == Op::Builtin && std::string(builtin(den.aux).name) == "length" && den.args[0] == in.args[0] &&
+                contains_zero(a.r[in.args[1]].c[0]))
+                needs[i] = kDivLength;
         }
         a.r[i] = a.eval(i, params);
         // A guarded operation's result is in range.
@@ -302,6 +310,16 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, const std::vector<Para
             case kClampUnit: in.args[0] = call("clamp", {in.args[0], konst(at, -1), konst(at, 1)}, at, in.span); break;
             case kNonNegative:
             case kPowBase: in.args[0] = call("max", {in.args[0], konst(at, 0)}, at, in.span); break;
+            case kDivLength: in.args[1] = call("max", {in.args[1], konst(Type::scalar(), 1e-30)}, Type::scalar(), in.span); break;
+            case kNormalize: {
+                // normalize(v) -> v / max(‖v‖, 1e-30)
+                ValueId len = call("length", {in.args[0]}, Type::scalar(), in.span);
+                ValueId safe = call("max", {len, konst(Type::scalar(), 1e-30)}, Type::scalar(), in.span);
+                in.op = Op::Div;
+                in.aux = 0;
+                in.args = {in.args[0], safe};
+                break;
+            }
             case kAtan2: {
                 // atan2(0, 0) = 0: select(y = 0 and x = 0, 0, atan2(y, x)) (scalars)
                 if (!in.type.is_scalar()) break;
