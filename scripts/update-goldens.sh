@@ -5,4 +5,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 cmake --build build -j "$(nproc)" >/dev/null
 IQC_UPDATE_GOLDEN=1 ./build/tests/iqc_tests "[golden]"
+# (the image goldens are tagged [golden] too: golden/images/*.png)
 git --no-pager diff --stat -- golden/ || true
