@@ -103,11 +103,16 @@ int render_command(const std::string& code, const std::vector<std::pair<std::str
         if (frames > 1 && tty) std::fprintf(stderr, "\riqc: frame %d/%d", k + 1, frames);
     }
     if (tty && (frames > 1 || ro.band_rows > 0)) std::fprintf(stderr, "\n");
+    // The first frame includes the driver's lazy compilation (llvmpipe compiles at the first draw).
+    double first_ms = frame_ms[0];
+    std::vector<double> later(frame_ms.begin() + 1, frame_ms.end());
+    std::sort(later.begin(), later.end());
     std::sort(frame_ms.begin(), frame_ms.end());
+    std::string later_text = later.empty() ? "" : fmt::format(", later frames {:.1f} ms median", later[later.size() / 2]);
     std::fprintf(stderr, "iqc: rendered %s (%dx%d%s, %s, shader compile %.1f ms, frame %.1f ms%s)\n",
                  frame_path(output, 0, frames).c_str(), ro.width, ro.height,
                  frames > 1 ? fmt::format(", {} frames", frames).c_str() : "", last.renderer.c_str(), last.compile_ms,
-                 frame_ms[frame_ms.size() / 2], frames > 1 ? " median" : "");
+                 first_ms, later_text.c_str());
     if (!stats) return 0;
     // NaN/Inf in the colour image, and the instrumented build's counts.
     long nan = 0;
