@@ -238,6 +238,8 @@ struct FunctionEmitter {
             case Op::Builtin: {
                 std::vector<std::string> args;
                 for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
+                // GLSL's round() leaves halves to the implementation; the evaluator rounds them up.
+                if (std::string(builtin(in.aux).name) == "round") return fmt::format("floor({} + 0.5)", a(0));
                 return fmt::format("{}({})", builtin(in.aux).glsl, fmt::join(args, ", "));
             }
             case Op::Construct: {

@@ -17,6 +17,9 @@ using ir::ValueId;
 namespace {
 
 int lower_local_function(const CheckedModule& m, int fi, const std::vector<Type>& arg_types, LowerContext& ctx);
+}  // namespace
+int lower_module_cached(const CheckedModule& m, LowerContext& ctx);
+namespace {
 
 struct Env {
     const CheckedModule& m;
@@ -181,6 +184,11 @@ struct Env {
                 std::vector<ValueId> args;
                 for (auto& a : e.args) args.push_back(lower(*a));
                 if (e.resolved == R_Builtin) return builtin(iqc::builtin(e.aux).name, std::move(args), e.span);
+                if (e.resolved == R_ImportModule) {
+                    const CheckedModule& callee = *m.imports[size_t(e.aux)].from;
+                    int idx = lower_module_cached(callee, ctx);
+                    return emit(Op::Call, ctx.module.functions[size_t(idx)].result_type(), std::move(args), idx, e.span);
+                }
                 const CheckedModule* owner = &m;
                 int fi = e.aux;
                 if (e.resolved == R_ImportFn) {
@@ -463,6 +471,13 @@ int lower_local_function(const CheckedModule& m, int fi, const std::vector<Type>
 }
 
 }  // namespace
+
+int lower_module_cached(const CheckedModule& m, LowerContext& ctx) {
+    if (auto it = ctx.modules.find(&m); it != ctx.modules.end()) return it->second;
+    int idx = lower_module(m, m.ast.name, m.ast.name, ctx);
+    ctx.modules[&m] = idx;
+    return idx;
+}
 
 int lower_module(const CheckedModule& m, const std::string& name, const std::string& glsl_name, LowerContext& ctx) {
     ir::Function fn;

@@ -23,9 +23,12 @@ struct LowerContext {
     // (module, local function, argument types) -> IR index: a function with symbolic sizes (ℝ^n) gets one
     // IR function per combination of sizes it is used with.
     std::map<std::tuple<const CheckedModule*, int, std::vector<Type>>, int> functions;
+    std::map<const CheckedModule*, int> modules;  // whole modules (shapes, materials), lowered once
 };
 
 // Returns the index of the new function in ctx.module.
 int lower_module(const CheckedModule& m, const std::string& name, const std::string& glsl_name, LowerContext& ctx);
+// The module's function under its own name, lowered once per context (instances and imports share it).
+int lower_module_cached(const CheckedModule& m, LowerContext& ctx);
 
 }  // namespace iqc

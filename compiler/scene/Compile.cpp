@@ -107,7 +107,6 @@ private:
     std::vector<std::unique_ptr<CheckedModule>> transforms_;
     ir::Module ir_;
     LowerContext lower_{ir_, {}};
-    std::map<const CheckedModule*, int> lowered_;
 
     bool plan_instance(const InstanceDesc& inst, InstancePlan& plan, std::map<std::string, int>& counts,
                        std::set<std::string>& names);
@@ -311,12 +310,7 @@ bool SceneCompiler::uses_inputs(int fn) const {
     return false;
 }
 
-int SceneCompiler::lower(const CheckedModule* m) {
-    if (auto it = lowered_.find(m); it != lowered_.end()) return it->second;
-    int fn = lower_module(*m, m->ast.name, m->ast.name, lower_);
-    lowered_[m] = fn;
-    return fn;
-}
+int SceneCompiler::lower(const CheckedModule* m) { return lower_module_cached(*m, lower_); }
 
 std::string param_comment(const ParamInfo& p) {
     std::string s = fmt::format("{} ∈ ", p.name);
@@ -539,6 +533,8 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
         for (size_t k = 0; k < sp.size(); ++k) args.push_back(int(k) == p.query ? q : p.constants.at("shape." + sp[k].name));
         std::string call = fmt::format("{}({})", em.function_name(p.shape_fn), fmt::join(args, ", "));
         if (!scale.empty()) call += " * " + scale;
+        if (p.shape->lipschitz != 1)
+            call += fmt::format(" / {}", glsl::float_literal(p.shape->lipschitz));  // `# lipschitz` of the shape: stays conservative
         if (normals == Normals::Analytic) {
             if (p.gradient_fn >= 0) {
                 // ∇(d ∘ world→object) = Lᵀ ∇d (L the linear part); the scale does not change the direction.
@@ -804,6 +800,7 @@ CompileResult SceneCompiler::run() {
             for (int k = 0; k < 3; ++k) in.offset[size_t(k)] = p.inv_offset[size_t(k)];
             in.scale = p.scale;
         }
+        in.scale /= p.shape->lipschitz;
         model->instances.push_back(std::move(in));
     }
     res.model = std::move(model);

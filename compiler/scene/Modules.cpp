@@ -106,6 +106,32 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
     ModuleLookup lookup = [this](const std::string& n, Span where) { return get(n, where); };
     auto m = check_module(std::move(ast), lookup, co, d_);
     if (d_.error_count() != before) m->ok = false;  // syntax errors too
+    // Pragmas in comment lines.
+    for (const auto& r : src.ranges) {
+        std::string_view text = sm_.text(src.file).substr(r.begin, r.end - r.begin);
+        size_t pos = 0;
+        while (pos < text.size()) {
+            size_t eol = text.find('\n', pos);
+            if (eol == std::string_view::npos) eol = text.size();
+            std::string_view line = text.substr(pos, eol - pos);
+            size_t h = line.find_first_not_of(" \t");
+            if (h != std::string_view::npos && line[h] == '#') {
+                std::string_view body = line.substr(h + 1);
+                while (!body.empty() && body.front() == ' ') body.remove_prefix(1);
+                if (body.rfind("exact", 0) == 0) m->exactness = "exact";
+                else if (body.rfind("bound", 0) == 0) m->exactness = "bound";
+                else if (body.rfind("lipschitz", 0) == 0) {
+                    std::string rest(body.substr(9));
+                    size_t k = rest.find_first_of("0123456789.");
+                    double v = k == std::string::npos ? 0 : std::atof(rest.c_str() + k);
+                    Span at = {src.file, uint32_t(r.begin + pos + h), uint32_t(r.begin + eol)};
+                    if (!(v >= 1)) d_.error(at, "'# lipschitz: K' needs a number K ≥ 1 (how much D can change per unit of distance)");
+                    else m->lipschitz = v;
+                }
+            }
+            pos = eol + 1;
+        }
+    }
     return m;
 }
 

@@ -8,6 +8,7 @@ namespace iqc {
 namespace {
 double b_sign(double x) { return x > 0 ? 1.0 : x < 0 ? -1.0 : 0.0; }
 double b_fract(double x) { return x - std::floor(x); }
+double b_round(double x) { return std::floor(x + 0.5); }  // halves round up, the same in GLSL (below)
 double b_mod(double x, double y) { return x - y * std::floor(x / y); }  // GLSL's mod
 double b_step(double edge, double x) { return x < edge ? 0.0 : 1.0; }
 double b_min(double a, double b) { return std::fmin(a, b); }
@@ -53,6 +54,7 @@ const std::vector<BuiltinInfo>& builtins() {
         {"ceil", "", Sig::Elementwise1, b_ceil, nullptr, "ceil"},
         {"sign", "", Sig::Elementwise1, b_sign, nullptr, "sign"},
         {"fract", "", Sig::Elementwise1, b_fract, nullptr, "fract"},
+        {"round", "", Sig::Elementwise1, b_round, nullptr, "round"},  // emitted as floor(x + 0.5)
         {"mod", "", Sig::Elementwise2, nullptr, b_mod, "mod"},
         {"pow", "", Sig::Elementwise2, nullptr, b_pow, "pow"},
         {"step", "", Sig::Elementwise2, nullptr, b_step, "step"},

@@ -353,7 +353,10 @@ void Checker::collect_imports() {
             }
             im.from = from;
             im.function = from->find_function(name);
-            if (im.function < 0) {
+            if (im.function < 0 && name == module &&
+                (from->ast.kind != ModuleKind::Library || from->ret != nullptr)) {
+                im.whole_module = true;
+            } else if (im.function < 0) {
                 std::vector<std::string> cands;
                 for (auto& f : from->functions) cands.push_back(f.stmt->name);
                 auto& e = d_.error(span, fmt::format("module '{}' defines no function '{}'", module, name));
@@ -800,6 +803,15 @@ Type Checker::check_call(Expr& e) {
         const ImportedFunction& im = m_.imports[ii];
         if (im.name != n) continue;
         if (im.builtin >= 0) break;  // handled below as a built-in
+        if (im.whole_module) {
+            e.resolved = R_ImportModule;
+            e.aux = int(ii);
+            std::vector<Type> pt;
+            for (const auto& p : im.from->params) pt.push_back(p.type);
+            if (!check_args(pt, n) || !args_ok) return {};
+            if (!im.from->ok || !im.from->primary_type.valid()) return {};
+            return im.from->primary_type;
+        }
         const LocalFunction& f = im.from->functions[size_t(im.function)];
         if (f.generic) {
             d_.error(e.name_span, fmt::format("'{}' from '{}' has symbolic sizes (ℝ^n): such functions can only be used in "

@@ -46,6 +46,7 @@ enum Resolved : int {
     R_SeqCurrent, // z_k inside its recurrence: the current element, aux = sequence
     R_SeqFirst,   // z_1: the sequence's first element, aux = sequence
     R_SeqLast,    // z_(N+1): the element the recurrence ends with, aux = sequence
+    R_ImportModule,  // call of a whole module imported as a function, aux = index in CheckedModule::imports
 };
 
 struct ParamInfo {
@@ -82,6 +83,9 @@ struct ImportedFunction {
     const CheckedModule* from = nullptr;  // null for built-in modules
     int function = -1;                    // index in from->functions
     int builtin = -1;                     // for built-in modules
+    // `torus from torus`: a shape, material or value module used as a function of its parameters (in
+    // declaration order), returning its D, C or value.
+    bool whole_module = false;
 };
 
 // A sequence defined by a first element and a recurrence: z_1 = p; z_(k+1) = f(z_k) for k ∈ 1..N.
@@ -115,6 +119,10 @@ struct CheckedModule {
     std::vector<LoopGroup> groups;
     int find_sequence(const std::string& n) const;
     std::string primary;                       // "D" (shape), "C" (material) or "" (the bare expression)
+    // From the module's comment lines: `# lipschitz: K` (D changes at most K per unit: the renderer divides
+    // by K so marching stays safe) and `# exact` / `# bound` (what D is; for documentation and tests).
+    double lipschitz = 1;
+    std::string exactness;
     Type primary_type;
     bool ok = false;
 

@@ -285,7 +285,7 @@ struct Differentiator {
                     return chain(recip(op2(t.is_scalar() ? Op::Mul : Op::Mul, scalar(2), safe)), x, T(0));
                 }
                 if (n == "abs") return chain(builtin("sign", {x}), x, T(0));
-                if (n == "floor" || n == "ceil" || n == "sign" || n == "step") return kZero;
+                if (n == "floor" || n == "ceil" || n == "sign" || n == "step" || n == "round") return kZero;
                 if (n == "fract") return T(0);
                 if (n == "mod") return T(0) == kZero ? kZero : T(0);  // for a constant modulus (repetition)
                 if (n == "min" || n == "max") {

@@ -86,7 +86,7 @@ struct Analyzer {
             Interval a = comp(in.args[0], k);
             return Interval{std::sqrt(std::max(a.lo, 0.0)), std::sqrt(std::max(a.hi, 0.0))};
         });
-        else if (n == "floor" || n == "ceil")
+        else if (n == "floor" || n == "ceil" || n == "round")
             each([&](size_t k) { Interval a = comp(in.args[0], k); return Interval{std::floor(a.lo), std::ceil(a.hi)}; });
         else if (n == "fract") each([&](size_t) { return Interval{0, 1}; });
         else if (n == "sign") each([&](size_t) { return Interval{-1, 1}; });
