@@ -121,6 +121,14 @@ Value run_builtin(const Instr& in, const std::vector<const Value*>& a) {
             return r;
         }
         case Sig::Clamp:
+            if (std::string(b.name) == "smoothstep") {
+                for (size_t i = 0; i < r.v.size(); ++i) {
+                    double e0 = at(a[0], i), e1 = at(a[1], i), x = at(a[2], i);
+                    double t = std::fmin(std::fmax((x - e0) / (e1 - e0), 0.0), 1.0);
+                    r.v[i] = t * t * (3 - 2 * t);
+                }
+                return r;
+            }
             for (size_t i = 0; i < r.v.size(); ++i) r.v[i] = std::fmin(std::fmax(at(a[0], i), at(a[1], i)), at(a[2], i));
             return r;
         case Sig::Mix:

@@ -61,6 +61,7 @@ const std::vector<BuiltinInfo>& builtins() {
         {"min", "", Sig::Nary, nullptr, b_min, "min"},
         {"max", "", Sig::Nary, nullptr, b_max, "max"},
         {"clamp", "", Sig::Clamp, nullptr, nullptr, "clamp"},
+        {"smoothstep", "", Sig::Clamp, nullptr, nullptr, "smoothstep"},  // (edge0, edge1, x)
         {"mix", "", Sig::Mix, nullptr, nullptr, "mix"},
         {"length", "", Sig::Length, nullptr, nullptr, "length"},
         {"normalize", "", Sig::Normalize, nullptr, nullptr, "normalize"},

@@ -312,6 +312,14 @@ struct Differentiator {
                     ValueId den = builtin("max", {op2(Op::Add, op2(Op::Mul, xx, xx), op2(Op::Mul, y, y)), scalar(1e-30)});
                     return op2(Op::Div, num, den);
                 }
+                if (n == "smoothstep") {
+                    // 6t(1 - t)/(e1 - e0) ∂x inside the edges (constant edges)
+                    if (!t.is_scalar() || T(0) != kZero || T(1) != kZero) return no_rule("smoothstep with varying edges");
+                    ValueId w = op2(Op::Sub, P(1), P(0));
+                    ValueId tt = builtin("clamp", {op2(Op::Div, op2(Op::Sub, P(2), P(0)), w), scalar(0), scalar(1)});
+                    ValueId d = op2(Op::Div, op2(Op::Mul, scalar(6), op2(Op::Mul, tt, op2(Op::Sub, scalar(1), tt))), w);
+                    return mul(d, T(2));
+                }
                 if (n == "clamp") {
                     ValueId inner = select_rows(P(0), P(2), t, CompareKind::Gt, T(2), T(0));  // x > hi ? ∂hi : ∂x
                     ValueId lo_c = P(0);
