@@ -75,6 +75,24 @@ float iqc_eps(float t) {
 {{/if}}
 }
 
+{{#if LIPSCHITZ}}
+// Largest singular value of L (the square root of the largest eigenvalue of LᵀL, in closed form):
+// dividing a distance by it keeps it conservative under any linear map.
+float iqc_max_singular(mat3 L) {
+    mat3 A = transpose(L) * L;
+    float p1 = A[0][1] * A[0][1] + A[0][2] * A[0][2] + A[1][2] * A[1][2];
+    float q = (A[0][0] + A[1][1] + A[2][2]) / 3.0;
+    float p2 = (A[0][0] - q) * (A[0][0] - q) + (A[1][1] - q) * (A[1][1] - q) + (A[2][2] - q) * (A[2][2] - q) + 2.0 * p1;
+    float p = sqrt(p2 / 6.0);
+    if (p < 1.0e-12) return sqrt(max(q, 0.0));
+    mat3 B = (A - q * mat3(1.0)) / p;
+    float r = clamp(determinant(B) / 2.0, -1.0, 1.0);
+    float phi = acos(r) / 3.0;
+    return sqrt(max(q + 2.0 * p * cos(phi), 0.0));
+}
+
+{{/if}}
+
 {{#if MARCH_SPHERE}}
 // Sphere tracing (Hart 1996): step by the distance bound. Starting inside a shape (a negative distance)
 // it marches to that shape's inner wall. When the step cap is reached, the closest approach counts as a
@@ -170,6 +188,16 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     }
     if (best < 10.0) { id = best_id; return best_t; }
     return -1.0;
+}
+{{/if}}
+{{#if PER_INSTANCE}}
+// I♥IQ's architecture (the baseline `iqc bench` compares with): every instance is sphere-traced on its own,
+// its transform inverted for each instance at each pixel; the nearest hit wins.
+float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
+    float best = -1.0;
+    id = -1;
+    steps = 0;
+{{PER_INSTANCE_BODY}}    return best;
 }
 {{/if}}
 {{#if MARCH_FIXED}}
@@ -336,23 +364,6 @@ vec4 iqc_transmission(int id) {
 }
 {{/if}}
 
-{{#if LIPSCHITZ}}
-// Largest singular value of L (the square root of the largest eigenvalue of LᵀL, in closed form):
-// dividing a distance by it keeps it conservative under any linear map.
-float iqc_max_singular(mat3 L) {
-    mat3 A = transpose(L) * L;
-    float p1 = A[0][1] * A[0][1] + A[0][2] * A[0][2] + A[1][2] * A[1][2];
-    float q = (A[0][0] + A[1][1] + A[2][2]) / 3.0;
-    float p2 = (A[0][0] - q) * (A[0][0] - q) + (A[1][1] - q) * (A[1][1] - q) + (A[2][2] - q) * (A[2][2] - q) + 2.0 * p1;
-    float p = sqrt(p2 / 6.0);
-    if (p < 1.0e-12) return sqrt(max(q, 0.0));
-    mat3 B = (A - q * mat3(1.0)) / p;
-    float r = clamp(determinant(B) / 2.0, -1.0, 1.0);
-    float phi = acos(r) / 3.0;
-    return sqrt(max(q + 2.0 * p * cos(phi), 0.0));
-}
-
-{{/if}}
 {{#if PREPARE}}
 // Transforms that change with sliders or time: inverted once per pixel, before any marching.
 void iqc_prepare() {

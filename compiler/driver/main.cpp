@@ -20,6 +20,7 @@
 #include "render/Png.h"
 #include "render/Render.h"
 #include "glsl/ShadertoyWrapper.h"
+#include "bench/Bench.h"
 #include "scene/Compile.h"
 #include "scene/Evaluate.h"
 
@@ -236,6 +237,16 @@ int main(int argc, char** argv) {
     render->add_option("--target", r_target, "which shader to run: shadertoy (default) or webgl2 (its uniforms at their defaults)")
         ->check(CLI::IsMember({"shadertoy", "webgl2"}));
     render->add_flag("--stats", r_stats, "print nan_pixels, steps_mean, steps_p99, evals_mean, evals_p99, frame_ms, renderer");
+    CLI::App* bench = app.add_subcommand(
+        "bench", "measure what accuracy costs in time on this scene: every march method × hit tolerance × step cap × "
+                 "normal method, and I♥IQ's one-march-per-instance architecture, against a reference");
+    std::string b_input, b_size = "160x90", b_csv, b_plot;
+    int b_frames = 5;
+    bench->add_option("input", b_input, "scene (.iq), document (.md) or shape module (.iql)")->required();
+    bench->add_option("--size", b_size, "image size WxH (default 160x90)");
+    bench->add_option("--csv", b_csv, "write the results as CSV");
+    bench->add_option("--plot", b_plot, "write an SVG plot of frame time against depth error (with the Pareto front)");
+    bench->add_option("--frames", b_frames, "timed frames per setting, after a warm-up (default 5)")->check(CLI::Range(1, 1000));
     CLI::App* eval = app.add_subcommand(
         "eval", "evaluate a module in double precision and print every output (a graphing calculator)");
     std::string e_input, e_module;
@@ -286,6 +297,34 @@ int main(int argc, char** argv) {
         if (!text.empty()) std::fputs(text.c_str(), stderr);
         if (!ok) return 1;
         for (const auto& o : outs) std::printf("%s = %s\n", o.name.c_str(), iqc::ir::format_value(o.value).c_str());
+        return 0;
+    }
+    if (bench->parsed()) {
+        iqc::bench::Options bo;
+        bo.input = b_input;
+        bo.frames = b_frames;
+        if (std::sscanf(b_size.c_str(), "%dx%d", &bo.width, &bo.height) != 2 || bo.width < 1 || bo.height < 1) {
+            std::fprintf(stderr, "iqc: error: --size must look like 160x90\n");
+            return 2;
+        }
+        bool tty = isatty(2);
+        auto t0 = std::chrono::steady_clock::now();
+        bo.progress = [&](int done, int total, const std::string& what) {
+            if (tty) std::fprintf(stderr, "\r\033[Kiqc bench: [%d/%d] %s", done, total, what.c_str());
+            else if (done == total) std::fprintf(stderr, "iqc bench: %d settings measured\n", total);
+        };
+        iqc::bench::Report rep = iqc::bench::run(bo);
+        if (tty) std::fprintf(stderr, "\r\033[K");
+        if (!rep.error.empty()) {
+            std::fprintf(stderr, "iqc: error: %s\n", rep.error.c_str());
+            return 1;
+        }
+        double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::printf("iqc bench %s at %dx%d on %s (%.1f s)\n", b_input.c_str(), bo.width, bo.height, rep.renderer.c_str(), secs);
+        std::printf("geometry reference: %s\ncolour reference: %s\n\n", rep.geometry_reference.c_str(), rep.colour_reference.c_str());
+        std::fputs(iqc::bench::table(rep).c_str(), stdout);
+        if (!b_csv.empty() && write_output(b_csv, iqc::bench::csv(rep)) != 0) return 1;
+        if (!b_plot.empty() && write_output(b_plot, iqc::bench::svg(rep, b_input)) != 0) return 1;
         return 0;
     }
     if (!render->parsed() && input.empty()) {

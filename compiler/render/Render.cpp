@@ -576,6 +576,12 @@ RenderResult render_current(const Renderer::State& st, const std::string& fs_sou
         glDisable(GL_SCISSOR_TEST);
     }
     res.frame_ms = ms_since(t_frame);
+    for (int k = 0; k < o.repeat; ++k) {
+        const auto t0 = Clock::now();
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glFinish();
+        res.repeat_ms.push_back(ms_since(t0));
+    }
     if (GLenum err = drain_gl_errors(); err != GL_NO_ERROR) {
         res.error = fmt::format("draw failed: {}", gl_error_name(err));
         return res;

@@ -47,6 +47,9 @@ struct RenderOptions {
     // Draw in horizontal bands of this many rows (0: one draw), reporting progress after each band —
     // long renders then show progress, and drivers with watchdogs get short draws.
     int band_rows = 0;
+    // Draw the frame this many more times after the first and report each draw's time (benchmarks: the
+    // first draw includes the driver's lazy compilation).
+    int repeat = 0;
     std::function<void(int rows_done, int rows_total)> progress;
 };
 
@@ -57,6 +60,7 @@ struct RenderResult {
     std::string renderer;               // GL_RENDERER string (plus a note if the framebuffer is not float)
     double compile_ms = 0;              // compile + link of the shader program
     double frame_ms = 0;                // draw + glFinish
+    std::vector<double> repeat_ms;      // the repeated draws' times (RenderOptions::repeat)
 };
 
 // An EGL/GLES 3 context able to render full-screen fragment shaders offscreen.

@@ -179,7 +179,7 @@ bool SceneCompiler::plan_transform(const InstanceDesc& inst, InstancePlan& plan)
     int fn = lower_module(*m, plan.name + ".transform", plan.name + "_transform", lower_);
     plan.transform = m.get();
     plan.transform_fn = fn;
-    plan.transform_runtime = opts_.target != Target::Shadertoy || uses_inputs(fn);
+    plan.transform_runtime = opts_.target != Target::Shadertoy || uses_inputs(fn) || opts_.per_instance;
     std::vector<ir::Value> args;
     std::vector<std::string> settings;
     for (const auto& p : m->params) {
@@ -487,7 +487,7 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     }
     if (!functions.empty()) functions = "// ---- modules ----" + functions;
     // Transforms, scene body, materials.
-    std::string transforms, prepare, body, shade, gradient, reflect, transmit;
+    std::string transforms, prepare, body, shade, gradient, reflect, transmit, per_instance;
     bool lipschitz = false;
     for (size_t i = 0; i < plans.size(); ++i) {
         InstancePlan& p = plans[i];
@@ -549,6 +549,26 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
             }
         }
         body += fmt::format("    d = {};  // {}\n", call, p.name);
+        if (opts_.per_instance) {
+            std::vector<std::string> pargs = args;
+            pargs[size_t(p.query)] = "o + t * dir";
+            std::string inv = "mat4(1.0)";
+            if (p.has_transform) {
+                std::vector<std::string> targs;
+                for (const auto& pi : p.transform->params) targs.push_back(p.constants.at("transform." + pi.name));
+                inv = fmt::format("inverse({}({}))", em.function_name(p.transform_fn), fmt::join(targs, ", "));
+            }
+            std::string step = fmt::format("{}({})", em.function_name(p.shape_fn), fmt::join(pargs, ", "));
+            if (p.has_transform) step += " / iqc_max_singular(mat3(inv))";
+            if (p.shape->lipschitz != 1) step += fmt::format(" / {}", glsl::float_literal(p.shape->lipschitz));
+            per_instance += fmt::format(
+                "    {{  // {}\n        mat4 inv = {};\n        vec3 o = (inv * vec4(ro, 1.0)).xyz;\n        vec3 dir = mat3(inv) * rd;\n"
+                "        float t = 0.0;\n        for (int k = 0; k < IQC_MAX_STEPS; k++) {{\n{}"
+                "            float h = {};\n            steps++;\n"
+                "            if (abs(h) < iqc_eps(t)) {{\n                if (id < 0 || t < best) {{ best = t; id = {}; }}\n"
+                "                break;\n            }}\n            t += h;\n            if (t > IQC_MAX_DIST) break;\n        }}\n    }}\n",
+                p.name, inv, opts_.instrument ? "            iqc_evals++;\n" : "", step, i);
+        }
         body += fmt::format("    if (d < res.x) res = vec2(d, {});\n", glsl::float_literal(double(i)));
         if (p.material) {
             const auto& mp = p.material->params;
@@ -630,9 +650,11 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     V["GRADIENT_BODY"] = gradient;
     V["REFLECT_BODY"] = reflect;
     V["TRANSMIT_BODY"] = transmit;
+    V["PER_INSTANCE_BODY"] = per_instance;
     F.insert(opts_.target == Target::Shadertoy ? "SHADERTOY" : opts_.target == Target::WebGL2 ? "WEBGL2" : "GLSL330");
     static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO"};
-    F.insert(marches[int(march)]);
+    F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march)]);
+    if (opts_.per_instance) lipschitz = true;
     static const char* normal_flags[] = {"NORMALS_CENTRAL", "NORMALS_FORWARD", "NORMALS_TETRAHEDRON", "NORMALS_ANALYTIC"};
     F.insert(normal_flags[int(normals)]);
     if (render.hit_relative) F.insert("HIT_RELATIVE");

@@ -38,6 +38,8 @@ struct CompileOptions {
     std::optional<Normals> normals;
     std::optional<double> hit;
     std::optional<int> max_steps;
+    // Benchmark baseline: I♥IQ's architecture (one march per instance, transforms inverted per instance).
+    bool per_instance = false;
 };
 
 struct CompileResult {

@@ -1,0 +1,323 @@
+#include "bench/Bench.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fmt/format.h>
+#include <map>
+#include <set>
+
+#include "glsl/ShadertoyWrapper.h"
+#include "render/Render.h"
+#include "scene/Compile.h"
+
+namespace iqc::bench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double percentile(std::vector<double> v, double q) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v[size_t(q * double(v.size() - 1) + 0.5)];
+}
+
+std::optional<March> parse_march(const std::string& s) {
+    if (s == "fixed") return March::Fixed;
+    if (s == "sphere") return March::Sphere;
+    if (s == "relaxed") return March::Relaxed;
+    if (s == "auto") return March::Auto;
+    return std::nullopt;
+}
+std::optional<Normals> parse_normals(const std::string& s) {
+    if (s == "central") return Normals::Central;
+    if (s == "forward") return Normals::Forward;
+    if (s == "tetrahedron") return Normals::Tetrahedron;
+    if (s == "analytic") return Normals::Analytic;
+    return std::nullopt;
+}
+
+struct Setting {
+    std::string method;  // a march method or "per_instance"
+    double hit;
+    int max_steps;
+    std::string normals;
+};
+
+struct Geometry {
+    std::vector<float> t;      // -1: no hit
+    std::vector<float> n;      // 3 per pixel
+};
+
+}  // namespace
+
+Report run(const Options& o) {
+    Report rep;
+    std::string err;
+    auto renderer = render::Renderer::create(&err);
+    if (!renderer) {
+        rep.error = "no headless renderer: " + err;
+        return rep;
+    }
+    rep.renderer = renderer->renderer_name();
+    const int W = o.width, H = o.height;
+    const size_t N = size_t(W) * size_t(H);
+
+    auto compile = [&](const Setting& s, bool instrument, bool geometry) -> CompileResult {
+        SourceManager sm;
+        Diagnostics d(sm);
+        CompileOptions co;
+        co.instrument = instrument;
+        co.geometry = geometry;
+        co.per_instance = s.method == "per_instance";
+        if (auto m = parse_march(s.method)) co.march = m;
+        co.normals = parse_normals(s.normals);
+        co.hit = s.hit;
+        co.max_steps = s.max_steps;
+        CompileResult r = compile_file(o.input, sm, d, co);
+        if (r.exit_code != 0) err = d.render() + r.internal;
+        return r;
+    };
+    auto render = [&](const std::string& code, int repeat, render::RenderResult& out) {
+        render::RenderOptions ro;
+        ro.width = W;
+        ro.height = H;
+        ro.repeat = repeat;
+        out = renderer->render(glsl::wrap_shadertoy(code), ro);
+        if (!out.ok) err = out.error;
+        return out.ok;
+    };
+
+    // The scene's own settings, and the model for the double-precision reference.
+    CompileResult base = compile({"sphere", 1e-3, 128, "tetrahedron"}, false, false);
+    if (base.exit_code != 0) {
+        rep.error = err;
+        return rep;
+    }
+    const SceneModel& model = *base.model;
+    double min_hit = *std::min_element(o.hits.begin(), o.hits.end());
+    int max_cap = *std::max_element(o.step_caps.begin(), o.step_caps.end());
+    Setting best{"sphere", min_hit, max_cap, "analytic"};
+
+    // Geometry reference: the evaluator when it fits in ~8 s (estimated from a sample), else the most
+    // accurate setting on the renderer.
+    Geometry ref;
+    ref.t.assign(N, -1);
+    ref.n.assign(3 * N, 0);
+    {
+        auto t0 = Clock::now();
+        int sampled = 0;
+        for (int k = 0; k < 64; ++k) {
+            int x = (k * 37) % W, y = (k * 17) % H;
+            std::array<double, 3> ro, rd;
+            model.ray(x, y, W, H, ro, rd);
+            model.trace(ro, rd);
+            ++sampled;
+        }
+        double per_pixel = std::chrono::duration<double>(Clock::now() - t0).count() / sampled;
+        if (per_pixel * double(N) < 8.0) {
+            for (int y = 0; y < H; ++y) {
+                for (int x = 0; x < W; ++x) {
+                    std::array<double, 3> ro, rd;
+                    model.ray(x, y, W, H, ro, rd);
+                    double t = model.trace(ro, rd);
+                    size_t i = size_t(y) * size_t(W) + size_t(x);
+                    ref.t[i] = float(t);
+                    if (t >= 0) {
+                        auto n = model.normal({ro[0] + t * rd[0], ro[1] + t * rd[1], ro[2] + t * rd[2]});
+                        for (int c = 0; c < 3; ++c) ref.n[3 * i + size_t(c)] = float(n[size_t(c)]);
+                    }
+                }
+                if (o.progress) o.progress(0, 1, fmt::format("reference: row {}/{}", y + 1, H));
+            }
+            rep.geometry_reference = "the double-precision evaluator (the scene's IR ray cast on the CPU)";
+        } else {
+            CompileResult g = compile(best, false, true);
+            render::RenderResult r;
+            if (g.exit_code != 0 || !render(g.code, 0, r)) {
+                rep.error = err;
+                return rep;
+            }
+            for (int y = 0; y < H; ++y)
+                for (int x = 0; x < W; ++x) {
+                    size_t i = size_t(y) * size_t(W) + size_t(x);
+                    const float* p = r.image.pixel(x, y);
+                    ref.t[i] = p[0];
+                    for (int c = 0; c < 3; ++c) ref.n[3 * i + size_t(c)] = p[1 + c];
+                }
+            rep.geometry_reference = fmt::format("the most accurate setting (march {}, hit {}, max_steps {}, normals {}) — the "
+                                                 "evaluator would take about {:.0f} s at this size",
+                                                 best.method, best.hit, best.max_steps, best.normals, per_pixel * double(N));
+        }
+    }
+    // Colour reference: the most accurate setting.
+    std::vector<float> ref_colour;
+    {
+        CompileResult c = compile(best, false, false);
+        render::RenderResult r;
+        if (c.exit_code != 0 || !render(c.code, 0, r)) {
+            rep.error = err;
+            return rep;
+        }
+        ref_colour = r.image.rgba;
+        rep.colour_reference = fmt::format("march {}, hit {}, max_steps {}, normals {}", best.method, best.hit, best.max_steps,
+                                           best.normals);
+    }
+
+    std::vector<Setting> settings;
+    for (const auto& m : o.marches)
+        for (double h : o.hits)
+            for (int cap : o.step_caps)
+                for (const auto& n : o.normals) settings.push_back({m, h, cap, n});
+    if (o.per_instance) settings.push_back({"per_instance", model.render.hit, model.render.max_steps, "tetrahedron"});
+
+    for (size_t si = 0; si < settings.size(); ++si) {
+        const Setting& s = settings[si];
+        if (o.progress)
+            o.progress(int(si), int(settings.size()),
+                       fmt::format("{} hit {} max_steps {} normals {}", s.method, s.hit, s.max_steps, s.normals));
+        Row row{s.method, s.hit, s.max_steps, s.normals};
+        CompileResult colour = compile(s, false, false), inst = compile(s, true, false), geo = compile(s, false, true);
+        render::RenderResult rc, ri, rg;
+        if (colour.exit_code != 0 || inst.exit_code != 0 || geo.exit_code != 0 || !render(colour.code, o.frames, rc) ||
+            !render(inst.code, 0, ri) || !render(geo.code, 0, rg)) {
+            rep.error = err;
+            return rep;
+        }
+        std::vector<double> times(rc.repeat_ms.begin(), rc.repeat_ms.end());
+        row.frame_ms = percentile(times, 0.5);
+        std::vector<double> evals, depth, angle;
+        long mismatch = 0;
+        double mse = 0;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                size_t i = size_t(y) * size_t(W) + size_t(x);
+                evals.push_back(ri.image.pixel(x, y)[1]);
+                const float* g = rg.image.pixel(x, y);
+                bool gh = g[0] >= 0, rh = ref.t[i] >= 0;
+                if (gh != rh) ++mismatch;
+                if (gh && rh) {
+                    depth.push_back(std::fabs(double(g[0]) - ref.t[i]));
+                    double gl = std::sqrt(double(g[1]) * g[1] + double(g[2]) * g[2] + double(g[3]) * g[3]);
+                    double dotp = gl > 0 ? (g[1] * ref.n[3 * i] + g[2] * ref.n[3 * i + 1] + g[3] * ref.n[3 * i + 2]) / gl : -1;
+                    angle.push_back(std::acos(std::clamp(dotp, -1.0, 1.0)) * 180.0 / M_PI);
+                }
+                const float* c = rc.image.pixel(x, y);
+                for (int k = 0; k < 3; ++k) {
+                    double a = std::clamp(double(c[k]), 0.0, 1.0), b = std::clamp(double(ref_colour[4 * i + size_t(k)]), 0.0, 1.0);
+                    mse += (a - b) * (a - b);
+                }
+            }
+        double sum = 0;
+        for (double e : evals) sum += e;
+        row.evals_mean = sum / double(evals.size());
+        row.evals_p99 = percentile(evals, 0.99);
+        row.hit_mismatch_pct = 100.0 * double(mismatch) / double(N);
+        row.depth_err_p99 = percentile(depth, 0.99);
+        row.normal_err_deg_p99 = percentile(angle, 0.99);
+        mse /= double(3 * N);
+        row.psnr_db = mse <= 1e-10 ? 100.0 : std::min(100.0, 10.0 * std::log10(1.0 / mse));
+        rep.rows.push_back(row);
+    }
+    if (o.progress) o.progress(int(settings.size()), int(settings.size()), "done");
+    return rep;
+}
+
+std::string csv(const Report& r) {
+    std::string out =
+        "method,hit,max_steps,normals,frame_ms,evals_per_pixel_mean,evals_per_pixel_p99,hit_mismatch_pct,depth_err_p99,"
+        "normal_err_deg_p99,psnr_db\n";
+    for (const auto& x : r.rows)
+        out += fmt::format("{},{},{},{},{:.3f},{:.3f},{:.0f},{:.3f},{:.3g},{:.3g},{:.2f}\n", x.method, x.hit, x.max_steps, x.normals,
+                           x.frame_ms, x.evals_mean, x.evals_p99, x.hit_mismatch_pct, x.depth_err_p99, x.normal_err_deg_p99,
+                           x.psnr_db);
+    return out;
+}
+
+std::string table(const Report& r) {
+    std::string out = fmt::format("{:<13} {:>7} {:>6} {:<12} {:>9} {:>10} {:>9} {:>9} {:>10} {:>10} {:>7}\n", "method", "hit",
+                                  "steps", "normals", "frame ms", "evals/px", "evals p99", "miss %", "depth p99",
+                                  "normal p99", "PSNR");
+    for (const auto& x : r.rows)
+        out += fmt::format("{:<13} {:>7} {:>6} {:<12} {:>9.2f} {:>10.2f} {:>9.0f} {:>9.3f} {:>10.3g} {:>9.3g}° {:>7.1f}\n", x.method,
+                           x.hit, x.max_steps, x.normals, x.frame_ms, x.evals_mean, x.evals_p99, x.hit_mismatch_pct,
+                           x.depth_err_p99, x.normal_err_deg_p99, x.psnr_db);
+    return out;
+}
+
+std::string svg(const Report& r, const std::string& title) {
+    const double W = 760, H = 480, L = 80, R = 170, T = 50, B = 60;
+    double tmin = 1e30, tmax = 0, emin = 1e30, emax = 0;
+    auto err = [](const Row& x) { return std::max(x.depth_err_p99, 1e-7); };
+    for (const auto& x : r.rows) {
+        tmin = std::min(tmin, x.frame_ms);
+        tmax = std::max(tmax, x.frame_ms);
+        emin = std::min(emin, err(x));
+        emax = std::max(emax, err(x));
+    }
+    if (r.rows.empty()) return "<svg xmlns=\"http://www.w3.org/2000/svg\"/>\n";
+    if (tmax <= tmin) tmax = tmin + 1;
+    double lmin = std::floor(std::log10(emin)), lmax = std::ceil(std::log10(emax));
+    if (lmax <= lmin) lmax = lmin + 1;
+    double t0 = std::max(0.0, tmin - 0.05 * (tmax - tmin)), t1 = tmax + 0.05 * (tmax - tmin);
+    auto X = [&](double t) { return L + (t - t0) / (t1 - t0) * (W - L - R); };
+    auto Y = [&](double e) { return T + (lmax - std::log10(e)) / (lmax - lmin) * (H - T - B); };
+    std::map<std::string, std::string> colours = {{"fixed", "#7f7f7f"}, {"sphere", "#1f77b4"}, {"relaxed", "#2ca02c"},
+                                                  {"auto", "#d62728"}, {"per_instance", "#9467bd"}};
+    std::string s = fmt::format("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" "
+                                "font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
+                                W, H);
+    s += fmt::format("<text x=\"{}\" y=\"24\" font-size=\"15\">{}</text>\n", L, title);
+    // Axes and grid.
+    s += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\"/>\n", L, H - B, W - R, H - B);
+    s += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\"/>\n", L, T, L, H - B);
+    for (int k = 0; k <= 5; ++k) {
+        double t = t0 + (t1 - t0) * k / 5;
+        s += fmt::format("<text x=\"{:.1f}\" y=\"{}\" text-anchor=\"middle\">{:.1f}</text>\n", X(t), H - B + 18, t);
+    }
+    for (double l = lmin; l <= lmax; l += 1) {
+        s += fmt::format("<line x1=\"{}\" y1=\"{:.1f}\" x2=\"{}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>\n", L, Y(std::pow(10, l)), W - R,
+                         Y(std::pow(10, l)));
+        s += fmt::format("<text x=\"{}\" y=\"{:.1f}\" text-anchor=\"end\">1e{:.0f}</text>\n", L - 6, Y(std::pow(10, l)) + 4, l);
+    }
+    s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">frame time (ms, median)</text>\n", (L + W - R) / 2, H - 18);
+    s += fmt::format("<text transform=\"translate(20,{}) rotate(-90)\" text-anchor=\"middle\">depth error, 99th percentile</text>\n",
+                     (T + H - B) / 2);
+    // Pareto front: no other setting is both faster and more accurate.
+    std::vector<const Row*> rows;
+    for (const auto& x : r.rows) rows.push_back(&x);
+    std::sort(rows.begin(), rows.end(), [&](const Row* a, const Row* b) {
+        return a->frame_ms != b->frame_ms ? a->frame_ms < b->frame_ms : err(*a) < err(*b);
+    });
+    std::string front;
+    double best = 1e300;
+    for (const Row* x : rows)
+        if (err(*x) < best) {
+            best = err(*x);
+            front += fmt::format("{:.1f},{:.1f} ", X(x->frame_ms), Y(err(*x)));
+        }
+    s += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"black\" stroke-dasharray=\"4 3\"/>\n", front);
+    for (const auto& x : r.rows) {
+        std::string c = colours.count(x.method) ? colours[x.method] : "black";
+        s += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3.5\" fill=\"{}\" fill-opacity=\"0.75\"><title>{} hit {} steps {} "
+                         "normals {}: {:.2f} ms, depth p99 {:.3g}, {:.1f} evals/px</title></circle>\n",
+                         X(x.frame_ms), Y(err(x)), c, x.method, x.hit, x.max_steps, x.normals, x.frame_ms, x.depth_err_p99,
+                         x.evals_mean);
+    }
+    double ly = T + 10;
+    for (const auto& [m, c] : colours) {
+        bool present = std::any_of(r.rows.begin(), r.rows.end(), [&](const Row& x) { return x.method == m; });
+        if (!present) continue;
+        s += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"5\" fill=\"{}\"/><text x=\"{}\" y=\"{}\">{}</text>\n", W - R + 20, ly, c,
+                         W - R + 32, ly + 4, m);
+        ly += 20;
+    }
+    s += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\" stroke-dasharray=\"4 3\"/><text x=\"{}\" "
+                     "y=\"{}\">Pareto front</text>\n",
+                     W - R + 12, ly, W - R + 28, ly, W - R + 32, ly + 4);
+    s += "</svg>\n";
+    return s;
+}
+
+}  // namespace iqc::bench
