@@ -92,7 +92,6 @@ float iqc_max_singular(mat3 L) {
 }
 
 {{/if}}
-
 {{#if MARCH_SPHERE}}
 // Sphere tracing (Hart 1996): step by the distance bound. Starting inside a shape (a negative distance)
 // it marches to that shape's inner wall. When the step cap is reached, the closest approach counts as a
