@@ -238,7 +238,15 @@ vec3 iqc_normal(vec3 p, float t, int id) {
     float h = 0.5 * iqc_eps(t);
     vec3 n = vec3(0.0);
     for (int i = min(iFrame, 0); i < 4; i++) n += k[i] * iqc_scene(p + h * k[i]).x;
-    return normalize(n);
+    if (dot(n, n) < 1.0e-24) {
+        // The four taps cancel (faces aligned with the tetrahedron): differences along the axes instead.
+        for (int i = min(iFrame, 0); i < 3; i++) {
+            vec3 e = vec3(0.0);
+            e[i] = h;
+            n[i] = iqc_scene(p + e).x - iqc_scene(p - e).x;
+        }
+    }
+    return dot(n, n) > 0.0 ? normalize(n) : vec3(0.0, 1.0, 0.0);
 }
 {{/if}}
 {{#if NORMALS_CENTRAL}}
@@ -251,7 +259,7 @@ vec3 iqc_normal(vec3 p, float t, int id) {
         e[i] = h;
         n[i] = iqc_scene(p + e).x - iqc_scene(p - e).x;
     }
-    return normalize(n);
+    return dot(n, n) > 0.0 ? normalize(n) : vec3(0.0, 1.0, 0.0);  // a flat field: no direction
 }
 {{/if}}
 {{#if NORMALS_FORWARD}}
@@ -265,7 +273,7 @@ vec3 iqc_normal(vec3 p, float t, int id) {
         e[i] = h;
         n[i] = iqc_scene(p + e).x - d0;
     }
-    return normalize(n);
+    return dot(n, n) > 0.0 ? normalize(n) : vec3(0.0, 1.0, 0.0);  // a flat field: no direction
 }
 {{/if}}
 {{#if NORMALS_ANALYTIC}}

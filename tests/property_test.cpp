@@ -136,7 +136,7 @@ std::vector<ShapeSource> all_shapes(SourceManager& sm, Diagnostics& d) {
             std::string text = read_text(p);
             FileId f = sm.add(p.string(), text);
             out.push_back({p.filename().string(), p.stem().string(), {p.stem().string(), f, {{0, uint32_t(text.size())}}, {f, 0, 1}, "file"},
-                           text.find("# exact") != std::string::npos});
+                           false});  // exactness comes from the module's `# exact` pragma
             return;
         }
         auto* desc = new SceneDesc();  // kept alive: the module sources point into it
@@ -144,7 +144,7 @@ std::vector<ShapeSource> all_shapes(SourceManager& sm, Diagnostics& d) {
         for (const auto& m : desc->modules) {
             std::string text;
             for (auto& r : m.ranges) text += std::string(sm.text(m.file).substr(r.begin, r.end - r.begin));
-            out.push_back({p.filename().string() + ":" + m.name, m.name, m, text.find("# exact") != std::string::npos});
+            out.push_back({p.filename().string() + ":" + m.name, m.name, m, false});
         }
     };
     // (tests/hardcases/ holds deliberately bad formulas, such as an angular term with an unbounded slope.)

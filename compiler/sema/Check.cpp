@@ -958,6 +958,21 @@ Type Checker::check(Expr& e) {
         }
         case ExprKind::Power: {
             Type a = check(*e.args[0]);
+            // a(3)² with a value a is a·(3)², not (a·3)²: the power belongs to the parenthesis.
+            if (e.args[0]->kind == ExprKind::Call && e.args[0]->resolved == R_Scale) {
+                ExprPtr call = std::move(e.args[0]);
+                ExprPtr exponent = std::move(e.args[1]);
+                auto power = std::make_unique<Expr>(ExprKind::Power, Span::join(call->args[1]->span, exponent->span));
+                power->args.push_back(std::move(call->args[1]));
+                power->args.push_back(std::move(exponent));
+                e.kind = ExprKind::Binary;
+                e.op = BinOp::Juxtapose;
+                e.args.clear();
+                e.args.push_back(std::move(call->args[0]));
+                e.args.push_back(std::move(power));
+                t = check(e);
+                break;
+            }
             Type b = check(*e.args[1]);
             if (!a.valid() || !b.valid()) break;
             if (a.is_scalar() && b.is_scalar()) {

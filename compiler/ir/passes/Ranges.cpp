@@ -72,8 +72,30 @@ struct Analyzer {
         auto each = [&](auto fn) {
             for (size_t k = 0; k < comps; ++k) x.c[k] = fn(k);
         };
-        if (n == "sin" || n == "cos") each([&](size_t) { return Interval{-1, 1}; });
+        if (n == "sin" || n == "cos") {
+            // Exact on an interval: the ends and any extremum (multiples of π/2) inside it.
+            bool is_sin = n == "sin";
+            each([&](size_t k) {
+                Interval a = comp(in.args[0], k);
+                if (!(a.hi - a.lo < 2 * M_PI) || std::isinf(a.lo) || std::isinf(a.hi)) return Interval{-1, 1};
+                auto fn = [&](double v) { return is_sin ? std::sin(v) : std::cos(v); };
+                Interval out{std::min(fn(a.lo), fn(a.hi)), std::max(fn(a.lo), fn(a.hi))};
+                double shift = is_sin ? M_PI / 2 : 0;  // sin peaks at π/2 + kπ, cos at kπ
+                for (double c = std::ceil((a.lo - shift) / M_PI) * M_PI + shift; c <= a.hi; c += M_PI) {
+                    out.lo = std::min(out.lo, fn(c));
+                    out.hi = std::max(out.hi, fn(c));
+                }
+                return out;
+            });
+        } else if (n == "tan") {
+            each([&](size_t k) {
+                Interval a = comp(in.args[0], k);
+                if (a.lo > -M_PI / 2 && a.hi < M_PI / 2) return Interval{std::tan(a.lo), std::tan(a.hi)};
+                return unknown();
+            });
+        }
         else if (n == "tanh") each([&](size_t) { return Interval{-1, 1}; });
+        else if (n == "smoothstep") each([&](size_t) { return Interval{0, 1}; });
         else if (n == "exp") each([&](size_t k) { return monotone(comp(in.args[0], k), [](double v) { return std::exp(v); }); });
         else if (n == "abs")
             each([&](size_t k) {
@@ -159,6 +181,14 @@ struct Analyzer {
             case Op::Mul:
             case Op::Hadamard: {
                 const Type &a = f.body[in.args[0]].type, &b = f.body[in.args[1]].type;
+                if (in.args[0] == in.args[1] && !in.type.is_matrix()) {  // a square is never negative
+                    for (size_t k = 0; k < comps; ++k) {
+                        Interval v = comp(in.args[0], k);
+                        double lo = contains_zero(v) ? 0 : std::min(v.lo * v.lo, v.hi * v.hi);
+                        x.c[k] = {lo, std::max(v.lo * v.lo, v.hi * v.hi)};
+                    }
+                    return x;
+                }
                 if ((a.is_scalar() || b.is_scalar() || in.op == Op::Hadamard) && !in.type.is_matrix())
                     for (size_t k = 0; k < comps; ++k) x.c[k] = mul(comp(in.args[0], k), comp(in.args[1], k));
                 return x;
@@ -183,6 +213,16 @@ struct Analyzer {
             case Op::Dot: {
                 if (r[in.args[0]].unit && r[in.args[1]].unit) {
                     x.c = {{-1, 1}};
+                    return x;
+                }
+                if (in.args[0] == in.args[1]) {  // v⋅v = ‖v‖² ≥ 0
+                    double lo = 0, hi = 0;
+                    for (size_t k = 0; k < r[in.args[0]].c.size(); ++k) {
+                        Interval v = comp(in.args[0], k);
+                        lo += contains_zero(v) ? 0 : std::min(v.lo * v.lo, v.hi * v.hi);
+                        hi += std::max(v.lo * v.lo, v.hi * v.hi);
+                    }
+                    x.c = {{lo, hi}};
                     return x;
                 }
                 Interval s{0, 0};
