@@ -22,9 +22,16 @@ out vec4 iqc_fragColor;
 // One scene distance function (every instance in its own object space) is marched once per pixel.
 
 // ---- settings ----
+{{#if BENCH}}
+// Benchmark build: one program serves every hit tolerance, step cap and output (uniforms).
+uniform int IQC_MAX_STEPS;
+uniform float IQC_HIT;
+uniform int iqc_mode;  // 0: colour, 1: counts (steps, evaluations, NaN flag), 2: geometry (distance, normal)
+{{#else}}
 const int IQC_MAX_STEPS = {{MAX_STEPS}};
-const float IQC_MAX_DIST = {{MAX_DIST}};
 const float IQC_HIT = {{HIT}};  // {{HIT_DOC}}
+{{/if}}
+const float IQC_MAX_DIST = {{MAX_DIST}};
 const vec3 IQC_BACKGROUND = {{BACKGROUND}};
 const vec3 IQC_CAMERA_POSITION = {{CAMERA_POSITION}};
 const vec3 IQC_CAMERA_TARGET = {{CAMERA_TARGET}};
@@ -192,11 +199,37 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{#if PER_INSTANCE}}
 // I♥IQ's architecture (the baseline `iqc bench` compares with): every instance is sphere-traced on its own,
 // its transform inverted for each instance at each pixel; the nearest hit wins.
+mat4 iqc_instance_to_object(int i) {
+{{PER_INSTANCE_INVERSE}}    return mat4(1.0);
+}
+float iqc_instance_distance(int i, vec3 q) {
+{{PER_INSTANCE_DISTANCE}}    return IQC_MAX_DIST * 2.0;
+}
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float best = -1.0;
     id = -1;
     steps = 0;
-{{PER_INSTANCE_BODY}}    return best;
+    for (int i = 0; i < {{INSTANCES}}; i++) {
+        mat4 inv = iqc_instance_to_object(i);
+        vec3 o = (inv * vec4(ro, 1.0)).xyz;
+        vec3 dir = mat3(inv) * rd;
+        float scale = 1.0 / iqc_max_singular(mat3(inv));
+        float t = 0.0;
+        for (int k = 0; k < IQC_MAX_STEPS; k++) {
+{{#if INSTRUMENT}}
+            iqc_evals++;
+{{/if}}
+            float h = iqc_instance_distance(i, o + t * dir) * scale;
+            steps++;
+            if (abs(h) < iqc_eps(t)) {
+                if (id < 0 || t < best) { best = t; id = i; }
+                break;
+            }
+            t += h;
+            if (t > IQC_MAX_DIST) break;
+        }
+    }
+    return best;
 }
 {{/if}}
 {{#if MARCH_FIXED}}
@@ -476,13 +509,19 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     vec3 right = normalize(cross(up, forward));
     mat3 basis = mat3(right, cross(forward, right), forward);
 {{#if GEOMETRY}}
-    // Geometry probe (tests): the primary ray's distance (-1: no hit) and the unit normal, unclamped.
-    vec2 uv0 = (2.0 * fragCoord - iResolution.xy) / iResolution.y;
-    vec3 rd0 = normalize(basis * vec3(uv0, IQC_CAMERA_FOCAL));
-    int gid, gsteps;
-    float gt = iqc_march(eye, rd0, gid, gsteps);
-    fragColor = gid < 0 ? vec4(-1.0, 0.0, 0.0, 0.0) : vec4(gt, iqc_normal(eye + gt * rd0, gt, gid));
-    return;
+{{#if BENCH}}
+    if (iqc_mode == 2) {
+{{#else}}
+    {
+{{/if}}
+        // Geometry probe (tests): the primary ray's distance (-1: no hit) and the unit normal, unclamped.
+        vec2 uv0 = (2.0 * fragCoord - iResolution.xy) / iResolution.y;
+        vec3 rd0 = normalize(basis * vec3(uv0, IQC_CAMERA_FOCAL));
+        int gid, gsteps;
+        float gt = iqc_march(eye, rd0, gid, gsteps);
+        fragColor = gid < 0 ? vec4(-1.0, 0.0, 0.0, 0.0) : vec4(gt, iqc_normal(eye + gt * rd0, gt, gid));
+        return;
+    }
 {{/if}}
 {{#if AA}}
     vec3 col = vec3(0.0);
@@ -498,6 +537,12 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     vec3 col = iqc_trace(eye, normalize(basis * vec3(uv, IQC_CAMERA_FOCAL)));
 {{/if}}
 {{#if INSTRUMENT}}
+{{#if BENCH}}
+    if (iqc_mode == 0) {
+        fragColor = vec4(clamp(col, 0.0, 1.0), 1.0);
+        return;
+    }
+{{/if}}
     // Instrumented build: march steps of the camera ray, scene evaluations in the pixel, NaN flag.
     bool bad = any(isnan(col)) || any(isinf(col));
     fragColor = vec4(float(iqc_primary_steps), float(iqc_evals), bad ? 1.0 : 0.0, 1.0);

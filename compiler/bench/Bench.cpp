@@ -167,21 +167,49 @@ Report run(const Options& o) {
 
     std::vector<Setting> settings;
     for (const auto& m : o.marches)
-        for (double h : o.hits)
-            for (int cap : o.step_caps)
-                for (const auto& n : o.normals) settings.push_back({m, h, cap, n});
+        for (const auto& n : o.normals)
+            for (double h : o.hits)
+                for (int cap : o.step_caps) settings.push_back({m, h, cap, n});
     if (o.per_instance) settings.push_back({"per_instance", model.render.hit, model.render.max_steps, "tetrahedron"});
 
+    // One benchmark build per (method, normals): the hit tolerance, the step cap and the output are uniforms.
+    std::string bench_code;
+    std::pair<std::string, std::string> built;
     for (size_t si = 0; si < settings.size(); ++si) {
         const Setting& s = settings[si];
         if (o.progress)
             o.progress(int(si), int(settings.size()),
                        fmt::format("{} hit {} max_steps {} normals {}", s.method, s.hit, s.max_steps, s.normals));
+        if (built != std::make_pair(s.method, s.normals) || bench_code.empty()) {
+            SourceManager sm;
+            Diagnostics d(sm);
+            CompileOptions co;
+            co.bench = true;
+            co.per_instance = s.method == "per_instance";
+            if (auto m = parse_march(s.method)) co.march = m;
+            co.normals = parse_normals(s.normals);
+            CompileResult r = compile_file(o.input, sm, d, co);
+            if (r.exit_code != 0) {
+                rep.error = d.render() + r.internal;
+                return rep;
+            }
+            bench_code = glsl::wrap_shadertoy(r.code);
+            built = {s.method, s.normals};
+        }
+        auto draw = [&](int mode, int repeat, render::RenderResult& out) {
+            render::RenderOptions ro;
+            ro.width = W;
+            ro.height = H;
+            ro.repeat = repeat;
+            ro.int_uniforms = {{"iqc_mode", mode}, {"IQC_MAX_STEPS", s.max_steps}};
+            ro.uniforms = {{"IQC_HIT", {float(s.hit)}}};
+            out = renderer->render(bench_code, ro);
+            if (!out.ok) err = out.error;
+            return out.ok;
+        };
         Row row{s.method, s.hit, s.max_steps, s.normals};
-        CompileResult colour = compile(s, false, false), inst = compile(s, true, false), geo = compile(s, false, true);
         render::RenderResult rc, ri, rg;
-        if (colour.exit_code != 0 || inst.exit_code != 0 || geo.exit_code != 0 || !render(colour.code, o.frames, rc) ||
-            !render(inst.code, 0, ri) || !render(geo.code, 0, rg)) {
+        if (!draw(0, o.frames, rc) || !draw(1, 0, ri) || !draw(2, 0, rg)) {
             rep.error = err;
             return rep;
         }

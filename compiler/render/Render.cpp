@@ -250,6 +250,11 @@ struct Renderer::State {
 
     GLint max_size = 0;  // largest width/height we can render
 
+    // The last program, kept for the next render of the same source (benchmarks render one program many
+    // times with other uniforms). Freed with the context.
+    std::string cached_source;
+    GLuint cached_program = 0;
+
     bool make_current() { return eglMakeCurrent(display, surface, surface, context) == EGL_TRUE; }
     void release_current() { eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT); }
 
@@ -485,7 +490,7 @@ void set_shadertoy_uniforms(GLuint program, const RenderOptions& o) {
 }
 
 // The body of Renderer::render, with the context current.
-RenderResult render_current(const Renderer::State& st, const std::string& fs_source, const RenderOptions& o) {
+RenderResult render_current(Renderer::State& st, const std::string& fs_source, const RenderOptions& o) {
     RenderResult res;
     res.renderer = st.gl_renderer;
     if (!st.format_note.empty()) res.renderer += " [" + st.format_note + "]";
@@ -499,21 +504,34 @@ RenderResult render_current(const Renderer::State& st, const std::string& fs_sou
     GlObjects gl;
     drain_gl_errors();
 
-    // Compile and link.
+    // Compile and link (or reuse the program of the previous render of the same source).
     const auto t_compile = Clock::now();
-    if (!compile_shader(GL_VERTEX_SHADER, kVertexShader, gl.vs, &res.error)) return res;
-    if (!compile_shader(GL_FRAGMENT_SHADER, fs_source, gl.fs, &res.error)) return res;
-    gl.program = glCreateProgram();
-    glAttachShader(gl.program, gl.vs);
-    glAttachShader(gl.program, gl.fs);
-    glLinkProgram(gl.program);
-    GLint linked = GL_FALSE;
-    glGetProgramiv(gl.program, GL_LINK_STATUS, &linked);
-    res.compile_ms = ms_since(t_compile);
-    if (linked != GL_TRUE) {
-        res.error = "shader program link failed:\n" + program_log(gl.program);
-        return res;
+    if (st.cached_program && st.cached_source == fs_source) {
+        gl.program = st.cached_program;
+    } else {
+        if (st.cached_program) {
+            glDeleteProgram(st.cached_program);
+            st.cached_program = 0;
+            st.cached_source.clear();
+        }
+        if (!compile_shader(GL_VERTEX_SHADER, kVertexShader, gl.vs, &res.error)) return res;
+        if (!compile_shader(GL_FRAGMENT_SHADER, fs_source, gl.fs, &res.error)) return res;
+        gl.program = glCreateProgram();
+        glAttachShader(gl.program, gl.vs);
+        glAttachShader(gl.program, gl.fs);
+        glLinkProgram(gl.program);
+        GLint linked = GL_FALSE;
+        glGetProgramiv(gl.program, GL_LINK_STATUS, &linked);
+        if (linked != GL_TRUE) {
+            res.error = "shader program link failed:\n" + program_log(gl.program);
+            return res;
+        }
+        st.cached_program = gl.program;
+        st.cached_source = fs_source;
     }
+    res.compile_ms = ms_since(t_compile);
+    GLuint program = gl.program;
+    gl.program = 0;  // owned by the cache now
 
     // Offscreen colour buffer.
     glGenTextures(1, &gl.texture);
@@ -531,10 +549,12 @@ RenderResult render_current(const Renderer::State& st, const std::string& fs_sou
         return res;
     }
 
-    glUseProgram(gl.program);
-    set_shadertoy_uniforms(gl.program, o);
+    glUseProgram(program);
+    set_shadertoy_uniforms(program, o);
+    for (const auto& [name, v] : o.int_uniforms)
+        if (GLint l = glGetUniformLocation(program, name.c_str()); l != -1) glUniform1i(l, v);
     for (const auto& [name, v] : o.uniforms) {
-        GLint l = glGetUniformLocation(gl.program, name.c_str());
+        GLint l = glGetUniformLocation(program, name.c_str());
         if (l == -1) continue;
         switch (v.size()) {
             case 1: glUniform1f(l, v[0]); break;

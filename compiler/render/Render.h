@@ -44,6 +44,7 @@ struct RenderOptions {
     // Extra uniforms (a webgl2-target shader's parameters): name -> components (1..16 floats; 9 and 16
     // are mat3 and mat4). Unknown names are ignored.
     std::vector<std::pair<std::string, std::vector<float>>> uniforms;
+    std::vector<std::pair<std::string, int>> int_uniforms;
     // Draw in horizontal bands of this many rows (0: one draw), reporting progress after each band —
     // long renders then show progress, and drivers with watchdogs get short draws.
     int band_rows = 0;

@@ -487,7 +487,7 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     }
     if (!functions.empty()) functions = "// ---- modules ----" + functions;
     // Transforms, scene body, materials.
-    std::string transforms, prepare, body, shade, gradient, reflect, transmit, per_instance;
+    std::string transforms, prepare, body, shade, gradient, reflect, transmit, per_instance_inverse, per_instance_distance;
     bool lipschitz = false;
     for (size_t i = 0; i < plans.size(); ++i) {
         InstancePlan& p = plans[i];
@@ -550,24 +550,20 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
         }
         body += fmt::format("    d = {};  // {}\n", call, p.name);
         if (opts_.per_instance) {
+            // I♥IQ's architecture, as code the driver can compile: per instance, its transform inverted (at
+            // each pixel) and its own distance, selected by the instance's index.
             std::vector<std::string> pargs = args;
-            pargs[size_t(p.query)] = "o + t * dir";
+            pargs[size_t(p.query)] = "q";
             std::string inv = "mat4(1.0)";
             if (p.has_transform) {
                 std::vector<std::string> targs;
                 for (const auto& pi : p.transform->params) targs.push_back(p.constants.at("transform." + pi.name));
                 inv = fmt::format("inverse({}({}))", em.function_name(p.transform_fn), fmt::join(targs, ", "));
             }
-            std::string step = fmt::format("{}({})", em.function_name(p.shape_fn), fmt::join(pargs, ", "));
-            if (p.has_transform) step += " / iqc_max_singular(mat3(inv))";
-            if (p.shape->lipschitz != 1) step += fmt::format(" / {}", glsl::float_literal(p.shape->lipschitz));
-            per_instance += fmt::format(
-                "    {{  // {}\n        mat4 inv = {};\n        vec3 o = (inv * vec4(ro, 1.0)).xyz;\n        vec3 dir = mat3(inv) * rd;\n"
-                "        float t = 0.0;\n        for (int k = 0; k < IQC_MAX_STEPS; k++) {{\n{}"
-                "            float h = {};\n            steps++;\n"
-                "            if (abs(h) < iqc_eps(t)) {{\n                if (id < 0 || t < best) {{ best = t; id = {}; }}\n"
-                "                break;\n            }}\n            t += h;\n            if (t > IQC_MAX_DIST) break;\n        }}\n    }}\n",
-                p.name, inv, opts_.instrument ? "            iqc_evals++;\n" : "", step, i);
+            std::string dist = fmt::format("{}({})", em.function_name(p.shape_fn), fmt::join(pargs, ", "));
+            if (p.shape->lipschitz != 1) dist += fmt::format(" / {}", glsl::float_literal(p.shape->lipschitz));
+            per_instance_inverse += fmt::format("    if (i == {}) return {};  // {}\n", i, inv, p.name);
+            per_instance_distance += fmt::format("    if (i == {}) return {};\n", i, dist);
         }
         body += fmt::format("    if (d < res.x) res = vec2(d, {});\n", glsl::float_literal(double(i)));
         if (p.material) {
@@ -650,7 +646,9 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     V["GRADIENT_BODY"] = gradient;
     V["REFLECT_BODY"] = reflect;
     V["TRANSMIT_BODY"] = transmit;
-    V["PER_INSTANCE_BODY"] = per_instance;
+    V["PER_INSTANCE_INVERSE"] = per_instance_inverse;
+    V["PER_INSTANCE_DISTANCE"] = per_instance_distance;
+    V["INSTANCES"] = std::to_string(plans.size());
     F.insert(opts_.target == Target::Shadertoy ? "SHADERTOY" : opts_.target == Target::WebGL2 ? "WEBGL2" : "GLSL330");
     static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO"};
     F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march)]);
@@ -672,8 +670,9 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     if (!prepare.empty()) F.insert("PREPARE");
     if (lipschitz) F.insert("LIPSCHITZ");
 
-    if (opts_.instrument) F.insert("INSTRUMENT");
-    if (opts_.geometry) F.insert("GEOMETRY");
+    if (opts_.instrument || opts_.bench) F.insert("INSTRUMENT");
+    if (opts_.geometry || opts_.bench) F.insert("GEOMETRY");
+    if (opts_.bench) F.insert("BENCH");
     nlohmann::ordered_json j;
     j["title"] = s_.title;
     j["target"] = target_name(opts_.target);

@@ -40,6 +40,9 @@ struct CompileOptions {
     std::optional<int> max_steps;
     // Benchmark baseline: I♥IQ's architecture (one march per instance, transforms inverted per instance).
     bool per_instance = false;
+    // Benchmark build: the hit tolerance, the step cap and the output (colour, counts, geometry) are
+    // uniforms (IQC_HIT, IQC_MAX_STEPS, iqc_mode), so one program serves a whole sweep.
+    bool bench = false;
 };
 
 struct CompileResult {
