@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Regenerates docs/accuracy.md and docs/accuracy/*.{csv,svg}: `iqc bench` on every scene in bench/ at
+# 160×90. Run after scripts/build.sh. Frame times vary from run to run; evaluations and errors do not.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=docs/accuracy
+mkdir -p "$out"
+size=${SIZE:-160x90}
+# REPORT_ONLY=1 rebuilds the page from the existing results without measuring again.
+if [ -z "${REPORT_ONLY:-}" ]; then
+for f in bench/*.iq; do
+  name=$(basename "$f" .iq)
+  echo "bench $name ..." >&2
+  ./build/iqc bench "$f" --size "$size" --csv "$out/$name.csv" --plot "$out/$name.svg" > "$out/$name.txt"
+done
+fi
+{
+  cat docs/accuracy.intro.md
+  for f in bench/*.iq; do
+    name=$(basename "$f" .iq)
+    title=$(sed -n 's/^title = "\(.*\)"/\1/p' "$f")
+    echo
+    echo "## $title (\`$f\`)"
+    echo
+    sed -n '1,3p' "$out/$name.txt" | sed 's/^/> /'
+    echo
+    echo "![frame time against depth error]($name.svg)"
+    echo
+    echo "The four march methods at hit 1e-3, 256 steps, tetrahedron normals, and I♥IQ's per-instance architecture:"
+    echo
+    echo "| method | frame ms | evals/px (mean) | evals/px (p99) | miss % | depth err p99 | normal err p99 (°) | PSNR (dB) |"
+    echo "| --- | --- | --- | --- | --- | --- | --- | --- |"
+    awk -F, 'NR > 1 && (($2 == "0.001" && $3 == "256" && $4 == "tetrahedron") || $1 == "per_instance") {
+      printf "| %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $5, $6, $7, $8, $9, $10, $11 }' "$out/$name.csv"
+    echo
+    echo "Normal methods (sphere tracing, hit 1e-3, 256 steps):"
+    echo
+    echo "| normals | frame ms | evals/px (mean) | normal err p99 (°) |"
+    echo "| --- | --- | --- | --- |"
+    awk -F, 'NR > 1 && $1 == "sphere" && $2 == "0.001" && $3 == "256" { printf "| %s | %s | %s | %s |\n", $4, $5, $6, $10 }' "$out/$name.csv"
+    echo
+    echo "Full results: [$name.csv]($name.csv)."
+  done
+} > docs/accuracy.md
+echo "wrote docs/accuracy.md" >&2

@@ -1,0 +1,120 @@
+// `iqc bench`: the CSV has the documented columns and one row per setting; everything but frame time is
+// reproducible run to run; the measured errors and costs move the way the settings say they must
+// (a tighter hit tolerance costs evaluations and lowers the depth error; analytic normals beat forward
+// differences); I♥IQ's per-instance architecture is measured as its own row. Usage errors exit 2.
+#include <catch2/catch.hpp>
+
+#include <map>
+#include <sstream>
+
+#include "TestUtil.h"
+
+using namespace iqc::test;
+
+namespace {
+
+using Row = std::map<std::string, std::string>;
+
+std::vector<Row> parse_csv(const std::string& text, std::vector<std::string>& header) {
+    std::istringstream in(text);
+    std::string line;
+    std::vector<Row> rows;
+    auto split = [](const std::string& l) {
+        std::vector<std::string> cells;
+        std::string cell;
+        std::istringstream s(l);
+        while (std::getline(s, cell, ',')) cells.push_back(cell);
+        return cells;
+    };
+    if (!std::getline(in, line)) return rows;
+    header = split(line);
+    while (std::getline(in, line)) {
+        if (line.empty()) continue;
+        auto cells = split(line);
+        Row r;
+        for (size_t i = 0; i < header.size() && i < cells.size(); ++i) r[header[i]] = cells[i];
+        rows.push_back(r);
+    }
+    return rows;
+}
+
+const Row& find(const std::vector<Row>& rows, const std::string& method, const std::string& hit, const std::string& cap,
+                const std::string& normals) {
+    for (const auto& r : rows)
+        if (r.at("method") == method && r.at("hit") == hit && r.at("max_steps") == cap && r.at("normals") == normals)
+            return r;
+    FAIL("no row " << method << " " << hit << " " << cap << " " << normals);
+    return rows.front();
+}
+
+double num(const Row& r, const char* column) { return std::stod(r.at(column)); }
+
+}  // namespace
+
+TEST_CASE("iqc bench: columns, rows, reproducibility and the direction of every trade-off", "[bench]") {
+    const std::string scene = std::string(IQC_SOURCE_DIR) + "/examples/two_tori.md";
+    auto a = temp_dir() / "bench_a.csv";
+    auto b = temp_dir() / "bench_b.csv";
+    auto plot = temp_dir() / "bench.svg";
+    RunResult ra = run_iqc("bench " + scene + " --size 64x36 --frames 1 --csv " + a.string() + " --plot " + plot.string());
+    INFO(ra.err);
+    REQUIRE(ra.exit_code == 0);
+    CHECK_THAT(ra.out, Catch::Contains("geometry reference:"));
+    RunResult rb = run_iqc("bench " + scene + " --size 64x36 --frames 1 --csv " + b.string());
+    REQUIRE(rb.exit_code == 0);
+
+    std::vector<std::string> header, header_b;
+    auto rows = parse_csv(read_text(a), header);
+    auto rows_b = parse_csv(read_text(b), header_b);
+    CHECK(header == std::vector<std::string>{"method", "hit", "max_steps", "normals", "frame_ms", "evals_per_pixel_mean",
+                                             "evals_per_pixel_p99", "hit_mismatch_pct", "depth_err_p99",
+                                             "normal_err_deg_p99", "psnr_db"});
+    // 4 methods × 3 tolerances × 2 caps × 4 normal methods, plus the per-instance baseline.
+    REQUIRE(rows.size() == 97);
+    REQUIRE(rows_b.size() == rows.size());
+    for (size_t i = 0; i < rows.size(); ++i)
+        for (const auto& column : header)
+            if (column != "frame_ms") CHECK(rows[i].at(column) == rows_b[i].at(column));
+    for (const auto& r : rows) {
+        CHECK(num(r, "frame_ms") > 0.0);
+        CHECK(num(r, "evals_per_pixel_mean") >= 1.0);
+        CHECK(num(r, "psnr_db") <= 100.0);
+    }
+
+    // Tighter tolerance: more evaluations, smaller depth error.
+    for (const char* method : {"sphere", "relaxed", "auto"}) {
+        const Row& loose = find(rows, method, "0.01", "256", "analytic");
+        const Row& tight = find(rows, method, "0.0001", "256", "analytic");
+        CHECK(num(tight, "evals_per_pixel_mean") > num(loose, "evals_per_pixel_mean"));
+        CHECK(num(tight, "depth_err_p99") < num(loose, "depth_err_p99"));
+    }
+    // Analytic normals are more accurate than forward differences at the same march.
+    CHECK(num(find(rows, "sphere", "0.0001", "256", "analytic"), "normal_err_deg_p99") <
+          num(find(rows, "sphere", "0.0001", "256", "forward"), "normal_err_deg_p99"));
+    // The same march settings give the same marching cost whatever the normal method (normals are not counted
+    // in the primary ray's steps but are in evaluations: central adds 6 per hit pixel, analytic none).
+    CHECK(num(find(rows, "sphere", "0.001", "256", "central"), "evals_per_pixel_mean") >
+          num(find(rows, "sphere", "0.001", "256", "analytic"), "evals_per_pixel_mean"));
+    // The baseline row exists and marches every instance separately: more evaluations than the combined field.
+    bool baseline = false;
+    for (const auto& r : rows)
+        if (r.at("method") == "per_instance") {
+            baseline = true;
+            CHECK(num(r, "evals_per_pixel_mean") >
+                  num(find(rows, "sphere", "0.001", "256", r.at("normals")), "evals_per_pixel_mean"));
+        }
+    CHECK(baseline);
+    std::string svg = read_text(plot);
+    CHECK_THAT(svg, Catch::StartsWith("<svg"));
+    CHECK_THAT(svg, Catch::Contains("Pareto"));
+}
+
+TEST_CASE("iqc bench usage errors", "[bench]") {
+    CHECK(run_iqc("bench").exit_code == 2);
+    RunResult size = run_iqc("bench " + std::string(IQC_SOURCE_DIR) + "/examples/two_tori.md --size 0x-3");
+    CHECK(size.exit_code == 2);
+    CHECK_THAT(size.err, Catch::Contains("--size"));
+    RunResult missing = run_iqc("bench /nonexistent/scene.iq");
+    CHECK(missing.exit_code == 1);
+    CHECK_THAT(missing.err, Catch::Contains("/nonexistent/scene.iq"));
+}
