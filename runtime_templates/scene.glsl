@@ -61,6 +61,7 @@ const int IQC_AA = {{AA}};  // samples per pixel side
 {{TRANSFORMS}}
 {{#if INSTRUMENT}}
 int iqc_evals = 0;           // scene evaluations in this pixel (instrumented build)
+int iqc_shape_evals = 0;     // instance shape evaluations (those skipped by `bound` are not counted)
 int iqc_primary_steps = -1;  // march steps of the first ray from the camera
 {{/if}}
 // Distance to the nearest surface (x) and that instance's id (y).
@@ -543,9 +544,10 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
         return;
     }
 {{/if}}
-    // Instrumented build: march steps of the camera ray, scene evaluations in the pixel, NaN flag.
+    // Instrumented build: march steps of the camera ray, scene evaluations in the pixel, NaN flag, shape
+    // evaluations in the pixel.
     bool bad = any(isnan(col)) || any(isinf(col));
-    fragColor = vec4(float(iqc_primary_steps), float(iqc_evals), bad ? 1.0 : 0.0, 1.0);
+    fragColor = vec4(float(iqc_primary_steps), float(iqc_evals), bad ? 1.0 : 0.0, float(iqc_shape_evals));
 {{#else}}
     fragColor = vec4(clamp(col, 0.0, 1.0), 1.0);
 {{/if}}

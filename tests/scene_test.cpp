@@ -179,3 +179,94 @@ TEST_CASE("scene error paths are located", "[scene]") {
     CHECK_THAT(l.err, Catch::Contains("error: this [[lights]] entry has no 'position'"));
     CHECK_THAT(l.err, Catch::Contains("error: 'color' must have 3 components, not 2"));
 }
+
+namespace {
+// The Menger sponge of examples/menger.iq (soft shadows on a floor), with or without `bound`.
+std::string menger_scene(const std::string& bound_line) {
+    std::string text = read_text(std::filesystem::path(IQC_SOURCE_DIR) / "examples" / "menger.iq");
+    size_t at = text.find("type = \"menger\"\n");
+    REQUIRE(at != std::string::npos);
+    size_t line_end = text.find('\n', at) + 1;
+    std::string out = text.substr(0, line_end) + bound_line;
+    std::string rest = text.substr(line_end);
+    if (rest.rfind("bound = ", 0) == 0) rest = rest.substr(rest.find('\n') + 1);  // the example's own bound
+    return out + rest;
+}
+double mean_channel(const render::Image& img, int c) {
+    double s = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) s += img.pixel(x, y)[c];
+    return s / double(img.width * img.height);
+}
+}  // namespace
+
+TEST_CASE("`bound` skips the shape outside its bounding sphere: same picture, same geometry, fewer evaluations",
+          "[scene][render]") {
+    auto plain = compile_text("bound_off.iq", menger_scene(""));
+    auto bounded = compile_text("bound_on.iq", menger_scene("bound = 1.74\n"));
+    INFO(plain.diagnostics << bounded.diagnostics);
+    REQUIRE(plain.result.exit_code == 0);
+    REQUIRE(bounded.result.exit_code == 0);
+    CHECK_THAT(bounded.result.code, Catch::Contains("const float IQC_BOUND_MARGIN = 0.1;"));
+    CHECK_THAT(bounded.result.code, Catch::Contains("if (iqc_b > IQC_BOUND_MARGIN) d = iqc_b;"));
+    CHECK_THAT(plain.result.code, !Catch::Contains("IQC_BOUND_MARGIN"));
+    render::Image a = render_code(plain.result.code), b = render_code(bounded.result.code);
+    CHECK(nan_pixels(b) == 0);
+    // Soft shadows read the distance as a penumbra: the bound (a lower bound) darkens it slightly.
+    CHECK(mean_abs_diff(a, b) < 0.03);
+    {
+        auto hard = [](std::string t) { return t.replace(t.find("shadows = \"soft\""), 16, "shadows = \"hard\""); };
+        auto ph = compile_text("bound_off_h.iq", hard(menger_scene("")));
+        auto bh = compile_text("bound_on_h.iq", hard(menger_scene("bound = 1.74\n")));
+        REQUIRE(ph.result.exit_code == 0);
+        REQUIRE(bh.result.exit_code == 0);
+        CHECK(mean_abs_diff(render_code(ph.result.code), render_code(bh.result.code)) < 0.002);
+    }
+    // The double-precision model: the same hits at the same depths.
+    const SceneModel &ma = *plain.result.model, &mb = *bounded.result.model;
+    REQUIRE(mb.instances[0].bound == 1.74);
+    int hits = 0;
+    for (int y = 1; y < 36; y += 4)
+        for (int x = 1; x < 64; x += 4) {
+            std::array<double, 3> ro, rd;
+            ma.ray(x, y, 64, 36, ro, rd);
+            int ia, ib;
+            double ta = ma.trace(ro, rd, &ia), tb = mb.trace(ro, rd, &ib);
+            INFO(x << "," << y);
+            CHECK(ia == ib);
+            if (ta >= 0 && tb >= 0) {
+                CHECK(tb == Approx(ta).margin(1e-6));
+                ++hits;
+            }
+        }
+    CHECK(hits > 50);
+    // Far from the sponge, the bound's distance (a lower bound); near it, the shape's.
+    CHECK(mb.distance({0, 5, 0}) == Approx(5 - 1.74).margin(1e-12));
+    CHECK(mb.distance({0, 1.7, 0}) == Approx(ma.distance({0, 1.7, 0})).margin(1e-12));
+    // Instrumented builds: the scene is evaluated about as often, the sponge far less.
+    CompileOptions io;
+    io.instrument = true;
+    auto ip = compile_path(write_temp("bound_off_i.iq", menger_scene("")), io);
+    auto ib = compile_path(write_temp("bound_on_i.iq", menger_scene("bound = 1.74\n")), io);
+    REQUIRE(ip.result.exit_code == 0);
+    REQUIRE(ib.result.exit_code == 0);
+    render::Image sp = render_code(ip.result.code), sb = render_code(ib.result.code);
+    double shape_plain = mean_channel(sp, 3), shape_bound = mean_channel(sb, 3);
+    double evals_plain = mean_channel(sp, 1);
+    INFO("shape evaluations per pixel: " << shape_plain << " without bound, " << shape_bound << " with");
+    CHECK(shape_plain == Approx(2 * evals_plain).epsilon(1e-6));  // two instances, both evaluated every time
+    CHECK(shape_bound < 0.8 * shape_plain);
+}
+
+TEST_CASE("`bound` must be a positive number, reported at the value", "[scene]") {
+    const std::string head = "[[shapes]]\ntype = \"sphere\"\n";
+    auto zero = compile_text("bound_zero.iq", head + "bound = 0\n");
+    CHECK(zero.result.exit_code != 0);
+    CHECK_THAT(zero.diagnostics, Catch::Contains("bound_zero.iq:3:9: error: 'bound' (a bounding sphere radius) must be "
+                                                 "positive, not 0\n  bound = 0\n          ^"));
+    auto neg = compile_text("bound_neg.iq", head + "bound = -1.5\n");
+    CHECK_THAT(neg.diagnostics, Catch::Contains("bound_neg.iq:3:9: error: 'bound' (a bounding sphere radius) must be positive, not -1.5"));
+    auto text = compile_text("bound_text.iq", head + "bound = \"big\"\n");
+    CHECK(text.result.exit_code != 0);
+    CHECK_THAT(text.diagnostics, Catch::Contains("bound_text.iq:3:9: error: 'bound' must be a number, not a string"));
+}

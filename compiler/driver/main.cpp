@@ -137,13 +137,14 @@ int render_command(const std::string& code, const std::vector<std::pair<std::str
         std::fprintf(stderr, "iqc: error: rendering the instrumented shader failed: %s\n", ir.error.c_str());
         return 1;
     }
-    std::vector<float> steps, evals;
+    std::vector<float> steps, evals, shape_evals;
     long flagged = 0;
     for (int y = 0; y < ir.image.height; ++y)
         for (int x = 0; x < ir.image.width; ++x) {
             const float* p = ir.image.pixel(x, y);
             steps.push_back(p[0]);
             evals.push_back(p[1]);
+            shape_evals.push_back(p[3]);
             flagged += p[2] > 0.5f;
         }
     double sm = 0, em = 0;
@@ -154,6 +155,9 @@ int render_command(const std::string& code, const std::vector<std::pair<std::str
     std::printf("steps_p99: %.0f\n", percentile(steps, 0.99));
     std::printf("evals_mean: %.3f\n", em / double(evals.size()));
     std::printf("evals_p99: %.0f\n", percentile(evals, 0.99));
+    double se = 0;
+    for (float v : shape_evals) se += v;
+    std::printf("shape_evals_mean: %.3f\n", se / double(shape_evals.size()));
     std::printf("frame_ms: %.3f\n", frame_ms[frame_ms.size() / 2]);
     std::printf("compile_ms: %.3f\n", last.compile_ms);
     std::printf("renderer: %s\n", last.renderer.c_str());
@@ -236,7 +240,7 @@ int main(int argc, char** argv) {
     render->add_option("--fps", r_fps, "frames per second of the animation (default 30)")->check(CLI::PositiveNumber);
     render->add_option("--target", r_target, "which shader to run: shadertoy (default) or webgl2 (its uniforms at their defaults)")
         ->check(CLI::IsMember({"shadertoy", "webgl2"}));
-    render->add_flag("--stats", r_stats, "print nan_pixels, steps_mean, steps_p99, evals_mean, evals_p99, frame_ms, renderer");
+    render->add_flag("--stats", r_stats, "print nan_pixels, steps_mean, steps_p99, evals_mean, evals_p99, shape_evals_mean, frame_ms, renderer");
     CLI::App* bench = app.add_subcommand(
         "bench", "measure what accuracy costs in time on this scene: every march method × hit tolerance × step cap × "
                  "normal method, and I♥IQ's one-march-per-instance architecture, against a reference");

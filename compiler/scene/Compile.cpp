@@ -117,6 +117,7 @@ private:
     bool uses_inputs(int fn) const;
     std::string assemble(std::vector<InstancePlan>& plans, std::string& meta);
     std::vector<std::pair<std::string, std::vector<double>>> uniform_defaults_;
+    double bound_margin_ = 0.1;  // IQC_BOUND_MARGIN, when an instance has `bound`
 };
 
 bool SceneCompiler::apply_overrides(const std::vector<ParamOverride>& ovs, const CheckedModule& m, const char* role,
@@ -488,7 +489,7 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     if (!functions.empty()) functions = "// ---- modules ----" + functions;
     // Transforms, scene body, materials.
     std::string transforms, prepare, body, shade, gradient, reflect, transmit, per_instance_inverse, per_instance_distance;
-    bool lipschitz = false;
+    bool lipschitz = false, any_bound = false;
     for (size_t i = 0; i < plans.size(); ++i) {
         InstancePlan& p = plans[i];
         std::string q = "p", scale;
@@ -548,7 +549,27 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
 
             }
         }
-        body += fmt::format("    d = {};  // {}\n", call, p.name);
+        bool counted = opts_.instrument || opts_.bench;  // instrumented builds count shape evaluations
+        double bound = p.desc ? p.desc->bound : 0;
+        if (bound > 0) {
+            // `bound = R`: outside the object-space sphere ‖q‖ = R (by more than IQC_BOUND_MARGIN in world units),
+            // the sphere's distance, scaled as the shape's, is a lower bound and the shape is not evaluated.
+            std::vector<std::string> bargs = args;
+            bargs[size_t(p.query)] = "iqc_q";
+            std::string bcall = fmt::format("{}({})", em.function_name(p.shape_fn), fmt::join(bargs, ", "));
+            std::string suffix;
+            if (!scale.empty()) suffix += " * " + scale;
+            if (p.shape->lipschitz != 1) suffix += fmt::format(" / {}", glsl::float_literal(p.shape->lipschitz));
+            body += fmt::format("    {{  // {}: bounding sphere of radius {}\n        vec3 iqc_q = {};\n"
+                                "        float iqc_b = (length(iqc_q) - {}){};\n        if (iqc_b > IQC_BOUND_MARGIN) d = iqc_b;\n"
+                                "        else {{\n{}            d = {}{};\n        }}\n    }}\n",
+                                p.name, glsl::float_literal(bound), q, glsl::float_literal(bound), suffix,
+                                counted ? "            iqc_shape_evals++;\n" : "", bcall, suffix);
+            any_bound = true;
+        } else {
+            if (counted) body += "    iqc_shape_evals++;\n";
+            body += fmt::format("    d = {};  // {}\n", call, p.name);
+        }
         if (opts_.per_instance) {
             // I♥IQ's architecture, as code the driver can compile: per instance, its transform inverted (at
             // each pixel) and its own distance, selected by the instance's index.
@@ -639,6 +660,13 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     V["PARAMETERS"] = params;
     V["LIGHTS"] = light_decls;
     V["FUNCTIONS"] = functions;
+    if (any_bound) {
+        // Ten hit tolerances (at the farthest distance for a relative tolerance), and at least 0.1: a march
+        // never stops on a bounding sphere, and the shape is evaluated wherever a hit is possible.
+        bound_margin_ = std::max(0.1, 10 * hit * (render.hit_relative ? render.max_dist : 1.0));
+        transforms = fmt::format("const float IQC_BOUND_MARGIN = {};  // `bound`: the shape is evaluated within this "
+                                 "distance of its bounding sphere\n", glsl::float_literal(bound_margin_)) + transforms;
+    }
     V["TRANSFORMS"] = transforms;
     V["PREPARE_BODY"] = prepare;
     V["SCENE_BODY"] = body;
@@ -822,6 +850,10 @@ CompileResult SceneCompiler::run() {
             in.scale = p.scale;
         }
         in.scale /= p.shape->lipschitz;
+        if (p.desc && p.desc->bound > 0) {
+            in.bound = p.desc->bound;
+            in.bound_margin = bound_margin_;
+        }
         model->instances.push_back(std::move(in));
     }
     res.model = std::move(model);

@@ -22,9 +22,15 @@ double SceneModel::distance(const V3& p, int* id) const {
         const auto& L = in.linear;
         V3 q = {L[0] * p[0] + L[1] * p[1] + L[2] * p[2] + in.offset[0], L[3] * p[0] + L[4] * p[1] + L[5] * p[2] + in.offset[1],
                 L[6] * p[0] + L[7] * p[1] + L[8] * p[2] + in.offset[2]};
-        std::vector<ir::Value> args = in.args;
-        args[size_t(in.query)] = {Type::vector(3), {q[0], q[1], q[2]}};
-        double d = ir::evaluate(ir, in.shape_fn, args).v[0] * in.scale;
+        double d;
+        double b = in.bound > 0 ? (std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]) - in.bound) * in.scale : 0;
+        if (in.bound > 0 && b > in.bound_margin) {
+            d = b;  // as the shader: outside the bounding sphere, its distance (a lower bound)
+        } else {
+            std::vector<ir::Value> args = in.args;
+            args[size_t(in.query)] = {Type::vector(3), {q[0], q[1], q[2]}};
+            d = ir::evaluate(ir, in.shape_fn, args).v[0] * in.scale;
+        }
         if (d < best) {
             best = d;
             best_id = int(i);

@@ -20,6 +20,8 @@ struct SceneModel {
         std::array<double, 9> linear{1, 0, 0, 0, 1, 0, 0, 0, 1};  // world -> object, row-major
         std::array<double, 3> offset{0, 0, 0};
         double scale = 1;               // 1 / Lipschitz factor
+        double bound = 0;               // `bound = R`: object-space bounding sphere radius (0: none)
+        double bound_margin = 0.1;      // the shader's IQC_BOUND_MARGIN
     };
     ir::Module ir;
     std::vector<Instance> instances;

@@ -1,6 +1,7 @@
 #include "scene/Scene.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fmt/format.h>
@@ -46,7 +47,7 @@ bool read_file(const std::string& path, std::string& out, std::string& err) {
 }
 
 const std::vector<std::string> kTopKeys = {"title", "include", "modules", "camera", "render", "effects", "lights", "shapes"};
-const std::vector<std::string> kShapeKeys = {"name", "type", "material", "transform", "shape_params", "material_params"};
+const std::vector<std::string> kShapeKeys = {"name", "type", "material", "transform", "shape_params", "material_params", "bound"};
 const std::vector<std::string> kCameraKeys = {"position", "target", "fov", "orbit"};
 const std::vector<std::string> kRenderKeys = {"march", "max_steps", "max_dist", "hit", "hit_mode", "normals",
                                               "background", "relaxation", "step", "debug"};
@@ -412,6 +413,15 @@ void SceneReader::read(std::string_view text) {
             if (auto v = get_string(*x, "transform")) inst.transform = string_source(*x, *v, "transform", "scene");
         if (auto* x = t.get("shape_params")) read_params(*x, "shape_params", inst.shape_params);
         if (auto* x = t.get("material_params")) read_params(*x, "material_params", inst.material_params);
+        if (auto* x = t.get("bound"))
+            if (auto v = get_number(*x, "bound")) {
+                if (!(*v > 0) || !std::isfinite(*v))
+                    d_.error(span_of(*x), fmt::format("'bound' (a bounding sphere radius) must be positive, not {}", *v));
+                else {
+                    inst.bound = *v;
+                    inst.bound_span = span_of(*x);
+                }
+            }
         if (!inst.type.empty()) s_.instances.push_back(std::move(inst));
     }
 }

@@ -38,6 +38,8 @@ struct InstanceDesc {
     Span material_span;
     std::optional<ModuleSource> transform;
     std::vector<ParamOverride> shape_params, material_params;
+    double bound = 0;  // object-space bounding sphere radius at the origin (`bound = R`); 0: none
+    Span bound_span;
     Span span;
 };
 
