@@ -21,6 +21,7 @@
 #include "render/Render.h"
 #include "glsl/ShadertoyWrapper.h"
 #include "bench/Bench.h"
+#include "scene/Page.h"
 #include "scene/Compile.h"
 #include "scene/Evaluate.h"
 
@@ -208,8 +209,9 @@ int main(int argc, char** argv) {
     app.add_option("-o,--output", output, "where to write the shader (default: standard output)");
     app.add_option("--target", target,
                    "output kind: shadertoy (default: mainImage, parameters as constants), webgl2 (GLSL ES 3.00 with a "
-                   "uniform per parameter), glsl330 (desktop core profile, uniforms)")
-        ->check(CLI::IsMember({"shadertoy", "webgl2", "glsl330"}));
+                   "uniform per parameter), glsl330 (desktop core profile, uniforms), html (one offline page: the webgl2 "
+                   "shader on a canvas with a slider per parameter component, reset, play/pause, mouse orbit)")
+        ->check(CLI::IsMember({"shadertoy", "webgl2", "glsl330", "html"}));
     std::string meta;
     app.add_option("--meta", meta, "also write a JSON description of every parameter (instance, module, role, "
                                    "uniform or constant name, type, bounds, default, description)");
@@ -341,7 +343,7 @@ int main(int argc, char** argv) {
     iqc::CompileOptions opts;
     opts.dump_ir = dump_ir;
     opts.strict_ranges = strict_ranges;
-    opts.target = target == "webgl2" ? iqc::Target::WebGL2 : target == "glsl330" ? iqc::Target::GLSL330 : iqc::Target::Shadertoy;
+    opts.target = target == "webgl2" || target == "html" ? iqc::Target::WebGL2 : target == "glsl330" ? iqc::Target::GLSL330 : iqc::Target::Shadertoy;
     if (render->parsed()) opts.target = r_target == "webgl2" ? iqc::Target::WebGL2 : iqc::Target::Shadertoy;
     iqc::CompileResult r = iqc::compile_file(render->parsed() ? r_input : input, sm, diags, opts);
     std::string rendered = diags.render();
@@ -384,6 +386,7 @@ int main(int argc, char** argv) {
                      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() -
                          [&] { double s = 0; for (double x : times) s += x; return s; }());
     }
+    if (target == "html" && !render->parsed()) r.code = iqc::html_page(r.code, r.meta);
     int rc = write_output(output, r.code);
     if (rc == 0 && !meta.empty()) {
         rc = write_output(meta, r.meta);
