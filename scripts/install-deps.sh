@@ -10,7 +10,7 @@ PKGS=(
   libcli11-dev libtomlplusplus-dev libfmt-dev catch2
   libpng-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
   nlohmann-json3-dev
-  nodejs
+  nodejs libcpp-httplib-dev
 )
 
 missing=()

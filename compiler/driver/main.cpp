@@ -21,6 +21,7 @@
 #include "render/Render.h"
 #include "glsl/ShadertoyWrapper.h"
 #include "bench/Bench.h"
+#include "driver/Serve.h"
 #include "scene/Page.h"
 #include "scene/Compile.h"
 #include "scene/Evaluate.h"
@@ -253,6 +254,15 @@ int main(int argc, char** argv) {
     bench->add_option("--csv", b_csv, "write the results as CSV");
     bench->add_option("--plot", b_plot, "write an SVG plot of frame time against depth error (with the Pareto front)");
     bench->add_option("--frames", b_frames, "timed frames per setting, after a warm-up (default 5)")->check(CLI::Range(1, 1000));
+    CLI::App* serve = app.add_subcommand(
+        "serve", "serve the scene's interactive page on 127.0.0.1 only; recompile when the scene or a module it reads "
+                 "changes (the page reloads and keeps its slider values); errors are shown in the page");
+    std::string s_input;
+    int s_port = 8080;
+    double s_poll = 0.2;
+    serve->add_option("input", s_input, "scene (.iq), document (.md) or shape module (.iql)")->required();
+    serve->add_option("--port", s_port, "TCP port on 127.0.0.1 (default 8080; 0 picks a free one)")->check(CLI::Range(0, 65535));
+    serve->add_option("--poll", s_poll, "seconds between checks for changed files (default 0.2)")->check(CLI::Range(0.01, 10.0));
     CLI::App* eval = app.add_subcommand(
         "eval", "evaluate a module in double precision and print every output (a graphing calculator)");
     std::string e_input, e_module;
@@ -305,6 +315,7 @@ int main(int argc, char** argv) {
         for (const auto& o : outs) std::printf("%s = %s\n", o.name.c_str(), iqc::ir::format_value(o.value).c_str());
         return 0;
     }
+    if (serve->parsed()) return iqc::serve(s_input, s_port, s_poll);
     if (bench->parsed()) {
         iqc::bench::Options bo;
         bo.input = b_input;

@@ -1,0 +1,146 @@
+// `iqc serve`: the page on 127.0.0.1 only; "/" and "/version" exist and nothing else (the scene's own
+// files included); editing a module the scene includes rebuilds the page (new version, new values); an
+// error becomes a page that shows it with its location; fixing it brings the scene back.
+#include <catch2/catch.hpp>
+
+#include <httplib.h>
+#include <ifaddrs.h>
+#include <netinet/in.h>
+#include <arpa/inet.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <thread>
+
+#include "TestUtil.h"
+
+using namespace iqc::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Server {
+    pid_t pid = -1;
+    int port = 0;
+    ~Server() {
+        if (pid > 0) {
+            kill(pid, SIGTERM);
+            waitpid(pid, nullptr, 0);
+        }
+    }
+};
+
+void write_file(const fs::path& p, const std::string& text) {
+    std::ofstream(p, std::ios::binary) << text;
+}
+
+std::string ring(const std::string& radius) {
+    return "shape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ [0,3] default = " + radius + ": ring radius\n";
+}
+
+template <class F>
+bool eventually(F f, double seconds = 5.0) {
+    auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end) {
+        if (f()) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return f();
+}
+
+}  // namespace
+
+TEST_CASE("iqc serve: loopback only, two paths, rebuilds on a module edit, shows errors", "[serve]") {
+    fs::path dir = temp_dir() / "serve";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    write_file(dir / "ring.iql", ring("1"));
+    write_file(dir / "scene.iq", "title = \"serve test\"\ninclude = [\"ring.iql\"]\n[[shapes]]\ntype = \"ring\"\n");
+    fs::path out = dir / "stdout.txt";
+    Server s;
+    std::fflush(stdout);
+    std::fflush(stderr);
+    s.pid = fork();
+    REQUIRE(s.pid >= 0);
+    if (s.pid == 0) {
+        FILE* f = std::freopen(out.c_str(), "w", stdout);
+        (void)f;
+        FILE* e = std::freopen((dir / "stderr.txt").c_str(), "w", stderr);
+        (void)e;
+        execl(IQC_BINARY, IQC_BINARY, "serve", (dir / "scene.iq").c_str(), "--port", "0", "--poll", "0.05",
+              static_cast<char*>(nullptr));
+        _exit(127);
+    }
+    REQUIRE(eventually([&] {
+        std::string text = read_text(out);
+        auto at = text.find("http://127.0.0.1:");
+        if (at == std::string::npos) return false;
+        s.port = std::stoi(text.substr(at + 17));
+        return true;
+    }));
+    INFO("port " << s.port);
+    httplib::Client client("127.0.0.1", s.port);
+    auto page = client.Get("/");
+    REQUIRE(page);
+    CHECK(page->status == 200);
+    CHECK_THAT(page->body, Catch::Contains("id=\"iqc-shader\""));
+    CHECK_THAT(page->body, Catch::Contains("fetch('/version'"));
+    CHECK_THAT(page->body, Catch::Contains("ring radius"));
+    auto v1 = client.Get("/version");
+    REQUIRE(v1);
+    CHECK(v1->body == "1");
+    // Nothing but the page and its version: not the scene, not its modules, not a path outside.
+    for (const char* path : {"/scene.iq", "/ring.iql", "/../scene.iq", "/%2e%2e/scene.iq", "/etc/passwd", "/index.html"}) {
+        auto r = client.Get(path);
+        REQUIRE(r);
+        CHECK(r->status == 404);
+    }
+    // Loopback only: a non-loopback address of this machine refuses the connection.
+    ifaddrs* addrs = nullptr;
+    if (getifaddrs(&addrs) == 0) {
+        for (ifaddrs* a = addrs; a; a = a->ifa_next) {
+            if (!a->ifa_addr || a->ifa_addr->sa_family != AF_INET) continue;
+            char ip[INET_ADDRSTRLEN];
+            inet_ntop(AF_INET, &reinterpret_cast<sockaddr_in*>(a->ifa_addr)->sin_addr, ip, sizeof ip);
+            if (std::string(ip).rfind("127.", 0) == 0) continue;
+            httplib::Client other(ip, s.port);
+            other.set_connection_timeout(1);
+            INFO("address " << ip);
+            CHECK(!other.Get("/version"));
+        }
+        freeifaddrs(addrs);
+    }
+    // Edit the included module: a new version whose page has the new default.
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    write_file(dir / "ring.iql", ring("2.25"));
+    CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "2"; }));
+    auto page2 = client.Get("/");
+    REQUIRE(page2);
+    CHECK_THAT(page2->body, Catch::Contains("2.25"));
+    // Break it: the page shows the diagnostic with its location instead of a blank canvas.
+    write_file(dir / "ring.iql", "shape\nD = ‖p‖ - radius\nwhere\np ∈ ℝ³\n");
+    CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "3"; }));
+    auto broken = client.Get("/");
+    REQUIRE(broken);
+    CHECK(broken->status == 200);
+    CHECK_THAT(broken->body, Catch::Contains("\"error\":"));
+    CHECK_THAT(broken->body, Catch::Contains("ring.iql:2:"));
+    CHECK_THAT(broken->body, Catch::Contains("undefined name"));
+    // Fix it: back to a working page.
+    write_file(dir / "ring.iql", ring("0.5"));
+    CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "4"; }));
+    auto fixed = client.Get("/");
+    REQUIRE(fixed);
+    CHECK_THAT(fixed->body, !Catch::Contains("\"error\":"));
+}
+
+TEST_CASE("iqc serve usage errors", "[serve]") {
+    RunResult missing = run_iqc("serve /nonexistent/scene.iq --port 0");
+    CHECK(missing.exit_code == 1);
+    CHECK_THAT(missing.err, Catch::Contains("cannot read '/nonexistent/scene.iq'"));
+    CHECK(run_iqc("serve").exit_code == 2);
+    CHECK(run_iqc("serve x.iq --port 70000").exit_code == 2);
+}
