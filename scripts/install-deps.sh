@@ -1,17 +1,21 @@
 #!/usr/bin/env bash
 # Installs what iqc needs to build and test on a fresh Debian (bookworm) machine.
 # Only packages that are missing are installed; `apt-get update` runs once, and only
-# when something is missing. Run as root (or with sudo available).
+# when something is missing. Run as root (or with sudo available). Then the browser tests'
+# npm packages (tests/browser/package-lock.json: playwright-core) are installed with `npm ci`.
 set -euo pipefail
+cd "$(dirname "$0")/.."
 
 PKGS=(
   build-essential cmake pkg-config
   glslang-dev glslang-tools spirv-tools
   libcli11-dev libtomlplusplus-dev libfmt-dev catch2
   libpng-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
-  nlohmann-json3-dev
-  nodejs libcpp-httplib-dev
+  nlohmann-json3-dev libcpp-httplib-dev
+  nodejs chromium
 )
+# npm: Debian's package, unless a node distribution that bundles npm is already installed.
+if ! command -v npm >/dev/null 2>&1; then PKGS+=(npm); fi
 
 missing=()
 for p in "${PKGS[@]}"; do
@@ -20,14 +24,20 @@ for p in "${PKGS[@]}"; do
   fi
 done
 
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: everything is installed"
-  exit 0
-fi
-
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -q
-$SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: every Debian package is installed"
+else
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -q
+  $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+# Browser tests: playwright-core drives /usr/bin/chromium (no browser download).
+if [ ! -d tests/browser/node_modules/playwright-core ] ||
+   [ tests/browser/package-lock.json -nt tests/browser/node_modules/.package-lock.json ]; then
+  echo "install-deps: npm ci in tests/browser"
+  PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --prefix tests/browser --no-audit --no-fund
+fi
