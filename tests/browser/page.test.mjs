@@ -3,7 +3,8 @@
 //  1. every example's --target html page loads offline with no console error and draws a non-blank
 //     picture; moving a slider changes the picture;
 //  2. a hostile title is shown as text (no dialog opens, the heading reads the title);
-//  3. under `iqc serve`, editing an included module updates the page, sliders keep their values.
+//  3. three.js, given the webgl2 shader and --meta JSON, draws the same picture as the html page;
+//  4. under `iqc serve`, editing an included module updates the page, sliders keep their values.
 import { chromium } from "playwright-core";
 import { execFileSync, spawn } from "node:child_process";
 import fs from "node:fs";
@@ -83,6 +84,45 @@ for (const name of examples) {
   check(before.colours > 10 && before.mean > 1, `${name}: the canvas is not blank (${before.colours} colours)`);
   check(differs(before, after), `${name}: moving a slider changes the picture`);
   await page.close();
+}
+
+// three.js: the webgl2 shader and --meta JSON on a RawShaderMaterial give the html page's picture.
+{
+  const name = "two_tori.md";
+  const dir = path.join(tmp, "three");
+  fs.mkdirSync(dir);
+  execFileSync(iqc, [path.join(src, "examples", name), "--target", "webgl2", "-o", path.join(dir, "shader.frag"),
+                     "--meta", path.join(dir, "meta.json")], { stdio: "pipe" });
+  const files = {
+    "three.html": path.join(src, "tests/browser/three.html"),
+    "three.module.js": path.join(src, "tests/browser/node_modules/three/build/three.module.js"),
+    "shader.frag": path.join(dir, "shader.frag"), "meta.json": path.join(dir, "meta.json"),
+  };
+  const out = path.join(tmp, "three_ref.html");
+  execFileSync(iqc, [path.join(src, "examples", name), "--target", "html", "-o", out], { stdio: "pipe" });
+  const ref = await open("file://" + out);
+  await ref.page.evaluate(() => document.getElementById("play").click());
+  const size = await ref.page.evaluate(() => [document.getElementById("canvas").width, document.getElementById("canvas").height]);
+  const expected = await picture(ref.page);
+  const page = await browser.newPage({ viewport: { width: 480, height: 270 } });
+  const errors = [];
+  page.on("console", m => { if (m.type() === "error") errors.push(m.text()); });
+  page.on("pageerror", e => errors.push(String(e)));
+  await page.route("http://iqc.test/**", route => {
+    const file = files[new URL(route.request().url()).pathname.slice(1)];
+    if (!file) return route.fulfill({ status: 404, body: "" });
+    const type = file.endsWith(".js") ? "text/javascript" : file.endsWith(".json") ? "application/json" : file.endsWith(".html") ? "text/html" : "text/plain";
+    return route.fulfill({ status: 200, contentType: type, body: fs.readFileSync(file) });
+  });
+  await page.goto(`http://iqc.test/three.html?w=${size[0]}&h=${size[1]}`);
+  await waitFor(page, () => window.iqcFrames > 0);
+  const got = await picture(page);
+  const diff = got.data.reduce((s, v, i) => s + Math.abs(v - expected.data[i]), 0) / got.data.length;
+  check(errors.length === 0, `three.js: no console errors ${errors.join(" | ")}`);
+  check(got.data.length === expected.data.length && diff < 2 && got.colours > 10,
+        `three.js: the same picture as the html page (mean difference ${diff.toFixed(2)} of 255, ${size[0]}×${size[1]})`);
+  await page.close();
+  await ref.page.close();
 }
 
 {
