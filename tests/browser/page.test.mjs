@@ -69,7 +69,7 @@ async function moveSlider(page, k) {
   return { before, after: await picture(page) };
 }
 
-const examples = ["two_tori.md", "box_frames.md", "gallery.iq", "menger.iq", "glass_and_mirror.iq"];
+const examples = fs.readdirSync(path.join(src, "examples")).filter(f => /\.(md|iq)$/.test(f)).sort();
 for (const name of examples) {
   const out = path.join(tmp, name + ".html");
   execFileSync(iqc, [path.join(src, "examples", name), "--target", "html", "-o", out], { stdio: "pipe" });
