@@ -107,3 +107,16 @@ TEST_CASE("imports from module files beside the input, and import cycles", "[dia
     CHECK(c.exit_code == 1);
     CHECK_THAT(c.err, Catch::Contains("cyc_b.iql:1:8: error: module 'cyc_a' imports itself (an import cycle)"));
 }
+
+TEST_CASE("a multi-letter function definition without backticks says how to write it", "[diag]") {
+    std::string d = errors_of("smooth_union(a, b) = min(a, b) where a ∈ ℝ, b ∈ ℝ\nx = 1\n");
+    CHECK_THAT(d, Catch::Contains("test.iql:1:20: error: unexpected '=' after the end of the statement\n"
+                                  "  smooth_union(a, b) = min(a, b) where a ∈ ℝ, b ∈ ℝ\n"
+                                  "                     ^\n"));
+    CHECK_THAT(d, Catch::Contains("test.iql:1:1: note: 'smooth_union' reads as a product of one-letter names; to "
+                                  "define a function with this name, write it in backticks: `smooth_union`(…) = …\n"
+                                  "  smooth_union(a, b) = min(a, b) where a ∈ ℝ, b ∈ ℝ\n"
+                                  "  ^~~~~~~~~~~~\n"));
+    // A one-letter function followed by '=' elsewhere is not given the hint.
+    CHECK_THAT(errors_of("y = 1 = 2\n"), !Catch::Contains("backticks"));
+}

@@ -1,5 +1,6 @@
 #include "syntax/Parser.h"
 
+#include <cctype>
 #include <algorithm>
 #include <cstdlib>
 #include <fmt/format.h>
@@ -213,6 +214,21 @@ private:
     }
     [[noreturn]] void fail(Span s, std::string msg) {
         diags_.error(s, std::move(msg));
+        throw Bail{};
+    }
+    // `smooth_union(a, b) = …` reads as products of one-letter names (I♥LA's rule) and then an unexpected '=':
+    // say so, and how to write a multi-letter function name.
+    void suggest_backticks(Span start, Span eq) {
+        if (start.file != eq.file || eq.begin <= start.begin) return;
+        std::string_view head = sm_.text(eq.file).substr(start.begin, eq.begin - start.begin);
+        size_t n = 0;
+        while (n < head.size() && (std::isalnum(static_cast<unsigned char>(head[n])) || head[n] == '_')) ++n;
+        if (n < 2 || n >= head.size() || head[n] != '(' || !std::isalpha(static_cast<unsigned char>(head[0]))) return;
+        std::string name(head.substr(0, n));
+        Diagnostic& d = diags_.error(eq, "unexpected '=' after the end of the statement");
+        Diagnostics::note(d, Span{start.file, start.begin, static_cast<uint32_t>(start.begin + n)},
+                          fmt::format("'{}' reads as a product of one-letter names; to define a function with this name, "
+                                      "write it in backticks: `{}`(…) = …", name, name));
         throw Bail{};
     }
     const Token& expect(Tok k, const char* what) {
@@ -660,11 +676,13 @@ Module Parser::parse(std::string name, bool allow_header) {
         if (at(Tok::Newline) || at(Tok::Semicolon)) { advance(); continue; }
         try {
             ctx_.assign(1, Ctx::Top);
+            Span start = cur().span;
             parse_line(m);
             if (!at(Tok::Newline) && !at(Tok::End) && !at(Tok::Semicolon)) {
                 const Token& t = cur();
                 if (t.kind == Tok::Unknown)
                     fail(t.span, fmt::format("unexpected character '{}'", t.text));
+                if (t.kind == Tok::Eq) suggest_backticks(start, t.span);
                 fail(t.span, fmt::format("unexpected {} after the end of the statement", describe(t)));
             }
         } catch (Bail&) {
