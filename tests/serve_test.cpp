@@ -12,7 +12,6 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <fstream>
 #include <thread>
 
 #include "TestUtil.h"
@@ -32,10 +31,6 @@ struct Server {
         }
     }
 };
-
-void write_file(const fs::path& p, const std::string& text) {
-    std::ofstream(p, std::ios::binary) << text;
-}
 
 std::string ring(const std::string& radius) {
     return "shape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ [0,3] default = " + radius + ": ring radius\n";
@@ -57,8 +52,8 @@ TEST_CASE("iqc serve: loopback only, two paths, rebuilds on a module edit, shows
     fs::path dir = temp_dir() / "serve";
     fs::remove_all(dir);
     fs::create_directories(dir);
-    write_file(dir / "ring.iql", ring("1"));
-    write_file(dir / "scene.iq", "title = \"serve test\"\ninclude = [\"ring.iql\"]\n[[shapes]]\ntype = \"ring\"\n");
+    write_temp("serve/ring.iql", ring("1"));
+    write_temp("serve/scene.iq", "title = \"serve test\"\ninclude = [\"ring.iql\"]\n[[shapes]]\ntype = \"ring\"\n");
     fs::path out = dir / "stdout.txt";
     Server s;
     std::fflush(stdout);
@@ -115,13 +110,13 @@ TEST_CASE("iqc serve: loopback only, two paths, rebuilds on a module edit, shows
     }
     // Edit the included module: a new version whose page has the new default.
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    write_file(dir / "ring.iql", ring("2.25"));
+    write_temp("serve/ring.iql", ring("2.25"));
     CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "2"; }));
     auto page2 = client.Get("/");
     REQUIRE(page2);
     CHECK_THAT(page2->body, Catch::Contains("2.25"));
     // Break it: the page shows the diagnostic with its location instead of a blank canvas.
-    write_file(dir / "ring.iql", "shape\nD = ‖p‖ - radius\nwhere\np ∈ ℝ³\n");
+    write_temp("serve/ring.iql", "shape\nD = ‖p‖ - radius\nwhere\np ∈ ℝ³\n");
     CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "3"; }));
     auto broken = client.Get("/");
     REQUIRE(broken);
@@ -130,7 +125,7 @@ TEST_CASE("iqc serve: loopback only, two paths, rebuilds on a module edit, shows
     CHECK_THAT(broken->body, Catch::Contains("ring.iql:2:"));
     CHECK_THAT(broken->body, Catch::Contains("undefined name"));
     // Fix it: back to a working page.
-    write_file(dir / "ring.iql", ring("0.5"));
+    write_temp("serve/ring.iql", ring("0.5"));
     CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "4"; }));
     auto fixed = client.Get("/");
     REQUIRE(fixed);

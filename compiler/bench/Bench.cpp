@@ -64,17 +64,21 @@ Report run(const Options& o) {
     const int W = o.width, H = o.height;
     const size_t N = size_t(W) * size_t(H);
 
-    auto compile = [&](const Setting& s, bool instrument, bool geometry) -> CompileResult {
+    // A benchmark build (`bench`) takes the hit tolerance, the step cap and the output mode as uniforms.
+    auto compile = [&](const Setting& s, bool instrument, bool geometry, bool bench = false) -> CompileResult {
         SourceManager sm;
         Diagnostics d(sm);
         CompileOptions co;
         co.instrument = instrument;
         co.geometry = geometry;
+        co.bench = bench;
         co.per_instance = s.method == "per_instance";
         if (auto m = parse_march(s.method)) co.march = m;
         co.normals = parse_normals(s.normals);
-        co.hit = s.hit;
-        co.max_steps = s.max_steps;
+        if (!bench) {
+            co.hit = s.hit;
+            co.max_steps = s.max_steps;
+        }
         CompileResult r = compile_file(o.input, sm, d, co);
         if (r.exit_code != 0) err = d.render() + r.internal;
         return r;
@@ -181,16 +185,9 @@ Report run(const Options& o) {
             o.progress(int(si), int(settings.size()),
                        fmt::format("{} hit {} max_steps {} normals {}", s.method, s.hit, s.max_steps, s.normals));
         if (built != std::make_pair(s.method, s.normals) || bench_code.empty()) {
-            SourceManager sm;
-            Diagnostics d(sm);
-            CompileOptions co;
-            co.bench = true;
-            co.per_instance = s.method == "per_instance";
-            if (auto m = parse_march(s.method)) co.march = m;
-            co.normals = parse_normals(s.normals);
-            CompileResult r = compile_file(o.input, sm, d, co);
+            CompileResult r = compile(s, false, false, true);
             if (r.exit_code != 0) {
-                rep.error = d.render() + r.internal;
+                rep.error = err;
                 return rep;
             }
             bench_code = glsl::wrap_shadertoy(r.code);

@@ -32,7 +32,7 @@ bool html_escape(std::string& out, std::string_view s, size_t& i) {
     return false;
 }
 
-void replace_all(std::string& text, std::string_view key, std::string_view value) {
+void fill_placeholder(std::string& text, std::string_view key, std::string_view value) {
     size_t at = text.find(key);
     if (at == std::string::npos) throw std::logic_error("page template lacks " + std::string(key));
     text.replace(at, key.size(), value);
@@ -70,9 +70,9 @@ std::string json_for_html(std::string_view json) {
 std::string html_page(std::string_view webgl2_shader, std::string_view meta_json, std::string_view live_reload) {
     std::string page(*embedded_file("runtime_templates/page.html"));
     // Substitute the script last: it is the only part that could contain a placeholder-like text.
-    replace_all(page, "{{LIVE_RELOAD}}", live_reload);
-    replace_all(page, "{{META_JSON}}", json_for_html(meta_json));
-    replace_all(page, "{{SHADER_JSON}}", json_string_for_html(webgl2_shader));
+    fill_placeholder(page, "{{LIVE_RELOAD}}", live_reload);
+    fill_placeholder(page, "{{META_JSON}}", json_for_html(meta_json));
+    fill_placeholder(page, "{{SHADER_JSON}}", json_string_for_html(webgl2_shader));
     return page;
 }
 
