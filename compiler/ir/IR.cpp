@@ -22,6 +22,7 @@ std::string Type::str() const {
         case Vector: return "ℝ" + sup(rows);
         case Matrix: return fmt::format("ℝ^({}×{})", rows, cols);
         case Tuple: return fmt::format("tuple({})", rows);
+        case Array: return fmt::format("{}[{}]", element().str(), count);
     }
     return "?";
 }
