@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "ir/Lower.h"
+#include "ir/Pipeline.h"
 #include "scene/Modules.h"
 #include "scene/Scene.h"
 
@@ -38,7 +39,7 @@ bool parse_value(const std::string& name, const std::string& text, SourceManager
         return false;
     }
     ir::Module irm;
-    LowerContext ctx{irm, {}};
+    LowerContext ctx{irm, {}, {}};
     int fn = lower_module(*m, "value", "value", ctx);
     out = ir::evaluate(irm, fn, {});
     return true;
@@ -140,9 +141,16 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
     }
     if (d.error_count() != before) return false;
     ir::Module irm;
-    LowerContext ctx{irm, {}};
+    LowerContext ctx{irm, {}, {}};
     int fn = lower_module(*m, name, name, ctx);
+    irm.functions[size_t(fn)].entry = true;
     lap("lower to IR");
+    ir::PipelineOptions po;
+    po.inject_fault = req.inject_fault;
+    ir::PipelineResult pr = ir::run_pipeline(irm, po);
+    for (const auto& w : pr.range_issues) d.warning(w.span, w.message);
+    fn = irm.find(name);
+    lap("pass pipeline");
     auto all = ir::evaluate_all(irm, fn, args, req.inputs);
     lap("evaluate");
     const ir::Function& F = irm.functions[size_t(fn)];
