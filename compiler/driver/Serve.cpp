@@ -64,7 +64,7 @@ Build build(const std::string& input, unsigned version, double poll_seconds) {
         std::string text = diags.render();
         if (r.exit_code == 3) text += r.internal;
         nlohmann::json meta = {{"title", fs::path(input).filename().string()}, {"error", text}};
-        b.page = html_page("", meta.dump(), live);
+        b.page = html_page("", meta.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), live);
     }
     return b;
 }

@@ -234,6 +234,11 @@ Value eval_instr(const Module& m, const Function& f, const Instr& in, const std:
             std::vector<Value> bargs(a.size());
             for (size_t k = 1; k < a.size(); ++k) bargs[k] = *a[k];
             double hi = std::floor(a[0]->v[0] + 0.5);
+            // Refused before it starts when its iterations alone exceed what is left of the budget (so a
+            // huge range never starts, and k += 1 never has to count past 2^53).
+            double trips = hi - in.data[0] + 1;
+            double left = double(inputs.max_steps - std::min(inputs.max_steps, inputs.steps));
+            if (trips > 0 && trips * double(body.body.size() + 1) > left) throw EvalLimit{in.span};
             for (double k = in.data[0]; k <= hi; k += 1) {
                 bargs[0] = {Type::integer(), {k}};
                 auto res = evaluate_all(m, in.aux, bargs, inputs);
@@ -267,6 +272,8 @@ std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value
     std::vector<Value> vals(f.body.size());
     for (size_t i = 0; i < f.body.size(); ++i) {
         const Instr& in = f.body[i];
+        inputs.steps += 1 + uint64_t(std::max(0, in.type.components()));
+        if (inputs.steps > inputs.max_steps) throw EvalLimit{in.span};
         std::vector<const Value*> a;
         for (ValueId id : in.args) a.push_back(&vals[id]);
         vals[i] = eval_instr(m, f, in, a, args, inputs);

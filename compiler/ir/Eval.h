@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "ir/IR.h"
+#include "source/Limits.h"
 
 namespace iqc::ir {
 
@@ -18,10 +19,20 @@ struct Value {
     double operator[](size_t i) const { return v[i]; }
 };
 
-// The reserved inputs (`time`, `mouse`).
+// The reserved inputs (`time`, `mouse`), and the work budget of one evaluation.
 struct EvalInputs {
     double time = 0;
     double mouse[2] = {0, 0};
+    // One step per instruction plus one per component it produces; a recurrence whose iterations alone
+    // exceed what is left is refused before it starts. Past the budget the evaluator throws EvalLimit.
+    uint64_t max_steps = limits::kMaxEvalSteps;
+    mutable uint64_t steps = 0;
+};
+
+// Thrown when an evaluation would exceed EvalInputs::max_steps; `span`: the recurrence or the
+// instruction where it stopped. Callers turn it into a located diagnostic.
+struct EvalLimit {
+    Span span;
 };
 
 // Evaluates function `fn` of `m` with the given arguments; returns every value of its body (index = ValueId).

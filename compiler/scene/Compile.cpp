@@ -187,7 +187,13 @@ bool SceneCompiler::plan_transform(const InstanceDesc& inst, InstancePlan& plan)
         args.push_back({p.type, p.value});
         settings.push_back(fmt::format("{} = {}", p.name, join_values(p.value)));
     }
-    ir::Value M = ir::evaluate(ir_, fn, args);
+    ir::Value M;
+    try {
+        M = ir::evaluate(ir_, fn, args);
+    } catch (const ir::EvalLimit& limit) {
+        d_.error(limit.span, fmt::format("evaluating the transform would take more than {} steps", limits::kMaxEvalSteps));
+        return false;
+    }
     const auto& v = M.v;
     plan.transform_comment = std::string(sm_.slice(m->ret->span));
     for (char& c : plan.transform_comment)
@@ -363,8 +369,9 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     nlohmann::ordered_json jparams = nlohmann::ordered_json::array();
     std::map<std::string, int> budget;  // instance -> uniform vectors
     auto declare = [&](const std::string& name, const Type& t, const std::vector<double>& value, const std::string& comment) {
-        if (shadertoy) return fmt::format("const {} {} = {};  // {}\n", glsl::type_name(t), name, glsl::constant(t, value), comment);
-        return fmt::format("uniform {} {};  // {} (default {})\n", glsl::type_name(t), name, comment, join_values(value));
+        if (shadertoy)
+            return fmt::format("const {} {} = {};  // {}\n", glsl::type_name(t), name, glsl::constant(t, value), glsl::comment_text(comment));
+        return fmt::format("uniform {} {};  // {} (default {})\n", glsl::type_name(t), name, glsl::comment_text(comment), join_values(value));
     };
     auto describe = [&](const std::string& instance, const std::string& module, const char* role, const ParamInfo& pi,
                         const std::vector<double>& value, const std::string& glsl_name) {
@@ -452,7 +459,8 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
                 describe(p.name, "transform", "transform", pi, pi.value, n);
             }
         if (!block.empty())
-            params += fmt::format("// {}: {}{}\n{}", p.name, p.desc->type, p.material ? " with " + p.desc->material : std::string(), block);
+            params += fmt::format("// {}\n{}", glsl::comment_text(fmt::format("{}: {}{}", p.name, p.desc->type,
+                                                                      p.material ? " with " + p.desc->material : std::string())), block);
     }
     if (!params.empty())
         params = (shadertoy ? "// ---- parameters (Shadertoy has no sliders: edit the values here) ----\n"
@@ -492,23 +500,25 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     bool lipschitz = false, any_bound = false;
     for (size_t i = 0; i < plans.size(); ++i) {
         InstancePlan& p = plans[i];
+        const std::string label = glsl::comment_text(p.name);  // the instance's name in comments
+        const std::string transform_text = glsl::comment_text(p.transform_comment);
         std::string q = "p", scale;
         if (p.has_transform && p.transform_runtime) {
             std::string lin = globals.unique(p.glsl + "_to_object");
             std::string off = globals.unique(p.glsl + "_offset");
             std::string sc = globals.unique(p.glsl + "_scale");
-            transforms += fmt::format("// {}: {} (evaluated per pixel in iqc_prepare)\nmat3 {};\nvec3 {};\nfloat {};\n", p.name,
-                                      p.transform_comment, lin, off, sc);
+            transforms += fmt::format("// {}: {} (evaluated per pixel in iqc_prepare)\nmat3 {};\nvec3 {};\nfloat {};\n", label,
+                                      transform_text, lin, off, sc);
             std::vector<std::string> targs;
             for (const auto& pi : p.transform->params) targs.push_back(p.constants.at("transform." + pi.name));
             prepare += fmt::format("    {{\n        mat4 inv = inverse({}({}));  // {}\n        {} = mat3(inv);\n        {} = inv[3].xyz;\n"
                                    "        {} = 1.0 / iqc_max_singular({});\n    }}\n",
-                                   em.function_name(p.transform_fn), fmt::join(targs, ", "), p.name, lin, off, sc, lin);
+                                   em.function_name(p.transform_fn), fmt::join(targs, ", "), label, lin, off, sc, lin);
             lipschitz = true;
             q = lin + " * p + " + off;
             scale = sc;
         } else if (p.has_transform) {
-            transforms += fmt::format("// {}: {}\n", p.name, p.transform_comment);
+            transforms += fmt::format("// {}: {}\n", label, transform_text);
             bool identity = true;
             for (int r = 0; r < 3; ++r)
                 for (int c = 0; c < 3; ++c) identity &= std::fabs(p.inv_linear[size_t(r * 3 + c)] - (r == c ? 1.0 : 0.0)) < 1e-12;
@@ -543,9 +553,9 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
                 std::string lin = q.substr(0, q.find(" * p"));
                 bool has_linear = q.find(" * p") != std::string::npos;
                 gradient += fmt::format("    if (id == {}) g = {};  // {}\n", i,
-                                        has_linear ? fmt::format("transpose({}) * {}", lin, grad) : grad, p.name);
+                                        has_linear ? fmt::format("transpose({}) * {}", lin, grad) : grad, label);
             } else {
-                gradient += fmt::format("    if (id == {}) g = iqc_tetrahedron_gradient(p, t);  // {}\n", i, p.name);
+                gradient += fmt::format("    if (id == {}) g = iqc_tetrahedron_gradient(p, t);  // {}\n", i, label);
 
             }
         }
@@ -563,12 +573,12 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
             body += fmt::format("    {{  // {}: bounding sphere of radius {}\n        vec3 iqc_q = {};\n"
                                 "        float iqc_b = (length(iqc_q) - {}){};\n        if (iqc_b > IQC_BOUND_MARGIN) d = iqc_b;\n"
                                 "        else {{\n{}            d = {}{};\n        }}\n    }}\n",
-                                p.name, glsl::float_literal(bound), q, glsl::float_literal(bound), suffix,
+                                label, glsl::float_literal(bound), q, glsl::float_literal(bound), suffix,
                                 counted ? "            iqc_shape_evals++;\n" : "", bcall, suffix);
             any_bound = true;
         } else {
             if (counted) body += "    iqc_shape_evals++;\n";
-            body += fmt::format("    d = {};  // {}\n", call, p.name);
+            body += fmt::format("    d = {};  // {}\n", call, label);
         }
         if (opts_.per_instance) {
             // I♥IQ's architecture, as code the driver can compile: per instance, its transform inverted (at
@@ -583,7 +593,7 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
             }
             std::string dist = fmt::format("{}({})", em.function_name(p.shape_fn), fmt::join(pargs, ", "));
             if (p.shape->lipschitz != 1) dist += fmt::format(" / {}", glsl::float_literal(p.shape->lipschitz));
-            per_instance_inverse += fmt::format("    if (i == {}) return {};  // {}\n", i, inv, p.name);
+            per_instance_inverse += fmt::format("    if (i == {}) return {};  // {}\n", i, inv, label);
             per_instance_distance += fmt::format("    if (i == {}) return {};\n", i, dist);
         }
         body += fmt::format("    if (d < res.x) res = vec2(d, {});\n", glsl::float_literal(double(i)));
@@ -604,10 +614,10 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
                 return fmt::format("{}({})", em.function_name(p.material_fn), fmt::join(margs, ", "));
             };
             if (!per_light) {
-                shade += fmt::format("    if (id == {}) return {};  // {}\n", i, material_call("", ""), p.name);
+                shade += fmt::format("    if (id == {}) return {};  // {}\n", i, material_call("", ""), label);
             } else {
-                shade += fmt::format("    if (id == {}) {{  // {}: {} once per light\n        vec3 c = vec3(0.0);\n", i, p.name,
-                                     p.material->ast.name);
+                shade += fmt::format("    if (id == {}) {{  // {}: {} once per light\n        vec3 c = vec3(0.0);\n", i, label,
+                                     glsl::comment_text(p.material->ast.name));
                 for (const auto& [pos, col] : light_names) {
                     std::string term = material_call(pos, col);
                     if (fx.shadows != Shadows::None) term += fmt::format(" * iqc_shadow(p, N, {})", pos);
@@ -623,12 +633,12 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
                 return mp[size_t(k)].type.is_scalar() ? fmt::format("vec3({})", n) : mp[size_t(k)].type == Type::vector(3) ? n : "";
             };
             if (std::string kr = vec3_of(kReflectivity); !kr.empty())
-                reflect += fmt::format("    if (id == {}) return {};  // {}\n", i, kr, p.name);
+                reflect += fmt::format("    if (id == {}) return {};  // {}\n", i, kr, label);
             if (std::string kt = vec3_of(kTransmission); !kt.empty()) {
                 int ek = p.material->find_param(kRefractiveIndex);
                 if (ek < 0) ek = p.material->find_param("eta");
                 std::string eta = ek >= 0 && mp[size_t(ek)].type.is_scalar() ? p.constants.at("material." + mp[size_t(ek)].name) : "1.5";
-                transmit += fmt::format("    if (id == {}) return vec4({}, {});  // {}\n", i, kt, eta, p.name);
+                transmit += fmt::format("    if (id == {}) return vec4({}, {});  // {}\n", i, kt, eta, label);
             }
         }
     }
@@ -638,9 +648,9 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     TemplateArgs ta;
     auto& V = ta.values;
     auto& F = ta.flags;
-    V["TITLE"] = s_.title;
+    V["TITLE"] = glsl::comment_text(s_.title);
     V["VERSION"] = IQC_VERSION;
-    V["SOURCE"] = std::filesystem::path(s_.path).filename().string();
+    V["SOURCE"] = glsl::comment_text(std::filesystem::path(s_.path).filename().string());
     V["TARGET"] = target_name(opts_.target);
     V["MAX_STEPS"] = std::to_string(max_steps);
     V["MAX_DIST"] = glsl::float_literal(render.max_dist);
@@ -707,7 +717,7 @@ std::string SceneCompiler::assemble(std::vector<InstancePlan>& plans, std::strin
     j["inputs"] = nlohmann::ordered_json::array({"iResolution", "iTime", "iMouse", "iFrame"});
     j["parameters"] = jparams;
     j["lights"] = jlights;
-    meta = j.dump(2) + "\n";
+    meta = j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";  // invalid UTF-8: U+FFFD
     return expand_template(std::string(*embedded_file("runtime_templates/scene.glsl")), ta);
 }
 
