@@ -171,6 +171,9 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
     return 0;
 }
 
+// Writes text with its length (a NUL byte in a diagnostic's source line must not cut off what follows).
+void put(std::FILE* f, std::string_view text) { std::fwrite(text.data(), 1, text.size(), f); }
+
 int write_output(const std::string& path, const std::string& text) {
     if (path.empty() || path == "-") {
         std::fwrite(text.data(), 1, text.size(), stdout);
@@ -195,8 +198,7 @@ int write_output(const std::string& path, const std::string& text) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-    tune_allocator();
+static int run(int argc, char** argv) {
     CLI::App app{
         "iqc — compiles math written as papers print it (I♥LA / I♥IQ) and a scene into a standalone fragment "
         "shader.\n\n"
@@ -334,9 +336,9 @@ int main(int argc, char** argv) {
         }
         for (auto& [name, ms] : timings) std::fprintf(stderr, "iqc: %-28s %8.3f ms\n", name.c_str(), ms);
         std::string text = diags.render();
-        if (!text.empty()) std::fputs(text.c_str(), stderr);
+        put(stderr, text);
         if (!ok) return 1;
-        for (const auto& o : outs) std::printf("%s = %s\n", o.name.c_str(), iqc::ir::format_value(o.value).c_str());
+        for (const auto& o : outs) put(stdout, o.name + " = " + iqc::ir::format_value(o.value) + "\n");
         return 0;
     }
     if (serve->parsed()) return iqc::serve(s_input, s_port, s_poll);
@@ -395,12 +397,12 @@ int main(int argc, char** argv) {
     if (render->parsed()) opts.target = r_target == "webgl2" ? iqc::Target::WebGL2 : iqc::Target::Shadertoy;
     iqc::CompileResult r = iqc::compile_file(render->parsed() ? r_input : input, sm, diags, opts);
     std::string rendered = diags.render();
-    if (!rendered.empty()) std::fputs(rendered.c_str(), stderr);
-    if (dump_ir && !r.ir.empty()) std::fputs(r.ir.c_str(), stderr);
+    put(stderr, rendered);
+    if (dump_ir) put(stderr, r.ir);
     if (time_passes)
         for (auto& [name, ms] : r.pass_ms) std::fprintf(stderr, "iqc: %-28s %8.3f ms\n", name.c_str(), ms);
     if (r.exit_code == 3) {
-        std::fprintf(stderr, "%s\n", r.internal.c_str());
+        put(stderr, r.internal + "\n");
         return 3;
     }
     if (r.exit_code != 0) {
@@ -446,4 +448,21 @@ int main(int argc, char** argv) {
     }
     if (rc == 0 && !output.empty() && output != "-") std::fprintf(stderr, "iqc: wrote %s\n", output.c_str());
     return rc;
+}
+
+// No exception reaches the C++ runtime: anything thrown is a bug in iqc (bad input is a diagnostic), and
+// says so with exit code 3.
+int main(int argc, char** argv) {
+    tune_allocator();
+    try {
+        return run(argc, argv);
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "iqc: internal compiler error: out of memory (this is a bug in iqc: input should be "
+                             "refused with a diagnostic before that)\n");
+    } catch (const std::exception& e) {
+        put(stderr, std::string("iqc: internal compiler error: ") + e.what() + " (this is a bug in iqc)\n");
+    } catch (...) {
+        std::fprintf(stderr, "iqc: internal compiler error: unknown exception (this is a bug in iqc)\n");
+    }
+    return 3;
 }

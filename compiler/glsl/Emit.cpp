@@ -45,6 +45,7 @@ std::string float_literal(double v) {
     if (std::isnan(v)) return "(0.0 / 0.0)";
     if (std::isinf(v)) return v > 0 ? "1.0e38" : "-1.0e38";
     float f = static_cast<float>(v);
+    if (std::isinf(f)) return f > 0 ? "1.0e38" : "-1.0e38";  // beyond float's range (a folded 1e30 * 1e30), as ∞
     if (f == 0.0f) f = 0.0f;  // no "-0.0"
     std::string s = fmt::format("{}", f);
     size_t e = s.find_first_of("eE");
@@ -147,21 +148,10 @@ std::vector<int> Emitter::closure(const std::vector<int>& roots) const {
 namespace {
 
 const char* kSwizzle = "xyzw";
+constexpr int kSwizzleSize = 4;  // GLSL's widest vector; a larger IR vector has no GLSL type (already reported)
 
-std::string one_line(const std::string& s) {
-    std::string out;
-    bool space = false;
-    for (char c : s) {
-        if (c == '\n' || c == '\r' || c == '\t' || c == ' ') {
-            space = true;
-            continue;
-        }
-        if (space && !out.empty()) out += ' ';
-        space = false;
-        out += c;
-    }
-    return out;
-}
+// Statement text (a formula as written) for a `//` comment: one line, nothing that could end the comment.
+std::string one_line(const std::string& s) { return comment_text(s); }
 
 struct FunctionEmitter {
     const ir::Module& m;
@@ -253,6 +243,11 @@ struct FunctionEmitter {
         return paren && compound(v) ? "(" + s + ")" : s;
     }
 
+    // Component k of a vector: `.x` … `.w`, or `[k]` past GLSL's four (only reached after a type error).
+    std::string component(ValueId v, int k) {
+        return k < kSwizzleSize ? postfix_base(v) + "." + kSwizzle[k] : fmt::format("{}[{}]", postfix_base(v), k);
+    }
+
     // A value as something `.x` or `[i]` may follow.
     std::string postfix_base(ValueId v) {
         std::string s = expr(v);
@@ -307,7 +302,8 @@ struct FunctionEmitter {
             std::string sel;
             for (size_t i = 0; i < in.args.size() && swz; ++i) {
                 const Instr& x = f.body[in.args[i]];
-                if (x.op != Op::Extract || !f.body[x.args[0]].type.is_vector() || !var[in.args[i]].empty()) {
+                if (x.op != Op::Extract || !f.body[x.args[0]].type.is_vector() || !var[in.args[i]].empty() ||
+                    x.aux >= kSwizzleSize) {
                     swz = false;
                     break;
                 }
@@ -359,7 +355,7 @@ struct FunctionEmitter {
                 const Type& t = f.body[in.args[i]].type;
                 if (t.is_scalar()) comps.push_back(plain(i));
                 else
-                    for (int k = 0; k < t.components(); ++k) comps.push_back(postfix_base(in.args[i]) + "." + kSwizzle[k]);
+                    for (int k = 0; k < t.components(); ++k) comps.push_back(component(in.args[i], k));
             }
             for (int c = 0; c < in.type.cols; ++c)
                 for (int r = 0; r < in.type.rows; ++r) args.push_back(comps[size_t(r * in.type.cols + c)]);
@@ -428,7 +424,7 @@ struct FunctionEmitter {
             case Op::Construct: return construct(in, v);
             case Op::Extract: {
                 const Type& st = f.body[in.args[0]].type;
-                if (st.is_vector() || (st.is_matrix() && st.rows == 1)) return postfix_base(in.args[0]) + "." + kSwizzle[in.aux];
+                if (st.is_vector() || (st.is_matrix() && st.rows == 1)) return component(in.args[0], in.aux);
                 return fmt::format("{}[{}][{}]", postfix_base(in.args[0]), in.aux % st.cols, in.aux / st.cols);
             }
             case Op::Column: return fmt::format("{}[{}]", postfix_base(in.args[0]), in.aux);
@@ -631,7 +627,7 @@ struct FunctionEmitter {
     std::string run(const std::string& name, const std::string& comment) {
         analyze({f.result});
         std::string out;
-        if (!comment.empty()) out += "// " + comment + "\n";
+        if (!comment.empty()) out += "// " + comment_text(comment) + "\n";
         std::vector<std::string> params = declare_params();
         out += fmt::format("{} {}({}) {{\n", type_of(f.result_type(), {}), name, fmt::join(params, ", "));
         out += region(0, "    ", f.result);
@@ -648,7 +644,7 @@ struct FunctionEmitter {
         for (const auto& o : f.outputs) roots.push_back(o.second);
         analyze(roots);
         std::string out;
-        if (!comment.empty()) out += "// " + comment + "\n";
+        if (!comment.empty()) out += "// " + comment_text(comment) + "\n";
         out += fmt::format("void {}() {{\n", name);
         out += region(0, "    ", ValueId(-1));
         for (const auto& [gname, v] : f.outputs) {

@@ -282,6 +282,8 @@ struct Frame {
 
     void run(ValueId i) {
         const Instr& in = f.body[i];
+        ev.steps_ += 1 + plan.size[i];
+        if (ev.steps_ > ev.inputs_.max_steps) throw EvalLimit{in.span};
         switch (in.op) {
             case Op::Param: at[i] = args[in.aux]; return;
             case Op::Global: at[i] = ev.globals_[size_t(in.aux)].data(); return;
@@ -360,6 +362,11 @@ struct Frame {
         for (size_t j = 0; j < states; ++j) a[j + 1] = r + off[j];
         for (size_t c = states + 1; c < in.args.size(); ++c) a[c] = at[in.args[c]];
         double hi = std::floor(at[in.args[0]][0] + 0.5);
+        // Refused before it starts when its iterations alone exceed what is left of the budget (so a huge
+        // range never starts, and k += 1 never has to count past 2^53).
+        double trips = hi - in.data[0] + 1;
+        double left = double(ev.inputs_.max_steps - std::min(ev.inputs_.max_steps, ev.steps_));
+        if (trips > 0 && trips * double(body.body.size() + 1) > left) throw EvalLimit{in.span};
         Frame bf(ev, in.aux, a.data());  // one frame for every iteration: each run overwrites its values
         for (k = in.data[0]; k <= hi; k += 1) {
             bf.run_region(0);
@@ -403,6 +410,7 @@ void Evaluator::prepare() {
     int fn = m_.find(names::kPrepare);
     if (fn < 0) return;
     const Function& f = m_.functions[size_t(fn)];
+    steps_ = 0;
     Frame fr(*this, fn, nullptr);
     fr.run_region(0);
     for (const auto& [name, v] : f.outputs) {
@@ -420,6 +428,7 @@ void Evaluator::set_global(int g, std::vector<double> value) {
 }
 
 void Evaluator::call(int fn, const double* const* args, double* out) {
+    steps_ = 0;
     Frame fr(*this, fn, args);
     fr.run_region(0);
     const Function& f = m_.functions[size_t(fn)];
@@ -453,6 +462,7 @@ Value Evaluator::call(int fn, const std::vector<Value>& args) {
 std::vector<Value> Evaluator::call_all(int fn, const std::vector<Value>& args) {
     const Function& f = m_.functions[size_t(fn)];
     auto a = arg_pointers(f, args);
+    steps_ = 0;
     Frame fr(*this, fn, a.data());
     fr.run_region(0);
     std::vector<Value> out(f.body.size());

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "ir/IR.h"
+#include "source/Limits.h"
 
 namespace iqc::ir {
 
@@ -25,10 +26,20 @@ struct Value {
     double operator[](size_t i) const { return v[i]; }
 };
 
-// The reserved inputs (`time`, `mouse`).
+// The reserved inputs (`time`, `mouse`), and the work budget of one evaluation.
 struct EvalInputs {
     double time = 0;
     double mouse[2] = {0, 0};
+    // One step per instruction plus one per component it produces, counted afresh for every call; a
+    // recurrence whose iterations alone exceed what is left is refused before it starts. Past the budget
+    // the evaluator throws EvalLimit.
+    uint64_t max_steps = limits::kMaxEvalSteps;
+};
+
+// Thrown when an evaluation would exceed EvalInputs::max_steps; `span`: the recurrence or the
+// instruction where it stopped. Callers turn it into a located diagnostic.
+struct EvalLimit {
+    Span span;
 };
 
 class Evaluator {
@@ -57,6 +68,7 @@ private:
     const Module& m_;
     EvalInputs inputs_;
     std::vector<std::vector<double>> globals_;
+    uint64_t steps_ = 0;  // work of the current call (EvalInputs::max_steps)
     mutable std::vector<std::unique_ptr<Plan>> plans_;
     const Plan& plan(int fn) const;
     void prepare();

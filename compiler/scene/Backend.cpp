@@ -66,13 +66,6 @@ std::string base64(const uint8_t* data, size_t n) {
     return out;
 }
 
-// Text safe inside a `//` comment: one line.
-std::string comment_text(const std::string& s) {
-    std::string out;
-    for (char c : s) out += (c == '\n' || c == '\r') ? ' ' : c;
-    return out;
-}
-
 std::string join_values(const std::vector<double>& v) {
     if (v.size() == 1) return fmt::format("{}", v[0]);
     return fmt::format("({})", fmt::join(v, ", "));
@@ -248,7 +241,7 @@ struct Declarations {
         const GlobalStorage& s = lay.storage[i];
         std::string tn = glsl::type_name(g.type);
         std::string arr = g.type.is_array() ? fmt::format("[{}]", g.type.count) : "";
-        std::string comment = comment_text(g.comment);
+        std::string comment = glsl::comment_text(g.comment);
         switch (s.kind) {
             case Kind::Const:
                 return fmt::format("const {} {}{} = {};{}\n", tn, s.name, arr, value_of(g), comment.empty() ? "" : "  // " + comment);
@@ -268,7 +261,7 @@ struct Declarations {
         for (size_t i = 0; i < m.globals.size(); ++i) {
             if (!in(i)) continue;
             const Global& g = m.globals[i];
-            if (g.owner != owner && !g.owner.empty()) out += "// " + comment_text(g.owner) + "\n";
+            if (g.owner != owner && !g.owner.empty()) out += "// " + glsl::comment_text(g.owner) + "\n";
             owner = g.owner;
             out += declare(i);
         }

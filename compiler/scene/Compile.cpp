@@ -95,9 +95,9 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     TemplateArgs ta;
     auto& V = ta.values;
     auto& F = ta.flags;
-    V["TITLE"] = s_.title;
+    V["TITLE"] = glsl::comment_text(s_.title);
     V["VERSION"] = IQC_VERSION;
-    V["SOURCE"] = std::filesystem::path(s_.path).filename().string();
+    V["SOURCE"] = glsl::comment_text(std::filesystem::path(s_.path).filename().string());
     V["TARGET"] = target_name(opts_.target);
     V["MAX_STEPS"] = std::to_string(max_steps);
     V["MAX_DIST"] = glsl::float_literal(render.max_dist);
@@ -151,7 +151,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     j["lights"] = code.lights;
     j["blocks"] = code.blocks;
     j["texture"] = code.texture;
-    res_.meta = j.dump(2) + "\n";
+    res_.meta = j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";  // invalid UTF-8: U+FFFD
     return expand_template(std::string(*embedded_file("runtime_templates/scene.glsl")), ta);
 }
 

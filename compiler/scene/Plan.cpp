@@ -151,7 +151,13 @@ struct Planner {
             args.push_back({p.type, p.value});
             settings.push_back(fmt::format("{} = {}", p.name, join_values(p.value)));
         }
-        const std::vector<double> v = ir::evaluate(scratch, fn, args).v;
+        std::vector<double> v;
+        try {
+            v = ir::evaluate(scratch, fn, args).v;
+        } catch (const ir::EvalLimit& limit) {
+            d.error(limit.span, fmt::format("evaluating the transform would take more than {} steps", limits::kMaxEvalSteps));
+            return false;
+        }
         plan.transform_comment = std::string(sm.slice(m->ret->span));
         for (char& c : plan.transform_comment)
             if (c == '\n' || c == '\r') c = ' ';
