@@ -187,7 +187,8 @@ struct FunctionEmitter {
             case Op::Index: return k == 1;
             case Op::Switch: return k == 0 || int_result;
             case Op::Compare: return f.body[in.args[0]].type.kind == Type::Integer && f.body[in.args[1]].type.kind == Type::Integer;
-            case Op::Add: case Op::Sub: case Op::Mul: case Op::Neg: case Op::Copy: return int_result;
+            case Op::Add: case Op::Sub: case Op::Mul: case Op::Neg: case Op::Copy: case Op::IntDiv: case Op::IntMod:
+                return int_result;
             case Op::Select: case Op::If: return k >= 1 && int_result;
             case Op::Call: return callee(in).params[k].type.kind == Type::Integer;
             case Op::Loop: return k == 0 || callee(in).params[k].type.kind == Type::Integer;
@@ -224,7 +225,8 @@ struct FunctionEmitter {
         if (!var[v].empty()) return false;
         const Instr& in = f.body[v];
         switch (in.op) {
-            case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Hadamard: case Op::Compare:
+            case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Hadamard: case Op::Compare: case Op::IntDiv:
+            case Op::IntMod:
             case Op::And: case Op::Or: case Op::Select: case Op::Neg:
                 return true;
             case Op::Const: return in.type.is_scalar() && in.data[0] < 0;
@@ -381,6 +383,8 @@ struct FunctionEmitter {
             case Op::Copy: return plain(0);
             case Op::Add: return a(0) + " + " + a(1);
             case Op::Sub: return a(0) + " - " + a(1);
+            case Op::IntDiv: return a(0) + " / " + a(1);
+            case Op::IntMod: return a(0) + " % " + a(1);
             case Op::Mul: {
                 const Type& lt = f.body[in.args[0]].type;
                 const Type& rt = f.body[in.args[1]].type;

@@ -158,6 +158,8 @@ void run_op(const Instr& in, const Arg* a, double* r) {
             return;
         case Op::Add: return each2([](double x, double y) { return x + y; });
         case Op::Sub: return each2([](double x, double y) { return x - y; });
+        case Op::IntDiv: return each2([](double x, double y) { return std::floor(x / y); });
+        case Op::IntMod: return each2([](double x, double y) { return x - y * std::floor(x / y); });
         case Op::Hadamard: return each2([](double x, double y) { return x * y; });
         case Op::Div: return each2([](double x, double y) { return x / y; });
         case Op::Neg:

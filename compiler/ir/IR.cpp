@@ -88,6 +88,9 @@ Type result_type(Op op, const std::vector<Type>& a, int aux) {
             return a[0];
         case Op::Index:
             return a[0].is_array() && a[1].kind == Type::Integer ? a[0].element() : Type{};
+        case Op::IntDiv:
+        case Op::IntMod:
+            return a[0].kind == Type::Integer && a[1].kind == Type::Integer ? Type::integer() : Type{};
         case Op::Add:
         case Op::Sub:
             if (a[0].kind == Type::Integer && a[1].kind == Type::Integer) return Type::integer();

@@ -55,7 +55,9 @@ namespace iqc::ir {
     X(Global, 0)      /* aux: index in Module::globals */                                \
     X(Index, 2)       /* array[i]: element i (ℤ, 0-based) of an array value */           \
     X(If, 3)          /* cond ? a : b, lazy: only the chosen operand is computed */      \
-    X(Switch, -1)     /* args: selector (ℤ), default, cases; data: each case's [lo, hi) */
+    X(Switch, -1)     /* args: selector (ℤ), default, cases; data: each case's [lo, hi) */ \
+    X(IntDiv, 2)      /* ℤ ÷ ℤ rounded down (operands ≥ 0: GLSL's a / b) */              \
+    X(IntMod, 2)      /* ℤ mod ℤ: a - b⌊a/b⌋ (operands ≥ 0: GLSL's a % b) */
 
 enum class Op : uint8_t {
 #define X(name, n) name,

@@ -9,6 +9,7 @@
 #include "ir/passes/Differentiate.h"
 #include "ir/passes/Fold.h"
 #include "ir/passes/Inline.h"
+#include "ir/passes/Tables.h"
 #include "source/Internal.h"
 
 namespace iqc::ir {
@@ -51,6 +52,8 @@ const std::vector<Pass>& passes() {
     static const std::vector<Pass> list = {
         {{"inline", "inline the scene's building blocks into the scene functions"},
          [](Module& m, const PipelineOptions&, PipelineResult&) { inline_marked(m); }},
+        {{"tables", "compile-time tables on a lattice become arithmetic on the index"},
+         [](Module& m, const PipelineOptions&, PipelineResult&) { compress_tables(m); }},
         {{"fold", "constant folding and algebraic identities"},
          [](Module& m, const PipelineOptions&, PipelineResult&) { fold_all(m); }},
         {{"cse", "common subexpression elimination"},
@@ -90,6 +93,15 @@ bool is_pass_name(const std::string& name) {
     if (name == "lower") return true;
     for (const auto& p : passes())
         if (name == p.info.name) return true;
+    return false;
+}
+
+bool run_pass(const std::string& name, Module& m, const PipelineOptions& o, PipelineResult& r) {
+    for (const auto& p : passes())
+        if (name == p.info.name) {
+            p.run(m, o, r);
+            return true;
+        }
     return false;
 }
 

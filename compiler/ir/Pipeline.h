@@ -1,6 +1,7 @@
 // The pass pipeline: the one place that says which passes run on a compile's IR, and in which order.
 //
 //   inline    the scene's building blocks (marked inline_hint) into the scene functions
+//   tables    compile-time tables on a lattice (grid offsets) become arithmetic on the index
 //   fold      constants, constant globals, identities, lazy choices with constant conditions
 //   cse       one value per computation (shared values are one value for the analyses that follow)
 //   ranges    range analysis: guards where an operation can leave its domain, warnings where a slider can
@@ -53,5 +54,8 @@ bool is_pass_name(const std::string& name);
 
 // Runs the pipeline on `m`. Throws InternalError when the IR fails verification or a pass fails.
 PipelineResult run_pipeline(Module& m, const PipelineOptions& o);
+
+// Runs one pass by name (pass tests); false when there is no such pass.
+bool run_pass(const std::string& name, Module& m, const PipelineOptions& o, PipelineResult& r);
 
 }  // namespace iqc::ir

@@ -96,7 +96,7 @@ private:
     const SceneLowerOptions& o_;
     SceneIR out_;
     ir::Module& m_ = out_.module;
-    LowerContext ctx_{out_.module, {}};
+    LowerContext ctx_{out_.module, {}, {}};
     std::vector<Item> items_;
     bool lights_ = false;
     std::set<std::string> global_names_;
@@ -110,6 +110,12 @@ private:
 
     // ---- items ----
 
+    static Item single(size_t plan) {
+        Item it;
+        it.members = {plan};
+        return it;
+    }
+
     void make_items() {
         // Instances that can share code: one shape, one material, a transform known at compile time, `bound`
         // or not. In order of first appearance; members keep their order.
@@ -119,7 +125,7 @@ private:
             const InstancePlan& p = plan(i);
             out_.headers[p.name] = p.desc->type + (p.material ? " with " + p.desc->material : std::string());
             if (o_.per_instance || runtime_transform(p)) {
-                items_.push_back({{i}});
+                items_.push_back(single(i));
                 continue;
             }
             auto key = std::make_tuple(p.shape, p.material, p.desc->bound > 0);
@@ -129,7 +135,7 @@ private:
         for (const auto& key : order) {
             const auto& members = kinds[key];
             if (int(members.size()) < o_.min_group) {
-                for (size_t i : members) items_.push_back({{i}});
+                for (size_t i : members) items_.push_back(single(i));
                 continue;
             }
             Item g;

@@ -138,6 +138,8 @@ struct Differentiator {
             case Op::Or:
             case Op::Global:  // globals (sliders, per-instance data) do not depend on the query point
             case Op::Index:
+            case Op::IntDiv:  // ℤ
+            case Op::IntMod:
                 return kZero;
             case Op::If: {
                 // The derivative of the arm taken, as lazy as the choice itself.

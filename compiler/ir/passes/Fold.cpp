@@ -100,6 +100,14 @@ int fold_constants(const Module& m, Function& f) {
         };
         switch (in.op) {
             case Op::Mul:
+                // (-1)·x = -x
+                if (all_equal(f, in.args[0], -1.0) && f.body[in.args[0]].type.is_scalar() && f.body[in.args[1]].type == in.type &&
+                    in.type.kind != Type::Integer) {
+                    in.op = Op::Neg;
+                    in.args = {in.args[1]};
+                    ++changed;
+                    break;
+                }
                 if (is_identity(f, in.args[0]) && f.body[in.args[1]].type == in.type) redirect(in.args[1]);
                 else if (is_identity(f, in.args[1]) && f.body[in.args[0]].type == in.type) redirect(in.args[0]);
                 else if (all_equal(f, in.args[0], 1.0) && f.body[in.args[0]].type.is_scalar() && f.body[in.args[1]].type == in.type)
@@ -110,6 +118,11 @@ int fold_constants(const Module& m, Function& f) {
             case Op::Add:
                 if (all_equal(f, in.args[0], 0.0) && f.body[in.args[1]].type == in.type) redirect(in.args[1]);
                 else if (all_equal(f, in.args[1], 0.0) && f.body[in.args[0]].type == in.type) redirect(in.args[0]);
+                else if (f.body[in.args[1]].op == Op::Neg && f.body[in.args[1]].type == in.type) {  // a + (-b) = a - b
+                    in.op = Op::Sub;
+                    in.args[1] = f.body[in.args[1]].args[0];
+                    ++changed;
+                }
                 break;
             case Op::Sub:
                 if (all_equal(f, in.args[1], 0.0) && f.body[in.args[0]].type == in.type) redirect(in.args[0]);
