@@ -162,7 +162,7 @@ TEST_CASE("an internal error in any pass is exit 3 with the bug message, for com
     }
 }
 
-TEST_CASE("--dump-ir=after-PASS prints the module after that pass, and an unknown pass is a usage error", "[cli]") {
+TEST_CASE("the IR after a named pass (--dump-ir=after-PASS), and an unknown pass is a usage error", "[cli]") {
     auto in = write_temp("dump_pass.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\n```\n");
     RunResult lower = run_iqc(in.string() + " --dump-ir=after-lower -o " + (temp_dir() / "dump.frag").string());
     CHECK(lower.exit_code == 0);
