@@ -141,6 +141,10 @@ struct CheckOptions {
     std::vector<std::pair<std::string, std::string>> implicit_imports;  // name, module
     // Types of parameters known from outside (e.g. `iqc eval --set`), which bind symbolic sizes (ℝ^n).
     std::map<std::string, Type> given_types;
+    // The value of a constant expression that const_eval cannot fold (√2, sin(1), 2^(1/3), …) for defaults
+    // and bounds: the scene layer lowers it and runs the evaluator (one meaning for every value). Empty, or
+    // nullopt: not a constant.
+    std::function<std::optional<std::vector<double>>(const ast::Expr&)> constant;
 };
 
 std::unique_ptr<CheckedModule> check_module(ast::Module module, const ModuleLookup& lookup,
