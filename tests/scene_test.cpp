@@ -273,7 +273,7 @@ TEST_CASE("`bound` must be a positive number, reported at the value", "[scene]")
     CHECK_THAT(text.diagnostics, Catch::Contains("bound_text.iq:3:9: error: 'bound' must be a number, not a string"));
 }
 
-TEST_CASE("overrides: numbers, vectors, a matrix's rows and constant expressions", "[scene]") {
+TEST_CASE("overrides may be numbers or vectors or a matrix's rows or constant expressions", "[scene]") {
     const std::string head = "[modules]\nsq = \"\"\"\nshape\nD = ‖A p‖ - r\nwhere\np ∈ ℝ³\nA ∈ ℝ^(3×3)\nr ∈ [0, 3] default = 1\n\"\"\"\n";
     auto ok = compile_text("overrides.iq", head + "[[shapes]]\ntype = \"sq\"\nshape_params = { r = \"√2/2\", A = [[1, 0, 0], [0, 2, 0], [0, 0, 1]] }\n"
                                                   "[[shapes]]\ntype = \"sq\"\nshape_params = { A = \"[1 0 0; 0 3 0; 0 0 1]\" }\n");
@@ -286,7 +286,7 @@ TEST_CASE("overrides: numbers, vectors, a matrix's rows and constant expressions
     CHECK(rows.result.exit_code == 1);
     CHECK_THAT(rows.diagnostics, Catch::Contains("override_rows.iq:12:18: error: 'A' is ℝ^(3×3) but the value is 2 rows of 2"));
     auto ragged = compile_text("override_ragged.iq", head + "[[shapes]]\ntype = \"sq\"\nshape_params = { A = [[1, 0, 0], [0, 2]] }\n");
-    CHECK_THAT(ragged.diagnostics, Catch::Contains("override_ragged.iq:12:35: error: the rows of 'A' must have one length: this one "
+    CHECK_THAT(ragged.diagnostics, Catch::Contains("override_ragged.iq:12:34: error: the rows of 'A' must have one length: this one "
                                                    "has 2, the first 3"));
     auto text = compile_text("override_text.iq", head + "[[shapes]]\ntype = \"sq\"\nshape_params = { r = \"two\" }\n");
     CHECK_THAT(text.diagnostics, Catch::Contains("override_text.iq:12:22: error: 'r' must be a number, an array, or a constant "
