@@ -77,7 +77,7 @@ TEST_CASE("an undefined name inside a module of a document", "[cli]") {
     RunResult r = compile_doc("undefined.md", "❤: ball\n```iheartla\nshape\nD = ‖p‖ - radius\nwhere\np ∈ ℝ³\n```\n"
                                               "```scene\n[[shapes]]\ntype = \"ball\"\n```\n");
     CHECK(r.exit_code == 1);
-    CHECK_THAT(r.err, Catch::Contains("undefined.md:4:11: error: undefined name 'r'"));
+    CHECK_THAT(r.err, Catch::Contains("undefined.md:4:11: error: undefined name 'radius'"));
 }
 
 TEST_CASE("TOML syntax errors carry their line", "[cli]") {

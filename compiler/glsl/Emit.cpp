@@ -238,9 +238,10 @@ struct FunctionEmitter {
             case Op::Builtin: {
                 std::vector<std::string> args;
                 for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
-                // GLSL's round() leaves halves to the implementation; the evaluator rounds them up.
-                if (std::string(builtin(in.aux).name) == "round") return fmt::format("floor({} + 0.5)", a(0));
-                return fmt::format("{}({})", builtin(in.aux).glsl, fmt::join(args, ", "));
+                // A template such as `1.0 / tan(#)`: # is the (parenthesised) argument.
+                std::string spelling = builtin(in.aux).glsl;
+                if (size_t at = spelling.find('#'); at != std::string::npos) return spelling.replace(at, 1, a(0));
+                return fmt::format("{}({})", spelling, fmt::join(args, ", "));
             }
             case Op::Construct: {
                 std::string tn = type_of(in.type, in.span);

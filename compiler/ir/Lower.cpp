@@ -131,14 +131,24 @@ struct Env {
     }
 
     ValueId builtin(const char* name, std::vector<ValueId> args, Span span) {
-        int id = *find_builtin(name);
+        return builtin_id(*find_builtin(name), std::move(args), span);
+    }
+
+    ValueId builtin_id(int id, std::vector<ValueId> args, Span span) {
         const BuiltinInfo& b = iqc::builtin(id);
         if (b.sig == Sig::Nary && args.size() > 2) {
-            ValueId acc = builtin(name, {args[0], args[1]}, span);
-            for (size_t i = 2; i < args.size(); ++i) acc = builtin(name, {acc, args[i]}, span);
+            ValueId acc = builtin_id(id, {args[0], args[1]}, span);
+            for (size_t i = 2; i < args.size(); ++i) acc = builtin_id(id, {acc, args[i]}, span);
             return acc;
         }
-        Type t;
+        if (b.sig == Sig::Elementwise1 && type_of(args[0]).is_matrix()) {
+            // sin(A) entry by entry: row by row (GLSL's functions take vectors, not matrices).
+            const Type t = type_of(args[0]);
+            std::vector<ValueId> rows;
+            for (int r = 0; r < t.rows; ++r)
+                rows.push_back(builtin_id(id, {emit(Op::Row, Type::vector(t.cols), {args[0]}, r, span)}, span));
+            return emit(Op::Construct, t, std::move(rows), 0, span);
+        }
         if (b.sig == Sig::Elementwise2 || b.sig == Sig::Nary || b.sig == Sig::Clamp || b.sig == Sig::Mix) {
             Type common = Type::scalar();
             for (ValueId a : args)
@@ -148,8 +158,41 @@ struct Env {
         }
         std::vector<Type> ts;
         for (ValueId a : args) ts.push_back(type_of(a));
-        t = check_builtin(id, ts).type;
+        Type t = check_builtin(id, ts).type;
         return emit(Op::Builtin, t, std::move(args), id, span);
+    }
+
+    // The linear algebra module's functions, in terms of the IR's own operations.
+    ValueId linear_algebra(int id, ValueId a, Span span) {
+        const Type t = type_of(a);
+        switch (iqc::builtin(id).sig) {
+            case Sig::Det: return emit(Op::Det, Type::scalar(), {a}, 0, span);
+            case Sig::Inverse: return emit(Op::Inverse, t, {a}, 0, span);
+            case Sig::Trace: {
+                ValueId acc = emit(Op::Extract, Type::scalar(), {a}, 0, span);
+                for (int i = 1; i < t.rows; ++i)
+                    acc = emit(Op::Add, Type::scalar(), {acc, emit(Op::Extract, Type::scalar(), {a}, i * t.cols + i, span)}, 0, span);
+                return acc;
+            }
+            case Sig::Diag: {
+                std::vector<ValueId> items;
+                if (t.is_vector()) {
+                    ValueId zero = f.scalar(0);
+                    for (int r = 0; r < t.rows; ++r)
+                        for (int c = 0; c < t.rows; ++c)
+                            items.push_back(r == c ? emit(Op::Extract, Type::scalar(), {a}, r, span) : zero);
+                    return emit(Op::Construct, Type::matrix(t.rows, t.rows), std::move(items), 0, span);
+                }
+                for (int i = 0; i < t.rows; ++i) items.push_back(emit(Op::Extract, Type::scalar(), {a}, i * t.cols + i, span));
+                return emit(Op::Construct, Type::vector(t.rows), std::move(items), 0, span);
+            }
+            case Sig::Vec: {  // the columns, one after the other
+                std::vector<ValueId> cols;
+                for (int c = 0; c < t.cols; ++c) cols.push_back(emit(Op::Column, Type::vector(t.rows), {a}, c, span));
+                return emit(Op::Construct, Type::vector(t.rows * t.cols), std::move(cols), 0, span);
+            }
+            default: throw std::logic_error("lowering: not a linear algebra function");
+        }
     }
 
     ValueId mul(ValueId a, ValueId b, Span span) {
@@ -175,6 +218,7 @@ struct Env {
                     case R_Local: return locals[size_t(e.aux)];
                     case R_Capture: return captures[size_t(e.aux)];
                     case R_Pi: return f.scalar(M_PI);
+                    case R_Constant: return f.scalar(M_E);
                     case R_Input: return emit(Op::Input, e.aux == 0 ? Type::scalar() : Type::vector(2), {}, e.aux, e.span);
                     case R_SumIndex: return f.scalar(double(sum_index.at(e.text) + 1));
                     default: throw std::logic_error("lowering: unresolved name " + e.text);
@@ -183,7 +227,12 @@ struct Env {
                 if (e.resolved == R_Scale) return mul(lower(*e.args[0]), lower(*e.args[1]), e.span);
                 std::vector<ValueId> args;
                 for (auto& a : e.args) args.push_back(lower(*a));
-                if (e.resolved == R_Builtin) return builtin(iqc::builtin(e.aux).name, std::move(args), e.span);
+                if (e.resolved == R_Builtin) {
+                    Sig sig = iqc::builtin(e.aux).sig;
+                    if (sig == Sig::Det || sig == Sig::Inverse || sig == Sig::Trace || sig == Sig::Diag || sig == Sig::Vec)
+                        return linear_algebra(e.aux, args[0], e.span);
+                    return builtin_id(e.aux, std::move(args), e.span);
+                }
                 if (e.resolved == R_ImportModule) {
                     const CheckedModule& callee = *m.imports[size_t(e.aux)].from;
                     int idx = lower_module_cached(callee, ctx);
@@ -231,6 +280,8 @@ struct Env {
                 return emit(Op::Neg, scalar_or(type_of(a)), {a}, 0, e.span);
             }
             case ExprKind::Power: {
+                if (e.args[0]->kind == ExprKind::Name && e.args[0]->resolved == R_Constant)  // eˣ
+                    return builtin("exp", {lower(*e.args[1])}, e.span);
                 ValueId base = lower(*e.args[0]);
                 if (type_of(base).is_matrix()) return emit(Op::Inverse, type_of(base), {base}, 0, e.span);
                 return power(base, *e.args[1], e.span);

@@ -8,6 +8,7 @@
 
 #include "ir/IR.h"
 #include "sema/Builtins.h"
+#include "sema/Hints.h"
 
 namespace iqc {
 
@@ -181,7 +182,14 @@ private:
     Type mul_type(Expr& e, const Type& a, const Type& b, bool dot);
     Type param_type(const TypeSpec& ts, const std::string& name);
     std::vector<std::string> visible_names() const;
-    void undefined(const std::string& name, Span s);
+    void undefined(const Expr& e);
+    std::set<std::pair<uint32_t, uint32_t>> reported_words_;  // split words already reported (file, offset)
+    // The built-in id of a constant imported by this name (e from trigonometry), or -1.
+    int imported_constant(const std::string& name) const {
+        for (const auto& im : m_.imports)
+            if (im.name == name && im.builtin >= 0 && builtin(im.builtin).sig == Sig::Constant) return im.builtin;
+        return -1;
+    }
     Type value_type_for_scope(const std::string& name, Type t, Expr& e, int resolved, int aux);
 };
 
@@ -337,9 +345,7 @@ void Checker::collect_imports() {
         if (is_builtin_module(module)) {
             auto b = find_builtin(name);
             if (!b || module != builtin(*b).module) {
-                std::vector<std::string> cands;
-                for (auto& bi : builtins())
-                    if (module == bi.module) cands.push_back(bi.name);
+                std::vector<std::string> cands = builtin_module_names(module);
                 auto& e = d_.error(span, fmt::format("module '{}' has no function '{}'", module, name));
                 if (auto s = did_you_mean(name, cands)) Diagnostics::note(e, span, fmt::format("did you mean '{}'?", *s));
                 return;
@@ -591,13 +597,37 @@ std::vector<std::string> Checker::visible_names() const {
     return v;
 }
 
-void Checker::undefined(const std::string& name, Span s) {
-    if (auto b = find_builtin(name)) {
-        d_.error(s, fmt::format("'{}' needs an import: add '{} from {}'", name, name, builtin(*b).module));
+void Checker::undefined(const Expr& e) {
+    const std::string& name = e.text;
+    Span s = e.name_span;
+    if (e.word_span.end > e.word_span.begin) {
+        // A letter of a longer word (`dot` is d·o·t): report the word once, as written, with a hint.
+        if (!reported_words_.insert({e.word_span.file, e.word_span.begin}).second) return;
+        std::string word(d_.sources().slice(e.word_span));
+        if (auto b = find_builtin(word); b && *builtin(*b).module) {
+            d_.error(e.word_span, fmt::format("'{}' needs an import: add '{} from {}'", word, word, builtin(*b).module));
+            return;
+        }
+        auto& err = d_.error(e.word_span, fmt::format("undefined name '{}'", word));
+        if (auto hint = word_hint(word)) {
+            Diagnostics::note(err, e.word_span, *hint);
+        } else {
+            Diagnostics::note(err, e.word_span,
+                              fmt::format("names are one letter, so '{}' reads as {}: declare `{}` to use it as one name, "
+                                          "or write {}", word, spell_letters(word, "·"), word, spell_letters(word, " ")));
+        }
         return;
     }
-    auto& e = d_.error(s, fmt::format("undefined name '{}'", name));
-    if (auto sug = did_you_mean(name, visible_names())) Diagnostics::note(e, s, fmt::format("did you mean '{}'?", *sug));
+    if (auto b = find_builtin(name)) {
+        if (*builtin(*b).module)
+            d_.error(s, fmt::format("'{}' needs an import: add '{} from {}'", name, name, builtin(*b).module));
+        else
+            d_.error(s, fmt::format("'{}' is a function: call it with arguments, as in {}(x)", name, name));
+        return;
+    }
+    auto& err = d_.error(s, fmt::format("undefined name '{}'", name));
+    if (auto sug = did_you_mean(name, visible_names())) Diagnostics::note(err, s, fmt::format("did you mean '{}'?", *sug));
+    else if (auto hint = word_hint(name)) Diagnostics::note(err, s, *hint);
 }
 
 Type Checker::value_type_for_scope(const std::string& name, Type t, Expr& e, int resolved, int aux) {
@@ -650,6 +680,11 @@ Type Checker::check_name(Expr& e) {
         e.resolved = R_Pi;
         return Type::scalar();
     }
+    if (int b = imported_constant(n); b >= 0) {
+        e.resolved = R_Constant;
+        e.aux = b;
+        return Type::scalar();
+    }
     if (n == "time" || n == "mouse") {  // reserved inputs (a declaration of the same name wins)
         e.resolved = R_Input;
         e.aux = n == "time" ? 0 : 1;
@@ -659,7 +694,7 @@ Type Checker::check_name(Expr& e) {
         d_.error(e.span, fmt::format("'{}' is a function: call it with arguments, as in {}(x)", n, n));
         return {};
     }
-    undefined(n, e.name_span);
+    undefined(e);
     return {};
 }
 
@@ -751,7 +786,7 @@ Type Checker::check_call(Expr& e) {
     };
     // A value followed by a parenthesis is a product: a(b + c).
     bool is_value = (scope_ && scope_->locals.count(n)) || m_.find_param(n) >= 0 || m_.values.count(n) ||
-                    assigns_.count(n) || n == "π";
+                    assigns_.count(n) || n == "π" || imported_constant(n) >= 0;
     if (is_value) {
         Expr name_expr(ExprKind::Name, e.name_span);
         name_expr.text = n;
@@ -831,21 +866,22 @@ Type Checker::check_call(Expr& e) {
             bool imported = false;
             for (auto& im : m_.imports) imported |= im.builtin == *b;
             if (!imported) {
-                d_.error(e.name_span, fmt::format("'{}' needs an import: add '{} from {}'", n, n, bi.module));
+                if (e.word_span.end > e.word_span.begin) undefined(e);  // the last letter of a word: `translate(v)`
+                else d_.error(e.name_span, fmt::format("'{}' needs an import: add '{} from {}'", n, n, bi.module));
                 return {};
             }
         }
         e.resolved = R_Builtin;
         e.aux = *b;
         if (!args_ok) return {};
-        BuiltinCheck c = check_builtin(*b, at);
+        BuiltinCheck c = check_builtin(*b, at, n);
         if (!c.error.empty()) {
             d_.error(c.bad_arg >= 0 ? e.args[size_t(c.bad_arg)]->span : e.span, c.error);
             return {};
         }
         return c.type;
     }
-    undefined(n, e.name_span);
+    undefined(e);
     return {};
 }
 

@@ -47,6 +47,7 @@ enum Resolved : int {
     R_SeqFirst,   // z_1: the sequence's first element, aux = sequence
     R_SeqLast,    // z_(N+1): the element the recurrence ends with, aux = sequence
     R_ImportModule,  // call of a whole module imported as a function, aux = index in CheckedModule::imports
+    R_Constant,   // a built-in constant imported by name (e from trigonometry), aux = builtin id
 };
 
 struct ParamInfo {

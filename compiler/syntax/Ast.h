@@ -65,6 +65,7 @@ struct Expr {
     double number = 0;
     std::string text;  // number as written; the name for Name/Call
     Span name_span;
+    Span word_span;    // Name/Call split out of a longer letter run: that run (see Token::word)
     BinOp op = BinOp::Add;
     std::vector<ExprPtr> args;
     std::vector<std::vector<ExprPtr>> rows;  // Matrix rows; Piecewise: {value, condition} per case

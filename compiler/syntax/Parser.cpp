@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <fmt/format.h>
 
+#include "sema/Builtins.h"
+
 namespace iqc {
 
 using namespace ast;
@@ -162,6 +164,13 @@ std::vector<Token> split_words(const std::vector<Token>& toks, const std::set<st
             Token piece = t;
             piece.text = t.text.substr(b, e - b);
             piece.span = {t.span.file, uint32_t(t.span.begin + b), uint32_t(t.span.begin + e)};
+            if (best < units.size()) {
+                piece.word = t.span;
+                // vec3(…), mat4(…): the digit belongs to the GLSL word.
+                if (i + 1 < toks.size() && toks[i + 1].kind == Tok::Number && !toks[i + 1].space_before &&
+                    toks[i + 1].text.size() == 1)
+                    piece.word.end = toks[i + 1].span.end;
+            }
             if (!first) { piece.space_before = false; piece.line_start = false; }
             out.push_back(std::move(piece));
             first = false;
@@ -294,6 +303,9 @@ private:
     ExprPtr parse_elem();
     ExprPtr parse_power();
     ExprPtr parse_postfix(bool exponent = false);
+    ExprPtr parse_call(ExprPtr callee);
+    bool function_power(ExprPtr& e);
+    bool log_base(ExprPtr& e);
     ExprPtr parse_primary();
     ExprPtr parse_matrix(Span open);
     ExprPtr parse_piecewise(Span open);
@@ -931,6 +943,7 @@ ExprPtr Parser::parse_power() {
 ExprPtr Parser::parse_postfix(bool exponent) {
     ExprPtr e = parse_primary();
     while (true) {
+        if (e->kind == ExprKind::Name && (function_power(e) || log_base(e))) continue;
         if (at(Tok::Sub)) {
             const Token& t = advance();
             auto idx = make(ExprKind::Index, Span::join(e->span, t.span));
@@ -992,25 +1005,91 @@ ExprPtr Parser::parse_postfix(bool exponent) {
         }
         bool callable = !exponent || functions_.count(e->text) || letter_units(e->text).size() > 1;
         if (at(Tok::LParen) && !cur().space_before && e->kind == ExprKind::Name && callable) {
-            Span open = advance().span;
-            ctx_.push_back(Ctx::Paren);
-            auto call = make(ExprKind::Call, e->span);
-            call->text = e->text;
-            call->name_span = e->name_span;
-            if (!at(Tok::RParen)) {
-                call->args.push_back(parse_expr());
-                while (accept(Tok::Comma)) call->args.push_back(parse_expr());
-            }
-            ctx_.pop_back();
-            Span close = expect(Tok::RParen, "to close the argument list").span;
-            (void)open;
-            call->span = Span::join(call->span, close);
-            e = std::move(call);
+            e = parse_call(std::move(e));
             continue;
         }
         break;
     }
     return e;
+}
+
+// call := NAME ( [expr {, expr}] )
+ExprPtr Parser::parse_call(ExprPtr callee) {
+    advance();  // (
+    ctx_.push_back(Ctx::Paren);
+    auto call = make(ExprKind::Call, callee->span);
+    call->text = callee->text;
+    call->name_span = callee->name_span;
+    call->word_span = callee->word_span;
+    if (!at(Tok::RParen)) {
+        call->args.push_back(parse_expr());
+        while (accept(Tok::Comma)) call->args.push_back(parse_expr());
+    }
+    ctx_.pop_back();
+    Span close = expect(Tok::RParen, "to close the argument list").span;
+    call->span = Span::join(call->span, close);
+    return call;
+}
+
+// function_power := TRIG (SUPERSCRIPT | ^ INTEGER) ( args )      sin²(x) is (sin x)², as in I♥LA
+bool Parser::function_power(ExprPtr& e) {
+    if (!is_power_function(e->text)) return false;
+    size_t k = pos_;
+    std::string power;
+    Span power_span = toks_[k].span;
+    if (toks_[k].kind == Tok::Super && !toks_[k].space_before) {
+        power = toks_[k].text;
+        ++k;
+    } else if (toks_[k].kind == Tok::Caret) {
+        ++k;
+        if (toks_[k].kind == Tok::Minus) power = "-", ++k;
+        if (toks_[k].kind != Tok::Number) return false;
+        power += toks_[k].text;
+        power_span = Span::join(power_span, toks_[k].span);
+        ++k;
+    } else {
+        return false;
+    }
+    if (toks_[k].kind != Tok::LParen) return false;
+    if (power.empty() || power.find_first_not_of("0123456789") != std::string::npos) {
+        auto& d = diags_.error(power_span, fmt::format("'{}' with the power {} is ambiguous", e->text, power));
+        Diagnostics::note(d, e->span, power == "-1" ? fmt::format("for the inverse function write a{}(x) or arc{}(x); for "
+                                                                  "1/{}(x) write {}(x)⁻¹", e->text, e->text, e->text, e->text)
+                                                    : std::string("a function's power must be a whole number such as ² "
+                                                                  "(sin²(x) is sin(x)²)"));
+        throw Bail{};
+    }
+    pos_ = k;
+    auto ex = make(ExprKind::Number, power_span);
+    ex->number = std::strtod(power.c_str(), nullptr);
+    ex->text = power;
+    ExprPtr call = parse_call(std::move(e));
+    auto p = make(ExprKind::Power, call->span);
+    p->args.push_back(std::move(call));
+    p->args.push_back(std::move(ex));
+    e = std::move(p);
+    return true;
+}
+
+// log_base := log (_2 | _10 | ₂ | ₁₀) ( expr )     the logarithm to base 2 or 10
+bool Parser::log_base(ExprPtr& e) {
+    if (e->text != "log") return false;
+    size_t k = pos_;
+    std::string base;
+    if (toks_[k].kind == Tok::Sub && !toks_[k].space_before) {
+        base = toks_[k].text, ++k;
+    } else if (toks_[k].kind == Tok::Underscore && !toks_[k].space_before && toks_[k + 1].kind == Tok::Number) {
+        base = toks_[k + 1].text, k += 2;
+    } else {
+        return false;
+    }
+    if (toks_[k].kind != Tok::LParen || (base != "2" && base != "10")) return false;
+    Span s = Span::join(e->span, toks_[k - 1].span);
+    pos_ = k;
+    e->text = "log_" + base;
+    e->span = e->name_span = s;
+    e = parse_call(std::move(e));
+    return true;
 }
 
 ExprPtr Parser::parse_delimited(ExprKind kind, Tok close, Span open, const char* what) {
@@ -1127,6 +1206,7 @@ ExprPtr Parser::parse_primary() {
             if (t.kind == Tok::Word && is_keyword(t.text))
                 fail(t.span, fmt::format("unexpected keyword '{}' in an expression", t.text));
             auto e = make(ExprKind::Name, t.span);
+            e->word_span = t.word;
             auto [n, s] = parse_name();
             e->text = n;
             e->span = s;
