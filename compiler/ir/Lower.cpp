@@ -195,6 +195,86 @@ struct Env {
         }
     }
 
+    // A^k for a whole k (the checker made sure), by repeated squaring; k < 0 powers the inverse.
+    ValueId matrix_power(ValueId a, int k, Span span) {
+        const Type t = type_of(a);
+        if (k < 0) {
+            a = emit(Op::Inverse, t, {a}, 0, span);
+            k = -k;
+        }
+        if (k == 0) {
+            std::vector<double> id(size_t(t.rows * t.cols), 0.0);
+            for (int i = 0; i < t.rows; ++i) id[size_t(i * t.cols + i)] = 1;
+            return f.constant(t, id);
+        }
+        ValueId result = ValueId(-1), square = a;
+        while (true) {
+            if (k & 1) result = result == ValueId(-1) ? square : emit(Op::Mul, t, {result, square}, 0, span);
+            k >>= 1;
+            if (!k) return result;
+            square = emit(Op::Mul, t, {square, square}, 0, span);
+        }
+    }
+
+    // A ⊗ B: entry (i₁·r₂ + i₂, j₁·c₂ + j₂) is A(i₁, j₁)·B(i₂, j₂); vectors are columns.
+    ValueId kronecker(ValueId a, ValueId b, Span span) {
+        const Type ta = type_of(a), tb = type_of(b);
+        int ac = ta.is_matrix() ? ta.cols : 1, bc = tb.is_matrix() ? tb.cols : 1;
+        int rows = ta.rows * tb.rows, cols = ac * bc;
+        std::vector<ValueId> items;
+        for (int i = 0; i < rows; ++i)
+            for (int j = 0; j < cols; ++j) {
+                ValueId x = emit(Op::Extract, Type::scalar(), {a}, (i / tb.rows) * ac + j / bc, span);
+                ValueId y = emit(Op::Extract, Type::scalar(), {b}, (i % tb.rows) * bc + j % bc, span);
+                items.push_back(emit(Op::Mul, Type::scalar(), {x, y}, 0, span));
+            }
+        return emit(Op::Construct, cols == 1 ? Type::vector(rows) : Type::matrix(rows, cols), std::move(items), 0, span);
+    }
+
+    // A : B = ∑ A_ij B_ij: the dot product of vectors, row by row for matrices.
+    ValueId frobenius(ValueId a, ValueId b, Span span) {
+        const Type t = type_of(a);
+        if (t.is_vector()) return emit(Op::Dot, Type::scalar(), {a, b}, 0, span);
+        ValueId acc = ValueId(-1);
+        for (int r = 0; r < t.rows; ++r) {
+            ValueId d = emit(Op::Dot, Type::scalar(), {emit(Op::Row, Type::vector(t.cols), {a}, r, span),
+                                                       emit(Op::Row, Type::vector(t.cols), {b}, r, span)}, 0, span);
+            acc = acc == ValueId(-1) ? d : emit(Op::Add, Type::scalar(), {acc, d}, 0, span);
+        }
+        return acc;
+    }
+
+    // ‖x‖ and |x| by what the checker resolved (see check_norm).
+    ValueId norm(const Expr& e) {
+        ValueId a = lower(*e.args[0]);
+        const Type t = type_of(a);
+        Span span = e.span;
+        auto ones = [&] { return f.constant(t, std::vector<double>(size_t(t.rows), 1.0)); };
+        switch (e.resolved) {
+            case R_Det: return emit(Op::Det, Type::scalar(), {a}, 0, span);
+            case R_Length: return builtin("length", {a}, span);
+            case R_Norm1: return emit(Op::Dot, Type::scalar(), {builtin("abs", {a}, span), ones()}, 0, span);
+            case R_NormMax: {
+                ValueId m = builtin("abs", {a}, span);
+                std::vector<ValueId> items;
+                for (int i = 0; i < t.rows; ++i) items.push_back(emit(Op::Extract, Type::scalar(), {m}, i, span));
+                return builtin("max", items, span);
+            }
+            case R_NormP: {  // (∑ |v_i|^p)^(1/p)
+                ValueId p = lower(*e.args[1]);
+                ValueId powered = builtin("pow", {builtin("abs", {a}, span), p}, span);
+                ValueId sum = emit(Op::Dot, Type::scalar(), {powered, ones()}, 0, span);
+                return builtin("pow", {sum, emit(Op::Div, Type::scalar(), {f.scalar(1), p}, 0, span)}, span);
+            }
+            case R_NormMatrix: {  // √(vᵀ M v)
+                ValueId mv = mul(lower(*e.args[1]), a, span);
+                return builtin("sqrt", {emit(Op::Dot, Type::scalar(), {a, mv}, 0, span)}, span);
+            }
+            case R_Frobenius: return builtin("sqrt", {frobenius(a, a, span)}, span);
+            default: return builtin("abs", {a}, span);
+        }
+    }
+
     ValueId mul(ValueId a, ValueId b, Span span) {
         const Instr& ai = f.body[a];
         // aᵀb is a dot product.
@@ -269,6 +349,9 @@ struct Env {
                     case BinOp::Div: return op2(Op::Div, a, b, e.span);
                     case BinOp::Hadamard: return op2(type_of(a).is_scalar() ? Op::Mul : Op::Hadamard, a, b, e.span);
                     case BinOp::Cross: return op2(Op::Cross, a, b, e.span);
+                    case BinOp::Solve: return mul(emit(Op::Inverse, type_of(a), {a}, 0, e.span), b, e.span);
+                    case BinOp::Kronecker: return kronecker(a, b, e.span);
+                    case BinOp::Frobenius: return frobenius(a, b, e.span);
                     default:
                         if (e.op == BinOp::Dot && type_of(a).is_vector() && type_of(a) == type_of(b))
                             return emit(Op::Dot, Type::scalar(), {a, b}, 0, e.span);
@@ -283,7 +366,7 @@ struct Env {
                 if (e.args[0]->kind == ExprKind::Name && e.args[0]->resolved == R_Constant)  // eˣ
                     return builtin("exp", {lower(*e.args[1])}, e.span);
                 ValueId base = lower(*e.args[0]);
-                if (type_of(base).is_matrix()) return emit(Op::Inverse, type_of(base), {base}, 0, e.span);
+                if (type_of(base).is_matrix()) return matrix_power(base, e.aux, e.span);
                 return power(base, *e.args[1], e.span);
             }
             case ExprKind::Transpose: {
@@ -369,10 +452,11 @@ struct Env {
                 return acc;
             }
             case ExprKind::Norm:
-            case ExprKind::Abs: {
-                ValueId a = lower(*e.args[0]);
-                if (type_of(a).is_matrix()) return emit(Op::Det, Type::scalar(), {a}, 0, e.span);
-                return builtin(e.kind == ExprKind::Norm && type_of(a).is_vector() ? "length" : "abs", {a}, e.span);
+            case ExprKind::Abs: return norm(e);
+            case ExprKind::Inner: {
+                ValueId u = lower(*e.args[0]), v = lower(*e.args[1]);
+                if (e.args.size() > 2) u = mul(lower(*e.args[2]), u, e.span);  // ⟨u, v⟩_M = vᵀ(M u)
+                return emit(Op::Dot, Type::scalar(), {u, v}, 0, e.span);
             }
             case ExprKind::Floor: return builtin("floor", {lower(*e.args[0])}, e.span);
             case ExprKind::Ceil: return builtin("ceil", {lower(*e.args[0])}, e.span);

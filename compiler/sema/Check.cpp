@@ -179,6 +179,9 @@ private:
     Type check_name(Expr& e);
     Type check_call(Expr& e);
     Type check_binary(Expr& e);
+    Type check_norm(Expr& e);
+    Type check_inner(Expr& e);
+    Type check_matrix_product(Expr& e, const Type& a, const Type& b);
     Type mul_type(Expr& e, const Type& a, const Type& b, bool dot);
     Type param_type(const TypeSpec& ts, const std::string& name);
     std::vector<std::string> visible_names() const;
@@ -968,6 +971,13 @@ Type Checker::check_binary(Expr& e) {
                 return {};
             }
             return a;
+        case BinOp::Solve:
+        case BinOp::Kronecker:
+        case BinOp::Frobenius:
+            return check_matrix_product(e, a, b);
+        case BinOp::PlusMinus:
+            d_.error(e.span, "'±' can only be used in a condition, where x = a ± b means x = a + b or x = a - b");
+            return {};
         case BinOp::Cross:
             if (a != Type::vector(3) || b != Type::vector(3)) {
                 note_operands(d_.error(e.span, fmt::format("the cross product × needs two ℝ³ vectors, not {} and {}", a.str(), b.str())), e);
@@ -977,6 +987,123 @@ Type Checker::check_binary(Expr& e) {
         default: break;
     }
     return {};
+}
+
+// A \ b (solve), A ⊗ B (Kronecker) and A : B (Frobenius), with I♥LA's type rules.
+Type Checker::check_matrix_product(Expr& e, const Type& a, const Type& b) {
+    auto fail = [&](std::string msg) {
+        note_operands(d_.error(e.span, std::move(msg)), e);
+        return Type{};
+    };
+    auto shaped = [](const Type& t) { return t.is_vector() || t.is_matrix(); };
+    switch (e.op) {
+        case BinOp::Solve:
+            if (!a.is_matrix() || a.rows != a.cols)
+                return fail(fmt::format("A \\ b needs a square matrix A on the left, not {}", a.str()));
+            if (!shaped(b)) return fail(fmt::format("A \\ b needs a vector or a matrix b on the right, not {}", b.str()));
+            if (b.rows != a.rows)
+                return fail(fmt::format("cannot solve {} \\ {}: the rows differ ({} and {})", a.str(), b.str(), a.rows, b.rows));
+            return b;
+        case BinOp::Kronecker: {
+            if (!shaped(a) || !shaped(b))
+                return fail(fmt::format("the Kronecker product ⊗ needs vectors or matrices, not {} and {}", a.str(), b.str()));
+            int rows = a.rows * b.rows, cols = (a.is_matrix() ? a.cols : 1) * (b.is_matrix() ? b.cols : 1);
+            return cols == 1 ? Type::vector(rows) : Type::matrix(rows, cols);
+        }
+        default:  // Frobenius
+            if (!shaped(a) || !shaped(b) || a != b)
+                return fail(fmt::format("the Frobenius product A : B needs two vectors or matrices of one size, not {} and {}",
+                                        a.str(), b.str()));
+            return Type::scalar();
+    }
+}
+
+// ‖x‖ and |x|, with I♥LA's subscripts: ‖v‖_1, ‖v‖_2, ‖v‖_∞, ‖v‖_p, ‖v‖_M; ‖A‖ and ‖A‖_F are Frobenius.
+Type Checker::check_norm(Expr& e) {
+    Type a = check(*e.args[0]);
+    if (!a.valid()) return {};
+    bool sub = e.args.size() > 1 || !e.text.empty();
+    Span where = e.span;
+    if (e.kind == ExprKind::Abs) {
+        if (a.is_matrix()) {
+            if (a.rows != a.cols) {
+                d_.error(where, fmt::format("the determinant |·| needs a square matrix, not {}", a.str()));
+                return {};
+            }
+            e.resolved = R_Det;
+            return Type::scalar();
+        }
+        if (!a.is_numeric()) return {};
+        if (sub && !a.is_scalar()) {
+            d_.error(where, "a norm with a subscript is written with double bars, as in ‖v‖_1 (|v| is elementwise)");
+            return {};
+        }
+        e.resolved = R_AbsValue;
+        return a.is_scalar() ? Type::scalar() : a;
+    }
+    if (a.is_scalar()) {
+        e.resolved = R_AbsValue;
+        return Type::scalar();
+    }
+    if (a.is_matrix()) {
+        if (e.text == "*") {
+            d_.error(where, "the nuclear norm ‖A‖_* is not supported: it needs the singular values of A");
+            return {};
+        }
+        if (e.args.size() > 1 || (!e.text.empty() && e.text != "F")) {
+            d_.error(where, fmt::format("the norm of a matrix ({}) is ‖A‖ or ‖A‖_F (Frobenius)", a.str()));
+            return {};
+        }
+        e.resolved = R_Frobenius;
+        return Type::scalar();
+    }
+    if (!a.is_vector()) return {};
+    if (e.text == "F" || e.text == "*") {
+        d_.error(where, fmt::format("‖·‖_{} is a norm of matrices; for a vector write ‖v‖, ‖v‖_1, ‖v‖_∞ or ‖v‖_p", e.text));
+        return {};
+    }
+    e.resolved = e.text == "∞" ? R_NormMax : R_Length;
+    if (e.args.size() > 1) {
+        Type p = check(*e.args[1]);
+        if (!p.valid()) return {};
+        auto c = const_eval(*e.args[1]);
+        if (p.is_matrix()) {
+            if (p.rows != p.cols || p.rows != a.rows) {
+                d_.error(e.args[1]->span, fmt::format("the matrix of ‖v‖_M must be {}×{} for v ∈ {}, not {}", a.rows, a.rows,
+                                                      a.str(), p.str()));
+                return {};
+            }
+            e.resolved = R_NormMatrix;
+        } else if (!p.is_scalar()) {
+            d_.error(e.args[1]->span, fmt::format("the subscript of a norm is a number p ≥ 1 or a matrix, not {}", p.str()));
+            return {};
+        } else if (c && c->size() == 1 && (*c)[0] < 1) {
+            d_.error(e.args[1]->span, fmt::format("‖v‖_p needs p ≥ 1, not {}", (*c)[0]));
+            return {};
+        } else {
+            e.resolved = c && (*c)[0] == 2 ? R_Length : c && (*c)[0] == 1 ? R_Norm1 : R_NormP;
+        }
+    }
+    return Type::scalar();
+}
+
+// ⟨u, v⟩ (or <u, v>): the dot product of two vectors of one size; ⟨u, v⟩_M = vᵀ M u.
+Type Checker::check_inner(Expr& e) {
+    Type a = check(*e.args[0]);
+    Type b = check(*e.args[1]);
+    Type m = e.args.size() > 2 ? check(*e.args[2]) : Type::scalar();
+    if (!a.valid() || !b.valid() || !m.valid()) return {};
+    if (!a.is_vector() || a != b) {
+        note_operands(d_.error(e.span, fmt::format("the inner product ⟨u, v⟩ needs two vectors of one size, not {} and {}",
+                                                   a.str(), b.str())), e);
+        return {};
+    }
+    if (e.args.size() > 2 && (!m.is_matrix() || m.rows != a.rows || m.cols != a.rows)) {
+        d_.error(e.args[2]->span, fmt::format("the matrix of ⟨u, v⟩_M must be {}×{} for vectors in {}, not {}", a.rows,
+                                              a.rows, a.str(), m.str()));
+        return {};
+    }
+    return Type::scalar();
 }
 
 Type Checker::check(Expr& e) {
@@ -1016,11 +1143,12 @@ Type Checker::check(Expr& e) {
                 t = Type::scalar();
             } else if (a.is_matrix() && a.rows == a.cols && b.is_scalar()) {
                 auto c = const_eval(*e.args[1]);
-                if (c && c->size() == 1 && (*c)[0] == -1) {
-                    e.resolved = R_Inverse;
+                if (c && c->size() == 1 && (*c)[0] == std::floor((*c)[0]) && std::fabs((*c)[0]) <= 1024) {
+                    e.resolved = (*c)[0] == -1 ? R_Inverse : R_MatPow;
+                    e.aux = int((*c)[0]);
                     t = a;
                 } else {
-                    d_.error(e.args[1]->span, "a matrix power must be ⁻¹ (the inverse)");
+                    d_.error(e.args[1]->span, "a matrix power must be a whole number such as A², A^3 or A⁻¹");
                 }
             } else if (a.is_matrix()) {
                 d_.error(e.span, fmt::format("only square matrices have powers, not {}", a.str()));
@@ -1207,26 +1335,9 @@ Type Checker::check(Expr& e) {
             else t = b.is_scalar() ? Type::scalar() : b;
             break;
         }
-        case ExprKind::Norm: {
-            Type a = check(*e.args[0]);
-            if (!a.valid()) break;
-            if (a.is_vector()) { e.resolved = R_Length; t = Type::scalar(); }
-            else if (a.is_scalar()) { e.resolved = R_AbsValue; t = Type::scalar(); }
-            else d_.error(e.span, fmt::format("the norm ‖·‖ of {} is not supported (vectors and scalars only)", a.str()));
-            break;
-        }
-        case ExprKind::Abs: {
-            Type a = check(*e.args[0]);
-            if (!a.valid()) break;
-            if (a.is_matrix()) {
-                if (a.rows != a.cols) d_.error(e.span, fmt::format("the determinant |·| needs a square matrix, not {}", a.str()));
-                else { e.resolved = R_Det; t = Type::scalar(); }
-            } else if (a.is_numeric()) {
-                e.resolved = R_AbsValue;
-                t = a.is_scalar() ? Type::scalar() : a;
-            }
-            break;
-        }
+        case ExprKind::Norm:
+        case ExprKind::Abs: t = check_norm(e); break;
+        case ExprKind::Inner: t = check_inner(e); break;
         case ExprKind::Floor:
         case ExprKind::Ceil:
         case ExprKind::Sqrt: {

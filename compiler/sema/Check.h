@@ -48,6 +48,12 @@ enum Resolved : int {
     R_SeqLast,    // z_(N+1): the element the recurrence ends with, aux = sequence
     R_ImportModule,  // call of a whole module imported as a function, aux = index in CheckedModule::imports
     R_Constant,   // a built-in constant imported by name (e from trigonometry), aux = builtin id
+    R_MatPow,     // matrix power A^k, aux = k (a whole number; -1 is the inverse)
+    R_Norm1,      // ‖v‖_1
+    R_NormMax,    // ‖v‖_∞
+    R_NormP,      // ‖v‖_p (args[1] is p)
+    R_NormMatrix, // ‖v‖_M = √(vᵀ M v)
+    R_Frobenius,  // ‖A‖, ‖A‖_F
 };
 
 struct ParamInfo {

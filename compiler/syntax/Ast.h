@@ -25,7 +25,7 @@ enum class ExprKind {
     Index,      // args[0] subscripted by indices (1-based; `*` is a whole row/column)
     Vector,     // (a, b, ...) — concatenation of scalars and vectors
     Matrix,     // [a b; c d]
-    Norm,       // ‖args[0]‖
+    Norm,       // ‖args[0]‖, with a subscript: text "∞", "*" or "F", or args[1] (‖v‖_1, ‖v‖_p, ‖v‖_M)
     Abs,        // |args[0]|
     Floor,      // ⌊args[0]⌋
     Ceil,       // ⌈args[0]⌉
@@ -34,6 +34,7 @@ enum class ExprKind {
     Logic,      // and / or
     Piecewise,  // cases: values[i] if conds[i]; otherwise
     Sum,        // ∑_text args[0]: a sum over the index `text` (range from the sizes it subscripts)
+    Inner,      // ⟨args[0], args[1]⟩ (or <a, b>), with a subscript args[2]: ⟨u, v⟩_M = vᵀ M u
 };
 
 enum class BinOp {
@@ -44,6 +45,10 @@ enum class BinOp {
     Div,        // a / b, a ÷ b
     Hadamard,   // a ∘ b
     Cross,      // a × b
+    Solve,      // A \ b: the x with A x = b
+    Kronecker,  // A ⊗ B
+    Frobenius,  // A : B, the sum of the elementwise products
+    PlusMinus,  // a ± b, only in conditions: x = a ± b is x = a + b or x = a - b
     Eq, Neq, Lt, Le, Gt, Ge,
     And, Or,
 };

@@ -243,6 +243,12 @@ struct Lexer {
                 case 0x211D: k = Tok::Reals; break;
                 case 0x2124: k = Tok::Integers; break;
                 case 0x2026: k = Tok::Ellipsis; break;
+                case '\\': k = Tok::Backslash; break;
+                case 0x2297: k = Tok::Kronecker; break;
+                case 0x27E8: k = Tok::LAngle; break;
+                case 0x27E9: k = Tok::RAngle; break;
+                case 0x221E: k = Tok::Infinity; break;
+                case 0xB1: k = Tok::PlusMinus; break;
                 default: break;
             }
             if (utf8::is_combining(cp) || cp == 0xFEFF || cp == 0x200B) {  // stray mark or BOM: whitespace

@@ -3,6 +3,7 @@
 #include <cctype>
 #include <algorithm>
 #include <cstdlib>
+#include <functional>
 #include <fmt/format.h>
 
 #include "sema/Builtins.h"
@@ -21,6 +22,10 @@ const char* ast::binop_spelling(BinOp op) {
         case BinOp::Div: return "/";
         case BinOp::Hadamard: return "∘";
         case BinOp::Cross: return "×";
+        case BinOp::Solve: return "\\";
+        case BinOp::Kronecker: return "⊗";
+        case BinOp::Frobenius: return ":";
+        case BinOp::PlusMinus: return "±";
         case BinOp::Eq: return "=";
         case BinOp::Neq: return "≠";
         case BinOp::Lt: return "<";
@@ -200,6 +205,8 @@ private:
     size_t pos_ = 0;
     std::vector<Ctx> ctx_{Ctx::Top};
     bool failed_ = false;  // an error in the current statement: skip to its end
+    int in_condition_ = 0;  // inside a piecewise condition: `<` compares (elsewhere it may open ⟨u, v⟩)
+    bool colon_ends_ = false;  // a default's value: `:` starts the description, not A : B
 
     struct Bail {};  // unwinds to the statement loop after an error
 
@@ -296,6 +303,7 @@ private:
 
     ExprPtr parse_condition();
     ExprPtr parse_comparison();
+    ExprPtr parse_atom_comparison();
     ExprPtr parse_expr();
     ExprPtr parse_unary();
     ExprPtr parse_mult();
@@ -309,6 +317,9 @@ private:
     ExprPtr parse_primary();
     ExprPtr parse_matrix(Span open);
     ExprPtr parse_piecewise(Span open);
+    ExprPtr parse_inner(const Token& open);
+    bool ascii_inner_ahead() const;
+    void parse_norm_subscript(Expr& norm);
     ExprPtr parse_delimited(ExprKind kind, Tok close, Span open, const char* what);
     bool starts_juxtaposed_operand();
     std::string statement_text(Span s) const;
@@ -506,7 +517,9 @@ Decl Parser::parse_decl() {
     if (at_kw("default")) {
         Span ds = advance().span;
         expect(Tok::Eq, "after 'default'");
+        colon_ends_ = true;
         d.default_value = parse_expr();
+        colon_ends_ = false;
         d.default_span = Span::join(ds, d.default_value->span);
     }
     if (at(Tok::Colon)) {
@@ -688,6 +701,8 @@ Module Parser::parse(std::string name, bool allow_header) {
         if (at(Tok::Newline) || at(Tok::Semicolon)) { advance(); continue; }
         try {
             ctx_.assign(1, Ctx::Top);
+            in_condition_ = 0;
+            colon_ends_ = false;
             Span start = cur().span;
             parse_line(m);
             if (!at(Tok::Newline) && !at(Tok::End) && !at(Tok::Semicolon)) {
@@ -731,6 +746,30 @@ ExprPtr Parser::parse_condition() {
 // comparison := expr (= | ≠ | < | ≤ | > | ≥) expr | expr (∈ | ∉) interval
 //   interval := ([ | () expr , expr (] | ))     — closed or open at either end
 ExprPtr Parser::parse_comparison() {
+    ++in_condition_;
+    ExprPtr c = parse_atom_comparison();
+    --in_condition_;
+    // x = a ± b is x = a + b or x = a - b (I♥LA: one ± per comparison).
+    std::vector<Expr*> pm;
+    std::function<void(Expr&)> find = [&](Expr& x) {
+        if (x.kind == ExprKind::Binary && x.op == BinOp::PlusMinus) pm.push_back(&x);
+        for (auto& a : x.args) find(*a);
+    };
+    find(*c);
+    if (pm.empty()) return c;
+    if (pm.size() > 1) fail(pm[1]->span, "a comparison may hold only one ±");
+    pm[0]->op = BinOp::Add;
+    ExprPtr plus = clone_expr(*c);
+    pm[0]->op = BinOp::Sub;
+    ExprPtr minus = clone_expr(*c);
+    Span whole = c->span;
+    auto e = binary(BinOp::Or, std::move(plus), std::move(minus));
+    e->kind = ExprKind::Logic;
+    e->span = whole;
+    return e;
+}
+
+ExprPtr Parser::parse_atom_comparison() {
     ExprPtr lhs = parse_expr();
     if (at(Tok::In) || at(Tok::NotIn) || at_kw("in")) {
         bool negate = at(Tok::NotIn);
@@ -799,10 +838,15 @@ ExprPtr Parser::parse_expr() {
     ExprPtr lhs = parse_unary();
     while (true) {
         const Token& t = cur();
-        if (t.kind != Tok::Plus && t.kind != Tok::Minus) break;
+        if (t.kind != Tok::Plus && t.kind != Tok::Minus && t.kind != Tok::PlusMinus) break;
         // Inside a matrix, `a -b` is two items while `a - b` and `a-b` are one.
         if (ctx_.back() == Ctx::Bracket && t.space_before && !peek_raw(1).space_before) break;
-        BinOp op = t.kind == Tok::Plus ? BinOp::Add : BinOp::Sub;
+        BinOp op = t.kind == Tok::Plus ? BinOp::Add : t.kind == Tok::Minus ? BinOp::Sub : BinOp::PlusMinus;
+        // In a condition, `+-` written together is I♥LA's ASCII ±.
+        if (op == BinOp::Add && in_condition_ && peek_raw(1).kind == Tok::Minus && !peek_raw(1).space_before) {
+            op = BinOp::PlusMinus;
+            advance();
+        }
         advance();
         if (ctx_.back() == Ctx::Top) {  // `a +` continues on the next line, if there is one
             size_t k = pos_;
@@ -851,6 +895,8 @@ bool Parser::starts_juxtaposed_operand() {
             return !(ctx_.back() == Ctx::Bars && (t.kind == Tok::Norm || t.kind == Tok::DoubleBar));
         case Tok::Bar: return ctx_.back() != Ctx::Bars;
         case Tok::Word: return !is_keyword(t.text);
+        case Tok::LAngle: return true;
+        case Tok::Lt: return in_condition_ == 0 && ascii_inner_ahead();  // 2<u, v> outside conditions
         default: return false;
     }
 }
@@ -873,11 +919,17 @@ ExprPtr Parser::parse_mult() {
     return lhs;
 }
 
-// elem := power {(∘ | ×) power}
+// elem := power {(∘ | × | ⊗ | \ | :) power}      (I♥LA's product operators between factors)
 ExprPtr Parser::parse_elem() {
     ExprPtr lhs = parse_power();
-    while (at(Tok::Circle) || at(Tok::Cross)) {
-        BinOp op = at(Tok::Circle) ? BinOp::Hadamard : BinOp::Cross;
+    while (true) {
+        BinOp op;
+        if (at(Tok::Circle)) op = BinOp::Hadamard;
+        else if (at(Tok::Cross)) op = BinOp::Cross;
+        else if (at(Tok::Kronecker)) op = BinOp::Kronecker;
+        else if (at(Tok::Backslash)) op = BinOp::Solve;
+        else if (at(Tok::Colon) && !colon_ends_) op = BinOp::Frobenius;
+        else break;
         advance();
         ExprPtr rhs = parse_power();
         lhs = binary(op, std::move(lhs), std::move(rhs));
@@ -944,6 +996,11 @@ ExprPtr Parser::parse_postfix(bool exponent) {
     ExprPtr e = parse_primary();
     while (true) {
         if (e->kind == ExprKind::Name && (function_power(e) || log_base(e))) continue;
+        if ((e->kind == ExprKind::Norm || e->kind == ExprKind::Abs) && e->args.size() == 1 && e->text.empty() &&
+            (at(Tok::Sub) || (at(Tok::Underscore) && !cur().space_before))) {
+            parse_norm_subscript(*e);
+            continue;
+        }
         if (at(Tok::Sub)) {
             const Token& t = advance();
             auto idx = make(ExprKind::Index, Span::join(e->span, t.span));
@@ -967,6 +1024,10 @@ ExprPtr Parser::parse_postfix(bool exponent) {
             advance();
             auto idx = make(ExprKind::Index, e->span);
             idx->args.push_back(std::move(e));
+            auto push = [&](IndexItem it) {
+                idx->span = Span::join(idx->span, it.span);
+                idx->indices.push_back(std::move(it));
+            };
             auto parse_index = [&]() {
                 IndexItem it;
                 const Token& t = cur();
@@ -984,22 +1045,47 @@ ExprPtr Parser::parse_postfix(bool exponent) {
                     it.expr->name_span = t.span;
                     advance();
                 } else if (t.kind == Tok::LParen) {
+                    // _(i), _(k+1), _(2,3), _(i,*): one or two subscripts
                     advance();
                     ctx_.push_back(Ctx::Paren);
-                    it.expr = parse_expr();
-                    ctx_.pop_back();
-                    it.span = Span::join(t.span, expect(Tok::RParen, "to close the subscript").span);
+                    for (bool first = true;; first = false) {
+                        IndexItem item;
+                        item.span = cur().span;
+                        if (at(Tok::Star)) advance();
+                        else item.expr = parse_expr(), item.span = item.expr->span;
+                        if (!accept(Tok::Comma)) {
+                            ctx_.pop_back();
+                            Span close = expect(Tok::RParen, "to close the subscript").span;
+                            if (first) item.span = Span::join(t.span, close);  // _(k+1): the whole parenthesis
+                            push(std::move(item));
+                            idx->span = Span::join(idx->span, close);
+                            return;
+                        }
+                        push(std::move(item));
+                    }
                 } else {
                     fail(t.span, fmt::format("expected a subscript after '_', found {}", describe(t)));
                 }
-                idx->span = Span::join(idx->span, it.span);
-                idx->indices.push_back(std::move(it));
+                push(std::move(it));
             };
             parse_index();
-            // A second index (`A_2,3`) only outside parenthesised lists, written without spaces.
-            if (ctx_.back() == Ctx::Top && toks_[pos_].kind == Tok::Comma && !toks_[pos_].space_before &&
-                !peek_raw(1).space_before)
-                advance(), parse_index();
+            // A second subscript written against its comma (`A_2,3`, `A_i,j`, `A_i,*`) belongs to the name, in
+            // any context (I♥LA); `(p_1, p_2)` and `(p_1,p_2)` stay two items.
+            while (toks_[pos_].kind == Tok::Comma && !toks_[pos_].space_before && !peek_raw(1).space_before) {
+                const Token& n = peek_raw(1);
+                const Token& after = peek_raw(2);
+                bool index = n.kind == Tok::Number || n.kind == Tok::Star ||
+                             (is_name_token(n) && !((after.kind == Tok::Underscore || after.kind == Tok::Sub ||
+                                                     after.kind == Tok::LParen) && !after.space_before));
+                if (!index || idx->indices.size() >= 2) break;
+                advance();
+                parse_index();
+            }
+            // A_ij: two one-letter subscripts written together (a word split into letters).
+            while (idx->indices.size() == 1 && idx->indices[0].expr && idx->indices[0].expr->kind == ExprKind::Name &&
+                   pos_ > 0 && toks_[pos_ - 1].word.end > toks_[pos_ - 1].word.begin && is_name_token(toks_[pos_]) &&
+                   toks_[pos_].word.begin == toks_[pos_ - 1].word.begin && toks_[pos_].word.end == toks_[pos_ - 1].word.end)
+                parse_index();
             e = std::move(idx);
             continue;
         }
@@ -1145,6 +1231,117 @@ ExprPtr Parser::parse_matrix(Span open) {
     return m;
 }
 
+// Whether the `<` at the current token opens <u, v>: a comma and then a `>` follow on the line, outside
+// any bracket opened after the `<`.
+bool Parser::ascii_inner_ahead() const {
+    int depth = 0;
+    bool comma = false;
+    for (size_t k = pos_ + 1; k < toks_.size(); ++k) {
+        Tok t = toks_[k].kind;
+        if (t == Tok::Newline || t == Tok::End || t == Tok::Eq || t == Tok::Lt || t == Tok::Semicolon) return false;
+        if (t == Tok::LParen || t == Tok::LBracket || t == Tok::LAngle) ++depth;
+        if (t == Tok::RParen || t == Tok::RBracket || t == Tok::RAngle) --depth;
+        if (depth < 0) return false;
+        if (depth == 0 && t == Tok::Comma) comma = true;
+        if (depth == 0 && t == Tok::Gt) return comma;
+    }
+    return false;
+}
+
+// inner := ⟨ expr , expr ⟩ [_ NAME] | < expr , expr > [_ NAME]     ⟨u, v⟩_M is vᵀ M u
+ExprPtr Parser::parse_inner(const Token& open_tok) {
+    bool angle = open_tok.kind == Tok::LAngle;
+    Span open = open_tok.span;
+    ctx_.push_back(Ctx::Paren);
+    ++in_condition_;  // `>` closes: no comparison or `<u, v>` inside
+    ExprPtr a = parse_expr();
+    --in_condition_;
+    if (!at(Tok::Comma)) {
+        auto& d = diags_.error(cur().span, fmt::format("expected ',' between the two vectors of the inner product, found {}",
+                                                       describe(cur())));
+        Diagnostics::note(d, open, angle ? "the inner product ⟨u, v⟩ opens here" : "'<' here opens an inner product <u, v>");
+        throw Bail{};
+    }
+    advance();
+    ++in_condition_;
+    ExprPtr b = parse_expr();
+    --in_condition_;
+    ctx_.pop_back();
+    if (!at(angle ? Tok::RAngle : Tok::Gt)) {
+        auto& d = diags_.error(cur().span, fmt::format("expected {} to close the inner product, found {}",
+                                                       angle ? "'⟩'" : "'>'", describe(cur())));
+        Diagnostics::note(d, open, "opened here");
+        throw Bail{};
+    }
+    auto e = make(ExprKind::Inner, Span::join(open, advance().span));
+    e->args.push_back(std::move(a));
+    e->args.push_back(std::move(b));
+    if (at(Tok::Underscore) && !cur().space_before && is_name_token(peek_raw(1))) {
+        advance();
+        auto m = make(ExprKind::Name, cur().span);
+        auto [n, sp] = parse_name();
+        m->text = n;
+        m->name_span = sp;
+        e->span = Span::join(e->span, sp);
+        e->args.push_back(std::move(m));
+    }
+    return e;
+}
+
+// norm_subscript := _ (INTEGER | ∞ | * | NAME | ( expr )) | SUBSCRIPT     ‖v‖_1, ‖v‖_∞, ‖A‖_F, ‖v‖_p, ‖v‖₁
+void Parser::parse_norm_subscript(Expr& norm) {
+    if (at(Tok::Sub)) {
+        const Token& t = advance();
+        auto n = make(ExprKind::Number, t.span);
+        n->number = std::atof(t.text.c_str());
+        n->text = t.text;
+        if (!std::isdigit(static_cast<unsigned char>(t.text[0]))) {
+            n->kind = ExprKind::Name;
+            n->name_span = t.span;
+        }
+        norm.args.push_back(std::move(n));
+        norm.span = Span::join(norm.span, t.span);
+        return;
+    }
+    advance();  // _
+    const Token& t = cur();
+    if (t.kind == Tok::Infinity || t.kind == Tok::Star || (t.kind == Tok::Word && t.text == "F" && !known_.count("F"))) {
+        norm.text = t.kind == Tok::Infinity ? "∞" : t.kind == Tok::Star ? "*" : "F";
+        norm.span = Span::join(norm.span, advance().span);
+        return;
+    }
+    ExprPtr sub;
+    if (t.kind == Tok::Number) {
+        sub = make(ExprKind::Number, t.span);
+        sub->number = std::strtod(t.text.c_str(), nullptr);
+        sub->text = t.text;
+        advance();
+    } else if (is_name_token(t)) {
+        sub = make(ExprKind::Name, t.span);
+        auto [n, sp] = parse_name();
+        sub->text = n;
+        sub->name_span = sp;
+    } else if (t.kind == Tok::LParen) {
+        advance();
+        ctx_.push_back(Ctx::Paren);
+        if (at(Tok::Infinity) || at(Tok::Star)) {
+            norm.text = at(Tok::Infinity) ? "∞" : "*";
+            advance();
+        } else {
+            sub = parse_expr();
+        }
+        ctx_.pop_back();
+        Span close = expect(Tok::RParen, "to close the norm's subscript").span;
+        norm.span = Span::join(norm.span, close);
+        if (!sub) return;
+    } else {
+        fail(t.span, fmt::format("expected the norm's subscript (1, 2, ∞, F, a number or a name) after '_', found {}",
+                                 describe(t)));
+    }
+    norm.span = Span::join(norm.span, sub->span);
+    norm.args.push_back(std::move(sub));
+}
+
 // piecewise := { case {newline case}      case := expr [,] (if condition | otherwise)
 ExprPtr Parser::parse_piecewise(Span open) {
     ctx_.push_back(Ctx::Brace);
@@ -1236,6 +1433,10 @@ ExprPtr Parser::parse_primary() {
         }
         case Tok::LBracket: return parse_matrix(advance().span);
         case Tok::LBrace: return parse_piecewise(advance().span);
+        case Tok::LAngle: return parse_inner(advance());
+        case Tok::Lt:
+            if (ascii_inner_ahead()) return parse_inner(advance());
+            fail(t.span, fmt::format("expected an expression, found {}", describe(t)));
         case Tok::Norm: return parse_delimited(ExprKind::Norm, Tok::Norm, advance().span, "the norm");
         case Tok::DoubleBar: return parse_delimited(ExprKind::Norm, Tok::DoubleBar, advance().span, "the norm");
         case Tok::Bar: return parse_delimited(ExprKind::Abs, Tok::Bar, advance().span, "the absolute value");

@@ -56,6 +56,12 @@ namespace iqc {
     X(Reals, "'ℝ'")                                                                                        \
     X(Integers, "'ℤ'")                                                                                     \
     X(Ellipsis, "'…'")                                                                                     \
+    X(Backslash, "'\\'")       /* A \ b: solve */                                                         \
+    X(Kronecker, "'⊗'")                                                                                    \
+    X(LAngle, "'⟨'")                                                                                       \
+    X(RAngle, "'⟩'")                                                                                       \
+    X(Infinity, "'∞'")                                                                                     \
+    X(PlusMinus, "'±'")                                                                                    \
     X(Unknown, "character")
 
 enum class Tok {
