@@ -2,9 +2,11 @@
 
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <fmt/format.h>
 #include <stdexcept>
 
+#include "ir/Eval.h"
 #include "sema/Builtins.h"
 
 namespace iqc {
@@ -195,6 +197,23 @@ struct Env {
         }
     }
 
+    // The value of `v` when it depends on constants only (a sum's condition on its index), else nullopt.
+    std::optional<std::vector<double>> constant_value(ValueId v) {
+        const Instr& in = f.body[v];
+        if (in.op == Op::Const) return in.data;
+        if (in.op == Op::Param || in.op == Op::Input || in.op == Op::Call || in.op == Op::Loop || in.op == Op::Member)
+            return std::nullopt;
+        std::vector<ir::Value> vals;
+        for (ValueId a : in.args) {
+            auto c = constant_value(a);
+            if (!c) return std::nullopt;
+            vals.push_back({type_of(a), *c});
+        }
+        std::vector<const ir::Value*> ptrs;
+        for (auto& x : vals) ptrs.push_back(&x);
+        return ir::eval_instr(ctx.module, f, in, ptrs, {}, {}).v;
+    }
+
     // A^k for a whole k (the checker made sure), by repeated squaring; k < 0 powers the inverse.
     ValueId matrix_power(ValueId a, int k, Span span) {
         const Type t = type_of(a);
@@ -374,7 +393,15 @@ struct Env {
                 if (type_of(a).is_scalar()) return a;
                 return emit(Op::Transpose, ir::result_type(Op::Transpose, {type_of(a)}, 0), {a}, 0, e.span);
             }
+            case ExprKind::Block:
             case ExprKind::Index: {
+                if (e.resolved == R_BlockZero || e.resolved == R_BlockOnes || e.resolved == R_BlockIdentity) {
+                    int rows = e.block_rows[0], cols = e.block_cols[0];
+                    std::vector<double> data(size_t(rows * cols), e.resolved == R_BlockOnes ? 1.0 : 0.0);
+                    if (e.resolved == R_BlockIdentity)
+                        for (int i = 0; i < rows; ++i) data[size_t(i * cols + i)] = 1;
+                    return f.constant(cols == 1 ? Type::vector(rows) : Type::matrix(rows, cols), std::move(data));
+                }
                 if (e.resolved == R_SeqCurrent) return seq_current.at(e.aux);
                 if (e.resolved == R_SeqFirst || e.resolved == R_SeqLast) {
                     if (parent) return capture(parent->lower(e));
@@ -446,6 +473,15 @@ struct Env {
                 for (int k = 0; k < n; ++k) {
                     sum_index[e.text] = k;
                     ValueId term = lower(*e.args[0]);
+                    if (e.args.size() > 1) {  // ∑_(j for condition): a term counts where its condition holds
+                        Type t = scalar_or(type_of(term));
+                        ValueId zero = f.constant(t, std::vector<double>(size_t(t.components()), 0.0));
+                        ValueId c = lower(*e.args[1]);
+                        auto known = constant_value(c);
+                        if (!known) term = emit(Op::Select, t, {c, term, zero}, 0, e.span);
+                        else if ((*known)[0] == 0) term = acc == ValueId(-1) && k == n - 1 ? zero : ValueId(-1);
+                        if (term == ValueId(-1)) continue;
+                    }
                     acc = acc == ValueId(-1) ? term : op2(Op::Add, acc, term, e.span);
                 }
                 sum_index.erase(e.text);

@@ -180,6 +180,12 @@ private:
     Type check_call(Expr& e);
     Type check_binary(Expr& e);
     Type check_norm(Expr& e);
+    Type check_block(Expr& e);
+    // Whether the module (or the local function being checked) gives `name` a meaning of its own.
+    bool defines(const std::string& name) const {
+        return m_.find_param(name) >= 0 || assigns_.count(name) || decls_.count(name) ||
+               (scope_ && scope_->locals.count(name)) || m_.find_sequence(name) >= 0;
+    }
     Type check_inner(Expr& e);
     Type check_matrix_product(Expr& e, const Type& a, const Type& b);
     Type mul_type(Expr& e, const Type& a, const Type& b, bool dot);
@@ -1018,6 +1024,45 @@ Type Checker::check_matrix_product(Expr& e, const Type& a, const Type& b) {
     }
 }
 
+// Sized blocks: 0_m,n (zeros), 1_n and 𝟙_m,n (ones), I_n (the identity, unless the module defines I).
+// A size is a whole number or a size symbol bound by a declaration (v ∈ ℝ^n).
+Type Checker::check_block(Expr& e) {
+    bool identity = e.kind == ExprKind::Index;
+    std::vector<int> dims;
+    for (auto& it : e.indices) {
+        if (!it.expr) {
+            d_.error(it.span, "a block's size cannot be *");
+            return {};
+        }
+        if (it.expr->kind == ExprKind::Name) {
+            auto s = sizes_.find(it.expr->text);
+            if (s == sizes_.end()) {
+                d_.error(it.span, fmt::format("the size '{}' is not known: a block's size is a whole number or a size "
+                                              "symbol such as n in v ∈ ℝ^n", it.expr->text));
+                return {};
+            }
+            dims.push_back(s->second);
+            continue;
+        }
+        auto c = const_eval(*it.expr);
+        if (!c || c->size() != 1 || (*c)[0] < 1 || (*c)[0] != std::floor((*c)[0]) || (*c)[0] > 1e6) {
+            d_.error(it.span, "a block's size must be a whole number ≥ 1");
+            return {};
+        }
+        dims.push_back(int((*c)[0]));
+    }
+    if (identity && dims.size() != 1) {
+        d_.error(e.span, "the identity I_n takes one size (it is n×n)");
+        return {};
+    }
+    int rows = dims[0], cols = identity ? dims[0] : dims.size() > 1 ? dims[1] : 1;
+    e.resolved = identity ? R_BlockIdentity : e.text == "0" ? R_BlockZero : R_BlockOnes;
+    e.block_rows = {rows};
+    e.block_cols = {cols};
+    if (cols == 1) return Type::vector(rows);
+    return Type::matrix(rows, cols);
+}
+
 // ‖x‖ and |x|, with I♥LA's subscripts: ‖v‖_1, ‖v‖_2, ‖v‖_∞, ‖v‖_p, ‖v‖_M; ‖A‖ and ‖A‖_F are Frobenius.
 Type Checker::check_norm(Expr& e) {
     Type a = check(*e.args[0]);
@@ -1165,7 +1210,12 @@ Type Checker::check(Expr& e) {
             if (a.valid()) t = ir::result_type(ir::Op::Transpose, {a}, 0);
             break;
         }
+        case ExprKind::Block: t = check_block(e); break;
         case ExprKind::Index: {
+            if (e.args[0]->kind == ExprKind::Name && e.args[0]->text == "I" && !defines("I")) {  // I_n: the identity
+                t = check_block(e);
+                break;
+            }
             if (e.args[0]->kind == ExprKind::Name && m_.find_sequence(e.args[0]->text) >= 0 &&
                 !(scope_ && scope_->locals.count(e.args[0]->text))) {
                 t = check_sequence_index(e);
@@ -1329,6 +1379,10 @@ Type Checker::check(Expr& e) {
             e.aux = n;
             sums_.push_back({e.text, n});
             Type b = check(*e.args[0]);
+            if (e.args.size() > 1) {  // ∑_(j for condition)
+                Type c = check(*e.args[1]);
+                if (c.valid() && c.kind != Type::Bool) d_.error(e.args[1]->span, "expected a condition such as j ≠ i");
+            }
             sums_.pop_back();
             if (!b.valid()) break;
             if (!b.is_numeric()) d_.error(e.args[0]->span, "a sum needs numbers to add");

@@ -35,6 +35,7 @@ enum class ExprKind {
     Piecewise,  // cases: values[i] if conds[i]; otherwise
     Sum,        // ∑_text args[0]: a sum over the index `text` (range from the sizes it subscripts)
     Inner,      // ⟨args[0], args[1]⟩ (or <a, b>), with a subscript args[2]: ⟨u, v⟩_M = vᵀ M u
+    Block,      // a sized block: text "0" (zeros) or "1" (ones, also 𝟙); indices: its sizes (0_2,3, 1_n, 𝟙₃)
 };
 
 enum class BinOp {

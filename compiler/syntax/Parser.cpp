@@ -41,7 +41,7 @@ const char* ast::binop_spelling(BinOp op) {
 namespace {
 
 const std::set<std::string> kKeywords = {"where", "given", "from", "if", "otherwise", "and", "or", "in",
-                                         "default", "shape", "material", "scalar", "vector", "matrix", "for"};
+                                         "default", "shape", "material", "scalar", "vector", "matrix", "for", "sum"};
 
 bool is_name_token(const Token& t) { return t.kind == Tok::Word || t.kind == Tok::Backtick; }
 
@@ -318,6 +318,8 @@ private:
     ExprPtr parse_matrix(Span open);
     ExprPtr parse_piecewise(Span open);
     ExprPtr parse_inner(const Token& open);
+    ExprPtr parse_sum(Span start);
+    ExprPtr parse_sized_block(ExprPtr symbol);
     bool ascii_inner_ahead() const;
     void parse_norm_subscript(Expr& norm);
     ExprPtr parse_delimited(ExprKind kind, Tok close, Span open, const char* what);
@@ -894,7 +896,7 @@ bool Parser::starts_juxtaposed_operand() {
         case Tok::Sqrt: case Tok::Fraction: case Tok::Norm: case Tok::DoubleBar: case Tok::Sum: case Tok::LBracket:
             return !(ctx_.back() == Ctx::Bars && (t.kind == Tok::Norm || t.kind == Tok::DoubleBar));
         case Tok::Bar: return ctx_.back() != Ctx::Bars;
-        case Tok::Word: return !is_keyword(t.text);
+        case Tok::Word: return !is_keyword(t.text) || t.text == "sum";
         case Tok::LAngle: return true;
         case Tok::Lt: return in_condition_ == 0 && ascii_inner_ahead();  // 2<u, v> outside conditions
         default: return false;
@@ -996,6 +998,11 @@ ExprPtr Parser::parse_postfix(bool exponent) {
     ExprPtr e = parse_primary();
     while (true) {
         if (e->kind == ExprKind::Name && (function_power(e) || log_base(e))) continue;
+        if (e->kind == ExprKind::Number && (e->text == "0" || e->text == "1" || e->text == "𝟙") &&
+            (at(Tok::Sub) || at(Tok::Underscore)) && !cur().space_before) {
+            e = parse_sized_block(std::move(e));
+            continue;
+        }
         if ((e->kind == ExprKind::Norm || e->kind == ExprKind::Abs) && e->args.size() == 1 && e->text.empty() &&
             (at(Tok::Sub) || (at(Tok::Underscore) && !cur().space_before))) {
             parse_norm_subscript(*e);
@@ -1231,6 +1238,97 @@ ExprPtr Parser::parse_matrix(Span open) {
     return m;
 }
 
+// sum := (∑ | sum) (_ NAME | SUBSCRIPT | _( NAME [for condition] )) term
+//   ∑_i a_i b_i + c is (∑_i a_i b_i) + c: the summand is one multiplicative term.
+//   ∑_(j for j ≠ i) x_j adds only the terms whose index satisfies the condition.
+ExprPtr Parser::parse_sum(Span start) {
+    std::string index;
+    ExprPtr condition;
+    if (at(Tok::Sub) && !cur().space_before) {
+        index = advance().text;
+    } else if (at(Tok::Underscore) && !cur().space_before) {
+        advance();
+        if (at(Tok::LParen)) {
+            Span open = advance().span;
+            ctx_.push_back(Ctx::Paren);
+            if (!is_name_token(cur()))
+                fail(cur().span, fmt::format("expected the summation index after '∑_(', found {}", describe(cur())));
+            index = advance().text;
+            if (at(Tok::Comma) || at(Tok::In) || at_kw("in"))
+                fail(cur().span, "a sum over the members of a set (∑_(i,j ∈ E)) is not supported: sets are not part of "
+                                 "iqc's language");
+            if (at_kw("for")) {
+                advance();
+                condition = parse_condition();
+            }
+            ctx_.pop_back();
+            if (!at(Tok::RParen)) {
+                auto& d = diags_.error(cur().span, fmt::format("expected ')' to close the sum's index, found {}", describe(cur())));
+                Diagnostics::note(d, open, "opened here");
+                throw Bail{};
+            }
+            advance();
+        } else if (is_name_token(cur())) {
+            index = advance().text;
+        } else {
+            fail(cur().span, fmt::format("expected the summation index after '∑_', found {}", describe(cur())));
+        }
+    } else {
+        fail(cur().span, "expected a summation index, as in ∑_i v_i");
+    }
+    ExprPtr body = parse_mult();
+    auto e = make(ExprKind::Sum, Span::join(start, body->span));
+    e->text = index;
+    e->args.push_back(std::move(body));
+    if (condition) e->args.push_back(std::move(condition));
+    return e;
+}
+
+// sized_block := (0 | 1 | 𝟙) (_ size [, size] | _( size [(, | × | x) size] ) | SUBSCRIPT [, SUBSCRIPT])
+//   size := INTEGER | NAME          0_2,3 is a 2×3 zero matrix, 1_n a vector of n ones
+ExprPtr Parser::parse_sized_block(ExprPtr symbol) {
+    auto e = make(ExprKind::Block, symbol->span);
+    e->text = symbol->text == "0" ? "0" : "1";
+    auto size = [&](const Token& t) {
+        IndexItem it;
+        it.span = t.span;
+        if (t.kind == Tok::Number || t.kind == Tok::Sub) {
+            it.expr = make(ExprKind::Number, t.span);
+            it.expr->number = std::atof(t.text.c_str());
+            it.expr->text = t.text;
+            if (t.kind == Tok::Sub && !std::isdigit(static_cast<unsigned char>(t.text[0]))) it.expr->kind = ExprKind::Name;
+        } else if (is_name_token(t)) {
+            it.expr = make(ExprKind::Name, t.span);
+            it.expr->text = t.text;
+            it.expr->name_span = t.span;
+        } else {
+            fail(t.span, fmt::format("expected the size of the {} block ({}_2,3 or {}_n), found {}", e->text == "0" ? "zero" : "ones",
+                                     symbol->text, symbol->text, describe(t)));
+        }
+        e->span = Span::join(e->span, t.span);
+        e->indices.push_back(std::move(it));
+        advance();
+    };
+    if (at(Tok::Sub)) {
+        size(cur());
+        if (at(Tok::Comma) && !cur().space_before && peek_raw(1).kind == Tok::Sub) advance(), size(cur());
+        return e;
+    }
+    advance();  // _
+    if (at(Tok::LParen)) {
+        advance();
+        size(cur());
+        if (accept(Tok::Comma) || accept(Tok::Cross) || (at(Tok::Word) && cur().text == "x" && (advance(), true))) size(cur());
+        e->span = Span::join(e->span, expect(Tok::RParen, "to close the block's size").span);
+        return e;
+    }
+    size(cur());
+    if (at(Tok::Comma) && !cur().space_before && !peek_raw(1).space_before &&
+        (peek_raw(1).kind == Tok::Number || is_name_token(peek_raw(1))))
+        advance(), size(cur());
+    return e;
+}
+
 // Whether the `<` at the current token opens <u, v>: a comma and then a `>` follow on the line, outside
 // any bracket opened after the `<`.
 bool Parser::ascii_inner_ahead() const {
@@ -1385,9 +1483,11 @@ ExprPtr Parser::parse_primary() {
     switch (t.kind) {
         case Tok::Number: {
             auto e = make(ExprKind::Number, t.span);
-            e->number = std::strtod(t.text.c_str(), nullptr);
+            e->number = t.text == "𝟙" ? 1.0 : std::strtod(t.text.c_str(), nullptr);
             e->text = t.text;
             advance();
+            if (e->text == "𝟙" && !((at(Tok::Sub) || at(Tok::Underscore)) && !cur().space_before))
+                fail(e->span, "𝟙 needs its size, as in 𝟙_3 (a vector of ones) or 𝟙_2,3 (a matrix of ones)");
             return e;
         }
         case Tok::Fraction: {
@@ -1400,6 +1500,12 @@ ExprPtr Parser::parse_primary() {
         }
         case Tok::Word:
         case Tok::Backtick: {
+            if (t.kind == Tok::Word && t.text == "sum") {  // I♥LA's ASCII ∑
+                Span s = advance().span;
+                if (!(at(Tok::Underscore) || at(Tok::Sub)) || cur().space_before)
+                    fail(s, "'sum' is I♥LA's ∑ and needs its index, as in sum_i x_i");
+                return parse_sum(s);
+            }
             if (t.kind == Tok::Word && is_keyword(t.text))
                 fail(t.span, fmt::format("unexpected keyword '{}' in an expression", t.text));
             auto e = make(ExprKind::Name, t.span);
@@ -1442,25 +1548,7 @@ ExprPtr Parser::parse_primary() {
         case Tok::Bar: return parse_delimited(ExprKind::Abs, Tok::Bar, advance().span, "the absolute value");
         case Tok::LFloor: return parse_delimited(ExprKind::Floor, Tok::RFloor, advance().span, "the floor");
         case Tok::LCeil: return parse_delimited(ExprKind::Ceil, Tok::RCeil, advance().span, "the ceiling");
-        case Tok::Sum: {
-            // ∑_i term: the summand is a multiplicative term, so ∑_i a_i b_i + c is (∑_i a_i b_i) + c.
-            Span s = advance().span;
-            std::string index;
-            if (at(Tok::Sub)) {
-                index = advance().text;
-            } else if (at(Tok::Underscore)) {
-                advance();
-                if (!is_name_token(cur())) fail(cur().span, fmt::format("expected the summation index after '∑_', found {}", describe(cur())));
-                index = advance().text;
-            } else {
-                fail(cur().span, "expected a summation index, as in ∑_i v_i");
-            }
-            ExprPtr body = parse_mult();
-            auto e = make(ExprKind::Sum, Span::join(s, body->span));
-            e->text = index;
-            e->args.push_back(std::move(body));
-            return e;
-        }
+        case Tok::Sum: return parse_sum(advance().span);
         case Tok::Sqrt: {
             Span s = advance().span;
             ExprPtr inner = parse_postfix();
