@@ -35,6 +35,10 @@ std::string type_name(const Type& t, std::string* why) {
                 return fail(fmt::format("{} is larger than GLSL's largest matrix (mat4)", t.str()));
             if (t.rows == t.cols) return fmt::format("mat{}", t.rows);
             return fmt::format("mat{}x{}", t.cols, t.rows);  // GLSL: columns x rows
+        case Type::Array: {  // a sequence: vec3[4]
+            std::string e = type_name(t.element(), why);
+            return e.empty() ? e : fmt::format("{}[{}]", e, t.count);
+        }
         default: return fail("invalid type");
     }
 }
@@ -54,6 +58,14 @@ std::string float_literal(double v) {
 
 std::string constant(const Type& t, const std::vector<double>& v) {
     if (t.is_scalar()) return float_literal(v[0]);
+    if (t.is_array()) {
+        std::vector<std::string> items;
+        size_t n = size_t(t.element().components());
+        for (int i = 0; i < t.count; ++i)
+            items.push_back(constant(t.element(), std::vector<double>(v.begin() + long(n * size_t(i)),
+                                                                      v.begin() + long(n * size_t(i + 1)))));
+        return fmt::format("{}({})", type_name(t), fmt::join(items, ", "));
+    }
     std::string tn = type_name(t);
     std::vector<std::string> parts;
     if (t.is_vector()) {
@@ -183,7 +195,8 @@ struct FunctionEmitter {
         std::string s = expr(v);
         const Instr& in = f.body[v];
         if (!var[v].empty() || in.op == Op::Param || in.op == Op::Builtin || in.op == Op::Call || in.op == Op::Construct ||
-            in.op == Op::Dot || in.op == Op::Cross || in.op == Op::Transpose || in.op == Op::Inverse)
+            in.op == Op::Dot || in.op == Op::Cross || in.op == Op::Transpose || in.op == Op::Inverse ||
+            in.op == Op::Element || in.op == Op::At)
             return s;
         return "(" + s + ")";
     }
@@ -298,6 +311,16 @@ struct FunctionEmitter {
                 return fmt::format("{}[{}][{}]", postfix_base(in.args[0]), in.aux % st.cols, in.aux / st.cols);
             }
             case Op::Column: return fmt::format("{}[{}]", postfix_base(in.args[0]), in.aux);
+            case Op::Element: return fmt::format("{}[{}]", postfix_base(in.args[0]), in.aux);
+            case Op::At: {  // indices rounded and clamped, as the evaluator does
+                const Type& st = f.body[in.args[0]].type;
+                auto index = [&](size_t k, int n) {
+                    return fmt::format("clamp(int(floor({} + 0.5)), 0, {})", expr(in.args[k]), n - 1);
+                };
+                if (st.is_matrix())  // GLSL indexes columns first
+                    return fmt::format("{}[{}][{}]", postfix_base(in.args[0]), index(2, st.cols), index(1, st.rows));
+                return fmt::format("{}[{}]", postfix_base(in.args[0]), index(1, st.is_array() ? st.count : st.rows));
+            }
             case Op::Row: {
                 const Type& st = f.body[in.args[0]].type;
                 if (st.rows == 1) return expr(in.args[0]);

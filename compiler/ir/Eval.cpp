@@ -147,6 +147,8 @@ Value run_builtin(const Instr& in, const std::vector<const Value*>& a) {
             for (size_t i = 0; i < r.v.size(); ++i) r.v[i] = a[0]->v[i] / s;
             return r;
         }
+        default:  // lowered to other operations (sema/Builtins.h): never an Op::Builtin
+            throw std::logic_error(std::string("evaluator: '") + b.name + "' has no built-in form");
     }
     return r;
 }
@@ -201,6 +203,28 @@ Value eval_instr(const Module& m, const Function& f, const Instr& in, const std:
             for (auto* x : a) r.v.insert(r.v.end(), x->v.begin(), x->v.end());
             break;
         case Op::Extract: r.v = {a[0]->v[size_t(in.aux)]}; break;
+        case Op::Element: {
+            size_t n = size_t(in.type.components());
+            r.v.assign(a[0]->v.begin() + long(n * size_t(in.aux)), a[0]->v.begin() + long(n * size_t(in.aux + 1)));
+            break;
+        }
+        case Op::At: {
+            // Indices are rounded and clamped to the range (a shader cannot stop; GLSL does the same).
+            const Type& t = a[0]->type;
+            auto index = [&](size_t k, int n) {
+                double x = std::floor(a[k]->v[0] + 0.5);
+                return size_t(std::isnan(x) ? 0 : std::min(std::max(x, 0.0), double(n - 1)));
+            };
+            if (t.is_array()) {
+                size_t n = size_t(in.type.components()), i = index(1, t.count);
+                r.v.assign(a[0]->v.begin() + long(n * i), a[0]->v.begin() + long(n * (i + 1)));
+            } else if (t.is_vector()) {
+                r.v = {a[0]->v[index(1, t.rows)]};
+            } else {
+                r.v = {a[0]->v[index(1, t.rows) * size_t(t.cols) + index(2, t.cols)]};
+            }
+            break;
+        }
         case Op::Row: {
             int c = a[0]->type.cols;
             r.v.assign(a[0]->v.begin() + in.aux * c, a[0]->v.begin() + (in.aux + 1) * c);
@@ -293,6 +317,15 @@ std::string format_value(const Value& v) {
             for (int c = 0; c < v.type.cols; ++c) s += (c ? " " : "") + num(v.v[size_t(r * v.type.cols + c)]);
         }
         return s + "]";
+    }
+    if (v.type.is_array()) {  // a sequence: {x_1, x_2, ...}
+        std::string s = "{";
+        size_t n = size_t(v.type.element().components());
+        for (int i = 0; i < v.type.count; ++i) {
+            Value e{v.type.element(), std::vector<double>(v.v.begin() + long(n * size_t(i)), v.v.begin() + long(n * size_t(i + 1)))};
+            s += (i ? ", " : "") + format_value(e);
+        }
+        return s + "}";
     }
     if (v.type.kind == Type::Bool) return v.v[0] != 0 ? "true" : "false";
     return num(v.v.empty() ? NAN : v.v[0]);

@@ -47,7 +47,10 @@ namespace iqc::ir {
     X(Call, -1)       /* aux: callee function index */                                  \
     X(Input, 0)       /* aux: 0 time (ℝ, seconds), 1 mouse (ℝ², [0,1]² of the view) */  \
     X(Loop, -1)       /* aux: body function; data: {lo}; args: hi, initial states, captures */    \
-    X(Member, 1)      /* aux: which result of a Loop */
+    X(Member, 1)      /* aux: which result of a Loop */                                  \
+    X(Element, 1)     /* aux: 0-based index of an array's element */                    \
+    X(At, -1)         /* args: an array, vector or matrix, then 0-based indices (values, \
+                         rounded; clamped to the range): a[i], v[i], M[i][j] */
 
 enum class Op : uint8_t {
 #define X(name, n) name,

@@ -105,9 +105,12 @@ struct Env {
                 for (size_t k = 0; k < x.indices.size(); ++k) {
                     const auto& it = x.indices[k];
                     if (!it.expr || it.expr->kind != ExprKind::Name || it.expr->text != index) continue;
-                    const Type& t = type_of(lower(*x.args[0]));
-                    if (t.is_vector()) n = t.rows;
-                    else if (t.is_matrix()) n = k == 0 ? t.rows : t.cols;
+                    Type t = type_of(lower(*x.args[0]));
+                    size_t pos = k;
+                    if (t.is_array() && k > 0) t = t.element(), pos = k - 1;  // x_i,j: a component of an element
+                    if (t.is_array()) n = t.count;
+                    else if (t.is_vector()) n = t.rows;
+                    else if (t.is_matrix()) n = pos == 0 ? t.rows : t.cols;
                 }
             for (const auto& a : x.args) walk(*a);
             for (const auto& r : x.rows)
@@ -212,6 +215,77 @@ struct Env {
         std::vector<const ir::Value*> ptrs;
         for (auto& x : vals) ptrs.push_back(&x);
         return ir::eval_instr(ctx.module, f, in, ptrs, {}, {}).v;
+    }
+
+    // A subscripted value (see Checker::check_index): constant subscripts extract, ∑ indices are constant
+    // while unrolling, ℤ values known only when running index with At (0-based, rounded and clamped).
+    ValueId index(const Expr& e) {
+        ValueId a = lower(*e.args[0]);
+        auto constant = [&](size_t k) {
+            const IndexItem& it = e.indices[k];
+            return it.value == -2 ? sum_index.at(it.expr->text) : it.value;
+        };
+        auto dynamic = [&](size_t k) { return e.indices[k].value == -3; };
+        auto position = [&](size_t k) {  // the 0-based position as a value
+            const IndexItem& it = e.indices[k];
+            if (!dynamic(k)) return f.scalar(double(constant(k)));
+            ValueId v = lower(*it.expr);
+            return it.zero_based ? v : emit(Op::Sub, Type::scalar(), {v, f.scalar(1)}, 0, it.span);
+        };
+        size_t first = 0;
+        if (type_of(a).is_array()) {
+            Type elem = type_of(a).element();
+            a = dynamic(0) ? emit(Op::At, elem, {a, position(0)}, 0, e.span) : emit(Op::Element, elem, {a}, constant(0), e.span);
+            if (e.indices.size() == 1) return a;
+            first = 1;
+        }
+        const Type t = type_of(a);
+        if (t.is_vector()) {
+            if (dynamic(first)) return emit(Op::At, Type::scalar(), {a, position(first)}, 0, e.span);
+            return emit(Op::Extract, Type::scalar(), {a}, constant(first), e.span);
+        }
+        if (dynamic(first) || dynamic(first + 1))
+            return emit(Op::At, Type::scalar(), {a, position(first), position(first + 1)}, 0, e.span);
+        int r = constant(first), c = constant(first + 1);
+        if (r < 0 && c < 0) return a;
+        if (r < 0) return emit(Op::Column, Type::vector(t.rows), {a}, c, e.span);
+        if (c < 0) return emit(Op::Row, Type::vector(t.cols), {a}, r, e.span);
+        return emit(Op::Extract, Type::scalar(), {a}, r * t.cols + c, e.span);
+    }
+
+    // An element-wise definition (see Checker::check_elementwise), unrolled over its indices.
+    ValueId elementwise(const Stmt& s) {
+        std::vector<int> ranges;
+        for (const auto& [letter, span] : s.elem_indices) ranges.push_back(sum_range(*s.value, letter));
+        const std::string& i = s.elem_indices[0].first;
+        std::vector<ValueId> items;
+        if (ranges.size() == 1) {
+            for (int k = 0; k < ranges[0]; ++k) {
+                sum_index[i] = k;
+                items.push_back(lower(*s.value));
+            }
+            sum_index.erase(i);
+            Type elem = scalar_or(type_of(items[0]));
+            Type t = elem.is_scalar() ? Type::vector(ranges[0]) : Type::array(elem, ranges[0]);
+            return items.size() == 1 ? items[0] : emit(Op::Construct, t, std::move(items), 0, s.span);
+        }
+        const std::string& j = s.elem_indices[1].first;
+        bool diagonal = i == j;
+        ValueId zero = diagonal ? f.scalar(0) : ValueId(-1);
+        for (int r = 0; r < ranges[0]; ++r)
+            for (int c = 0; c < ranges[1]; ++c) {
+                if (diagonal && r != c) {
+                    items.push_back(zero);
+                    continue;
+                }
+                sum_index[i] = r;
+                sum_index[j] = c;
+                items.push_back(lower(*s.value));
+            }
+        sum_index.erase(i);
+        sum_index.erase(j);
+        Type t = ranges[1] == 1 ? Type::vector(ranges[0]) : Type::matrix(ranges[0], ranges[1]);
+        return items.size() == 1 ? items[0] : emit(Op::Construct, t, std::move(items), 0, s.span);
     }
 
     // A^k for a whole k (the checker made sure), by repeated squaring; k < 0 powers the inverse.
@@ -407,18 +481,13 @@ struct Env {
                     if (parent) return capture(parent->lower(e));
                     return (e.resolved == R_SeqFirst ? seq_first : seq_last).at(e.aux);
                 }
-                ValueId a = lower(*e.args[0]);
-                const Type& t = type_of(a);
-                auto index = [&](size_t k) {
-                    const IndexItem& it = e.indices[k];
-                    return it.value == -2 ? sum_index.at(it.expr->text) : it.value;
-                };
-                if (t.is_vector()) return emit(Op::Extract, Type::scalar(), {a}, index(0), e.span);
-                int r = index(0), c = index(1);
-                if (r < 0 && c < 0) return a;
-                if (r < 0) return emit(Op::Column, Type::vector(t.rows), {a}, c, e.span);
-                if (c < 0) return emit(Op::Row, Type::vector(t.cols), {a}, r, e.span);
-                return emit(Op::Extract, Type::scalar(), {a}, r * t.cols + c, e.span);
+                return index(e);
+            }
+            case ExprKind::Sequence: {
+                std::vector<ValueId> items;
+                for (auto& a : e.args) items.push_back(lower(*a));
+                Type t = Type::array(scalar_or(type_of(items[0])), int(items.size()));
+                return emit(Op::Construct, t, std::move(items), 0, e.span);
             }
             case ExprKind::Vector: {
                 std::vector<ValueId> items;
@@ -666,7 +735,7 @@ int lower_module(const CheckedModule& m, const std::string& name, const std::str
                 if (g.leader == s) env.lower_group(g);
             continue;
         }
-        ValueId v = env.name_value(env.lower(*s->value), *s);
+        ValueId v = env.name_value(s->elem_indices.empty() ? env.lower(*s->value) : env.elementwise(*s), *s);
         if (s->kind == StmtKind::Assign) {
             env.values[s->name] = v;
             fn.outputs.push_back({s->name, v});

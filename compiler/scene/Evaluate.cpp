@@ -32,9 +32,10 @@ bool parse_value(const std::string& name, const std::string& text, SourceManager
     size_t before = d.error_count();
     auto m = lib.parse_check(src, "value", false);
     if (d.error_count() != before) return false;
-    if (!m->ret || !m->params.empty() || !m->primary_type.is_numeric()) {
+    if (!m->ret || !m->params.empty() || !(m->primary_type.is_numeric() || m->primary_type.is_array())) {
         d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
-                fmt::format("the value of '{}' must be a number, a vector (1, 2, 3) or a matrix [1 2; 3 4]", name));
+                fmt::format("the value of '{}' must be a number, a vector (1, 2, 3), a matrix [1 2; 3 4] or a sequence "
+                            "{{(1, 2), (3, 4)}}", name));
         return false;
     }
     ir::Module irm;

@@ -165,6 +165,8 @@ private:
     int sum_range(const Expr& body, const std::string& index);
 
     void collect_declarations();
+    void declare_sequence(const Decl& decl, const std::string& name, Span span, const std::string& index);
+    std::map<std::string, int> seq_lengths_;  // a sequence index letter -> the length of its sequences
     void collect_imports();
     void collect_statements();
     void order_statements();
@@ -181,6 +183,21 @@ private:
     Type check_binary(Expr& e);
     Type check_norm(Expr& e);
     Type check_block(Expr& e);
+    Type check_index(Expr& e);
+    Type check_sequence_literal(Expr& e);
+    Type check_elementwise(const Stmt& s);
+    bool zero_based(const Expr& x) const;
+    // Whether a sum, difference or product of two scalars is a whole number: a ℤ value with another, or
+    // with a whole-number literal (b + 1, 2k).
+    static bool integer_result(const Expr& e, const Type& a, const Type& b) {
+        auto whole = [](const Expr& x, const Type& t) {
+            return t.kind == Type::Integer || (x.kind == ExprKind::Number && x.number == std::floor(x.number) &&
+                                               std::fabs(x.number) < 1e9);
+        };
+        return (a.kind == Type::Integer || b.kind == Type::Integer) && whole(*e.args[0], a) && whole(*e.args[1], b);
+    }
+    bool allow_sequence_ = false;               // the Name being checked is subscripted (x_1): it may be a sequence
+    std::set<std::string> zero_based_values_;   // assigned ℤ values that count from 0 (c = b + 1, b ∈ ℤ index)
     // Whether the module (or the local function being checked) gives `name` a meaning of its own.
     bool defines(const std::string& name) const {
         return m_.find_param(name) >= 0 || assigns_.count(name) || decls_.count(name) ||
@@ -279,9 +296,10 @@ void Checker::collect_declarations() {
         for (auto& [name, span] : decl.names)
             if (auto it = opts_.given_types.find(name);
                 it != opts_.given_types.end() && (!decl.type.sym_rows.empty() || !decl.type.sym_cols.empty()))
-                bind_sizes(decl.type, it->second, name, span);
+                bind_sizes(decl.type, it->second.is_array() ? it->second.element() : it->second, name, span);
     for (auto& decl : m_.ast.decls) {
-        for (auto& [name, span] : decl.names) {
+        for (size_t ni = 0; ni < decl.names.size(); ++ni) {
+            auto& [name, span] = decl.names[ni];
             if (decl_spans_.count(name)) {
                 auto& e = d_.error(span, fmt::format("'{}' is declared twice", name));
                 Diagnostics::note(e, decl_spans_[name].second, "first declared here");
@@ -289,11 +307,16 @@ void Checker::collect_declarations() {
             }
             decl_spans_[name] = {name, span};
             decls_[name] = &decl;
+            if (ni < decl.indices.size() && !decl.indices[ni].empty()) {  // x_i ∈ ℝ³
+                declare_sequence(decl, name, span, decl.indices[ni]);
+                continue;
+            }
             if (fn_params.count(name) && !used_at_module.count(name)) continue;  // a local function's parameter
             ParamInfo p;
             p.name = name;
             p.span = span;
             p.description = decl.description;
+            p.zero_based = decl.zero_based;
             p.type = param_type(decl.type, name);
             if (!p.type.valid()) continue;
             int n = p.type.components();
@@ -341,6 +364,55 @@ void Checker::collect_declarations() {
             m_.params.push_back(std::move(p));
         }
     }
+}
+
+// x_i ∈ ℝ³: a sequence parameter. Its length comes from its value (iqc eval --set 'x={…}') or its default
+// {…}; sequences indexed by one letter have one length (I♥LA: the index ranges over them all).
+void Checker::declare_sequence(const Decl& decl, const std::string& name, Span span, const std::string& index) {
+    if (!decl.bounds.empty()) {
+        d_.error(Span::join(decl.bounds.front().span, decl.bounds.back().span),
+                 fmt::format("the sequence '{}' cannot have bounds (give its elements' type, such as ℝ³)", name));
+        return;
+    }
+    Type elem = param_type(decl.type, name);
+    if (!elem.valid()) return;
+    if (elem.is_scalar()) elem = Type::scalar();
+    ParamInfo p;
+    p.name = name;
+    p.span = span;
+    p.description = decl.description;
+    p.seq_index = index;
+    int count = 0;
+    if (auto it = opts_.given_types.find(name); it != opts_.given_types.end() && it->second.is_array()) {
+        count = it->second.count;
+    } else if (decl.default_value && decl.default_value->kind == ExprKind::Sequence) {
+        count = int(decl.default_value->args.size());
+        for (const auto& item : decl.default_value->args) {
+            auto v = const_eval(*item);
+            if (!v || int(v->size()) != elem.components()) {
+                d_.error(item->span, fmt::format("each element of '{}' must be a constant {}", name, elem.str()));
+                return;
+            }
+            p.value.insert(p.value.end(), v->begin(), v->end());
+        }
+        p.has_default = true;
+    } else if (decl.default_value) {
+        d_.error(decl.default_value->span, fmt::format("the default of the sequence '{}' lists its elements: {{x_1, x_2, …}}", name));
+        return;
+    } else {
+        d_.error(span, fmt::format("the length of the sequence '{}' is not known: give its elements as a default "
+                                   "({}_{} ∈ {} default = {{…}}) or a value (iqc eval --set '{}={{…}}')", name, name, index,
+                                   elem.str(), name));
+        return;
+    }
+    if (auto [it, fresh] = seq_lengths_.emplace(index, count); !fresh && it->second != count) {
+        d_.error(span, fmt::format("'{}' has {} elements but another sequence indexed by {} has {}", name, count, index,
+                                   it->second));
+        return;
+    }
+    p.type = Type::array(elem, count);
+    if (p.value.empty()) p.value.assign(size_t(p.type.components()), 0.0);
+    m_.params.push_back(std::move(p));
 }
 
 void Checker::collect_imports() {
@@ -408,6 +480,9 @@ void Checker::collect_statements() {
                                                     ? fmt::format("'{}' is a declared parameter and cannot be assigned", s.name)
                                                     : fmt::format("'{}' is assigned twice", s.name));
                 Diagnostics::note(e, it->second, "first defined here");
+                if (!s.elem_indices.empty())
+                    Diagnostics::note(e, s.name_span, "an element-wise definition defines the whole of its name; changing "
+                                                      "some entries of a value defined elsewhere is not supported");
                 continue;
             }
             defined[s.name] = s.name_span;
@@ -911,6 +986,7 @@ void Checker::note_operands(Diagnostic& d, const Expr& e) {
 
 Type Checker::mul_type(Expr& e, const Type& a, const Type& b, bool dot) {
     e.resolved = R_Mul;
+    if (a.is_scalar() && b.is_scalar() && integer_result(e, a, b)) return Type::integer();
     if (a.is_scalar()) return b.is_scalar() ? Type::scalar() : b;
     if (b.is_scalar()) return a;
     if (a.is_vector() && b.is_vector()) {
@@ -950,7 +1026,8 @@ Type Checker::check_binary(Expr& e) {
         case BinOp::Add:
         case BinOp::Sub:
             if (!numeric(a, *e.args[0]) || !numeric(b, *e.args[1])) return {};
-            if (a.is_scalar() && b.is_scalar()) return Type::scalar();
+            if (a.is_scalar() && b.is_scalar())  // ℤ ± ℤ stays ℤ (it may be a subscript: a_(b+1))
+                return integer_result(e, a, b) ? Type::integer() : Type::scalar();
             if (a != b) {
                 if (e.op == BinOp::Add) note_operands(d_.error(e.span, fmt::format("cannot add {} and {}", a.str(), b.str())), e);
                 else note_operands(d_.error(e.span, fmt::format("cannot subtract {} from {}", b.str(), a.str())), e);
@@ -1155,13 +1232,20 @@ Type Checker::check(Expr& e) {
     Type t;
     switch (e.kind) {
         case ExprKind::Number: t = Type::scalar(); break;
-        case ExprKind::Name: t = check_name(e); break;
+        case ExprKind::Name:
+            t = check_name(e);
+            if (t.is_array() && !allow_sequence_) {
+                d_.error(e.span, fmt::format("'{}' is a sequence: use an element, such as {}_1, or {}_i inside ∑_i", e.text,
+                                             e.text, e.text));
+                t = {};
+            }
+            break;
         case ExprKind::Call: t = check_call(e); break;
         case ExprKind::Binary: t = check_binary(e); break;
         case ExprKind::Negate: {
             Type a = check(*e.args[0]);
             if (a.valid() && !a.is_numeric()) d_.error(e.span, "a condition cannot be negated with '-'");
-            else t = a.is_scalar() ? Type::scalar() : a;
+            else t = a.kind == Type::Integer ? a : a.is_scalar() ? Type::scalar() : a;
             break;
         }
         case ExprKind::Power: {
@@ -1211,81 +1295,8 @@ Type Checker::check(Expr& e) {
             break;
         }
         case ExprKind::Block: t = check_block(e); break;
-        case ExprKind::Index: {
-            if (e.args[0]->kind == ExprKind::Name && e.args[0]->text == "I" && !defines("I")) {  // I_n: the identity
-                t = check_block(e);
-                break;
-            }
-            if (e.args[0]->kind == ExprKind::Name && m_.find_sequence(e.args[0]->text) >= 0 &&
-                !(scope_ && scope_->locals.count(e.args[0]->text))) {
-                t = check_sequence_index(e);
-                break;
-            }
-            Type a = check(*e.args[0]);
-            if (!a.valid()) break;
-            std::vector<int> idx;
-            bool ok = true;
-            for (auto& it : e.indices) {
-                if (!it.expr) {
-                    it.value = -1;
-                    idx.push_back(-1);
-                    continue;
-                }
-                if (it.expr->kind == ExprKind::Name &&
-                    std::any_of(sums_.begin(), sums_.end(), [&](auto& s) { return s.first == it.expr->text; })) {
-                    check(*it.expr);
-                    it.value = -2;  // bound by the enclosing ∑ (its range fits: see sum_range)
-                    idx.push_back(0);
-                    continue;
-                }
-                auto c = const_eval(*it.expr);
-                if (!c || c->size() != 1 || (*c)[0] != std::floor((*c)[0])) {
-                    d_.error(it.span, "a subscript must be a whole number such as p_1 (or * for a whole row or column)");
-                    ok = false;
-                    continue;
-                }
-                it.value = int((*c)[0]) - 1;
-                if (it.value < 0) {
-                    d_.error(it.span, fmt::format("subscript {} is out of range: subscripts start at 1", int((*c)[0])));
-                    ok = false;
-                    continue;
-                }
-                idx.push_back(it.value);
-            }
-            if (!ok) break;
-            auto range_error = [&](const IndexItem& it, int size, const char* what) {
-                d_.error(it.span, fmt::format("subscript {} is out of range: {} has {} {} (subscripts start at 1)",
-                                              it.value + 1, a.str(), size, what));
-            };
-            if (a.is_vector()) {
-                if (idx.size() != 1 || idx[0] < 0) {
-                    d_.error(e.span, fmt::format("a vector ({}) takes one subscript", a.str()));
-                } else if (idx[0] >= a.rows) {
-                    range_error(e.indices[0], a.rows, "components");
-                } else {
-                    t = Type::scalar();
-                }
-            } else if (a.is_matrix()) {
-                if (idx.size() != 2) {
-                    d_.error(e.span, fmt::format("a matrix ({}) takes two subscripts, as in A_2,3 or A_(2,3)", a.str()));
-                } else if (idx[0] >= a.rows) {
-                    range_error(e.indices[0], a.rows, "rows");
-                } else if (idx[1] >= a.cols) {
-                    range_error(e.indices[1], a.cols, "columns");
-                } else if (idx[0] < 0 && idx[1] < 0) {
-                    t = a;
-                } else if (idx[0] < 0) {
-                    t = Type::vector(a.rows);
-                } else if (idx[1] < 0) {
-                    t = Type::vector(a.cols);
-                } else {
-                    t = Type::scalar();
-                }
-            } else {
-                d_.error(e.span, fmt::format("cannot subscript {}", a.str()));
-            }
-            break;
-        }
+        case ExprKind::Index: t = check_index(e); break;
+        case ExprKind::Sequence: t = check_sequence_literal(e); break;
         case ExprKind::Vector: t = check_vector_items(e); break;
         case ExprKind::Matrix: {
             // Entries may be scalars, vectors (columns) or matrices (blocks); 0, 1 and I are blocks sized
@@ -1447,6 +1458,182 @@ Type Checker::check(Expr& e) {
     return t;
 }
 
+// A subscripted value: p_1 (a component), A_2,3 / A_2,* / A_*,1 (an entry, a row, a column), x_1 or x_i (an
+// element of a sequence, then optionally its component: x_i,2). A subscript is a whole number, an enclosing
+// ∑'s index, or a ℤ value known only when running (a_b, b ∈ ℤ; counted from 0 for `ℤ index`).
+Type Checker::check_index(Expr& e) {
+    if (e.args[0]->kind == ExprKind::Name && e.args[0]->text == "I" && !defines("I")) return check_block(e);  // I_n
+    if (e.args[0]->kind == ExprKind::Name && m_.find_sequence(e.args[0]->text) >= 0 &&
+        !(scope_ && scope_->locals.count(e.args[0]->text)))
+        return check_sequence_index(e);
+    allow_sequence_ = e.args[0]->kind == ExprKind::Name;
+    Type a = check(*e.args[0]);
+    allow_sequence_ = false;
+    if (!a.valid()) return {};
+    std::vector<int> idx;
+    bool ok = true;
+    for (auto& it : e.indices) {
+        if (!it.expr) {
+            it.value = -1;
+            idx.push_back(-1);
+            continue;
+        }
+        if (it.expr->kind == ExprKind::Name &&
+            std::any_of(sums_.begin(), sums_.end(), [&](auto& s) { return s.first == it.expr->text; })) {
+            check(*it.expr);
+            it.value = -2;  // bound by the enclosing ∑ (its range fits: see sum_range)
+            idx.push_back(0);
+            continue;
+        }
+        auto c = const_eval(*it.expr);
+        if (!c) {
+            Type it_type = check(*it.expr);
+            if (it_type.kind == Type::Integer) {  // known when running: a_b with b ∈ ℤ
+                it.value = -3;
+                it.zero_based = zero_based(*it.expr);
+                idx.push_back(0);
+                continue;
+            }
+            if (it_type.valid())
+                d_.error(it.span, fmt::format("a subscript must be a whole number (p_1) or a ℤ value (p_k with k ∈ ℤ), not {}",
+                                              it_type.str()));
+            ok = false;
+            continue;
+        }
+        if (c->size() != 1 || (*c)[0] != std::floor((*c)[0])) {
+            d_.error(it.span, "a subscript must be a whole number such as p_1 (or * for a whole row or column)");
+            ok = false;
+            continue;
+        }
+        it.value = int((*c)[0]) - 1;
+        if (it.value < 0) {
+            d_.error(it.span, fmt::format("subscript {} is out of range: subscripts start at 1", int((*c)[0])));
+            ok = false;
+            continue;
+        }
+        idx.push_back(it.value);
+    }
+    if (!ok) return {};
+    size_t first = 0;
+    Type base = a;
+    if (a.is_array()) {  // a sequence: its first subscript picks the element
+        if (idx[0] == -1) {
+            d_.error(e.indices[0].span, fmt::format("an element of the sequence '{}' is chosen by a subscript, not *", e.args[0]->text));
+            return {};
+        }
+        if (e.indices[0].value >= a.count) {
+            d_.error(e.indices[0].span, fmt::format("subscript {} is out of range: the sequence '{}' has {} elements (subscripts "
+                                                    "start at 1)", e.indices[0].value + 1, e.args[0]->text, a.count));
+            return {};
+        }
+        if (e.indices.size() == 1) return a.element();
+        base = a.element();
+        first = 1;
+    }
+    size_t n = e.indices.size() - first;
+    auto value = [&](size_t k) { return idx[first + k]; };
+    auto dynamic = [&](size_t k) { return e.indices[first + k].value == -3; };
+    auto range_error = [&](size_t k, int size, const char* what) {
+        d_.error(e.indices[first + k].span, fmt::format("subscript {} is out of range: {} has {} {} (subscripts start at 1)",
+                                                        e.indices[first + k].value + 1, base.str(), size, what));
+    };
+    if (base.is_vector()) {
+        if (n != 1 || value(0) < 0) d_.error(e.span, fmt::format("a vector ({}) takes one subscript", base.str()));
+        else if (value(0) >= base.rows) range_error(0, base.rows, "components");
+        else return Type::scalar();
+        return {};
+    }
+    if (base.is_matrix()) {
+        if (n != 2) {
+            d_.error(e.span, fmt::format("a matrix ({}) takes two subscripts, as in A_2,3 or A_(2,3)", base.str()));
+        } else if (value(0) >= base.rows) {
+            range_error(0, base.rows, "rows");
+        } else if (value(1) >= base.cols) {
+            range_error(1, base.cols, "columns");
+        } else if ((dynamic(0) || dynamic(1)) && (value(0) < 0 || value(1) < 0)) {
+            d_.error(e.span, "a row or a column (A_k,*) is chosen by a whole number, not a ℤ value known only when running");
+        } else if (value(0) < 0 && value(1) < 0) {
+            return base;
+        } else if (value(0) < 0) {
+            return Type::vector(base.rows);
+        } else if (value(1) < 0) {
+            return Type::vector(base.cols);
+        } else {
+            return Type::scalar();
+        }
+        return {};
+    }
+    d_.error(e.span, fmt::format("cannot subscript {}", base.str()));
+    return {};
+}
+
+// {a, b, c}: a sequence of values of one type.
+Type Checker::check_sequence_literal(Expr& e) {
+    Type elem;
+    for (auto& item : e.args) {
+        Type t = check(*item);
+        if (!t.valid()) return {};
+        if (t.is_scalar()) t = Type::scalar();
+        if (!t.is_numeric()) {
+            d_.error(item->span, fmt::format("a sequence's elements are numbers, vectors or matrices, not {}", t.str()));
+            return {};
+        }
+        if (elem.valid() && elem != t) {
+            d_.error(item->span, fmt::format("the elements of a sequence must have one type: {} and {}", elem.str(), t.str()));
+            return {};
+        }
+        elem = t;
+    }
+    return Type::array(elem, int(e.args.size()));
+}
+
+// Whether a ℤ subscript counts from 0: an I♥LA `ℤ index` (b ∈ ℤ index), or one plus or minus a count
+// (b + 1); the difference of two indices is a count again.
+bool Checker::zero_based(const Expr& x) const {
+    switch (x.kind) {
+        case ExprKind::Name:
+            if (int pi = m_.find_param(x.text); pi >= 0 && (x.resolved == R_Param || x.resolved == R_Capture))
+                return m_.params[size_t(pi)].zero_based;
+            return x.resolved == R_Value && zero_based_values_.count(x.text);
+        case ExprKind::Binary:
+            if (x.op == BinOp::Add) return zero_based(*x.args[0]) != zero_based(*x.args[1]);
+            if (x.op == BinOp::Sub) return zero_based(*x.args[0]) && !zero_based(*x.args[1]);
+            return false;
+        default: return false;
+    }
+}
+
+// An element-wise definition: q_i = p_i² (a vector, or a sequence when the elements are vectors or
+// matrices), B_ij = A_ij A_ij (a matrix), D_ii = v_i (a diagonal matrix). Each index runs over the size of
+// what it subscripts on the right side.
+Type Checker::check_elementwise(const Stmt& s) {
+    std::vector<int> ranges;
+    for (const auto& [letter, span] : s.elem_indices) {
+        int n = sum_range(*s.value, letter);
+        if (n == 0)
+            d_.error(span, fmt::format("cannot tell the range of {}: subscript a vector, a matrix or a sequence with {} on "
+                                       "the right side", letter, letter));
+        if (n <= 0) return {};
+        ranges.push_back(n);
+    }
+    size_t pushed = 0;
+    for (size_t k = 0; k < ranges.size(); ++k)
+        if (k == 0 || s.elem_indices[k].first != s.elem_indices[0].first) sums_.push_back({s.elem_indices[k].first, ranges[k]}), ++pushed;
+    Type b = check(*s.value);
+    sums_.resize(sums_.size() - pushed);
+    if (!b.valid()) return {};
+    if (!b.is_numeric()) {
+        d_.error(s.value->span, "an element-wise definition needs numbers");
+        return {};
+    }
+    if (ranges.size() == 1) return b.is_scalar() ? Type::vector(ranges[0]) : Type::array(b, ranges[0]);
+    if (!b.is_scalar()) {
+        d_.error(s.value->span, fmt::format("the entries of the matrix {} must be numbers, not {}", s.name, b.str()));
+        return {};
+    }
+    return ranges[1] == 1 ? Type::vector(ranges[0]) : Type::matrix(ranges[0], ranges[1]);
+}
+
 // (a, b, ...): scalars and vectors concatenated. The items were already checked when they carry a type.
 Type Checker::check_vector_items(Expr& e) {
     int n = 0;
@@ -1541,10 +1728,15 @@ int Checker::sum_range(const Expr& body, const std::string& index) {
                 const auto& it = x.indices[k];
                 if (!it.expr || it.expr->kind != ExprKind::Name || it.expr->text != index) continue;
                 // The size of the subscripted thing: check it (its type does not depend on the index).
+                allow_sequence_ = x.args[0]->kind == ExprKind::Name;
                 Type bt = check(const_cast<Expr&>(*x.args[0]));
+                allow_sequence_ = false;
+                size_t pos = k;
+                if (bt.is_array() && k > 0) bt = bt.element(), pos = k - 1;  // x_i,j: a component of an element
                 int size = 0;
-                if (bt.is_vector()) size = bt.rows;
-                else if (bt.is_matrix()) size = k == 0 ? bt.rows : bt.cols;
+                if (bt.is_array()) size = bt.count;
+                else if (bt.is_vector()) size = bt.rows;
+                else if (bt.is_matrix()) size = pos == 0 ? bt.rows : bt.cols;
                 if (size == 0) continue;
                 if (n && n != size && !bad) {
                     d_.error(it.span, fmt::format("∑_{} runs over {} here but over {} elsewhere in the sum", index, size, n));
@@ -1575,8 +1767,11 @@ void Checker::run() {
                 if (g.leader == s) check_group(g);
             continue;
         }
-        Type t = check(*s->value);
-        if (s->kind == StmtKind::Assign && t.valid()) m_.values[s->name] = t;
+        Type t = s->elem_indices.empty() ? check(*s->value) : check_elementwise(*s);
+        if (s->kind == StmtKind::Assign && t.valid()) {
+            m_.values[s->name] = t;
+            if (t.kind == Type::Integer && zero_based(*s->value)) zero_based_values_.insert(s->name);
+        }
     }
     for (auto& f : m_.functions) check_function(f, f.stmt->name_span);
     // Outputs the module kind requires.

@@ -65,6 +65,8 @@ struct ParamInfo {
     std::vector<double> value;   // default: given, else the bounds' midpoint, else 0
     bool has_default = false;
     std::string description;
+    std::string seq_index;    // a sequence x_i ∈ ℝ³: its index letter (the type is then an array)
+    bool zero_based = false;  // `b ∈ ℤ index`: an index counting from 0
 };
 
 struct CheckedModule;

@@ -36,6 +36,7 @@ enum class ExprKind {
     Sum,        // ∑_text args[0]: a sum over the index `text` (range from the sizes it subscripts)
     Inner,      // ⟨args[0], args[1]⟩ (or <a, b>), with a subscript args[2]: ⟨u, v⟩_M = vᵀ M u
     Block,      // a sized block: text "0" (zeros) or "1" (ones, also 𝟙); indices: its sizes (0_2,3, 1_n, 𝟙₃)
+    Sequence,   // {a, b, c}: a sequence literal (an iqc extension, for values and defaults of x_i ∈ ℝ³)
 };
 
 enum class BinOp {
@@ -62,7 +63,10 @@ using ExprPtr = std::unique_ptr<Expr>;
 struct IndexItem {
     ExprPtr expr;     // null for `*`
     Span span;
-    int value = 0;    // 0-based index, filled by the checker (-1 for `*`)
+    // Filled by the checker: the 0-based index; -1 for `*`, -2 for an enclosing ∑'s (or an element-wise
+    // definition's) index, -3 for a ℤ value known only when running (a_b with b ∈ ℤ).
+    int value = 0;
+    bool zero_based = false;  // -3: the value is an I♥LA `ℤ index` (counts from 0), not a position (from 1)
 };
 
 struct Expr {
@@ -103,7 +107,10 @@ struct Interval {
 
 struct Decl {
     std::vector<std::pair<std::string, Span>> names;
+    // Per name: the index of a sequence (`x_i ∈ ℝ³` declares the sequence x, indexed by i), else "".
+    std::vector<std::string> indices;
     TypeSpec type;
+    bool zero_based = false;  // `b ∈ ℤ index`: I♥LA's index type, which counts from 0
     std::vector<Interval> bounds;  // `[a,b]x[c,d]`: one interval per component (type is then derived)
     ExprPtr default_value;
     Span default_span;
@@ -126,6 +133,9 @@ struct Stmt {
     std::string from;                                   // Import: module
     Span from_span;
     ExprPtr index;                  // SeqInit / Recurrence: the subscript on the left
+    // Assign with subscripts on the left: an element-wise definition, q_i = p_i² or B_ij = A_ij A_ij (one or
+    // two index letters; the same letter twice, D_ii, defines a diagonal matrix).
+    std::vector<std::pair<std::string, Span>> elem_indices;
     std::string loop_var;           // Recurrence: the index variable
     Span loop_var_span;
     ExprPtr range_lo, range_hi;     // Recurrence: var ∈ lo..hi

@@ -103,9 +103,19 @@ std::set<std::string> prescan(const std::vector<Token>& toks) {
             while (k < line_end && is_name_token(toks[k])) {
                 std::string n = toks[k].text;
                 if (k + 2 < line_end && toks[k + 1].kind == Tok::Underscore && !toks[k + 1].space_before &&
-                    (is_name_token(toks[k + 2]) || toks[k + 2].kind == Tok::Number) && !toks[k + 2].space_before &&
-                    !sequences.count(n)) {
-                    names.push_back(n);
+                    toks[k + 2].kind == Tok::Word && !toks[k + 2].space_before) {
+                    // x_i ∈ ℝ³ (a sequence), q_i = … or B_i,j = … (element-wise): the name is x, q or B.
+                    k += 2;
+                    if (k + 2 < line_end && toks[k + 1].kind == Tok::Comma && !toks[k + 1].space_before &&
+                        toks[k + 2].kind == Tok::Word && !toks[k + 2].space_before)
+                        k += 2;
+                } else if (k + 1 < line_end && toks[k + 1].kind == Tok::Sub && !toks[k + 1].space_before &&
+                           !std::isdigit(static_cast<unsigned char>(toks[k + 1].text[0]))) {
+                    k += 1;  // xᵢ
+                } else if (k + 2 < line_end && toks[k + 1].kind == Tok::Underscore && !toks[k + 1].space_before &&
+                           (toks[k + 2].kind == Tok::Backtick || toks[k + 2].kind == Tok::Number) &&
+                           !toks[k + 2].space_before && !sequences.count(n)) {
+                    names.push_back(n);  // x_1 = … and x_`max` ∈ ℝ are names of their own (an iqc extension)
                     n += "_" + toks[k + 2].text;
                     k += 2;
                 }
@@ -262,6 +272,13 @@ private:
         }
     }
     Span prev_span() const { return toks_[pos_ > 0 ? pos_ - 1 : 0].span; }
+    // The letter run the current token starts (a word split into letters, or the token itself).
+    Span word_span() const { const Token& t = toks_[pos_]; return t.word.end > t.word.begin ? t.word : t.span; }
+    bool word_is(const char* w) const { return sm_.slice(word_span()) == w; }
+    void skip_word() {
+        Span w = word_span();
+        while (toks_[pos_].kind == Tok::Word && toks_[pos_].span.begin >= w.begin && toks_[pos_].span.end <= w.end) ++pos_;
+    }
     void skip_line() {
         while (toks_[pos_].kind != Tok::Newline && toks_[pos_].kind != Tok::End) ++pos_;
     }
@@ -296,6 +313,7 @@ private:
     Stmt parse_statement();
     bool indexed_assignment();
     Stmt parse_indexed_assignment(std::pair<std::string, Span> name, Span start);
+    bool elementwise_indices(Stmt& s);
     Decl parse_decl();
     TypeSpec parse_type();
     std::vector<std::pair<std::string, Span>> parse_name_list();
@@ -317,6 +335,7 @@ private:
     ExprPtr parse_primary();
     ExprPtr parse_matrix(Span open);
     ExprPtr parse_piecewise(Span open);
+    ExprPtr parse_sequence_literal(Span open, ExprPtr first);
     ExprPtr parse_inner(const Token& open);
     ExprPtr parse_sum(Span start);
     ExprPtr parse_sized_block(ExprPtr symbol);
@@ -362,12 +381,16 @@ bool Parser::line_is_decl() {
     while (true) {
         if (!is_name_token(toks_[k])) return false;
         ++k;
-        if (toks_[k].kind == Tok::Underscore && k + 1 < toks_.size() && is_name_token(toks_[k + 1]) &&
-            known_.count(toks_[k - 1].text + "_" + toks_[k + 1].text))
+        // x_i (a sequence), x_1 and `k_d` (names): the subscript is part of the declared name.
+        if (toks_[k].kind == Tok::Underscore && !toks_[k].space_before && k + 1 < toks_.size() &&
+            (is_name_token(toks_[k + 1]) || toks_[k + 1].kind == Tok::Number) && !toks_[k + 1].space_before) {
             k += 2;
-        else if (toks_[k].kind == Tok::Underscore && k + 1 < toks_.size() && toks_[k + 1].kind == Tok::Number &&
-                 known_.count(toks_[k - 1].text + "_" + toks_[k + 1].text))
-            k += 2;
+            while (toks_[k].kind == Tok::Word && toks_[k].word.end > toks_[k].word.begin &&
+                   toks_[k].word.begin == toks_[k - 1].word.begin)
+                ++k;  // the other letters of a word such as `ij`
+        } else if (toks_[k].kind == Tok::Sub && !toks_[k].space_before) {
+            ++k;
+        }
         if (toks_[k].kind == Tok::Comma) { ++k; continue; }
         break;
     }
@@ -490,7 +513,32 @@ TypeSpec Parser::parse_type() {
 Decl Parser::parse_decl() {
     Decl d;
     Span start = cur().span;
-    d.names = parse_name_list();
+    while (true) {
+        auto name = parse_name();  // x_1 and `k_d` are names; x_i is the sequence x with its index i
+        std::string index;
+        if (at(Tok::Underscore) && !cur().space_before && is_name_token(peek_raw(1)) && !peek_raw(1).space_before) {
+            advance();
+            const Token& t = advance();
+            Span sub = t.span;
+            index = t.text;
+            if (t.word.end > t.word.begin) {
+                sub = t.word;
+                auto& e = diags_.error(Span::join(name.second, sub),
+                                       fmt::format("the sequence '{}' needs a one-letter index, not '{}'", name.first,
+                                                   std::string(sm_.slice(t.word))));
+                Diagnostics::note(e, name.second, fmt::format("for a parameter named {}_{}, write it in backticks: `{}_{}`",
+                                                              name.first, sm_.slice(t.word), name.first, sm_.slice(t.word)));
+                throw Bail{};
+            }
+            name.second = Span::join(name.second, sub);
+        } else if (at(Tok::Sub) && !cur().space_before && !std::isdigit(static_cast<unsigned char>(cur().text[0]))) {
+            index = cur().text;
+            name.second = Span::join(name.second, advance().span);
+        }
+        d.names.push_back(name);
+        d.indices.push_back(index);
+        if (!accept(Tok::Comma)) break;
+    }
     if (!(accept(Tok::In) || accept(Tok::Colon) || (at_kw("in") && (advance(), true))))
         fail(cur().span, fmt::format("expected '∈' in the declaration, found {}", describe(cur())));
     if (at(Tok::LBracket)) {
@@ -515,6 +563,16 @@ Decl Parser::parse_decl() {
         d.type.span = Span::join(d.bounds.front().span, d.bounds.back().span);
     } else {
         d.type = parse_type();
+        // I♥LA's attributes: `b ∈ ℤ index` (an index counting from 0) and `A ∈ ℝ^(n×n) sparse` (a storage hint:
+        // the values are the same, so iqc ignores it).
+        while (at(Tok::Word) && (word_is("index") || word_is("sparse"))) {
+            if (word_is("index")) {
+                if (d.type.kind != TypeSpec::Integer)
+                    fail(word_span(), "only an integer can be an index: write 'b ∈ ℤ index'");
+                d.zero_based = true;
+            }
+            skip_word();
+        }
     }
     if (at_kw("default")) {
         Span ds = advance().span;
@@ -604,7 +662,15 @@ bool Parser::indexed_assignment() {
     size_t k = pos_;
     if (toks_[k].kind == Tok::Sub) return toks_[k + 1].kind == Tok::Eq;
     ++k;  // '_'
-    if (toks_[k].kind == Tok::Number || is_name_token(toks_[k])) return toks_[k + 1].kind == Tok::Eq;
+    if (toks_[k].kind == Tok::Number) return toks_[k + 1].kind == Tok::Eq;
+    if (is_name_token(toks_[k])) {  // q_i =, B_ij =, B_i,j =
+        ++k;
+        while (toks_[k].kind == Tok::Word && toks_[k].word.end > toks_[k].word.begin &&
+               toks_[k].word.begin == toks_[k - 1].word.begin)
+            ++k;
+        if (toks_[k].kind == Tok::Comma && !toks_[k].space_before && is_name_token(toks_[k + 1])) k += 2;
+        return toks_[k].kind == Tok::Eq;
+    }
     if (toks_[k].kind != Tok::LParen) return false;
     int depth = 0;
     for (; toks_[k].kind != Tok::Newline && toks_[k].kind != Tok::End; ++k) {
@@ -614,12 +680,55 @@ bool Parser::indexed_assignment() {
     return false;
 }
 
+// elementwise := NAME (_ LETTER [LETTER] | _ LETTER , LETTER | _( LETTER , LETTER ) | SUBSCRIPT) = expr
+//   q_i = p_i², B_ij = A_ij A_ij: the left side's subscripts are letters (a number starts a sequence).
+bool Parser::elementwise_indices(Stmt& s) {
+    size_t k = pos_;
+    std::vector<std::pair<std::string, Span>> letters;
+    auto letter = [&](const Token& t) { return t.kind == Tok::Word && letter_units(t.text).size() == 1; };
+    if (toks_[k].kind == Tok::Sub) {
+        if (std::isdigit(static_cast<unsigned char>(toks_[k].text[0]))) return false;
+        for (size_t i = 0; i < toks_[k].text.size(); ++i) letters.push_back({toks_[k].text.substr(i, 1), toks_[k].span});
+        ++k;
+    } else if (k + 5 < toks_.size() && toks_[k + 1].kind == Tok::LParen && letter(toks_[k + 2]) && toks_[k + 3].kind == Tok::Comma &&
+               letter(toks_[k + 4]) && toks_[k + 5].kind == Tok::RParen) {
+        letters = {{toks_[k + 2].text, toks_[k + 2].span}, {toks_[k + 4].text, toks_[k + 4].span}};
+        k += 6;
+    } else if (letter(toks_[k + 1])) {
+        letters.push_back({toks_[k + 1].text, toks_[k + 1].span});
+        k += 2;
+        while (letter(toks_[k]) && toks_[k].word.end > toks_[k].word.begin && toks_[k].word.begin == toks_[k - 1].word.begin)
+            letters.push_back({toks_[k].text, toks_[k].span}), ++k;
+        if (toks_[k].kind == Tok::Comma && !toks_[k].space_before && letter(toks_[k + 1]))
+            letters.push_back({toks_[k + 1].text, toks_[k + 1].span}), k += 2;
+    }
+    if (letters.empty() || toks_[k].kind != Tok::Eq) return false;
+    if (letters.size() > 2)
+        fail(Span::join(letters.front().second, letters.back().second),
+             fmt::format("an element-wise definition has one subscript (a vector or a sequence) or two (a matrix), not {}",
+                         letters.size()));
+    pos_ = k;
+    s.elem_indices = std::move(letters);
+    return true;
+}
+
 // sequence := NAME _ INDEX = expr                         (its first element, e.g. z_1 = p)
 //           | NAME _ ( VAR + 1 ) = expr for VAR (∈ | = | in) lo .. hi   (the recurrence)
 Stmt Parser::parse_indexed_assignment(std::pair<std::string, Span> name, Span start) {
     Stmt s;
     s.name = name.first;
     s.name_span = name.second;
+    if (elementwise_indices(s)) {
+        expect(Tok::Eq, "");
+        s.kind = StmtKind::Assign;
+        s.value = parse_expr();
+        s.span = Span::join(start, s.value->span);
+        if (at_kw("for"))
+            fail(cur().span, fmt::format("a recurrence defines the next element from the current one: write {}_({}+1) = … "
+                                         "for {} ∈ 1..N", s.name, s.elem_indices[0].first, s.elem_indices[0].first));
+        s.source_line = statement_text(s.span);
+        return s;
+    }
     if (at(Tok::Sub)) {
         const Token& t = advance();
         s.index = make(std::isdigit(static_cast<unsigned char>(t.text[0])) ? ExprKind::Number : ExprKind::Name, t.span);
@@ -1084,7 +1193,7 @@ ExprPtr Parser::parse_postfix(bool exponent) {
                 bool index = n.kind == Tok::Number || n.kind == Tok::Star ||
                              (is_name_token(n) && !((after.kind == Tok::Underscore || after.kind == Tok::Sub ||
                                                      after.kind == Tok::LParen) && !after.space_before));
-                if (!index || idx->indices.size() >= 2) break;
+                if (!index || idx->indices.size() >= 3) break;  // A_i,2,3: an entry of a sequence's matrix
                 advance();
                 parse_index();
             }
@@ -1440,6 +1549,22 @@ void Parser::parse_norm_subscript(Expr& norm) {
     norm.args.push_back(std::move(sub));
 }
 
+// sequence_literal := { expr {, expr} }      (after the first item; iqc's value of a sequence x_i ∈ ℝ³)
+ExprPtr Parser::parse_sequence_literal(Span open, ExprPtr first) {
+    ctx_.back() = Ctx::Paren;
+    auto e = make(ExprKind::Sequence, open);
+    e->args.push_back(std::move(first));
+    while (accept(Tok::Comma)) e->args.push_back(parse_expr());
+    ctx_.pop_back();
+    if (!at(Tok::RBrace)) {
+        auto& d = diags_.error(cur().span, fmt::format("expected '}}' to close the sequence, found {}", describe(cur())));
+        Diagnostics::note(d, open, "opened here");
+        throw Bail{};
+    }
+    e->span = Span::join(open, advance().span);
+    return e;
+}
+
 // piecewise := { case {newline case}      case := expr [,] (if condition | otherwise)
 ExprPtr Parser::parse_piecewise(Span open) {
     ctx_.push_back(Ctx::Brace);
@@ -1448,6 +1573,10 @@ ExprPtr Parser::parse_piecewise(Span open) {
         while (at(Tok::Newline)) advance();
         if (at(Tok::RBrace)) { advance(); break; }
         ExprPtr value = parse_expr();
+        // {a, b, c}: a sequence literal (a comma not followed by `if`/`otherwise`, or a `}` after one item).
+        if (p->rows.empty() && (at(Tok::RBrace) || (at(Tok::Comma) && !is_kw(peek_raw(1), "if") &&
+                                                    !is_kw(peek_raw(1), "otherwise"))))
+            return parse_sequence_literal(open, std::move(value));
         accept(Tok::Comma);
         if (at_kw("otherwise")) {
             p->span = Span::join(p->span, advance().span);
