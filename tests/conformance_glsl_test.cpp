@@ -43,10 +43,17 @@ TEST_CASE("conformance suite through emitted GLSL agrees with the evaluator", "[
         // --set values: evaluate them as the CLI does (they may bind symbolic sizes).
         std::map<std::string, Type> given_types;
         std::map<std::string, ir::Value> given;
+        std::map<std::string, std::shared_ptr<const ast::Module>> given_functions;
         bool ok = true;
         for (const auto& s : c.sets) {
             size_t eq = s.find('=');
             std::string n = trim(s.substr(0, eq)), text = s.substr(eq + 1);
+            if (size_t paren = n.find('('); paren != std::string::npos) {  // f(x)=…: a function parameter's definition
+                std::string def = n + " = " + text;
+                FileId df = sm.add("function", def);
+                given_functions[n.substr(0, paren)] = lib.parse_function({"value", df, {{0, uint32_t(def.size())}}, {df, 0, 1}, "value"});
+                continue;
+            }
             if (n.size() > 2 && n.front() == '`') n = n.substr(1, n.size() - 2);
             FileId vf = sm.add("value", text);
             ModuleSource vs{"value", vf, {{0, uint32_t(text.size())}}, {vf, 0, 1}, "value"};
@@ -59,7 +66,7 @@ TEST_CASE("conformance suite through emitted GLSL agrees with the evaluator", "[
             given_types[n] = v.type;
         }
         if (!ok) continue;
-        auto m = lib.parse_check(src, "m", false, given_types);
+        auto m = lib.parse_check(src, "m", false, given_types, given_functions);
         INFO(c.name << "\n" << d.render());
         REQUIRE(m->ok);
         ir::Module irm;

@@ -81,20 +81,30 @@ std::vector<std::string> ModuleLibrary::names() const {
 }
 
 std::unique_ptr<CheckedModule> ModuleLibrary::check_with(const std::string& name,
-                                                        const std::map<std::string, Type>& given_types) {
+                                                        const std::map<std::string, Type>& given_types,
+                                                        const std::map<std::string, std::shared_ptr<const ast::Module>>& given_functions) {
     const ModuleSource* src = find_source(name);
     if (!src) return nullptr;
-    auto m = parse_check(*src, name, false, given_types);
+    auto m = parse_check(*src, name, false, given_types, given_functions);
     m->ast.span = src->where;
     return m;
 }
 
+std::shared_ptr<const ast::Module> ModuleLibrary::parse_function(const ModuleSource& src) {
+    ParseOptions po;
+    for (const auto& n : known_names()) po.known_names.insert(n);
+    po.allow_header = false;
+    return std::make_shared<const ast::Module>(parse_module(sm_, src.file, src.ranges, src.name, po, d_));
+}
+
 std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& src, const std::string& name, bool transform,
-                                                         const std::map<std::string, Type>& given_types) {
+                                                         const std::map<std::string, Type>& given_types,
+                                                         const std::map<std::string, std::shared_ptr<const ast::Module>>& given_functions) {
     ParseOptions po;
     for (const auto& n : known_names()) po.known_names.insert(n);
     CheckOptions co;
     co.given_types = given_types;
+    co.given_functions = given_functions;
     if (transform) {
         po.allow_header = false;
         for (auto& [n, mod] : transform_imports()) po.known_names.insert(n);

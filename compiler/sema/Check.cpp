@@ -166,6 +166,8 @@ private:
 
     void collect_declarations();
     void declare_sequence(const Decl& decl, const std::string& name, Span span, const std::string& index);
+    void bind_function(const Decl& decl, const std::string& name, Span span);
+    std::set<std::string> unbound_functions_;  // function parameters without a definition (already reported)
     std::map<std::string, int> seq_lengths_;  // a sequence index letter -> the length of its sequences
     void collect_imports();
     void collect_statements();
@@ -207,6 +209,7 @@ private:
     Type check_matrix_product(Expr& e, const Type& a, const Type& b);
     Type mul_type(Expr& e, const Type& a, const Type& b, bool dot);
     Type param_type(const TypeSpec& ts, const std::string& name);
+    std::optional<int> computed_size(const Expr& x, const std::string& name);
     std::vector<std::string> visible_names() const;
     void undefined(const Expr& e);
     std::set<std::pair<uint32_t, uint32_t>> reported_words_;  // split words already reported (file, offset)
@@ -219,8 +222,48 @@ private:
     Type value_type_for_scope(const std::string& name, Type t, Expr& e, int resolved, int aux);
 };
 
+// A size written as arithmetic on size symbols (ℝ^((p+1)×k)), once the symbols are bound.
+std::optional<int> Checker::computed_size(const Expr& x, const std::string& name) {
+    std::function<std::optional<double>(const Expr&)> eval = [&](const Expr& e) -> std::optional<double> {
+        if (e.kind == ExprKind::Number) return e.number;
+        if (e.kind == ExprKind::Name) {
+            auto it = sizes_.find(e.text);
+            if (it == sizes_.end()) {
+                d_.error(e.span, fmt::format("the size {} of '{}' is not known: it must be a size of another declaration, "
+                                             "such as n in v ∈ ℝ^n", e.text, name));
+                return std::nullopt;
+            }
+            return double(it->second);
+        }
+        if (e.kind != ExprKind::Binary) return std::nullopt;
+        auto a = eval(*e.args[0]);
+        if (!a) return std::nullopt;
+        auto b = eval(*e.args[1]);
+        if (!b) return std::nullopt;
+        switch (e.op) {
+            case BinOp::Add: return *a + *b;
+            case BinOp::Sub: return *a - *b;
+            case BinOp::Div: return *b == 0 ? std::optional<double>() : *a / *b;
+            default: return *a * *b;
+        }
+    };
+    auto v = eval(x);
+    if (!v) return std::nullopt;
+    if (*v < 1 || *v != std::floor(*v) || *v > 1e6) {
+        d_.error(x.span, fmt::format("the size of '{}' must be a whole number ≥ 1, but it is {}", name, *v));
+        return std::nullopt;
+    }
+    return int(*v);
+}
+
 Type Checker::param_type(const TypeSpec& ts, const std::string& name) {
     int rows = ts.rows, cols = ts.cols;
+    for (auto [ex, dim] : {std::pair<const ExprPtr*, int*>{&ts.rows_expr, &rows}, {&ts.cols_expr, &cols}}) {
+        if (!*ex) continue;
+        auto n = computed_size(**ex, name);
+        if (!n) return {};
+        *dim = *n;
+    }
     for (auto [sym, dim] : {std::pair<const std::string*, int*>{&ts.sym_rows, &rows}, {&ts.sym_cols, &cols}}) {
         if (sym->empty()) continue;
         auto it = sizes_.find(*sym);
@@ -239,7 +282,8 @@ Type Checker::param_type(const TypeSpec& ts, const std::string& name) {
             if (cols == 1) return Type::vector(rows);
             return Type::matrix(rows, cols);
         case TypeSpec::Function:
-            d_.error(ts.span, fmt::format("function parameters such as '{}' are not supported yet", name));
+            d_.error(ts.span, fmt::format("'{}' is a function: a local function's parameters are values (define the "
+                                          "function in the module and call it by name)", name));
             return {};
     }
     return {};
@@ -312,6 +356,10 @@ void Checker::collect_declarations() {
                 continue;
             }
             if (fn_params.count(name) && !used_at_module.count(name)) continue;  // a local function's parameter
+            if (decl.type.kind == TypeSpec::Function) {  // f: ℝ → ℝ, bound to a definition given from outside
+                bind_function(decl, name, span);
+                continue;
+            }
             ParamInfo p;
             p.name = name;
             p.span = span;
@@ -413,6 +461,39 @@ void Checker::declare_sequence(const Decl& decl, const std::string& name, Span s
     p.type = Type::array(elem, count);
     if (p.value.empty()) p.value.assign(size_t(p.type.components()), 0.0);
     m_.params.push_back(std::move(p));
+}
+
+// A function parameter of the module: its definition comes from outside (iqc eval --set 'f(x)=…'), typed
+// by the declaration; calls to it are calls of that definition.
+void Checker::bind_function(const Decl& decl, const std::string& name, Span span) {
+    auto it = opts_.given_functions.find(name);
+    if (it == opts_.given_functions.end() || !it->second) {
+        unbound_functions_.insert(name);
+        d_.error(span, fmt::format("'{}' is a function parameter: give its definition, e.g. iqc eval --set '{}(x)=…' "
+                                   "(a shader needs it defined in the module: {}(x) = … where x ∈ …)", name, name, name));
+        return;
+    }
+    const ast::Module& given = *it->second;
+    const Stmt* def = nullptr;
+    for (const auto& st : given.stmts)
+        if (st.kind == StmtKind::Function && st.name == name) def = &st;
+    unbound_functions_.insert(name);  // until bound below: its errors are reported here, not at each call
+    if (!def) {
+        d_.error(span, fmt::format("the value given for the function '{}' must define it: {}(x) = …", name, name));
+        return;
+    }
+    if (def->params.size() != decl.type.params.size()) {
+        d_.error(def->name_span, fmt::format("'{}' takes {} argument{} (its declaration: {}), but the definition has {}", name,
+                                             decl.type.params.size(), decl.type.params.size() == 1 ? "" : "s",
+                                             d_.sources().slice(decl.type.span), def->params.size()));
+        return;
+    }
+    unbound_functions_.erase(name);
+    m_.bound_functions.push_back(it->second);
+    LocalFunction f;
+    f.stmt = def;
+    f.declared = &decl.type;
+    m_.functions.push_back(std::move(f));
 }
 
 void Checker::collect_imports() {
@@ -683,6 +764,7 @@ std::vector<std::string> Checker::visible_names() const {
 
 void Checker::undefined(const Expr& e) {
     const std::string& name = e.text;
+    if (unbound_functions_.count(name)) return;  // reported at its declaration
     Span s = e.name_span;
     if (e.word_span.end > e.word_span.begin) {
         // A letter of a longer word (`dot` is d·o·t): report the word once, as written, with a hint.
@@ -791,7 +873,7 @@ void Checker::check_function(LocalFunction& f, Span call_site, const std::vector
         for (auto& ld : s.local_decls)
             for (auto& nm : ld.names)
                 if (nm.first == pname) decl = &ld;
-        if (!decl)
+        if (!decl && !f.declared)
             if (auto it = decls_.find(pname); it != decls_.end()) decl = it->second;
         decls.push_back(decl);
         if (decl && (!decl->type.sym_rows.empty() || !decl->type.sym_cols.empty())) f.generic = true;
@@ -823,7 +905,9 @@ void Checker::check_function(LocalFunction& f, Span call_site, const std::vector
         const auto& [pname, pspan] = s.params[i];
         const Decl* decl = decls[i];
         Type t;
-        if (!decl) {
+        if (!decl && f.declared) {
+            t = param_type(f.declared->params[i], pname);
+        } else if (!decl) {
             d_.error(pspan, fmt::format("the parameter '{}' of '{}' has no type: add 'where {} ∈ ℝ' (or its type)", pname,
                                         s.name, pname));
         } else if (!decl->bounds.empty()) {
@@ -838,6 +922,12 @@ void Checker::check_function(LocalFunction& f, Span call_site, const std::vector
     scope_ = &scope;
     f.result = check(*s.value);
     scope_ = saved;
+    if (f.declared && f.result.valid()) {
+        Type want = param_type(*f.declared->result, s.name);
+        if (want.valid() && want != f.result && !(want.is_scalar() && f.result.is_scalar()))
+            d_.error(s.value->span, fmt::format("'{}' is declared to give {}, but its definition gives {}", s.name, want.str(),
+                                                f.result.str()));
+    }
     sizes_ = saved_sizes;
     f.checking = false;
     f.checked = true;

@@ -73,6 +73,9 @@ struct CheckedModule;
 
 struct LocalFunction {
     const ast::Stmt* stmt = nullptr;
+    // A function parameter of the module (f: ℝ → ℝ) bound to a definition given from outside: its declared
+    // type, which types the definition's parameters and result.
+    const ast::TypeSpec* declared = nullptr;
     std::vector<std::pair<std::string, Type>> params;
     Type result;
     // Module values and parameters the body uses; passed as extra arguments after the declared ones.
@@ -131,6 +134,7 @@ struct CheckedModule {
     // From the module's comment lines: `# lipschitz: K` (D changes at most K per unit: the renderer divides
     // by K so marching stays safe) and `# exact` / `# bound` (what D is; for documentation and tests).
     double lipschitz = 1;
+    std::vector<std::shared_ptr<const ast::Module>> bound_functions;  // keeps given definitions alive
     std::string exactness;
     Type primary_type;
     bool ok = false;
@@ -147,6 +151,9 @@ struct CheckOptions {
     std::vector<std::pair<std::string, std::string>> implicit_imports;  // name, module
     // Types of parameters known from outside (e.g. `iqc eval --set`), which bind symbolic sizes (ℝ^n).
     std::map<std::string, Type> given_types;
+    // Definitions of the module's function parameters (f: ℝ → ℝ), given from outside (`iqc eval --set
+    // 'f(x)=x²'`): each a parsed module whose first statement defines the function.
+    std::map<std::string, std::shared_ptr<const ast::Module>> given_functions;
 };
 
 std::unique_ptr<CheckedModule> check_module(ast::Module module, const ModuleLookup& lookup,

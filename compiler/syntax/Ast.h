@@ -95,6 +95,7 @@ struct TypeSpec {
     enum Kind { Scalar, Integer, Vector, Matrix, Function } kind = Scalar;
     int rows = 1, cols = 1;
     std::string sym_rows, sym_cols;  // symbolic sizes (`ℝ^n`)
+    ExprPtr rows_expr, cols_expr;    // sizes computed from symbolic ones (`ℝ^((p+1)×k)`): rows/cols are then 0
     std::vector<TypeSpec> params;    // Function
     std::unique_ptr<TypeSpec> result;
     Span span;

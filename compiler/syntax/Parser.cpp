@@ -315,7 +315,9 @@ private:
     Stmt parse_indexed_assignment(std::pair<std::string, Span> name, Span start);
     bool elementwise_indices(Stmt& s);
     Decl parse_decl();
-    TypeSpec parse_type();
+    TypeSpec parse_type(bool allow_function = true);
+    bool compound_dim() const;
+    ExprPtr parse_dim_expr();
     std::vector<std::pair<std::string, Span>> parse_name_list();
     std::pair<std::string, Span> parse_name();
 
@@ -408,8 +410,69 @@ bool Parser::line_is_import() {
     return is_kw(toks_[k], "from");
 }
 
+// Whether the size at the current token is arithmetic on sizes (`p+1`, `2k`, `(p+1)`), not one number or name.
+bool Parser::compound_dim() const {
+    const Token& t = toks_[pos_];
+    if (t.kind == Tok::LParen) return true;
+    if (t.kind != Tok::Number && !is_name_token(t)) return false;
+    const Token& n = toks_[pos_ + 1];
+    return !(n.kind == Tok::Cross || n.kind == Tok::Comma || n.kind == Tok::RParen || (n.kind == Tok::Word && n.text == "x"));
+}
+
+// dim_expr := dim_term {(+ | -) dim_term}     dim_term := dim_factor {[⋅ | * | /] dim_factor}
+// dim_factor := NUMBER | NAME | ( dim_expr )   (`x` and `×` separate the two sizes)
+ExprPtr Parser::parse_dim_expr() {
+    std::function<ExprPtr()> expr, term, factor;
+    factor = [&]() -> ExprPtr {
+        const Token& t = cur();
+        if (t.kind == Tok::Number) {
+            auto e = make(ExprKind::Number, t.span);
+            e->number = std::strtod(t.text.c_str(), nullptr);
+            e->text = t.text;
+            advance();
+            return e;
+        }
+        if (is_name_token(t) && !(t.kind == Tok::Word && t.text == "x")) {
+            auto e = make(ExprKind::Name, t.span);
+            e->text = t.text;
+            e->name_span = t.span;
+            advance();
+            return e;
+        }
+        if (t.kind == Tok::LParen) {
+            advance();
+            ExprPtr e = expr();
+            e->span = Span::join(t.span, expect(Tok::RParen, "to close the size").span);
+            return e;
+        }
+        fail(t.span, fmt::format("expected a size (a number, a size symbol or arithmetic on them), found {}", describe(t)));
+    };
+    term = [&]() {
+        ExprPtr lhs = factor();
+        while (true) {
+            BinOp op = BinOp::Juxtapose;
+            if (at(Tok::Dot) || at(Tok::Star)) advance(), op = BinOp::Star;
+            else if (at(Tok::Slash) || at(Tok::Divide)) advance(), op = BinOp::Div;
+            else if (!(at(Tok::Number) || at(Tok::LParen) || (is_name_token(cur()) && !(at(Tok::Word) && cur().text == "x"))))
+                break;
+            lhs = binary(op, std::move(lhs), factor());
+        }
+        return lhs;
+    };
+    expr = [&]() {
+        ExprPtr lhs = term();
+        while (at(Tok::Plus) || at(Tok::Minus)) {
+            BinOp op = at(Tok::Plus) ? BinOp::Add : BinOp::Sub;
+            advance();
+            lhs = binary(op, std::move(lhs), term());
+        }
+        return lhs;
+    };
+    return expr();
+}
+
 // type := ℝ [SUPER | ^ dims] | ℤ | R [^ dims] | Z | scalar | vector(n) | matrix(m, n) | type {, type} → type
-TypeSpec Parser::parse_type() {
+TypeSpec Parser::parse_type(bool allow_function) {
     TypeSpec ts;
     Span start = cur().span;
     auto parse_dim = [&](int& value, std::string& sym) {
@@ -439,9 +502,11 @@ TypeSpec Parser::parse_type() {
         if (!accept(Tok::Caret)) return;
         if (accept(Tok::LParen)) {
             ctx_.push_back(Ctx::Paren);
-            parse_dim(ts.rows, ts.sym_rows);
+            if (compound_dim()) ts.rows_expr = parse_dim_expr(), ts.rows = 0;
+            else parse_dim(ts.rows, ts.sym_rows);
             if (accept(Tok::Cross) || (at(Tok::Word) && cur().text == "x" && (advance(), true)) || accept(Tok::Comma)) {
-                parse_dim(ts.cols, ts.sym_cols);
+                if (compound_dim()) ts.cols_expr = parse_dim_expr(), ts.cols = 0;
+                else parse_dim(ts.cols, ts.sym_cols);
                 ts.kind = TypeSpec::Matrix;
             } else {
                 ts.kind = TypeSpec::Vector;
@@ -485,7 +550,7 @@ TypeSpec Parser::parse_type() {
     }
     ts.span = Span::join(start, prev_span());
     // Function type: type {, type} → type
-    if (at(Tok::Comma) || at(Tok::Arrow)) {
+    if (allow_function && (at(Tok::Comma) || at(Tok::Arrow))) {
         size_t save = pos_;
         std::vector<TypeSpec> params;
         params.push_back(std::move(ts));
@@ -493,13 +558,13 @@ TypeSpec Parser::parse_type() {
         while (accept(Tok::Comma)) {
             if (!(at(Tok::Reals) || at(Tok::Integers) || at_kw("scalar") || at_kw("vector") || at_kw("matrix") ||
                   (at(Tok::Word) && (cur().text == "R" || cur().text == "Z")))) { ok = false; break; }
-            params.push_back(parse_type());
+            params.push_back(parse_type(false));
         }
         if (ok && accept(Tok::Arrow)) {
             TypeSpec f;
             f.kind = TypeSpec::Function;
             f.params = std::move(params);
-            f.result = std::make_unique<TypeSpec>(parse_type());
+            f.result = std::make_unique<TypeSpec>(parse_type(false));
             f.span = Span::join(start, prev_span());
             return f;
         }
