@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include "TestUtil.h"
+#include "ir/Pipeline.h"
 
 using namespace iqc::test;
 
@@ -136,9 +137,44 @@ TEST_CASE("a shader glslang rejects is an internal error: exit 3 and nothing wri
     auto in = write_temp("fault.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\n```\n");
     auto out = temp_dir() / "fault.frag";
     std::filesystem::remove(out);
-    RunResult r = run_iqc_env("IQC_INJECT_GLSL_FAULT=1", in.string() + " -o " + out.string());
+    RunResult r = run_iqc(in.string() + " --inject-fault glslang -o " + out.string());
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.err, Catch::Contains("internal compiler error: glslang rejected the generated shader (this is a bug in iqc"));
     CHECK_THAT(r.err, Catch::Contains("ERROR"));
     CHECK_FALSE(std::filesystem::exists(out));
+}
+
+TEST_CASE("an internal error in any pass is exit 3 with the bug message, for compile and eval", "[cli]") {
+    auto in = write_temp("fault_pass.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\n```\n");
+    auto out = temp_dir() / "fault_pass.frag";
+    for (const auto& p : iqc::ir::pipeline_passes()) {
+        std::filesystem::remove(out);
+        INFO(p.name);
+        RunResult r = run_iqc(in.string() + " --inject-fault " + p.name + " -o " + out.string());
+        CHECK(r.exit_code == 3);
+        CHECK_THAT(r.err, Catch::Contains(std::string("internal compiler error: ") + p.name +
+                                          ": injected fault (--inject-fault) (this is a bug in iqc; nothing was written)"));
+        CHECK_FALSE(std::filesystem::exists(out));
+        RunResult e = run_iqc("eval " + in.string() + " --module torus --inject-fault " + p.name);
+        CHECK(e.exit_code == 3);
+        CHECK_THAT(e.err, Catch::Contains(std::string("internal compiler error: ") + p.name + ": injected fault"));
+        CHECK(e.out.empty());
+    }
+}
+
+TEST_CASE("the IR after a named pass (--dump-ir=after-PASS), and an unknown pass is a usage error", "[cli]") {
+    auto in = write_temp("dump_pass.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\n```\n");
+    RunResult lower = run_iqc(in.string() + " --dump-ir=after-lower -o " + (temp_dir() / "dump.frag").string());
+    CHECK(lower.exit_code == 0);
+    CHECK_THAT(lower.err, Catch::Contains("inline function iqc_distance.torus_1(p: ℝ³) -> ℝ {"));
+    RunResult inl = run_iqc(in.string() + " --dump-ir=after-inline -o " + (temp_dir() / "dump.frag").string());
+    CHECK(inl.exit_code == 0);
+    CHECK_THAT(inl.err, Catch::Contains("Call torus %"));
+    CHECK_THAT(inl.err, Catch::Contains("  ; torus_1"));
+    RunResult last = run_iqc(in.string() + " --dump-ir -o " + (temp_dir() / "dump.frag").string());
+    CHECK_THAT(last.err, !Catch::Contains("iqc_distance.torus_1"));  // inlined, then removed by dce
+    CHECK_THAT(last.err, Catch::Contains("entry function iqc_scene(p: ℝ³) -> ℝ² {"));
+    RunResult bad = run_iqc(in.string() + " --dump-ir=after-frobnicate");
+    CHECK(bad.exit_code == 2);
+    CHECK_THAT(bad.err, Catch::Contains("--dump-ir takes after-PASS with PASS one of lower, inline, tables, fold"));
 }

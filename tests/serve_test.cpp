@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstring>
 #include <thread>
 
 #include "TestUtil.h"
@@ -46,16 +47,9 @@ bool eventually(F f, double seconds = 5.0) {
     return f();
 }
 
-}  // namespace
-
-TEST_CASE("iqc serve: loopback only, two paths, rebuilds on a module edit, shows errors", "[serve]") {
-    fs::path dir = temp_dir() / "serve";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    write_temp("serve/ring.iql", ring("1"));
-    write_temp("serve/scene.iq", "title = \"serve test\"\ninclude = [\"ring.iql\"]\n[[shapes]]\ntype = \"ring\"\n");
+// Starts `iqc serve dir/scene.iq` on a free port polling every 50 ms; the port is known when it returns.
+void start_serve(Server& s, const fs::path& dir) {
     fs::path out = dir / "stdout.txt";
-    Server s;
     std::fflush(stdout);
     std::fflush(stderr);
     s.pid = fork();
@@ -75,7 +69,19 @@ TEST_CASE("iqc serve: loopback only, two paths, rebuilds on a module edit, shows
         if (at == std::string::npos) return false;
         s.port = std::stoi(text.substr(at + 17));
         return true;
-    }));
+    }, 30.0));
+}
+
+}  // namespace
+
+TEST_CASE("iqc serve: loopback only, two paths, rebuilds on a module edit, shows errors", "[serve]") {
+    fs::path dir = temp_dir() / "serve";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    write_temp("serve/ring.iql", ring("1"));
+    write_temp("serve/scene.iq", "title = \"serve test\"\ninclude = [\"ring.iql\"]\n[[shapes]]\ntype = \"ring\"\n");
+    Server s;
+    start_serve(s, dir);
     INFO("port " << s.port);
     httplib::Client client("127.0.0.1", s.port);
     auto page = client.Get("/");
@@ -138,4 +144,84 @@ TEST_CASE("iqc serve usage errors", "[serve]") {
     CHECK_THAT(missing.err, Catch::Contains("cannot read '/nonexistent/scene.iq'"));
     CHECK(run_iqc("serve").exit_code == 2);
     CHECK(run_iqc("serve x.iq --port 70000").exit_code == 2);
+}
+
+TEST_CASE("iqc serve: connections that never send do not stall it", "[serve]") {
+    fs::path dir = temp_dir() / "serve_halfopen";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    write_temp("serve_halfopen/scene.iq", "[[shapes]]\ntype = \"sphere\"\n");
+    Server s;
+    start_serve(s, dir);
+    // 40 connections that send nothing, 8 that send half a request and stop.
+    std::vector<int> sockets;
+    for (int i = 0; i < 48; ++i) {
+        int fd = socket(AF_INET, SOCK_STREAM, 0);
+        REQUIRE(fd >= 0);
+        sockaddr_in addr{};
+        addr.sin_family = AF_INET;
+        addr.sin_port = htons(uint16_t(s.port));
+        addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        REQUIRE(connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0);
+        if (i >= 40) {
+            const char* partial = "GET /version HTTP/1.1\r\nHost: 127.0.0.1\r\n";
+            REQUIRE(send(fd, partial, std::strlen(partial), 0) > 0);
+        }
+        sockets.push_back(fd);
+    }
+    httplib::Client client("127.0.0.1", s.port);
+    client.set_read_timeout(10, 0);
+    auto t0 = std::chrono::steady_clock::now();
+    auto v = client.Get("/version");
+    double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    REQUIRE(v);
+    CHECK(v->body == "1");
+    CHECK(seconds < 2.0);
+    for (int fd : sockets) close(fd);
+}
+
+TEST_CASE("iqc serve: a save during a rebuild is picked up", "[serve]") {
+    fs::path dir = temp_dir() / "serve_race";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    // A scene slow enough to compile (thousands of instances) that a second save lands during the rebuild
+    // the first one started, after the rebuild has read the module.
+    // (Shapes without parameters: WebGL2's uniform budget stays small.)
+    std::string scene = "include = [\"ring.iql\"]\n[modules]\ndot = \"shape\\nD = ‖p‖ - 0.1\\nwhere\\np ∈ ℝ³\"\n"
+                        "[[shapes]]\ntype = \"ring\"\n";
+    for (int i = 0; i < 3000; ++i) scene += "[[shapes]]\ntype = \"dot\"\ntransform = \"T((" + std::to_string(i) + ", 0, 0))\"\n";
+    write_temp("serve_race/ring.iql", ring("1"));
+    write_temp("serve_race/scene.iq", scene);
+    Server s;
+    start_serve(s, dir);
+    httplib::Client client("127.0.0.1", s.port);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    write_temp("serve_race/ring.iql", ring("1.5"));
+    // The poll (50 ms) starts a rebuild that reads ring.iql first and then compiles for a while.
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    write_temp("serve_race/ring.iql", ring("2.75"));
+    CHECK(eventually([&] {
+        auto r = client.Get("/");
+        return r && r->body.find("2.75") != std::string::npos;
+    }, 60.0));
+}
+
+TEST_CASE("iqc serve: invalid UTF-8 in a description or an error keeps serving", "[serve]") {
+    fs::path dir = temp_dir() / "serve_utf8";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    write_temp("serve_utf8/ring.iql", "shape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ [0,3] default = 1: bad \xFF byte\n");
+    write_temp("serve_utf8/scene.iq", "include = [\"ring.iql\"]\n[[shapes]]\ntype = \"ring\"\n");
+    Server s;
+    start_serve(s, dir);
+    httplib::Client client("127.0.0.1", s.port);
+    auto page = client.Get("/");
+    REQUIRE(page);
+    CHECK_THAT(page->body, Catch::Contains("bad \xEF\xBF\xBD byte"));
+    write_temp("serve_utf8/ring.iql", "shape\nD = ‖p‖ - \xFF\xFE\nwhere\np ∈ ℝ³\n");
+    CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "2"; }));
+    auto broken = client.Get("/");
+    REQUIRE(broken);
+    CHECK_THAT(broken->body, Catch::Contains("\"error\":"));
+    CHECK_THAT(broken->body, Catch::Contains("ring.iql:2:"));
 }

@@ -22,6 +22,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
+constexpr size_t kServeThreads = 32;
+
 struct Build {
     std::string page;
     std::map<std::string, fs::file_time_type> files;  // what the compile read, with its time
@@ -42,19 +44,38 @@ std::string live_reload_script(unsigned version, double poll_seconds) {
            std::to_string(static_cast<int>(poll_seconds * 1000)) + ");";
 }
 
-Build build(const std::string& input, unsigned version, double poll_seconds) {
+// Compiles the input to its page. `before`: the files the previous build read, with their times taken
+// now, before this compile reads them; a save during the compile then differs from what is recorded
+// and the next poll rebuilds (recording times after the compile missed such saves).
+Build build(const std::string& input, unsigned version, double poll_seconds,
+            const std::map<std::string, fs::file_time_type>& before) {
     Build b;
     SourceManager sm;
     Diagnostics diags(sm);
     CompileOptions opts;
     opts.target = Target::WebGL2;
-    CompileResult r = compile_file(input, sm, diags, opts);
+    auto start = fs::file_time_type::clock::now();
+    CompileResult r;
+    try {
+        r = compile_file(input, sm, diags, opts);
+    } catch (const std::exception& e) {  // a bug in iqc: shown in the page, the server keeps running
+        r.exit_code = 3;
+        r.internal = std::string("internal compiler error: ") + e.what() + " (this is a bug in iqc)";
+    }
     // Watch every real file the compile read (modules beside the scene, includes), and the input itself.
-    b.files[input] = mtime(input);
-    for (size_t f = 0; f < sm.size(); ++f) {
-        std::string name = sm.name(static_cast<FileId>(f));
+    // A file read for the first time has no earlier time: if it changed since shortly before this compile
+    // began (file systems stamp times coarsely), it is marked changed so the next poll rebuilds once.
+    std::vector<std::string> read = {input};
+    for (size_t f = 0; f < sm.size(); ++f) read.push_back(sm.name(static_cast<FileId>(f)));
+    for (const std::string& name : read) {
         std::error_code ec;
-        if (fs::is_regular_file(name, ec)) b.files[name] = mtime(name);
+        if (!fs::is_regular_file(name, ec)) continue;
+        if (auto it = before.find(name); it != before.end()) {
+            b.files[name] = it->second;
+        } else {
+            fs::file_time_type t = mtime(name);
+            b.files[name] = t >= start - std::chrono::seconds(2) ? fs::file_time_type::min() : t;
+        }
     }
     std::string live = live_reload_script(version, poll_seconds);
     if (r.exit_code == 0) {
@@ -64,7 +85,7 @@ Build build(const std::string& input, unsigned version, double poll_seconds) {
         std::string text = diags.render();
         if (r.exit_code == 3) text += r.internal;
         nlohmann::json meta = {{"title", fs::path(input).filename().string()}, {"error", text}};
-        b.page = html_page("", meta.dump(), live);
+        b.page = html_page("", meta.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), live);
     }
     return b;
 }
@@ -79,10 +100,18 @@ int serve(const std::string& input, int port, double poll_seconds) {
     }
     std::mutex mu;
     std::atomic<unsigned> version{1};
-    Build current = build(input, version, poll_seconds);
+    Build current = build(input, version, poll_seconds, {{input, mtime(input)}});
     if (!current.ok) std::fprintf(stderr, "iqc: %s has errors (shown in the page)\n", input.c_str());
 
     httplib::Server server;
+    // Requests are tiny GETs from this machine: short timeouts and enough threads, so connections that
+    // never send (or never read) hold a thread for a second, not the server for the default 5 s each.
+    server.new_task_queue = [] { return new httplib::ThreadPool(kServeThreads); };
+    server.set_read_timeout(1, 0);
+    server.set_write_timeout(1, 0);
+    server.set_keep_alive_timeout(1);
+    server.set_keep_alive_max_count(100);
+    server.set_payload_max_length(4096);
     server.Get("/", [&](const httplib::Request&, httplib::Response& res) {
         std::lock_guard<std::mutex> lock(mu);
         res.set_header("Cache-Control", "no-store");
@@ -107,14 +136,17 @@ int serve(const std::string& input, int port, double poll_seconds) {
         while (running) {
             std::this_thread::sleep_for(std::chrono::duration<double>(poll_seconds));
             bool changed = false;
+            std::map<std::string, fs::file_time_type> now;  // taken before the rebuild reads the files
             {
                 std::lock_guard<std::mutex> lock(mu);
-                for (const auto& [path, t] : current.files)
-                    if (mtime(path) != t) changed = true;
+                for (const auto& [path, t] : current.files) {
+                    now[path] = mtime(path);
+                    if (now[path] != t) changed = true;
+                }
             }
             if (!changed) continue;
             auto t0 = std::chrono::steady_clock::now();
-            Build next = build(input, version + 1, poll_seconds);
+            Build next = build(input, version + 1, poll_seconds, now);
             {
                 std::lock_guard<std::mutex> lock(mu);
                 current = std::move(next);

@@ -25,6 +25,8 @@
 #include "scene/Page.h"
 #include "scene/Compile.h"
 #include "scene/Evaluate.h"
+#include "ir/Pipeline.h"
+#include "source/Internal.h"
 
 namespace {
 
@@ -64,8 +66,7 @@ double percentile(std::vector<float> v, double q) {
     return v[size_t(q * double(v.size() - 1) + 0.5)];
 }
 
-int render_command(const std::string& code, const std::vector<std::pair<std::string, std::vector<double>>>& uniforms,
-                   const std::string& output, const std::string& size, float time, int frames, float fps, bool stats,
+int render_command(const std::string& code, const iqc::ShaderInputs& inputs, bool webgl2, const std::string& output, const std::string& size, float time, int frames, float fps, bool stats,
                    const std::function<iqc::CompileResult()>& instrumented) {
     iqc::render::RenderOptions ro;
     if (std::sscanf(size.c_str(), "%dx%d", &ro.width, &ro.height) != 2 || ro.width < 1 || ro.height < 1 ||
@@ -73,8 +74,12 @@ int render_command(const std::string& code, const std::vector<std::pair<std::str
         std::fprintf(stderr, "iqc: error: --size must look like 640x360\n");
         return 2;
     }
-    for (const auto& [n, v] : uniforms) ro.uniforms.push_back({n, std::vector<float>(v.begin(), v.end())});
-    bool webgl2 = !uniforms.empty() || code.rfind("#version", 0) == 0;
+    for (const auto& u : inputs.uniforms) {
+        if (u.integer) ro.int_uniforms.push_back({u.name, int(u.value[0])});
+        else ro.uniforms.push_back({u.name, std::vector<float>(u.value.begin(), u.value.end())});
+    }
+    for (const auto& b : inputs.blocks) ro.uniform_blocks.push_back({b.name, b.binding, b.bytes});
+    ro.data_texture = {inputs.texture.name, inputs.texture.width, inputs.texture.height, inputs.texture.rgba};
     std::string source = webgl2 ? code : iqc::glsl::wrap_shadertoy(code);
     std::string err;
     auto renderer = iqc::render::Renderer::create(&err);
@@ -166,6 +171,9 @@ int render_command(const std::string& code, const std::vector<std::pair<std::str
     return 0;
 }
 
+// Writes text with its length (a NUL byte in a diagnostic's source line must not cut off what follows).
+void put(std::FILE* f, std::string_view text) { std::fwrite(text.data(), 1, text.size(), f); }
+
 int write_output(const std::string& path, const std::string& text) {
     if (path.empty() || path == "-") {
         std::fwrite(text.data(), 1, text.size(), stdout);
@@ -190,8 +198,7 @@ int write_output(const std::string& path, const std::string& text) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-    tune_allocator();
+static int run(int argc, char** argv) {
     CLI::App app{
         "iqc — compiles math written as papers print it (I♥LA / I♥IQ) and a scene into a standalone fragment "
         "shader.\n\n"
@@ -204,8 +211,8 @@ int main(int argc, char** argv) {
         "iqc"};
     app.set_version_flag("--version", std::string("iqc ") + IQC_VERSION);
     app.require_subcommand(0, 1);
-    std::string input, output, target = "shadertoy";
-    bool dump_ir = false, time = false;
+    std::string input, output, target = "shadertoy", dump_ir_spec, inject_fault;
+    bool time = false;
     app.add_option("input", input, "scene (.iq), document (.md) or shape module (.iql)");
     app.add_option("-o,--output", output, "where to write the shader (default: standard output)");
     app.add_option("--target", target,
@@ -216,7 +223,17 @@ int main(int argc, char** argv) {
     std::string meta;
     app.add_option("--meta", meta, "also write a JSON description of every parameter (instance, module, role, "
                                    "uniform or constant name, type, bounds, default, description)");
-    app.add_flag("--dump-ir", dump_ir, "print the typed IR of every function to standard error");
+    std::string passes_list;
+    for (const auto& p : iqc::ir::pipeline_passes()) passes_list += fmt::format("{}{} ({})", passes_list.empty() ? "" : ", ", p.name, p.summary);
+    CLI::Option* dump_ir_opt =
+        app.add_option("--dump-ir", dump_ir_spec,
+                       "print the IR to standard error: after the last pass, or with =after-PASS after that pass (=after-lower: "
+                       "before the first). Passes, in order: " + passes_list)
+            ->expected(0, 1);
+    app.add_option("--inject-fault", inject_fault, "testing the internal-error path: fail in this pass, or 'glslang'")
+        ->group("");
+    bool verify_ir = false;
+    app.add_flag("--verify-ir", verify_ir, "verify the IR before and after every pass (a fault is an internal error naming the pass)");
     app.add_flag("--time", time, "print the compile time to standard error");
     bool time_passes = false;
     bool strict_ranges = false;
@@ -277,6 +294,7 @@ int main(int argc, char** argv) {
     bool e_time_passes = false;
     eval->add_flag("--time-passes", e_time_passes, "print the time of each phase to standard error");
     eval->add_option("--mouse", e_mouse, "the value of `mouse` (two numbers in [0,1], default 0 0)")->expected(2);
+    eval->add_option("--inject-fault", inject_fault, "testing the internal-error path: fail in this pass")->group("");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -287,6 +305,7 @@ int main(int argc, char** argv) {
         iqc::SourceManager sm;
         iqc::Diagnostics diags(sm);
         iqc::EvalRequest req;
+        req.inject_fault = inject_fault;
         req.path = e_input;
         req.module = e_module;
         req.inputs.time = e_time;
@@ -307,12 +326,19 @@ int main(int argc, char** argv) {
         std::vector<iqc::EvalOutput> outs;
         std::vector<std::pair<std::string, double>> timings;
         if (e_time_passes) req.timings = &timings;
-        bool ok = iqc::evaluate_module_file(req, sm, diags, outs);
+        bool ok = false;
+        try {
+            ok = iqc::evaluate_module_file(req, sm, diags, outs);
+        } catch (const iqc::InternalError& e) {
+            std::fputs(diags.render().c_str(), stderr);
+            std::fprintf(stderr, "iqc: %s\n", iqc::internal_error_message(e.what()).c_str());
+            return 3;
+        }
         for (auto& [name, ms] : timings) std::fprintf(stderr, "iqc: %-28s %8.3f ms\n", name.c_str(), ms);
         std::string text = diags.render();
-        if (!text.empty()) std::fputs(text.c_str(), stderr);
+        put(stderr, text);
         if (!ok) return 1;
-        for (const auto& o : outs) std::printf("%s = %s\n", o.name.c_str(), iqc::ir::format_value(o.value).c_str());
+        for (const auto& o : outs) put(stdout, o.name + " = " + iqc::ir::format_value(o.value) + "\n");
         return 0;
     }
     if (serve->parsed()) return iqc::serve(s_input, s_port, s_poll);
@@ -351,26 +377,39 @@ int main(int argc, char** argv) {
     auto t0 = std::chrono::steady_clock::now();
     iqc::SourceManager sm;
     iqc::Diagnostics diags(sm);
+    bool dump_ir = dump_ir_opt->count() > 0;
     iqc::CompileOptions opts;
     opts.dump_ir = dump_ir;
+    if (!dump_ir_spec.empty()) {
+        std::string pass = dump_ir_spec.rfind("after-", 0) == 0 ? dump_ir_spec.substr(6) : "";
+        if (!iqc::ir::is_pass_name(pass)) {
+            std::fprintf(stderr, "iqc: error: --dump-ir takes after-PASS with PASS one of lower, %s (not '%s')\n",
+                         [] { std::string n; for (const auto& p : iqc::ir::pipeline_passes()) n += std::string(n.empty() ? "" : ", ") + p.name; return n; }().c_str(),
+                         dump_ir_spec.c_str());
+            return 2;
+        }
+        opts.dump_after = pass;
+    }
+    opts.inject_fault = inject_fault;
+    if (verify_ir) opts.verify_each = true;
     opts.strict_ranges = strict_ranges;
     opts.target = target == "webgl2" || target == "html" ? iqc::Target::WebGL2 : target == "glsl330" ? iqc::Target::GLSL330 : iqc::Target::Shadertoy;
     if (render->parsed()) opts.target = r_target == "webgl2" ? iqc::Target::WebGL2 : iqc::Target::Shadertoy;
     iqc::CompileResult r = iqc::compile_file(render->parsed() ? r_input : input, sm, diags, opts);
     std::string rendered = diags.render();
-    if (!rendered.empty()) std::fputs(rendered.c_str(), stderr);
-    if (dump_ir && !r.ir.empty()) std::fputs(r.ir.c_str(), stderr);
+    put(stderr, rendered);
+    if (dump_ir) put(stderr, r.ir);
     if (time_passes)
         for (auto& [name, ms] : r.pass_ms) std::fprintf(stderr, "iqc: %-28s %8.3f ms\n", name.c_str(), ms);
     if (r.exit_code == 3) {
-        std::fprintf(stderr, "%s\n", r.internal.c_str());
+        put(stderr, r.internal + "\n");
         return 3;
     }
     if (r.exit_code != 0) {
         if (diags.error_count() > 1) std::fprintf(stderr, "%zu errors\n", diags.error_count());
         return 1;
     }
-    if (render->parsed()) return render_command(r.code, r.uniform_defaults, r_output, r_size, r_time, r_frames, r_fps, r_stats,
+    if (render->parsed()) return render_command(r.code, r.inputs, opts.target != iqc::Target::Shadertoy, r_output, r_size, r_time, r_frames, r_fps, r_stats,
                                                 [&]() {
                                                     iqc::SourceManager sm2;
                                                     iqc::Diagnostics d2(sm2);
@@ -409,4 +448,21 @@ int main(int argc, char** argv) {
     }
     if (rc == 0 && !output.empty() && output != "-") std::fprintf(stderr, "iqc: wrote %s\n", output.c_str());
     return rc;
+}
+
+// No exception reaches the C++ runtime: anything thrown is a bug in iqc (bad input is a diagnostic), and
+// says so with exit code 3.
+int main(int argc, char** argv) {
+    tune_allocator();
+    try {
+        return run(argc, argv);
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "iqc: internal compiler error: out of memory (this is a bug in iqc: input should be "
+                             "refused with a diagnostic before that)\n");
+    } catch (const std::exception& e) {
+        put(stderr, std::string("iqc: internal compiler error: ") + e.what() + " (this is a bug in iqc)\n");
+    } catch (...) {
+        std::fprintf(stderr, "iqc: internal compiler error: unknown exception (this is a bug in iqc)\n");
+    }
+    return 3;
 }

@@ -80,6 +80,34 @@ std::string identifier(const std::string& math) {
     return clean;
 }
 
+std::string comment_text(std::string_view text) {
+    std::string out;
+    out.reserve(text.size());
+    bool space = false;
+    for (size_t i = 0; i < text.size();) {
+        size_t start = i;
+        char32_t c = utf8::decode(text, i);
+        // Invalid, overlong, surrogate or out-of-range sequences: U+FFFD (what they decode to is judged below).
+        std::string canonical;
+        utf8::append(canonical, c);
+        bool invalid = canonical != text.substr(start, i - start) || (c >= 0xD800 && c <= 0xDFFF) || c > 0x10FFFF;
+        bool blank = c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == 0x0B || c == 0x0C || c == 0x85 ||
+                     c == 0x2028 || c == 0x2029;
+        if (blank || c < 0x20 || c == 0x7F || (c >= 0x80 && c < 0xA0)) {  // white space, controls (NUL too)
+            space = true;
+            continue;
+        }
+        if (space && !out.empty()) out += ' ';
+        space = false;
+        // `/*` and `*/` are split with a space, so no block comment can open or close here.
+        if ((c == '*' && !out.empty() && out.back() == '/') || (c == '/' && !out.empty() && out.back() == '*')) out += ' ';
+        if (invalid) utf8::append(out, 0xFFFD);
+        else out.append(text.substr(start, i - start));
+    }
+    while (!out.empty() && (out.back() == '\\' || out.back() == ' ')) out.pop_back();  // no line continuation
+    return out;
+}
+
 bool is_reserved(const std::string& n) {
     static const std::set<std::string> words = {
         // keywords and reserved words (GLSL ES 3.00 and 3.30 core)

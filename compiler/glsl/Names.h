@@ -4,11 +4,20 @@
 
 #include <set>
 #include <string>
+#include <string_view>
 
 namespace iqc::glsl {
 
 // A valid GLSL identifier spelling the math name (not yet checked for collisions).
 std::string identifier(const std::string& math_name);
+
+// Text that is safe to put after `// ` in generated GLSL, whatever the user wrote (titles, instance, light
+// and module names, descriptions, formulas): one line (every line terminator: LF, CR, VT, FF, NEL U+0085,
+// LINE/PARAGRAPH SEPARATOR U+2028/U+2029, becomes a space; runs of white space become one), no NUL or
+// other control character, no `/*` or `*/`, no backslash at the end (a line continuation would pull the
+// next line of code into the comment), valid UTF-8 (invalid bytes become U+FFFD). The one function every
+// comment built from user text goes through.
+std::string comment_text(std::string_view text);
 
 // GLSL ES 3.00 / 3.30 keywords, reserved words, built-in functions and variables, and names the runtime uses.
 bool is_reserved(const std::string& name);

@@ -36,13 +36,17 @@ Probe make_probe(const ir::Module& m, int fn, const std::vector<ir::Value>& args
     std::string code = "// iqc probe: each output's components in consecutive pixels (red channel)\n";
     for (int g : fns) code += em.function(g) + "\n";
     std::vector<std::string> arg_text;
-    for (const auto& a : args) arg_text.push_back(constant(a.type.is_scalar() ? Type::scalar() : a.type, a.v));
+    for (size_t k = 0; k < args.size(); ++k) {
+        const Type& pt = f.params[k].type;  // a ℤ parameter takes an int
+        arg_text.push_back(constant(pt.kind == Type::Integer ? pt : args[k].type.is_scalar() ? Type::scalar() : args[k].type, args[k].v));
+    }
     code += "void mainImage(out vec4 fragColor, in vec2 fragCoord) {\n    int i = int(fragCoord.x);\n    float v = 0.0;\n";
     for (auto [idx, j] : probes) {
         const ProbeOutput& po = probe.outputs[j];
         int n = po.type.components();
-        code += fmt::format("    if (i >= {} && i < {}) {{\n        {} r = {}({});\n        int k = i - {};\n", po.first_pixel,
-                            po.first_pixel + n, type_name(po.type), em.function_name(idx), fmt::join(arg_text, ", "),
+        code += fmt::format("    if (i >= {} && i < {}) {{\n        {} r{} = {}({});\n        int k = i - {};\n", po.first_pixel,
+                            po.first_pixel + n, type_name(po.type),
+                            po.type.is_array() ? fmt::format("[{}]", po.type.count) : "", em.function_name(idx), fmt::join(arg_text, ", "),
                             po.first_pixel);
         Type t = po.type.is_array() ? po.type.element() : po.type;
         std::string r = "r";
@@ -50,7 +54,7 @@ Probe make_probe(const ir::Module& m, int fn, const std::vector<ir::Value>& args
             r = "r[e]";
             code += fmt::format("        int e = k / {};\n        k -= e * {};\n", t.components(), t.components());
         }
-        if (t.is_scalar()) code += fmt::format("        v = {};\n", r);
+        if (t.is_scalar()) code += fmt::format("        v = float({});\n", r);  // a ℤ output is an int
         else if (t.is_vector() || t.rows == 1) code += fmt::format("        v = {}[k];\n", r);
         else code += fmt::format("        v = {}[k % {}][k / {}];\n", r, t.cols, t.cols);
         code += "    }\n";

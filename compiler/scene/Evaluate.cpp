@@ -4,13 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <cerrno>
-#include <cstring>
 #include <fmt/format.h>
-#include <fstream>
-#include <sstream>
 
 #include "ir/Lower.h"
+#include "ir/Pipeline.h"
 #include "scene/Modules.h"
 #include "scene/Scene.h"
 
@@ -19,6 +16,11 @@ namespace iqc {
 namespace fs = std::filesystem;
 
 namespace {
+
+void report_eval_limit(Diagnostics& d, const ir::EvalLimit& limit) {
+    d.error(limit.span, fmt::format("evaluating this would take more than {} steps: a recurrence or sum too large to "
+                                    "evaluate (iqc eval stops there)", limits::kMaxEvalSteps));
+}
 
 // Evaluates a literal such as `3`, `-0.5`, `(1, 2, 3)` or `[1 2; 3 4]` (any constant expression).
 bool parse_value(const std::string& name, const std::string& text, SourceManager& sm, Diagnostics& d, ir::Value& out) {
@@ -39,9 +41,14 @@ bool parse_value(const std::string& name, const std::string& text, SourceManager
         return false;
     }
     ir::Module irm;
-    LowerContext ctx{irm, {}};
+    LowerContext ctx{irm, {}, {}};
     int fn = lower_module(*m, "value", "value", ctx);
-    out = ir::evaluate(irm, fn, {});
+    try {
+        out = ir::evaluate(irm, fn, {});
+    } catch (const ir::EvalLimit& limit) {
+        report_eval_limit(d, limit);
+        return false;
+    }
     return true;
 }
 
@@ -78,16 +85,12 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
         std::string text;
         ModuleSource ms;
         SceneDesc tmp;
-        // Read the file through the scene loader's reader for its error messages.
-        std::ifstream in(req.path, std::ios::binary);
-        std::error_code ec;
-        if (!in || fs::is_directory(req.path, ec)) {
-            d.error_nospan(fmt::format("cannot read '{}': {}", req.path, ec ? ec.message() : std::strerror(errno)));
+        std::string err;
+        if (!read_source_file(req.path, sm.total_bytes(), text, err)) {
+            d.error_nospan(fmt::format("cannot read '{}': {}", req.path, err));
             return false;
         }
-        std::ostringstream ss;
-        ss << in.rdbuf();
-        ms.file = sm.add(req.path, ss.str());
+        ms.file = sm.add(req.path, std::move(text));
         ms.name = name.empty() ? fs::path(req.path).stem().string() : name;
         ms.ranges = {{0, uint32_t(sm.text(ms.file).size())}};
         ms.where = {ms.file, 0, 1};
@@ -149,10 +152,23 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
     }
     if (d.error_count() != before) return false;
     ir::Module irm;
-    LowerContext ctx{irm, {}};
+    LowerContext ctx{irm, {}, {}};
     int fn = lower_module(*m, name, name, ctx);
+    irm.functions[size_t(fn)].entry = true;
     lap("lower to IR");
-    auto all = ir::evaluate_all(irm, fn, args, req.inputs);
+    ir::PipelineOptions po;
+    po.inject_fault = req.inject_fault;
+    ir::PipelineResult pr = ir::run_pipeline(irm, po);
+    for (const auto& w : pr.range_issues) d.warning(w.span, w.message);
+    fn = irm.find(name);
+    lap("pass pipeline");
+    std::vector<ir::Value> all;
+    try {
+        all = ir::evaluate_all(irm, fn, args, req.inputs);
+    } catch (const ir::EvalLimit& limit) {
+        report_eval_limit(d, limit);
+        return false;
+    }
     lap("evaluate");
     const ir::Function& F = irm.functions[size_t(fn)];
     // Outputs in source order.

@@ -2,10 +2,9 @@
 
 #include <filesystem>
 #include <fmt/format.h>
-#include <fstream>
-#include <sstream>
 
 #include "resources/Embedded.h"
+#include "source/Limits.h"
 #include "sema/Builtins.h"
 #include "syntax/Parser.h"
 
@@ -30,8 +29,16 @@ void ModuleLibrary::add(const ModuleSource& m) {
     registry_[m.name] = &m;
 }
 
-const ModuleSource* ModuleLibrary::find_source(const std::string& name) {
+bool ModuleLibrary::is_file_name(const std::string& name) {
+    if (name.empty() || name.size() > 200 || name[0] == '.') return false;
+    for (char c : name)
+        if (c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20 || c == 0x7F) return false;
+    return true;
+}
+
+const ModuleSource* ModuleLibrary::find_source(const std::string& name, Span where) {
     if (auto it = registry_.find(name); it != registry_.end()) return it->second;
+    if (!is_file_name(name)) return nullptr;  // never a path: `type = "../x"` finds nothing
     auto own = [&](std::unique_ptr<ModuleSource> ms) {
         registry_[name] = ms.get();
         owned_.push_back(std::move(ms));
@@ -41,12 +48,16 @@ const ModuleSource* ModuleLibrary::find_source(const std::string& name) {
         fs::path p = fs::path(dir) / (name + ".iql");
         std::error_code ec;
         if (!fs::is_regular_file(p, ec)) continue;
-        std::ifstream in(p, std::ios::binary);
-        std::ostringstream ss;
-        ss << in.rdbuf();
+        std::string text, err;
+        if (!read_source_file(p.string(), sm_.total_bytes(), text, err)) {
+            std::string msg = fmt::format("cannot read module file '{}': {}", p.string(), err);
+            if (where.valid()) d_.error(where, msg);
+            else d_.error_nospan(msg);
+            return nullptr;
+        }
         auto ms = std::make_unique<ModuleSource>();
         ms->name = name;
-        ms->file = sm_.add(p.string(), ss.str());
+        ms->file = sm_.add(p.string(), std::move(text));
         ms->ranges = {{0, uint32_t(sm_.text(ms->file).size())}};
         ms->where = {ms->file, 0, 1};
         ms->origin = "module file";
@@ -83,7 +94,7 @@ std::vector<std::string> ModuleLibrary::names() const {
 std::unique_ptr<CheckedModule> ModuleLibrary::check_with(const std::string& name,
                                                         const std::map<std::string, Type>& given_types,
                                                         const std::map<std::string, std::shared_ptr<const ast::Module>>& given_functions) {
-    const ModuleSource* src = find_source(name);
+    const ModuleSource* src = find_source(name, {});
     if (!src) return nullptr;
     auto m = parse_check(*src, name, false, given_types, given_functions);
     m->ast.span = src->where;
@@ -151,8 +162,13 @@ const CheckedModule* ModuleLibrary::get(const std::string& name, Span where) {
         d_.error(where, fmt::format("module '{}' imports itself (an import cycle)", name));
         return nullptr;
     }
-    const ModuleSource* src = find_source(name);
+    const ModuleSource* src = find_source(name, where);
     if (!src) return nullptr;
+    if (in_progress_.size() >= size_t(limits::kMaxImportDepth)) {
+        d_.error(where, fmt::format("module '{}' is imported through more than {} nested imports", name,
+                                    limits::kMaxImportDepth));
+        return nullptr;
+    }
     in_progress_.insert(name);
     auto m = parse_check(*src, name, false);
     in_progress_.erase(name);

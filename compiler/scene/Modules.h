@@ -3,7 +3,8 @@
 // Lookup order: modules added by the input (the scene's or document's own, then its includes), then
 // `<dir>/<name>.iql` in the search directories (the input's folder), then the standard library
 // (stdlib/, embedded in the binary). The same name added twice is an error naming both places; a module
-// that imports itself, directly or not, is an import cycle.
+// that imports itself, directly or not, is an import cycle; imports nest at most limits::kMaxImportDepth deep.
+// Names are never paths: a name with a folder in it (`../x`, `/tmp/x`) is not looked up in the file system.
 #pragma once
 
 #include <map>
@@ -40,6 +41,9 @@ public:
     // Every module name that lookup can find, for "did you mean".
     std::vector<std::string> names() const;
 
+    // Whether a name can be looked up as `<dir>/<name>.iql`: a plain file name, no folders, no leading dot.
+    static bool is_file_name(const std::string& name);
+
     // The names a scene transform imports without saying so.
     static const std::vector<std::pair<std::string, std::string>>& transform_imports();
 
@@ -52,7 +56,8 @@ private:
     std::map<std::string, std::unique_ptr<CheckedModule>> checked_;
     std::set<std::string> in_progress_;
 
-    const ModuleSource* find_source(const std::string& name);
+    // `where`: where the name was written (for a file that exists but cannot be read); may be empty.
+    const ModuleSource* find_source(const std::string& name, Span where);
 };
 
 }  // namespace iqc

@@ -5,45 +5,93 @@
 #include <cstring>
 #include <filesystem>
 #include <fmt/format.h>
-#include <fstream>
-#include <sstream>
+#include <limits>
 #include <toml++/toml.h>
+#include <unordered_map>
 
 #include "sema/Check.h"
+#include "source/Limits.h"
 
 namespace iqc {
 
 namespace fs = std::filesystem;
 
-uint32_t offset_at(const SourceManager& sm, FileId file, uint32_t base, uint32_t line, uint32_t col) {
-    std::string_view t = sm.text(file);
-    size_t i = base;
-    for (uint32_t l = 1; l < line && i < t.size(); ++i)
-        if (t[i] == '\n') ++l;
-    for (uint32_t c = 1; c < col && i < t.size() && t[i] != '\n';) {
-        utf8::decode(t, i);
-        ++c;
-    }
-    return uint32_t(std::min(i, t.size()));
-}
-
 namespace {
 
-bool read_file(const std::string& path, std::string& out, std::string& err) {
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) {
-        err = "it is a directory";
-        return false;
+// Byte offsets of toml++'s positions (1-based lines and columns, columns in code points) in a file's text
+// that starts at `base`: a line's code points are indexed once, at its first use, so locating every
+// node of a scene costs time linear in its size (rescanning from `base` per node was quadratic).
+class TomlPositions {
+public:
+    TomlPositions(const SourceManager& sm, FileId file, uint32_t base)
+        : sm_(sm), file_(file), first_line_(sm.line_col(file, base).line), base_(base) {}
+
+    uint32_t offset(uint32_t line, uint32_t col) {
+        std::string_view text = sm_.text(file_);
+        uint32_t l = first_line_ + line - 1;
+        std::string_view lt = sm_.line_text(file_, l);
+        if (lt.data() == nullptr) return uint32_t(text.size());
+        uint32_t start = line == 1 ? base_ : uint32_t(lt.data() - text.data());
+        auto it = lines_.find(l);
+        if (it == lines_.end()) {
+            std::vector<uint32_t> cps;  // byte offset of each code point of the line, and of its end
+            size_t end = size_t(lt.data() - text.data()) + lt.size();
+            for (size_t i = start; i < end;) {
+                cps.push_back(uint32_t(i));
+                utf8::decode(text, i);
+            }
+            cps.push_back(uint32_t(end));
+            it = lines_.emplace(l, std::move(cps)).first;
+        }
+        const auto& cps = it->second;
+        return col == 0 ? cps.front() : cps[std::min<size_t>(col - 1, cps.size() - 1)];
     }
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        err = std::strerror(errno);
-        return false;
+
+private:
+    const SourceManager& sm_;
+    FileId file_;
+    uint32_t first_line_, base_;
+    std::unordered_map<uint32_t, std::vector<uint32_t>> lines_;
+};
+
+// Where TOML text first nests deeper than limits::kMaxTomlDepth, counting the parts of a dotted key
+// (`a.b.c`) and the open arrays and inline tables around it; npos when it never does. toml++ recurses
+// that deep while it builds and frees the tables, so a 100,000-part key would overflow the stack. The
+// count is a slight over-estimate (a table header's bracket, a float's point), never an under-estimate.
+size_t toml_too_deep(std::string_view t) {
+    int open = 0, parts = 0;
+    auto skip_string = [&](size_t i) {  // i at the opening quote; returns the index of the closing one
+        char q = t[i];
+        bool multi = t.substr(i, 3) == std::string(3, q);
+        size_t j = i + (multi ? 3 : 1);
+        for (; j < t.size(); ++j) {
+            if (q == '"' && t[j] == '\\') { ++j; continue; }
+            if (!multi && (t[j] == q || t[j] == '\n')) return j;
+            if (multi && t.substr(j, 3) == std::string(3, q)) return j + 2;
+        }
+        return t.size();
+    };
+    for (size_t i = 0; i < t.size(); ++i) {
+        char c = t[i];
+        if (c == '#') {
+            while (i < t.size() && t[i] != '\n') ++i;
+            parts = 0;
+        } else if (c == '"' || c == '\'') {
+            i = skip_string(i);
+        } else if (c == '[' || c == '{') {
+            ++open;
+            parts = 0;
+        } else if (c == ']' || c == '}') {
+            open = std::max(0, open - 1);
+            parts = 0;
+        } else if (c == '.') {
+            ++parts;
+        } else if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '+' || c == ' ' || c == '\t')) {
+            parts = 0;
+        }
+        if (open + parts > limits::kMaxTomlDepth) return i;
     }
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    out = ss.str();
-    return true;
+    return std::string_view::npos;
 }
 
 const std::vector<std::string> kTopKeys = {"title", "include", "modules", "camera", "render", "effects", "lights", "shapes"};
@@ -58,7 +106,7 @@ const std::vector<std::string> kLightKeys = {"name", "position", "color"};
 class SceneReader {
 public:
     SceneReader(SourceManager& sm, Diagnostics& d, SceneDesc& s, FileId file, uint32_t base)
-        : sm_(sm), d_(d), s_(s), file_(file), base_(base) {}
+        : sm_(sm), d_(d), s_(s), file_(file), base_(base), positions_(sm, file, base) {}
 
     void read(std::string_view toml_text);
 
@@ -68,10 +116,11 @@ private:
     SceneDesc& s_;
     FileId file_;
     uint32_t base_;  // offset of the TOML text in the file (a document's scene block)
+    TomlPositions positions_;
 
     Span span_of(const toml::source_region& r) {
-        uint32_t b = offset_at(sm_, file_, base_, r.begin.line ? r.begin.line : 1, r.begin.column ? r.begin.column : 1);
-        uint32_t e = r.end.line ? offset_at(sm_, file_, base_, r.end.line, r.end.column) : b + 1;
+        uint32_t b = positions_.offset(r.begin.line ? r.begin.line : 1, r.begin.column ? r.begin.column : 1);
+        uint32_t e = r.end.line ? positions_.offset(r.end.line, r.end.column) : b + 1;
         if (e <= b) e = b + 1;
         // Keep the span on one line for the caret.
         std::string_view t = sm_.text(file_);
@@ -134,12 +183,25 @@ private:
         return std::nullopt;
     }
     std::optional<double> get_number(const toml::node& n, const std::string& key) {
-        if (n.is_number()) return n.value<double>();
+        if (n.is_number()) return in_float_range(n, key);
         wrong_type(n, key, "a number");
         return std::nullopt;
     }
+    // A number's value when it is finite and within 32-bit floats' range (what shaders compute in; TOML
+    // also allows inf and nan), else a located error.
+    std::optional<double> in_float_range(const toml::node& n, const std::string& key) {
+        double v = *n.value<double>();
+        if (std::fabs(v) <= double(std::numeric_limits<float>::max())) return v;
+        d_.error(span_of(n), fmt::format("'{}' must be a finite number within the range of 32-bit floats (about ±3.4e38), "
+                                         "not {}", key, v));
+        return std::nullopt;
+    }
     std::optional<std::vector<double>> get_numbers(const toml::node& n, const std::string& key) {
-        if (n.is_number()) return std::vector<double>{*n.value<double>()};
+        if (n.is_number()) {
+            auto v = in_float_range(n, key);
+            if (!v) return std::nullopt;
+            return std::vector<double>{*v};
+        }
         if (!n.is_array()) {
             wrong_type(n, key, "a number or an array of numbers");
             return std::nullopt;
@@ -150,7 +212,9 @@ private:
                 wrong_type(x, key, "a number");
                 return std::nullopt;
             }
-            out.push_back(*x.value<double>());
+            auto v = in_float_range(x, key);
+            if (!v) return std::nullopt;
+            out.push_back(*v);
         }
         return out;
     }
@@ -207,6 +271,12 @@ private:
 };
 
 void SceneReader::read(std::string_view text) {
+    if (size_t at = toml_too_deep(text); at != std::string_view::npos) {
+        d_.error({file_, uint32_t(base_ + at), uint32_t(base_ + at + 1)},
+                 fmt::format("the TOML nests deeper than {} levels here (the parts of a dotted key plus the arrays "
+                             "and tables around it)", limits::kMaxTomlDepth));
+        return;
+    }
     toml::table root;
     try {
         root = toml::parse(text, sm_.name(file_));
@@ -228,7 +298,7 @@ void SceneReader::read(std::string_view text) {
                 if (!rel) continue;
                 fs::path p = dir / *rel;
                 std::string text, err;
-                if (!read_file(p.string(), text, err)) {
+                if (!read_source_file(p.string(), sm_.total_bytes(), text, err)) {
                     d_.error(span_of(item), fmt::format("cannot read included file '{}': {}", p.string(), err));
                     continue;
                 }
@@ -399,6 +469,10 @@ void SceneReader::read(std::string_view text) {
             if (auto v = get_string(*x, "type")) {
                 inst.type = *v;
                 inst.type_span = span_of(*x);
+                if (v->empty()) {
+                    d_.error(inst.type_span, "'type' cannot be empty: name a shape module, e.g. type = \"sphere\"");
+                    continue;
+                }
             }
         } else {
             d_.error(inst.span, "this [[shapes]] entry has no 'type' (the shape module to use)");
@@ -408,6 +482,9 @@ void SceneReader::read(std::string_view text) {
             if (auto v = get_string(*x, "material")) {
                 inst.material = *v;
                 inst.material_span = span_of(*x);
+                if (v->empty())
+                    d_.error(inst.material_span, "'material' cannot be empty: name a material module, or leave "
+                                                 "'material' out for the default (the normal as a colour)");
             }
         if (auto* x = t.get("transform"))
             if (auto v = get_string(*x, "transform")) inst.transform = string_source(*x, *v, "transform", "scene");
@@ -521,7 +598,7 @@ void read_document(SourceManager& sm, Diagnostics& d, SceneDesc& s) {
 bool load_scene(const std::string& path, SourceManager& sm, Diagnostics& d, SceneDesc& s) {
     std::string text, err;
     size_t before = d.error_count();
-    if (!read_file(path, text, err)) {
+    if (!read_source_file(path, sm.total_bytes(), text, err)) {
         d.error_nospan(fmt::format("cannot read '{}': {}", path, err));
         return false;
     }

@@ -101,7 +101,4 @@ struct SceneDesc {
 // Reads and parses `path` into `out`; reports problems to `diags` (returns false on error).
 bool load_scene(const std::string& path, SourceManager& sm, Diagnostics& diags, SceneDesc& out);
 
-// The byte offset of a 1-based line/column (columns in code points) counted from `base` in `file`.
-uint32_t offset_at(const SourceManager& sm, FileId file, uint32_t base, uint32_t line, uint32_t col);
-
 }  // namespace iqc

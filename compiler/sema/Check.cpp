@@ -9,6 +9,7 @@
 #include "ir/IR.h"
 #include "sema/Builtins.h"
 #include "sema/Hints.h"
+#include "source/Limits.h"
 
 namespace iqc {
 
@@ -161,6 +162,8 @@ private:
     const LoopGroup* loop_ = nullptr;  // the recurrence group whose bodies are being checked
     std::map<std::string, const Stmt*> seq_leader_;  // sequence name -> its group's leader
     std::vector<std::pair<std::string, int>> sums_;  // enclosing ∑ indices and their ranges
+    int depth_ = 0;          // nesting of check() (limits::kMaxNesting)
+    bool too_deep_ = false;  // reported once
 
     int sum_range(const Expr& body, const std::string& index);
 
@@ -179,7 +182,8 @@ private:
     void note_operands(Diagnostic& d, const Expr& e);
     std::vector<const Expr*> statement_values(const Stmt& s) const;
     void check_function(LocalFunction& f, Span call_site, const std::vector<Type>* args = nullptr);
-    Type check(Expr& e);
+    Type check(Expr& e);       // with the depth limit and the size limit
+    Type check_kind(Expr& e);  // by the expression's kind
     Type check_name(Expr& e);
     Type check_call(Expr& e);
     Type check_binary(Expr& e);
@@ -273,6 +277,11 @@ Type Checker::param_type(const TypeSpec& ts, const std::string& name) {
             return {};
         }
         *dim = it->second;
+    }
+    if (int64_t(rows) * (ts.kind == TypeSpec::Matrix ? cols : 1) > limits::kMaxComponents) {
+        d_.error(ts.span, fmt::format("'{}' would have {}×{} components: iqc allows at most {} per vector or matrix", name,
+                                      rows, cols, limits::kMaxComponents));
+        return {};
     }
     switch (ts.kind) {
         case TypeSpec::Scalar: return Type::scalar();
@@ -586,6 +595,9 @@ void Checker::collect_statements() {
     collect_sequences(inits, recs);
 }
 
+// Ends of a recurrence's range: GLSL loops count in 32-bit ints (z_(hi+1) must exist too).
+constexpr int kMaxRangeEnd = 1'000'000'000;
+
 void Checker::collect_sequences(const std::vector<const Stmt*>& inits, const std::vector<const Stmt*>& recs) {
     auto const_int = [&](const Expr& x, const char* what) -> std::optional<int> {
         auto v = const_eval(x);
@@ -593,7 +605,9 @@ void Checker::collect_sequences(const std::vector<const Stmt*>& inits, const std
             d_.error(x.span, fmt::format("the {} of a recurrence's range must be a whole number", what));
             return std::nullopt;
         }
-        return int((*v)[0]);
+        auto k = limits::checked_int((*v)[0], -kMaxRangeEnd, kMaxRangeEnd);
+        if (!k) d_.error(x.span, fmt::format("the {} of a recurrence's range must be within ±{}", what, kMaxRangeEnd));
+        return k;
     };
     for (const Stmt* r : recs) {
         if (m_.find_sequence(r->name) >= 0) {
@@ -719,25 +733,53 @@ void Checker::order_statements() {
         return deps;
     };
     bool reported = false;
-    std::function<void(const Stmt*)> visit = [&](const Stmt* s) {
+    // Depth-first with an explicit stack of frames: 50,000 statements written in reverse order are a
+    // 50,000-deep chain, too deep for recursion.
+    struct Frame {
+        const Stmt* s;
+        std::vector<const Stmt*> deps;
+        size_t next = 0;
+    };
+    std::vector<Frame> frames;
+    auto enter = [&](const Stmt* s) {
         if (state[s] == 2) return;
         if (state[s] == 1) {
             if (reported) return;
             reported = true;
             auto it = std::find(stack.begin(), stack.end(), s);
+            const long kShown = 12;  // a long cycle is shown by its first and last names
+            long length = long(stack.end() - it);
             std::string cycle;
-            for (auto j = it; j != stack.end(); ++j) cycle += (*j)->name + " → ";
+            for (auto j = it; j != stack.end(); ++j) {
+                long k = long(j - it);
+                if (k < kShown - 1 || k == length - 1) cycle += (*j)->name + " → ";
+                else if (k == kShown - 1) cycle += fmt::format("… ({} more) → ", length - kShown);
+            }
             cycle += s->name;
             auto& e = d_.error(s->name_span, fmt::format("dependency cycle: {}", cycle));
-            for (auto j = it + 1; j != stack.end(); ++j) Diagnostics::note(e, (*j)->name_span, fmt::format("'{}' is defined here", (*j)->name));
+            for (auto j = it + 1; j != stack.end() && j - it < kShown; ++j)
+                Diagnostics::note(e, (*j)->name_span, fmt::format("'{}' is defined here", (*j)->name));
             return;
         }
         state[s] = 1;
         stack.push_back(s);
-        for (const auto& dep : deps_of(*s)) visit(node_of(std::string(dep)));
-        stack.pop_back();
-        state[s] = 2;
-        m_.order.push_back(s);
+        Frame f{s, {}};
+        for (const auto& dep : deps_of(*s)) f.deps.push_back(node_of(std::string(dep)));
+        frames.push_back(std::move(f));
+    };
+    auto visit = [&](const Stmt* root) {
+        enter(root);
+        while (!frames.empty()) {
+            Frame& f = frames.back();
+            if (f.next < f.deps.size()) {
+                enter(f.deps[f.next++]);  // may grow `frames`: `f` is not used after this
+                continue;
+            }
+            state[f.s] = 2;
+            m_.order.push_back(f.s);
+            stack.pop_back();
+            frames.pop_back();
+        }
     };
     for (const auto& s : m_.ast.stmts) {
         if (s.kind == StmtKind::Assign && assigns_.count(s.name) && assigns_[s.name] == &s) visit(&s);
@@ -961,6 +1003,10 @@ Type Checker::check_call(Expr& e) {
     // A value followed by a parenthesis is a product: a(b + c).
     bool is_value = (scope_ && scope_->locals.count(n)) || m_.find_param(n) >= 0 || m_.values.count(n) ||
                     assigns_.count(n) || n == "π" || imported_constant(n) >= 0;
+    if (is_value && e.args.empty()) {
+        d_.error(e.span, fmt::format("'{}' is a value, not a function: '{}()' has nothing to multiply it by", n, n));
+        return {};
+    }
     if (is_value) {
         Expr name_expr(ExprKind::Name, e.name_span);
         name_expr.text = n;
@@ -1319,6 +1365,25 @@ Type Checker::check_inner(Expr& e) {
 }
 
 Type Checker::check(Expr& e) {
+    limits::DepthGuard depth(depth_);
+    if (!depth.enter()) {
+        // The parser bounds one expression's depth; local functions calling local functions add up.
+        if (!too_deep_) d_.error(e.span, fmt::format("expressions and the local functions they call nest deeper than {} "
+                                                     "levels here", limits::kMaxNesting));
+        too_deep_ = true;
+        return {};
+    }
+    Type t = check_kind(e);
+    if (t.valid() && t.components() > limits::kMaxComponents) {
+        d_.error(e.span, fmt::format("this value has {} components: iqc allows at most {} per vector or matrix",
+                                     t.components(), limits::kMaxComponents));
+        t = {};
+    }
+    e.type = t;
+    return t;
+}
+
+Type Checker::check_kind(Expr& e) {
     Type t;
     switch (e.kind) {
         case ExprKind::Number: t = Type::scalar(); break;
@@ -1463,10 +1528,15 @@ Type Checker::check(Expr& e) {
             if (!ok) break;
             e.block_rows = heights;
             e.block_cols = widths;
-            int R = 0, C = 0;
+            int64_t R = 0, C = 0;
             for (int h : heights) R += h;
             for (int w : widths) C += w;
-            t = C == 1 ? Type::vector(R) : Type::matrix(R, C);
+            if (R * C > limits::kMaxComponents) {
+                d_.error(e.span, fmt::format("this matrix has {}×{} entries: iqc allows at most {} per vector or matrix", R,
+                                             C, limits::kMaxComponents));
+                break;
+            }
+            t = C == 1 ? Type::vector(int(R)) : Type::matrix(int(R), int(C));
             break;
         }
         case ExprKind::Sum: {
@@ -1544,7 +1614,6 @@ Type Checker::check(Expr& e) {
             break;
         }
     }
-    e.type = t;
     return t;
 }
 
@@ -1595,12 +1664,17 @@ Type Checker::check_index(Expr& e) {
             ok = false;
             continue;
         }
-        it.value = int((*c)[0]) - 1;
-        if (it.value < 0) {
-            d_.error(it.span, fmt::format("subscript {} is out of range: subscripts start at 1", int((*c)[0])));
+        if (!((*c)[0] >= 1)) {
+            d_.error(it.span, fmt::format("subscript {} is out of range: subscripts start at 1", (*c)[0]));
             ok = false;
             continue;
         }
+        if ((*c)[0] > limits::kMaxComponents) {
+            d_.error(it.span, fmt::format("subscript {} is out of range: {} has fewer components", (*c)[0], a.str()));
+            ok = false;
+            continue;
+        }
+        it.value = int((*c)[0]) - 1;
         idx.push_back(it.value);
     }
     if (!ok) return {};
@@ -1726,7 +1800,7 @@ Type Checker::check_elementwise(const Stmt& s) {
 
 // (a, b, ...): scalars and vectors concatenated. The items were already checked when they carry a type.
 Type Checker::check_vector_items(Expr& e) {
-    int n = 0;
+    int64_t n = 0;
     bool ok = true;
     for (auto& a : e.args) {
         Type at = a->type.valid() ? a->type : check(*a);
@@ -1738,7 +1812,12 @@ Type Checker::check_vector_items(Expr& e) {
             ok = false;
         }
     }
-    return ok ? Type::vector(n) : Type{};
+    if (!ok) return {};
+    if (n > limits::kMaxComponents) {
+        d_.error(e.span, fmt::format("this vector has {} components: iqc allows at most {}", n, limits::kMaxComponents));
+        return {};
+    }
+    return Type::vector(int(n));
 }
 
 void Checker::check_group(const LoopGroup& g) {
@@ -1868,27 +1947,37 @@ void Checker::run() {
     if (m_.ast.kind == ModuleKind::Shape || m_.ast.kind == ModuleKind::Material) {
         const char* out = m_.ast.kind == ModuleKind::Shape ? "D" : "C";
         m_.primary = out;
-        // The renderer binds a shape's query point and a material's surface point, normal and eye: they
-        // must be ℝ³ (by name p, N̂, I, or else the first parameters in order).
-        auto require_vec3 = [&](std::vector<std::string> names, size_t position, const char* what) {
-            int pi = -1;
-            for (const auto& n : names)
-                if (pi < 0) pi = m_.find_param(n);
-            if (pi < 0 && position < m_.params.size()) pi = int(position);
+        // The renderer binds a shape's query point and a material's surface point, normal and eye: by their
+        // conventional names where the module uses them, otherwise the first parameters not yet bound, in
+        // order. They must be ℝ³. These are the only rules (CheckedModule::roles; the scene compiler uses them).
+        bool shape = m_.ast.kind == ModuleKind::Shape;
+        std::vector<std::vector<std::string>> names = {{"p"}};
+        std::vector<const char*> what = {shape ? "the query point" : "the surface point"};
+        if (!shape) {
+            names.push_back({"N̂", "N", "n̂", "n"});
+            names.push_back({"I", "eye", "E"});
+            what.push_back("the unit normal");
+            what.push_back("the eye position");
+        }
+        m_.roles.assign(names.size(), -1);
+        for (size_t r = 0; r < names.size(); ++r)
+            for (const auto& n : names[r])
+                if (m_.roles[r] < 0) m_.roles[r] = m_.find_param(n);
+        for (size_t r = 0, next = 0; r < names.size(); ++r) {
+            if (m_.roles[r] >= 0) continue;
+            auto taken = [&](size_t k) { return std::find(m_.roles.begin(), m_.roles.end(), int(k)) != m_.roles.end(); };
+            while (next < m_.params.size() && taken(next)) ++next;
+            if (next < m_.params.size()) m_.roles[r] = int(next++);
+        }
+        for (size_t r = 0; r < names.size(); ++r) {
+            int pi = m_.roles[r];
             if (pi < 0) {
-                d_.error(m_.ast.span, fmt::format("{} '{}' needs {} as a parameter", m_.ast.kind == ModuleKind::Shape ? "shape" : "material",
-                                                  m_.ast.name, what));
+                d_.error(m_.ast.span, fmt::format("{} '{}' needs {} as a parameter", shape ? "shape" : "material", m_.ast.name,
+                                                  what[r]));
             } else if (m_.params[size_t(pi)].type != Type::vector(3)) {
-                d_.error(m_.params[size_t(pi)].span, fmt::format("'{}' is {} ({}) and must be ℝ³", m_.params[size_t(pi)].name, what,
-                                                                  m_.params[size_t(pi)].type.str()));
+                d_.error(m_.params[size_t(pi)].span, fmt::format("'{}' is {} ({}) and must be ℝ³", m_.params[size_t(pi)].name,
+                                                                  what[r], m_.params[size_t(pi)].type.str()));
             }
-        };
-        if (m_.ast.kind == ModuleKind::Shape) {
-            require_vec3({"p"}, 0, "the query point");
-        } else {
-            require_vec3({"p"}, 0, "the surface point");
-            require_vec3({"N̂", "N", "n̂", "n"}, 1, "the unit normal");
-            require_vec3({"I", "eye", "E"}, 2, "the eye position");
         }
         if (!assigns_.count(out)) {
             d_.error(m_.ast.span, fmt::format("{} '{}' does not assign '{}' ({})", m_.ast.kind == ModuleKind::Shape ? "shape" : "material",

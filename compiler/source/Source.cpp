@@ -1,7 +1,14 @@
 #include "source/Source.h"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "source/Limits.h"
 
 namespace iqc {
 
@@ -78,6 +85,7 @@ FileId SourceManager::add(std::string name, std::string text) {
     f.name = std::move(name);
     f.text = std::move(text);
     f.line_starts = compute_line_starts(f.text);
+    total_bytes_ += f.text.size();
     files_.push_back(std::move(f));
     return FileId(files_.size() - 1);
 }
@@ -88,6 +96,51 @@ FileId SourceManager::add_embedded(std::string name, std::string text, FileId ou
     files_[id].outer = outer;
     files_[id].outer_offset = outer_offset;
     return id;
+}
+
+bool read_source_file(const std::string& path, size_t already, std::string& out, std::string& err) {
+    // O_NONBLOCK: opening a named pipe must not wait for a writer; the mode is checked before any read.
+    int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        err = std::strerror(errno);
+        return false;
+    }
+    struct stat st {};
+    size_t budget = already >= limits::kMaxTotalBytes ? 0 : limits::kMaxTotalBytes - already;
+    size_t cap = std::min(limits::kMaxFileBytes, budget);
+    bool ok = false;
+    if (::fstat(fd, &st) != 0) {
+        err = std::strerror(errno);
+    } else if (S_ISDIR(st.st_mode)) {
+        err = "it is a directory";
+    } else if (!S_ISREG(st.st_mode)) {
+        err = "it is not a regular file (iqc reads no pipes or devices)";
+    } else {
+        out.clear();
+        char buf[65536];
+        ok = true;
+        while (true) {
+            ssize_t n = ::read(fd, buf, sizeof buf);
+            if (n < 0 && errno == EINTR) continue;
+            if (n < 0) {
+                err = std::strerror(errno);
+                ok = false;
+                break;
+            }
+            if (n == 0) break;
+            if (out.size() + size_t(n) > cap) {
+                err = cap < limits::kMaxFileBytes
+                          ? fmt::format("the files of this compile would exceed {} MiB in all", limits::kMaxTotalBytes >> 20)
+                          : fmt::format("it is larger than {} MiB", limits::kMaxFileBytes >> 20);
+                ok = false;
+                break;
+            }
+            out.append(buf, size_t(n));
+        }
+    }
+    ::close(fd);
+    if (!ok) out.clear();
+    return ok;
 }
 
 LineCol SourceManager::line_col(FileId f, uint32_t offset) const {
@@ -152,16 +205,30 @@ static const char* severity_name(Severity s) {
     return "error";
 }
 
+// Text as shown in a diagnostic: control characters (a NUL, an escape sequence) become their visible
+// pictures (U+2400 + c, ␡ for DEL), one column each like the byte they stand for; tabs and (in messages)
+// newlines stay.
+static std::string printable(std::string_view text, bool keep_newlines) {
+    std::string out;
+    out.reserve(text.size());
+    for (char ch : text) {
+        unsigned char c = static_cast<unsigned char>(ch);
+        if ((c < 0x20 && c != '\t' && !(keep_newlines && c == '\n')) || c == 0x7F) utf8::append(out, c == 0x7F ? 0x2421 : 0x2400 + c);
+        else out += ch;
+    }
+    return out;
+}
+
 std::string Diagnostics::render(const Diagnostic& d) const {
     std::string out;
     if (!d.has_span) {
-        out += fmt::format("iqc: {}: {}\n", severity_name(d.severity), d.message);
+        out += fmt::format("iqc: {}: {}\n", severity_name(d.severity), printable(d.message, true));
     } else {
-        out += fmt::format("{}: {}: {}\n", sm_.location(d.span), severity_name(d.severity), d.message);
+        out += fmt::format("{}: {}: {}\n", sm_.location(d.span), severity_name(d.severity), printable(d.message, true));
         LineCol b = sm_.line_col(d.span.file, d.span.begin);
         LineCol e = sm_.line_col(d.span.file, d.span.end);
         std::string_view line = sm_.line_text(d.span.file, b.line);
-        out += fmt::format("  {}\n", line);
+        out += fmt::format("  {}\n", printable(line, false));
         size_t line_width = utf8::width(line);
         size_t start = b.col - 1;
         size_t len = (e.line == b.line && e.col > b.col) ? e.col - b.col : 1;

@@ -45,6 +45,8 @@ public:
     // Display position: for embedded files, the position translated into the outer file.
     std::string location(Span s) const;
     size_t size() const { return files_.size(); }
+    // Bytes of every file added so far (for the limit on what one compile reads).
+    size_t total_bytes() const { return total_bytes_; }
 
 private:
     struct File {
@@ -55,7 +57,13 @@ private:
         uint32_t outer_offset = 0;
     };
     std::vector<File> files_;
+    size_t total_bytes_ = 0;
 };
+
+// Reads a source file for a compile that has already read `already` bytes: regular files only (a pipe,
+// a device or a directory is refused at once, never waited on), at most limits::kMaxFileBytes each and
+// limits::kMaxTotalBytes in all. False with `err` saying why ("it is not a regular file", ...).
+bool read_source_file(const std::string& path, size_t already, std::string& out, std::string& err);
 
 enum class Severity { Error, Warning, Note };
 

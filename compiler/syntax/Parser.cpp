@@ -2,9 +2,14 @@
 
 #include <cctype>
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <functional>
 #include <fmt/format.h>
+#include <limits>
+
+#include "source/Limits.h"
+#include "syntax/WordSplit.h"
 
 #include "sema/Builtins.h"
 
@@ -49,24 +54,6 @@ bool is_name_token(const Token& t) { return t.kind == Tok::Word || t.kind == Tok
 bool is_keyword(const std::string& w) { return w.size() >= 2 && w.size() <= 9 && kKeywords.count(w) > 0; }
 bool is_kw(const Token& t, const char* kw) { return t.kind == Tok::Word && t.text == kw; }
 
-// Splits a letter run into letter units: a base letter and the combining marks after it.
-std::vector<std::pair<size_t, size_t>> letter_units(const std::string& w) {
-    std::vector<std::pair<size_t, size_t>> units;  // byte offset, length
-    size_t i = 0;
-    while (i < w.size()) {
-        size_t b = i;
-        utf8::decode(w, i);
-        while (i < w.size()) {
-            size_t j = i;
-            char32_t c = utf8::decode(w, j);
-            if (!utf8::is_combining(c)) break;
-            i = j;
-        }
-        units.push_back({b, i - b});
-    }
-    return units;
-}
-
 // Pre-scan: names the module assigns, declares, defines as functions or imports.
 std::set<std::string> prescan(const std::vector<Token>& toks) {
     std::set<std::string> known;
@@ -99,8 +86,9 @@ std::set<std::string> prescan(const std::vector<Token>& toks) {
             if (!starts || !is_name_token(toks[s])) continue;
             // name list: NAME[_SUB] {, NAME[_SUB]}
             std::vector<std::string> names;
-            size_t k = s;
+            size_t k = s, last = s;  // `last`: where the list's last name starts
             while (k < line_end && is_name_token(toks[k])) {
+                last = k;
                 std::string n = toks[k].text;
                 if (k + 2 < line_end && toks[k + 1].kind == Tok::Underscore && !toks[k + 1].space_before &&
                     toks[k + 2].kind == Tok::Word && !toks[k + 2].space_before) {
@@ -147,6 +135,10 @@ std::set<std::string> prescan(const std::vector<Token>& toks) {
             }
             if (decl || imp || assign || func)
                 for (auto& n : names) known.insert(n);
+            // A list starting at a later name of this one ends the same way with fewer names: nothing new,
+            // unless it is the last name alone (then `NAME =` or `NAME(...)` may apply). Skipping keeps the
+            // pre-scan linear on long lists.
+            if (last > s) s = last - 1;
         }
         i = line_end + 1;
     }
@@ -157,6 +149,7 @@ std::set<std::string> prescan(const std::vector<Token>& toks) {
 std::vector<Token> split_words(const std::vector<Token>& toks, const std::set<std::string>& known) {
     std::vector<Token> out;
     out.reserve(toks.size() + toks.size() / 4);
+    WordSplitter splitter(known);
     for (size_t i = 0; i < toks.size(); ++i) {
         const Token& t = toks[i];
         bool after_from = i > 0 && is_kw(toks[i - 1], "from");
@@ -164,32 +157,23 @@ std::vector<Token> split_words(const std::vector<Token>& toks, const std::set<st
             out.push_back(t);
             continue;
         }
-        auto units = letter_units(t.text);
-        size_t u = 0;
         bool first = true;
-        while (u < units.size()) {
-            size_t best = 1;
-            for (size_t len = units.size() - u; len > 1; --len) {
-                size_t b = units[u].first;
-                size_t e = units[u + len - 1].first + units[u + len - 1].second;
-                if (known.count(t.text.substr(b, e - b))) { best = len; break; }
-            }
-            size_t b = units[u].first;
-            size_t e = units[u + best - 1].first + units[u + best - 1].second;
-            Token piece = t;
-            piece.text = t.text.substr(b, e - b);
-            piece.span = {t.span.file, uint32_t(t.span.begin + b), uint32_t(t.span.begin + e)};
-            if (best < units.size()) {
+        for (auto [b, len] : splitter.split(t.text)) {
+            Token piece;  // not a copy of `t`: its text may be a 100,000-letter run
+            piece.kind = t.kind;
+            piece.text = t.text.substr(b, len);
+            piece.span = {t.span.file, uint32_t(t.span.begin + b), uint32_t(t.span.begin + b + len)};
+            piece.space_before = first && t.space_before;
+            piece.line_start = first && t.line_start;
+            if (len < t.text.size()) {
                 piece.word = t.span;
                 // vec3(…), mat4(…): the digit belongs to the GLSL word.
                 if (i + 1 < toks.size() && toks[i + 1].kind == Tok::Number && !toks[i + 1].space_before &&
                     toks[i + 1].text.size() == 1)
                     piece.word.end = toks[i + 1].span.end;
             }
-            if (!first) { piece.space_before = false; piece.line_start = false; }
             out.push_back(std::move(piece));
             first = false;
-            u += best;
         }
     }
     return out;
@@ -217,6 +201,7 @@ private:
     bool failed_ = false;  // an error in the current statement: skip to its end
     int in_condition_ = 0;  // inside a piecewise condition: `<` compares (elsewhere it may open ⟨u, v⟩)
     bool colon_ends_ = false;  // a default's value: `:` starts the description, not A : B
+    int depth_ = 0;        // grammar nesting (limits::kMaxNesting)
 
     struct Bail {};  // unwinds to the statement loop after an error
 
@@ -256,6 +241,31 @@ private:
                           fmt::format("'{}' reads as a product of one-letter names; to define a function with this name, "
                                       "write it in backticks: `{}`(…) = …", name, name));
         throw Bail{};
+    }
+    // One more level of nesting (a parenthesis, a sign, one more operand of a chain such as a + b + …) at
+    // `at`: past limits::kMaxNesting a located error, instead of a stack overflow here or in a later pass.
+    void nest(limits::DepthGuard& g, Span at) {
+        if (!g.enter())
+            fail(at, fmt::format("the expression nests deeper than {} levels (parentheses, signs and the terms of "
+                                 "one sum or product count one each): split it into named steps", limits::kMaxNesting));
+    }
+    // A size written in a type (the 3 of ℝ³ or ℝ^(3×4)): from 1 to limits::kMaxComponents, else a located error.
+    int checked_dimension(const Token& t) {
+        if (t.text.find_first_not_of("0123456789") != std::string::npos || t.text.find_first_not_of('0') == std::string::npos)
+            fail(t.span, fmt::format("a size must be a positive integer, found {}", t.text));
+        auto n = limits::checked_size(t.text);
+        if (!n)
+            fail(t.span, fmt::format("the size {} is too large: iqc allows at most {} components per vector or matrix",
+                                     t.text, limits::kMaxComponents));
+        return *n;
+    }
+    // A number literal's value: within the range of the 32-bit floats shaders compute in, else a located error.
+    double literal_value(const Token& t) {
+        double v = std::strtod(t.text.c_str(), nullptr);
+        if (!(std::fabs(v) <= double(std::numeric_limits<float>::max())))
+            fail(t.span, fmt::format("the number {} is outside the range of 32-bit floats (at most about 3.4e38), "
+                                     "which shaders compute in", t.text));
+        return v;
     }
     const Token& expect(Tok k, const char* what) {
         if (!at(k))
@@ -440,6 +450,8 @@ ExprPtr Parser::parse_dim_expr() {
             return e;
         }
         if (t.kind == Tok::LParen) {
+            limits::DepthGuard depth(depth_);
+            nest(depth, t.span);
             advance();
             ExprPtr e = expr();
             e->span = Span::join(t.span, expect(Tok::RParen, "to close the size").span);
@@ -473,14 +485,14 @@ ExprPtr Parser::parse_dim_expr() {
 
 // type := ℝ [SUPER | ^ dims] | ℤ | R [^ dims] | Z | scalar | vector(n) | matrix(m, n) | type {, type} → type
 TypeSpec Parser::parse_type(bool allow_function) {
+    limits::DepthGuard depth(depth_);
+    nest(depth, cur().span);
     TypeSpec ts;
     Span start = cur().span;
     auto parse_dim = [&](int& value, std::string& sym) {
         if (at(Tok::Number)) {
             const Token& t = advance();
-            value = std::atoi(t.text.c_str());
-            if (value < 1 || t.text.find_first_not_of("0123456789") != std::string::npos)
-                fail(t.span, fmt::format("a size must be a positive integer, found {}", t.text));
+            value = checked_dimension(t);
         } else if (is_name_token(cur())) {
             sym = advance().text;
             value = 0;
@@ -492,9 +504,7 @@ TypeSpec Parser::parse_type(bool allow_function) {
         if (at(Tok::Super) && !cur().space_before) {
             const Token& t = advance();
             if (t.text == "n") { ts.kind = TypeSpec::Vector; ts.sym_rows = "n"; ts.rows = 0; return; }
-            int n = std::atoi(t.text.c_str());
-            if (n < 1 || t.text.find_first_not_of("0123456789") != std::string::npos)
-                fail(t.span, "a size must be a positive integer");
+            int n = checked_dimension(t);
             ts.kind = n == 1 ? TypeSpec::Scalar : TypeSpec::Vector;
             ts.rows = n;
             return;
@@ -618,6 +628,9 @@ Decl Parser::parse_decl() {
             expect(Tok::RBracket, "to close the interval");
             iv.span = Span::join(open, prev_span());
             d.bounds.push_back(std::move(iv));
+            if (d.bounds.size() > size_t(limits::kMaxComponents))
+                fail(d.bounds.back().span, fmt::format("more than {} intervals: iqc allows at most {} components per vector",
+                                          limits::kMaxComponents, limits::kMaxComponents));
             if (accept(Tok::Cross) || (at(Tok::Word) && cur().text == "x" && peek_raw(1).kind == Tok::LBracket &&
                                        (advance(), true)))
                 continue;
@@ -897,9 +910,11 @@ Module Parser::parse(std::string name, bool allow_header) {
 
 // condition := conjunction {or conjunction}       conjunction := comparison {and comparison}
 ExprPtr Parser::parse_condition() {
+    limits::DepthGuard depth(depth_);
     auto conjunction = [&]() {
         ExprPtr lhs = parse_comparison();
         while (at_kw("and")) {
+            nest(depth, cur().span);
             advance();
             ExprPtr rhs = parse_comparison();
             auto e = binary(BinOp::And, std::move(lhs), std::move(rhs));
@@ -910,6 +925,7 @@ ExprPtr Parser::parse_condition() {
     };
     ExprPtr lhs = conjunction();
     while (at_kw("or")) {
+        nest(depth, cur().span);
         advance();
         ExprPtr rhs = conjunction();
         auto e = binary(BinOp::Or, std::move(lhs), std::move(rhs));
@@ -1011,12 +1027,15 @@ ExprPtr Parser::parse_atom_comparison() {
 
 // expr := unary {(+ | -) unary}
 ExprPtr Parser::parse_expr() {
+    limits::DepthGuard depth(depth_);
+    nest(depth, cur().span);
     ExprPtr lhs = parse_unary();
     while (true) {
         const Token& t = cur();
         if (t.kind != Tok::Plus && t.kind != Tok::Minus && t.kind != Tok::PlusMinus) break;
         // Inside a matrix, `a -b` is two items while `a - b` and `a-b` are one.
         if (ctx_.back() == Ctx::Bracket && t.space_before && !peek_raw(1).space_before) break;
+        nest(depth, t.span);
         BinOp op = t.kind == Tok::Plus ? BinOp::Add : t.kind == Tok::Minus ? BinOp::Sub : BinOp::PlusMinus;
         // In a condition, `+-` written together is I♥LA's ASCII ±.
         if (op == BinOp::Add && in_condition_ && peek_raw(1).kind == Tok::Minus && !peek_raw(1).space_before) {
@@ -1037,6 +1056,8 @@ ExprPtr Parser::parse_expr() {
 
 // unary := (- | +) unary | mult        (so -a2 is -(2a) and -x² is -(x²))
 ExprPtr Parser::parse_unary() {
+    limits::DepthGuard depth(depth_);
+    nest(depth, cur().span);
     if (at(Tok::Minus)) {
         Span s = advance().span;
         ExprPtr inner = parse_unary();
@@ -1052,6 +1073,8 @@ ExprPtr Parser::parse_unary() {
 }
 
 ExprPtr Parser::parse_operand() {
+    limits::DepthGuard depth(depth_);
+    nest(depth, cur().span);
     if (at(Tok::Minus)) {
         Span s = advance().span;
         ExprPtr inner = parse_operand();
@@ -1079,6 +1102,7 @@ bool Parser::starts_juxtaposed_operand() {
 
 // mult := elem {(⋅ | * | / | ÷) operand | elem}      (juxtaposition; a/bc is (a/b)c)
 ExprPtr Parser::parse_mult() {
+    limits::DepthGuard depth(depth_);
     ExprPtr lhs = parse_elem();
     while (true) {
         BinOp op;
@@ -1088,6 +1112,7 @@ ExprPtr Parser::parse_mult() {
         else if (t.kind == Tok::Slash || t.kind == Tok::Divide) op = BinOp::Div;
         else if (starts_juxtaposed_operand()) op = BinOp::Juxtapose;
         else break;
+        nest(depth, t.span);
         if (op != BinOp::Juxtapose) advance();
         ExprPtr rhs = op == BinOp::Juxtapose ? parse_elem() : parse_operand();
         lhs = binary(op, std::move(lhs), std::move(rhs));
@@ -1097,6 +1122,7 @@ ExprPtr Parser::parse_mult() {
 
 // elem := power {(∘ | × | ⊗ | \ | :) power}      (I♥LA's product operators between factors)
 ExprPtr Parser::parse_elem() {
+    limits::DepthGuard depth(depth_);
     ExprPtr lhs = parse_power();
     while (true) {
         BinOp op;
@@ -1106,6 +1132,7 @@ ExprPtr Parser::parse_elem() {
         else if (at(Tok::Backslash)) op = BinOp::Solve;
         else if (at(Tok::Colon) && !colon_ends_) op = BinOp::Frobenius;
         else break;
+        nest(depth, cur().span);
         advance();
         ExprPtr rhs = parse_power();
         lhs = binary(op, std::move(lhs), std::move(rhs));
@@ -1115,9 +1142,11 @@ ExprPtr Parser::parse_elem() {
 
 // power := postfix {^ [-] primary | SUPERSCRIPT}      (x^2y is x²·y; ᵀ and ⁻¹ are superscripts too)
 ExprPtr Parser::parse_power() {
+    limits::DepthGuard depth(depth_);
     ExprPtr base = parse_postfix();
     while (true) {
         if (at(Tok::Super) && !cur().space_before) {
+            nest(depth, cur().span);
             const Token& t = advance();
             if (t.text == "T") {
                 auto e = make(ExprKind::Transpose, Span::join(base->span, t.span));
@@ -1129,7 +1158,7 @@ ExprPtr Parser::parse_power() {
                 t.text.find_first_of("0123456789") == std::string::npos)
                 fail(t.span, "a superscript power must be an integer such as ² or ⁻¹");
             auto ex = make(ExprKind::Number, t.span);
-            ex->number = std::strtod(t.text.c_str(), nullptr);
+            ex->number = literal_value(t);
             ex->text = t.text;
             auto e = make(ExprKind::Power, Span::join(base->span, t.span));
             e->args.push_back(std::move(base));
@@ -1138,6 +1167,7 @@ ExprPtr Parser::parse_power() {
             continue;
         }
         if (at(Tok::Caret)) {
+            nest(depth, cur().span);
             advance();
             if (at(Tok::Word) && cur().text == "T" && !known_.count("T")) {
                 Span ts = advance().span;
@@ -1169,6 +1199,7 @@ ExprPtr Parser::parse_power() {
 // postfix := primary {_ index [, index] | SUBSCRIPT | (args)}
 // In an exponent, a one-letter value is not called: x^α(1, 2) is x^α · (1, 2), but e^f(x) calls f.
 ExprPtr Parser::parse_postfix(bool exponent) {
+    limits::DepthGuard depth(depth_);
     ExprPtr e = parse_primary();
     while (true) {
         if (e->kind == ExprKind::Name && (function_power(e) || log_base(e))) continue;
@@ -1183,6 +1214,7 @@ ExprPtr Parser::parse_postfix(bool exponent) {
             continue;
         }
         if (at(Tok::Sub)) {
+            nest(depth, cur().span);
             const Token& t = advance();
             auto idx = make(ExprKind::Index, Span::join(e->span, t.span));
             IndexItem it;
@@ -1202,6 +1234,7 @@ ExprPtr Parser::parse_postfix(bool exponent) {
             continue;
         }
         if (at(Tok::Underscore) && !cur().space_before) {
+            nest(depth, cur().span);
             advance();
             auto idx = make(ExprKind::Index, e->span);
             idx->args.push_back(std::move(e));
@@ -1282,6 +1315,8 @@ ExprPtr Parser::parse_postfix(bool exponent) {
 
 // call := NAME ( [expr {, expr}] )
 ExprPtr Parser::parse_call(ExprPtr callee) {
+    limits::DepthGuard depth(depth_);
+    nest(depth, cur().span);
     advance();  // (
     ctx_.push_back(Ctx::Paren);
     auto call = make(ExprKind::Call, callee->span);
@@ -1562,6 +1597,8 @@ ExprPtr Parser::parse_inner(const Token& open_tok) {
 
 // norm_subscript := _ (INTEGER | ∞ | * | NAME | ( expr )) | SUBSCRIPT     ‖v‖_1, ‖v‖_∞, ‖A‖_F, ‖v‖_p, ‖v‖₁
 void Parser::parse_norm_subscript(Expr& norm) {
+    limits::DepthGuard depth(depth_);
+    nest(depth, cur().span);
     if (at(Tok::Sub)) {
         const Token& t = advance();
         auto n = make(ExprKind::Number, t.span);
@@ -1673,11 +1710,13 @@ ExprPtr Parser::parse_piecewise(Span open) {
 // primary := NUMBER | NAME | FRACTION | ( expr {, expr} ) | [ matrix ] | ‖expr‖ | |expr| | ⌊expr⌋ | ⌈expr⌉
 //          | √ postfix | { piecewise
 ExprPtr Parser::parse_primary() {
+    limits::DepthGuard depth(depth_);
+    nest(depth, cur().span);
     const Token& t = cur();
     switch (t.kind) {
         case Tok::Number: {
             auto e = make(ExprKind::Number, t.span);
-            e->number = t.text == "𝟙" ? 1.0 : std::strtod(t.text.c_str(), nullptr);
+            e->number = t.text == "𝟙" ? 1.0 : literal_value(t);
             e->text = t.text;
             advance();
             if (e->text == "𝟙" && !((at(Tok::Sub) || at(Tok::Underscore)) && !cur().space_before))
@@ -1771,8 +1810,8 @@ ast::Module parse_module(const SourceManager& sm, FileId file, const std::vector
                     if (raw[j + 1].kind == Tok::Eq) raw_functions.push_back(raw[i].text);
                     break;
                 }
-        if (is_kw(raw[i], "from"))
-            for (size_t j = i; j-- > 0 && raw[j].kind != Tok::Newline;)
+        if (is_kw(raw[i], "from"))  // the names before it, back to the line start or an earlier `from`
+            for (size_t j = i; j-- > 0 && raw[j].kind != Tok::Newline && !is_kw(raw[j], "from");)
                 if (is_name_token(raw[j])) raw_functions.push_back(raw[j].text);
     }
     for (const auto& n : opts.known_names) raw_functions.push_back(n);  // built-ins and implicit imports

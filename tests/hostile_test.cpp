@@ -1,0 +1,319 @@
+// Hostile input: every reproducer of issue 16 (crashes, hangs, comment injection, wrong exit codes) runs
+// the real binary under a time and memory bound and must end with exit 0 or with exit 1 and a located
+// diagnostic (file:line:col, the line and a caret). Small inputs are files in tests/hostile/; large ones
+// are generated here. The limits they meet are in compiler/source/Limits.h.
+#include <catch2/catch.hpp>
+
+#include <sys/stat.h>
+
+#include <chrono>
+#include <regex>
+
+#include "TestUtil.h"
+#include "glsl/Names.h"
+#include "source/Limits.h"
+
+using namespace iqc;
+using namespace iqc::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAddressSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kAddressSanitizer = true;
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+
+std::string hostile(const std::string& name) { return std::string(IQC_SOURCE_DIR) + "/tests/hostile/" + name; }
+
+struct Bounded {
+    RunResult run;
+    double seconds = 0;
+};
+
+// Runs iqc with 10 s of wall time and 2 GB of address space (the issue's bounds; sanitizer builds reserve
+// terabytes of address space for their shadow memory, so there only the time bound applies, tripled).
+Bounded run_bounded(const std::string& args) {
+    std::string limit = kAddressSanitizer ? "timeout 30" : "ulimit -v 2097152; timeout 10";
+    auto t0 = std::chrono::steady_clock::now();
+    Bounded b;
+    b.run = run_iqc_env(limit, args);
+    b.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return b;
+}
+
+// Exit 1 with `location: error: message` (message: a prefix; a location ending in ':' matches any
+// line and column after it), followed by the source line and a caret line.
+void require_located(const Bounded& b, const std::string& location, const std::string& message) {
+    INFO("stderr: " << b.run.err.substr(0, 2000));
+    CHECK(b.run.exit_code == 1);
+    size_t at = std::string::npos;
+    for (size_t from = 0; (from = b.run.err.find(location, from)) != std::string::npos; ++from) {
+        size_t k = from + location.size();
+        if (location.back() == ':')
+            while (k < b.run.err.size() && (std::isdigit(static_cast<unsigned char>(b.run.err[k])) || b.run.err[k] == ':') &&
+                   b.run.err.compare(k, 2, ": ") != 0)
+                ++k;
+        if (b.run.err.compare(k, 9 + message.size(), ": error: " + message) == 0) {
+            at = from;
+            break;
+        }
+    }
+    REQUIRE(at != std::string::npos);
+    size_t eol = b.run.err.find('\n', at);
+    REQUIRE(eol != std::string::npos);
+    size_t eol2 = b.run.err.find('\n', eol + 1);
+    REQUIRE(eol2 != std::string::npos);
+    std::string caret_line = b.run.err.substr(eol2 + 1, b.run.err.find('\n', eol2 + 1) - eol2 - 1);
+    CHECK(std::regex_match(caret_line, std::regex("  *\\^~*")));
+}
+
+fs::path generated(const std::string& name, const std::string& text) {
+    fs::create_directories(temp_dir() / "hostile");
+    return write_temp("hostile/" + name, text);
+}
+
+std::string repeat(const std::string& s, size_t n) {
+    std::string out;
+    out.reserve(s.size() * n);
+    for (size_t i = 0; i < n; ++i) out += s;
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("a value called with no arguments is a located error, not a crash", "[hostile]") {
+    require_located(run_bounded("eval " + hostile("value_call.iql")), hostile("value_call.iql") + ":1:5",
+                    "'x' is a value, not a function: 'x()' has nothing to multiply it by");
+    require_located(run_bounded(hostile("value_call_shape.iql") + " -o -"), hostile("value_call_shape.iql") + ":2:11",
+                    "'r' is a value, not a function");
+    require_located(run_bounded(hostile("pi_call.iql") + " -o -"), hostile("pi_call.iql") + ":2:11",
+                    "'π' is a value, not a function");
+}
+
+TEST_CASE("invalid UTF-8 in a description reaches --meta as U+FFFD, not an abort", "[hostile]") {
+    fs::path meta = temp_dir() / "bad_utf8.json";
+    Bounded b = run_bounded(hostile("bad_utf8_description.iql") + " -o - --meta " + meta.string());
+    INFO(b.run.err);
+    REQUIRE(b.run.exit_code == 0);
+    CHECK_THAT(read_text(meta), Catch::Contains("\"description\": \"radius \xEF\xBF\xBD\xEF\xBF\xBD bytes\""));
+    CHECK_THAT(b.run.out, Catch::Contains("// r ∈ [0, 2]: radius \xEF\xBF\xBD\xEF\xBF\xBD bytes"));
+}
+
+TEST_CASE("sizes are checked once: too large, wrapping, beyond int, products", "[hostile]") {
+    std::string cap = std::to_string(limits::kMaxComponents);
+    require_located(run_bounded("eval " + hostile("size_overflow.iql")), hostile("size_overflow.iql") + ":3:8",
+                    "the size 65536 is too large: iqc allows at most " + cap + " components per vector or matrix");
+    require_located(run_bounded("eval " + hostile("size_wrap.iql")), hostile("size_wrap.iql") + ":3:8",
+                    "the size 65536 is too large");
+    require_located(run_bounded("eval " + hostile("size_atoi.iql")), hostile("size_atoi.iql") + ":3:8",
+                    "the size 4294967299 is too large");
+    require_located(run_bounded("eval " + hostile("size_product.iql")), hostile("size_product.iql") + ":3:5",
+                    "'A' would have 100×100 components: iqc allows at most " + cap);
+    require_located(run_bounded("eval " + hostile("sum_huge.iql")), hostile("sum_huge.iql") + ":3:8",
+                    "the size 100000000 is too large");
+    // Sizes computed by the checker: a concatenation and an outer product past the cap.
+    fs::path concat = generated("concat.iql", "y = (v, v, v)\nwhere\nv ∈ ℝ^2000\n");
+    require_located(run_bounded("eval " + concat.string()), concat.string() + ":1:5", "this vector has 6000 components");
+    fs::path outer = generated("outer.iql", "y = v vᵀ\nwhere\nv ∈ ℝ^100\n");
+    require_located(run_bounded("eval " + outer.string()), outer.string() + ":1:5", "this value has 10000 components");
+    fs::path subscript = generated("subscript.iql", "y = v_99999999999\nwhere\nv ∈ ℝ³\n");
+    require_located(run_bounded("eval " + subscript.string()), subscript.string() + ":1:7",
+                    "subscript 99999999999 is out of range");
+}
+
+TEST_CASE("deep nesting is a located error; long chains of statements are fine", "[hostile]") {
+    std::string cap = std::to_string(limits::kMaxNesting);
+    fs::path parens = generated("parens.iql", "y = " + repeat("(", 7000) + "1" + repeat(")", 7000) + "\n");
+    Bounded p = run_bounded("eval " + parens.string());
+    require_located(p, parens.string() + ":1:", "the expression nests deeper than " + cap + " levels");
+    std::string terms = "1";
+    for (int i = 1; i < 20000; ++i) terms += " + 1";
+    fs::path sum = generated("sum.iql", "y = " + terms + "\n");
+    require_located(run_bounded("eval " + sum.string()), sum.string() + ":1:", "the expression nests deeper than");
+    // A sum just under the limit is fine, and exact.
+    std::string ok_terms = "1";
+    for (int i = 1; i < 900; ++i) ok_terms += " + 1";
+    Bounded ok = run_bounded("eval " + generated("sum900.iql", "y = " + ok_terms + "\n").string());
+    CHECK(ok.run.exit_code == 0);
+    CHECK(ok.run.out == "y = 900\n");
+    // 50,000 statements, each using the one after it: ordered without recursion.
+    std::string chain = "y = `a_50000`\n";
+    for (int i = 50000; i > 1; --i) chain += "`a_" + std::to_string(i) + "` = `a_" + std::to_string(i - 1) + "` + 1\n";
+    chain += "`a_1` = 1\n";
+    Bounded c = run_bounded("eval " + generated("chain.iql", chain).string());
+    INFO(c.run.err);
+    CHECK(c.run.exit_code == 0);
+    CHECK_THAT(c.run.out, Catch::StartsWith("y = 50000\n"));
+    // A dependency cycle through 2,000 statements is reported with its ends, not 2,000 names.
+    std::string cycle;
+    for (int i = 1; i <= 2000; ++i) cycle += "`c_" + std::to_string(i) + "` = `c_" + std::to_string(i % 2000 + 1) + "` + 1\n";
+    fs::path cyc = generated("cycle.iql", cycle);
+    Bounded cy = run_bounded("eval " + cyc.string());
+    require_located(cy, cyc.string() + ":1:1", "dependency cycle: c_1 → c_2 → ");
+    CHECK_THAT(cy.run.err, Catch::Contains("… (1988 more) → c_2000 → c_1"));
+    // Local functions calling local functions: the checker's own depth limit.
+    std::string fns = "y = `f_1`(1)\n";
+    for (int i = 1; i < 3000; ++i) fns += "`f_" + std::to_string(i) + "`(x) = `f_" + std::to_string(i + 1) + "`(x) + 1 where x ∈ ℝ\n";
+    fns += "`f_3000`(x) = x where x ∈ ℝ\n";
+    fs::path fn = generated("functions.iql", fns);
+    require_located(run_bounded("eval " + fn.string()), fn.string() + ":",
+                    "expressions and the local functions they call nest deeper than " + cap + " levels");
+}
+
+TEST_CASE("a 100,000-part dotted TOML key is a located error", "[hostile]") {
+    fs::path dotted = generated("dotted.iq", "a" + repeat(".a", 100000) + " = 1\n[[shapes]]\ntype = \"sphere\"\n");
+    require_located(run_bounded(dotted.string() + " -o -"), dotted.string() + ":1:258",
+                    "the TOML nests deeper than " + std::to_string(limits::kMaxTomlDepth) + " levels here");
+}
+
+TEST_CASE("imports nest at most 64 deep", "[hostile]") {
+    fs::path dir = temp_dir() / "hostile" / "imports";
+    fs::create_directories(dir);
+    for (int i = 1; i <= 100; ++i) {
+        std::string body = i < 100 ? "`g_" + std::to_string(i) + "` from `m_" + std::to_string(i + 1) + "`\n" : "";
+        body += "`g_" + std::to_string(i - 1) + "`(x) = " + (i < 100 ? "`g_" + std::to_string(i) + "`(x)" : "x") + " where x ∈ ℝ\n";
+        std::ofstream(dir / ("m_" + std::to_string(i) + ".iql")) << body;
+    }
+    std::ofstream(dir / "main.iql") << "`g_0` from `m_1`\ny = `g_0`(2)\n";
+    Bounded b = run_bounded("eval " + (dir / "main.iql").string());
+    INFO(b.run.err);
+    CHECK(b.run.exit_code == 1);
+    CHECK_THAT(b.run.err, Catch::Contains("is imported through more than " + std::to_string(limits::kMaxImportDepth) +
+                                          " nested imports"));
+}
+
+TEST_CASE("name splitting and scene reading are linear", "[hostile]") {
+    // The cubic case: a 12,800-letter run with known names that almost match everywhere. It splits into
+    // 6,400 products, past the nesting limit: a located error, quickly.
+    std::string run = repeat("ab", 6400);
+    fs::path letters = generated("letters.iql", "y = " + run + "\nwhere\na ∈ ℝ\nb ∈ ℝ\n`abab` ∈ ℝ\n`ababa` ∈ ℝ\n");
+    Bounded l = run_bounded("eval " + letters.string());
+    require_located(l, letters.string() + ":1:", "the expression nests deeper than");
+    CHECK(l.seconds < 10);
+    // A declared 12,800-letter name is one name.
+    fs::path longname = generated("longname.iql", "y = " + run + " + 1\nwhere\n`" + run + "` ∈ ℝ default = 2\n");
+    Bounded n = run_bounded("eval " + longname.string());
+    INFO(n.run.err);
+    CHECK(n.run.exit_code == 0);
+    CHECK(n.run.out == "y = 3\n");
+    // 5,000 shapes, each with a transform: read and compiled within the bound.
+    std::string scene;
+    for (int i = 0; i < 5000; ++i) scene += "[[shapes]]\ntype = \"sphere\"\ntransform = \"T((" + std::to_string(i) + ", 0, 0))\"\n";
+    Bounded s = run_bounded(generated("shapes5000.iq", scene).string() + " -o /dev/null");
+    INFO(s.run.err);
+    CHECK(s.run.exit_code == 0);
+}
+
+TEST_CASE("iqc eval refuses a recurrence too long to evaluate", "[hostile]") {
+    require_located(run_bounded("eval " + hostile("recurrence_huge.iql")), hostile("recurrence_huge.iql") + ":2:1",
+                    "evaluating this would take more than " + std::to_string(limits::kMaxEvalSteps) + " steps");
+    // A range end past what GLSL's int loops count is refused by the checker.
+    fs::path far = generated("far.iql", "z_1 = 0\nz_(k+1) = z_k + 1 for k ∈ 1..1e12\ny = z_1\n");
+    require_located(run_bounded("eval " + far.string()), far.string() + ":2:30",
+                    "the end of a recurrence's range must be within ±1000000000");
+}
+
+TEST_CASE("files are read only when regular and not too large", "[hostile]") {
+    require_located(run_bounded(hostile("include_dev_zero.iq") + " -o -"), hostile("include_dev_zero.iq") + ":1:12",
+                    "cannot read included file '/dev/zero': it is not a regular file");
+    // A named pipe nobody writes to: refused at once, never waited on.
+    fs::path dir = temp_dir() / "hostile" / "fifo";
+    fs::create_directories(dir);
+    fs::remove(dir / "pipe.iql");
+    REQUIRE(mkfifo((dir / "pipe.iql").c_str(), 0600) == 0);
+    std::ofstream(dir / "scene.iq") << "include = [\"pipe.iql\"]\n[[shapes]]\ntype = \"sphere\"\n";
+    Bounded p = run_bounded((dir / "scene.iq").string() + " -o -");
+    require_located(p, (dir / "scene.iq").string() + ":1:12", "cannot read included file");
+    CHECK_THAT(p.run.err, Catch::Contains("not a regular file"));
+    Bounded direct = run_bounded("eval " + (dir / "pipe.iql").string());
+    CHECK(direct.run.exit_code == 1);
+    CHECK_THAT(direct.run.err, Catch::Contains("not a regular file"));
+    // A module file beside the scene that is a pipe is not a module file.
+    std::ofstream(dir / "named.iq") << "[[shapes]]\ntype = \"pipe\"\n";
+    require_located(run_bounded((dir / "named.iq").string() + " -o -"), (dir / "named.iq").string() + ":2:8",
+                    "unknown shape 'pipe'");
+    // Larger than the limit on one file.
+    std::string big(limits::kMaxFileBytes + 1, '#');
+    fs::path large = generated("large.iql", big);
+    std::ofstream(temp_dir() / "hostile" / "large_scene.iq") << "include = [\"large.iql\"]\n[[shapes]]\ntype = \"sphere\"\n";
+    Bounded l = run_bounded((temp_dir() / "hostile" / "large_scene.iq").string() + " -o -");
+    require_located(l, (temp_dir() / "hostile" / "large_scene.iq").string() + ":1:12", "cannot read included file");
+    CHECK_THAT(l.run.err, Catch::Contains("it is larger than 16 MiB"));
+    fs::remove(large);
+}
+
+TEST_CASE("user text in comments cannot inject code", "[hostile]") {
+    for (const char* target : {"shadertoy", "webgl2", "glsl330"}) {
+        Bounded b = run_bounded(hostile("injection.iq") + " --target " + target + " -o -");
+        INFO(target << "\n" << b.run.err);
+        REQUIRE(b.run.exit_code == 0);
+        std::istringstream lines(b.run.out);
+        std::string line;
+        int comments_with_names = 0;
+        while (std::getline(lines, line)) {
+            size_t slash = line.find("//");
+            std::string code = line.substr(0, slash);
+            INFO(line);
+            CHECK(code.find("int injected") == std::string::npos);
+            CHECK(code.find("#define IQC_BACKGROUND vec3(1.0, 0.0, 0.0)") == std::string::npos);
+            CHECK(code.find("IQC_FOG 9.0") == std::string::npos);
+            CHECK(line.find("/*") == std::string::npos);
+            CHECK(line.find("*/") == std::string::npos);
+            CHECK((line.empty() || line.back() != '\\'));
+            if (slash != std::string::npos && line.find("injected", slash) != std::string::npos) ++comments_with_names;
+        }
+        CHECK(comments_with_names >= 4);  // the names are still there, as comments
+    }
+}
+
+TEST_CASE("comment_text: one line, no comment delimiters, no continuation, valid UTF-8", "[hostile]") {
+    CHECK(glsl::comment_text("a\nb\r\nc\vd\fe") == "a b c d e");
+    CHECK(glsl::comment_text("x\xC2\x85y\xE2\x80\xA8z\xE2\x80\xA9w") == "x y z w");  // NEL, U+2028, U+2029
+    CHECK(glsl::comment_text(std::string("n\0ul", 4)) == "n ul");
+    CHECK(glsl::comment_text("a */ b /* c") == "a * / b / * c");
+    CHECK(glsl::comment_text("ends \\") == "ends");
+    CHECK(glsl::comment_text("ends \\ \\\\  ") == "ends");
+    CHECK(glsl::comment_text("bad \xFF byte, overlong \xC0\xAF slash") == "bad \xEF\xBF\xBD byte, overlong \xEF\xBF\xBD slash");
+    CHECK(glsl::comment_text("‖p‖ - r: keeps math") == "‖p‖ - r: keeps math");
+}
+
+TEST_CASE("literals outside float's range are located errors; folded overflow is not an internal error", "[hostile]") {
+    require_located(run_bounded(hostile("float_range.iql") + " -o -"), hostile("float_range.iql") + ":2:11",
+                    "the number 1e39 is outside the range of 32-bit floats");
+    Bounded folded = run_bounded(hostile("float_folded.iql") + " -o -");
+    INFO(folded.run.err);
+    CHECK(folded.run.exit_code == 0);
+    require_located(run_bounded(hostile("toml_inf.iq") + " -o -"), hostile("toml_inf.iq") + ":2:19",
+                    "'position' must be a finite number within the range of 32-bit floats");
+}
+
+TEST_CASE("NUL bytes: in a description the compile succeeds; in source every diagnostic is printed", "[hostile]") {
+    Bounded d = run_bounded(hostile("nul_description.iql") + " -o -");
+    INFO(d.run.err);
+    CHECK(d.run.exit_code == 0);
+    CHECK_THAT(d.run.out, Catch::Contains("// r ∈ [0, 2]: before after"));
+    Bounded s = run_bounded("eval " + hostile("nul_source.iql"));
+    require_located(s, hostile("nul_source.iql") + ":1:7", "unexpected character '␀'");
+    CHECK_THAT(s.run.err, Catch::Contains("  y = 1 ␀ 2\n"));
+    CHECK_THAT(s.run.err, Catch::Contains(hostile("nul_source.iql") + ":2:5: error: undefined name 'q'"));
+}
+
+TEST_CASE("a 6-vector never reaches the emitter's swizzles; empty and path-like types are errors", "[hostile]") {
+    require_located(run_bounded(hostile("six_vector.iql") + " -o -"), hostile("six_vector.iql") + ":2:1",
+                    "cannot generate GLSL: ℝ⁶ is larger than GLSL's largest vector (vec4)");
+    require_located(run_bounded(hostile("empty_type.iq") + " -o -"), hostile("empty_type.iq") + ":2:8",
+                    "'type' cannot be empty");
+    // A type is a module name, never a path: `../../stdlib/torus` exists as a file but is not found.
+    require_located(run_bounded(hostile("path_type.iq") + " -o -"), hostile("path_type.iq") + ":2:8",
+                    "unknown shape '../../stdlib/torus'");
+    fs::path abs = generated("absolute.iq", "[[shapes]]\ntype = \"" + std::string(IQC_SOURCE_DIR) + "/stdlib/torus\"\n");
+    require_located(run_bounded(abs.string() + " -o -"), abs.string() + ":2:8", "unknown shape");
+}

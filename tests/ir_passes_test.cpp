@@ -1,0 +1,112 @@
+// Pass tests in IR text: each tests/passes/<pass>/<case>.ir holds an input module, the line `; expect:`, and
+// the module the pass must make of it (ir::print's text). The input is parsed (ir/Parse.h), verified, given
+// to the one pass its folder names, verified again, printed, and compared with the expectation.
+//
+// Regenerate the expectations (then review every diff as code):
+//     IQC_UPDATE_GOLDEN=1 ./build/tests/iqc_tests "[passes]"
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <fstream>
+
+#include "TestUtil.h"
+#include "ir/IR.h"
+#include "ir/Parse.h"
+#include "ir/Pipeline.h"
+#include "source/Internal.h"
+
+using namespace iqc;
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kExpect = "; expect:\n";
+
+std::vector<fs::path> pass_cases() {
+    std::vector<fs::path> out;
+    for (auto& e : fs::recursive_directory_iterator(fs::path(IQC_SOURCE_DIR) / "tests" / "passes"))
+        if (e.path().extension() == ".ir") out.push_back(e.path());
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("every pass has IR-text tests", "[passes]") {
+    for (const auto& p : ir::pipeline_passes()) {
+        bool found = false;
+        for (const auto& c : pass_cases()) found |= c.parent_path().filename() == p.name;
+        INFO("tests/passes/" << p.name << "/*.ir");
+        CHECK(found);
+    }
+}
+
+TEST_CASE("passes on IR text: input, one pass, expected output", "[passes]") {
+    bool update = std::getenv("IQC_UPDATE_GOLDEN") != nullptr;
+    auto cases = pass_cases();
+    REQUIRE(cases.size() >= 8);
+    for (const auto& path : cases) {
+        std::string text = test::read_text(path);
+        size_t at = text.find(kExpect);
+        INFO(path.string());
+        REQUIRE(at != std::string::npos);
+        std::string input = text.substr(0, at), expected = text.substr(at + std::string(kExpect).size());
+        ir::Module m;
+        std::string error;
+        REQUIRE(ir::parse_module(input, m, error));
+        INFO("input verifies: " << ir::verify(m));
+        REQUIRE(ir::verify(m).empty());
+        // The text form reads back as itself.
+        ir::Module again;
+        REQUIRE(ir::parse_module(ir::print(m), again, error));
+        CHECK(ir::print(again) == ir::print(m));
+        ir::PipelineOptions o;
+        ir::PipelineResult r;
+        std::string pass = path.parent_path().filename().string();
+        REQUIRE(ir::run_pass(pass, m, o, r));
+        CHECK(ir::verify(m).empty());
+        std::string actual = ir::print(m);
+        for (const auto& w : r.range_issues) actual += "; warning: " + w.message + "\n";
+        for (const auto& w : r.warnings) actual += "; warning: " + w.message + "\n";
+        if (update) {
+            std::ofstream(path, std::ios::binary) << input << kExpect << actual;
+            continue;
+        }
+        CHECK(actual == expected);
+    }
+}
+
+TEST_CASE("the IR text reader reports what it cannot read, with the line", "[passes]") {
+    ir::Module m;
+    std::string error;
+    CHECK_FALSE(ir::parse_module("function f() -> ℝ {\n  %0 = ℝ Frobnicate %1\n  return %0\n}\n", m, error));
+    CHECK(error == "line 2: unknown operation 'Frobnicate'");
+    ir::Module m2;
+    CHECK_FALSE(ir::parse_module("function f() -> ℝ {\n  %1 = ℝ Const 1\n}\n", m2, error));
+    CHECK(error == "line 2: instructions must be numbered in order (%0 expected)");
+    ir::Module m3;
+    CHECK_FALSE(ir::parse_module("function f() -> ℝ {\n  %0 = ℝ Call g\n  return %0\n}\n", m3, error));
+    CHECK(error == "line 2: no function named 'g'");
+    ir::Module m4;
+    CHECK_FALSE(ir::parse_module("function f() -> ℝ {\n  %0 = ℝ Const 1\n", m4, error));
+    CHECK_THAT(error, Catch::Contains("missing '}'"));
+}
+
+TEST_CASE("every pass verifies its IR and reports a fault as an internal error naming the pass", "[passes]") {
+    // A function whose result is out of range: the verifier rejects it before the first pass.
+    ir::Module bad;
+    std::string error;
+    REQUIRE(ir::parse_module("entry function f() -> ℝ {\n  %0 = ℝ Const 1\n  return %0\n}\n", bad, error));
+    bad.functions[0].result = 7;
+    ir::PipelineOptions o;
+    o.verify_each = true;
+    CHECK_THROWS_WITH(ir::run_pipeline(bad, o), Catch::Contains("invalid IR after lowering: f: result out of range"));
+    // A fault injected in each pass stops the pipeline there.
+    for (const auto& p : ir::pipeline_passes()) {
+        ir::Module m;
+        REQUIRE(ir::parse_module("entry function f() -> ℝ {\n  %0 = ℝ Const 1\n  return %0\n}\n", m, error));
+        o.inject_fault = p.name;
+        INFO(p.name);
+        CHECK_THROWS_AS(ir::run_pipeline(m, o), InternalError);
+        CHECK_THROWS_WITH(ir::run_pipeline(m, o), Catch::StartsWith(std::string(p.name) + ": injected fault"));
+    }
+}
