@@ -253,7 +253,7 @@ std::optional<int> Checker::computed_size(const Expr& x, const std::string& name
     };
     auto v = eval(x);
     if (!v) return std::nullopt;
-    if (*v < 1 || *v != std::floor(*v) || *v > 1e6) {
+    if (!(*v >= 1) || *v != std::floor(*v) || *v > limits::kMaxComponents) {
         d_.error(x.span, fmt::format("the size of '{}' must be a whole number ≥ 1, but it is {}", name, *v));
         return std::nullopt;
     }
@@ -465,6 +465,11 @@ void Checker::declare_sequence(const Decl& decl, const std::string& name, Span s
     if (auto [it, fresh] = seq_lengths_.emplace(index, count); !fresh && it->second != count) {
         d_.error(span, fmt::format("'{}' has {} elements but another sequence indexed by {} has {}", name, count, index,
                                    it->second));
+        return;
+    }
+    if (int64_t(count) * elem.components() > limits::kMaxComponents) {
+        d_.error(span, fmt::format("the sequence '{}' would have {} components: iqc allows at most {}", name,
+                                   int64_t(count) * elem.components(), limits::kMaxComponents));
         return;
     }
     p.type = Type::array(elem, count);
@@ -1258,7 +1263,7 @@ Type Checker::check_block(Expr& e) {
             continue;
         }
         auto c = const_eval(*it.expr);
-        if (!c || c->size() != 1 || (*c)[0] < 1 || (*c)[0] != std::floor((*c)[0]) || (*c)[0] > 1e6) {
+        if (!c || c->size() != 1 || !((*c)[0] >= 1) || (*c)[0] != std::floor((*c)[0]) || (*c)[0] > limits::kMaxComponents) {
             d_.error(it.span, "a block's size must be a whole number ≥ 1");
             return {};
         }
@@ -1790,12 +1795,21 @@ Type Checker::check_elementwise(const Stmt& s) {
         d_.error(s.value->span, "an element-wise definition needs numbers");
         return {};
     }
-    if (ranges.size() == 1) return b.is_scalar() ? Type::vector(ranges[0]) : Type::array(b, ranges[0]);
-    if (!b.is_scalar()) {
+    Type t;
+    if (ranges.size() == 1) {
+        t = b.is_scalar() ? Type::vector(ranges[0]) : Type::array(b, ranges[0]);
+    } else if (!b.is_scalar()) {
         d_.error(s.value->span, fmt::format("the entries of the matrix {} must be numbers, not {}", s.name, b.str()));
         return {};
+    } else {
+        t = ranges[1] == 1 ? Type::vector(ranges[0]) : Type::matrix(ranges[0], ranges[1]);
     }
-    return ranges[1] == 1 ? Type::vector(ranges[0]) : Type::matrix(ranges[0], ranges[1]);
+    if (t.components() > limits::kMaxComponents) {
+        d_.error(s.name_span, fmt::format("'{}' would have {} components: iqc allows at most {} per vector or matrix", s.name,
+                                          t.components(), limits::kMaxComponents));
+        return {};
+    }
+    return t;
 }
 
 // (a, b, ...): scalars and vectors concatenated. The items were already checked when they carry a type.

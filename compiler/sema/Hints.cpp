@@ -68,6 +68,34 @@ std::optional<std::string> word_hint(std::string_view word) {
     return std::nullopt;
 }
 
+std::optional<std::string> match_key(const std::string& key, const std::vector<std::string>& candidates, bool* accept) {
+    *accept = false;
+    // theta -> θ, theta_1 -> θ_1
+    size_t cut = key.find('_');
+    if (auto g = greek_letter(key.substr(0, cut))) {
+        std::string greek = *g + (cut == std::string::npos ? "" : key.substr(cut));
+        for (const auto& c : candidates)
+            if (c == greek) {
+                *accept = true;
+                return c;
+            }
+    }
+    // kd -> k_d: the same letters without underscores or backticks.
+    auto bare = [](const std::string& s) {
+        std::string out;
+        for (char c : s)
+            if (c != '_' && c != '`') out += c;
+        return out;
+    };
+    std::optional<std::string> found;
+    for (const auto& c : candidates)
+        if (c != key && bare(c) == bare(key)) {
+            if (found) return std::nullopt;  // ambiguous
+            found = c;
+        }
+    return found;
+}
+
 std::string spell_letters(std::string_view word, std::string_view sep) {
     std::string out;
     size_t i = 0;
