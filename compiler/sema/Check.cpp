@@ -79,6 +79,16 @@ std::optional<std::vector<double>> const_eval(const Expr& e) {
             for (auto& x : *v) x = -x;
             return v;
         }
+        case ExprKind::Matrix: {  // [1 0; 0 1]: numbers only, row-major
+            std::vector<double> out;
+            for (const auto& row : e.rows)
+                for (const auto& a : row) {
+                    auto v = const_eval(*a);
+                    if (!v || v->size() != 1 || row.size() != e.rows[0].size()) return std::nullopt;
+                    out.push_back((*v)[0]);
+                }
+            return out;
+        }
         case ExprKind::Vector: {
             std::vector<double> out;
             for (const auto& a : e.args) {
@@ -170,7 +180,8 @@ private:
     void collect_declarations();
     void declare_sequence(const Decl& decl, const std::string& name, Span span, const std::string& index);
     void bind_function(const Decl& decl, const std::string& name, Span span);
-    std::set<std::string> unbound_functions_;  // function parameters without a definition (already reported)
+    std::set<std::string> unbound_functions_;  // function parameters without a definition, and sequences whose
+                                               // declaration failed (already reported: not undefined at each use)
     std::map<std::string, int> seq_lengths_;  // a sequence index letter -> the length of its sequences
     void collect_imports();
     void collect_statements();
@@ -426,6 +437,7 @@ void Checker::collect_declarations() {
 // x_i ∈ ℝ³: a sequence parameter. Its length comes from its value (iqc eval --set 'x={…}') or its default
 // {…}; sequences indexed by one letter have one length (I♥LA: the index ranges over them all).
 void Checker::declare_sequence(const Decl& decl, const std::string& name, Span span, const std::string& index) {
+    unbound_functions_.insert(name);  // until it is declared below
     if (!decl.bounds.empty()) {
         d_.error(Span::join(decl.bounds.front().span, decl.bounds.back().span),
                  fmt::format("the sequence '{}' cannot have bounds (give its elements' type, such as ℝ³)", name));
@@ -475,6 +487,7 @@ void Checker::declare_sequence(const Decl& decl, const std::string& name, Span s
     p.type = Type::array(elem, count);
     if (p.value.empty()) p.value.assign(size_t(p.type.components()), 0.0);
     m_.params.push_back(std::move(p));
+    unbound_functions_.erase(name);
 }
 
 // A function parameter of the module: its definition comes from outside (iqc eval --set 'f(x)=…'), typed
@@ -1650,6 +1663,20 @@ Type Checker::check_index(Expr& e) {
             continue;
         }
         auto c = const_eval(*it.expr);
+        if (!c && a.is_array() && &it == &e.indices[0] && it.expr->kind == ExprKind::Name && !defines(it.expr->text) &&
+            !m_.values.count(it.expr->text) && !assigns_.count(it.expr->text) && it.expr->text != "π") {
+            const std::string& x = e.args[0]->text;
+            auto& err = d_.error(it.span, fmt::format("the index '{}' of {}_{} is not bound: use {}_{} inside ∑_{} or an "
+                                                      "element-wise definition (y_{} = …), or an element such as {}_1",
+                                                      it.expr->text, x, it.expr->text, x, it.expr->text, it.expr->text,
+                                                      it.expr->text, x));
+            if (int pi = m_.find_param(x); pi >= 0)
+                Diagnostics::note(err, m_.params[size_t(pi)].span,
+                                  fmt::format("{}_{} declares the sequence {}; to name one parameter {}_{}, write `{}_{}`", x,
+                                              m_.params[size_t(pi)].seq_index, x, x, it.expr->text, x, it.expr->text));
+            ok = false;
+            continue;
+        }
         if (!c) {
             Type it_type = check(*it.expr);
             if (it_type.kind == Type::Integer) {  // known when running: a_b with b ∈ ℤ

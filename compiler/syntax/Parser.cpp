@@ -1154,6 +1154,9 @@ ExprPtr Parser::parse_power() {
                 base = std::move(e);
                 continue;
             }
+            if (t.text == "+")
+                fail(t.span, "the pseudo-inverse A⁺ is not supported (it needs a singular value decomposition); for an "
+                             "invertible matrix write A⁻¹");
             if (t.text.empty() || t.text.find_first_not_of("+-0123456789") != std::string::npos ||
                 t.text.find_first_of("0123456789") == std::string::npos)
                 fail(t.span, "a superscript power must be an integer such as ² or ⁻¹");
@@ -1234,6 +1237,10 @@ ExprPtr Parser::parse_postfix(bool exponent) {
             continue;
         }
         if (at(Tok::Underscore) && !cur().space_before) {
+            if (e->kind == ExprKind::Name && peek_raw(1).kind == Tok::LParen &&
+                (e->text == "min" || e->text == "max" || sm_.slice(e->word_span) == "argmin" || sm_.slice(e->word_span) == "argmax"))
+                fail(e->word_span.end > e->word_span.begin ? e->word_span : e->span,
+                     "I♥LA's optimization (min_(x ∈ …), argmin_(x ∈ …)) is not supported: iqc compiles closed-form math");
             nest(depth, cur().span);
             advance();
             auto idx = make(ExprKind::Index, e->span);
@@ -1789,7 +1796,12 @@ ExprPtr Parser::parse_primary() {
             e->args.push_back(std::move(inner));
             return e;
         }
-        case Tok::Unknown: fail(t.span, fmt::format("unexpected character '{}'", t.text));
+        case Tok::Unknown:
+            if (t.text == "∂")
+                fail(t.span, "I♥LA's derivatives (∂) are not supported: write the derivative out (iqc differentiates "
+                             "shapes itself for their normals)");
+            if (t.text == "∫") fail(t.span, "I♥LA's integrals (∫) are not supported: iqc's math has closed forms only");
+            fail(t.span, fmt::format("unexpected character '{}'", t.text));
         case Tok::Newline:
         case Tok::End: fail(t.span, "expected an expression, found the end of the line");
         default: fail(t.span, fmt::format("expected an expression, found {}", describe(t)));
