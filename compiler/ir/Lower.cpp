@@ -540,6 +540,8 @@ struct Env {
                 // Unrolled: the range is a vector's or matrix's size, known when checking.
                 ValueId acc = ValueId(-1);
                 int n = sum_range(*e.args[0], e.text);
+                auto outer = sum_index.find(e.text);  // an enclosing sum with the same index letter
+                std::optional<int> shadowed = outer == sum_index.end() ? std::nullopt : std::optional<int>(outer->second);
                 for (int k = 0; k < n; ++k) {
                     sum_index[e.text] = k;
                     ValueId term = lower(*e.args[0]);
@@ -554,7 +556,8 @@ struct Env {
                     }
                     acc = acc == ValueId(-1) ? term : op2(Op::Add, acc, term, e.span);
                 }
-                sum_index.erase(e.text);
+                if (shadowed) sum_index[e.text] = *shadowed;
+                else sum_index.erase(e.text);
                 return acc;
             }
             case ExprKind::Norm:
