@@ -507,7 +507,11 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
         vec3 rd0 = normalize(basis * vec3(uv0, IQC_CAMERA_FOCAL));
         int gid, gsteps;
         float gt = iqc_march(eye, rd0, gid, gsteps);
+{{#if IDS}}
+        fragColor = gid < 0 ? vec4(-1.0, -1.0, 0.0, 0.0) : vec4(gt, float(gid), 0.0, 0.0);  // distance and instance id
+{{#else}}
         fragColor = gid < 0 ? vec4(-1.0, 0.0, 0.0, 0.0) : vec4(gt, iqc_normal(eye + gt * rd0, gt, gid));
+{{/if}}
         return;
     }
 {{/if}}

@@ -12,6 +12,7 @@
 
 #include "ir/Eval.h"
 #include "ir/Lower.h"
+#include "render/Render.h"
 #include "scene/Compile.h"
 #include "sema/Builtins.h"
 #include "sema/Check.h"
@@ -75,6 +76,32 @@ inline Compiled compile_path(const std::filesystem::path& p, const CompileOption
     return c;
 }
 inline Compiled compile_text(const std::string& name, const std::string& text) { return compile_path(write_temp(name, text)); }
+
+// Renders a compiled shader of any target on the headless renderer with what its host sets (uniform
+// defaults, uniform blocks, the data texture).
+inline render::RenderResult render_compiled(const CompileResult& c, int w, int h, float time = 0) {
+    render::RenderOptions o;
+    o.width = w;
+    o.height = h;
+    o.time = time;
+    for (const auto& u : c.inputs.uniforms) {
+        if (u.integer) o.int_uniforms.push_back({u.name, int(u.value[0])});
+        else o.uniforms.push_back({u.name, std::vector<float>(u.value.begin(), u.value.end())});
+    }
+    for (const auto& b : c.inputs.blocks) o.uniform_blocks.push_back({b.name, b.binding, b.bytes});
+    o.data_texture = {c.inputs.texture.name, c.inputs.texture.width, c.inputs.texture.height, c.inputs.texture.rgba};
+    bool shadertoy = c.code.rfind("#version", 0) != 0;
+    if (shadertoy) return render::render_shadertoy(c.code, o);
+    static std::unique_ptr<render::Renderer> renderer;
+    std::string err;
+    if (!renderer) renderer = render::Renderer::create(&err);
+    if (!renderer) {
+        render::RenderResult r;
+        r.error = err;
+        return r;
+    }
+    return renderer->render(c.code, o);
+}
 
 // Parses, checks, lowers and evaluates a standalone module (a function library may import
 // trigonometry); returns every output (assigned name or "ret") formatted as `iqc eval` prints values.

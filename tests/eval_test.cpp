@@ -1,5 +1,6 @@
 // `iqc eval`: outputs in source order at full precision, --set with the language's literals, errors.
 #include <catch2/catch.hpp>
+#include <cmath>
 
 #include "TestUtil.h"
 
@@ -109,4 +110,30 @@ TEST_CASE("eval: sequences and function parameters from --set, and their errors"
     RunResult broken = run_iqc("eval " + fn.string() + " --set 'f(s, w)=)' --set x=3 --set 'v=(1, 2)'");
     CHECK(broken.exit_code == 1);
     CHECK_THAT(broken.err, Catch::Contains("--set f(s, w):1:11: error: expected an expression, found ')'"));
+}
+
+TEST_CASE("defaults and bounds may be any constant expression, evaluated by the evaluator", "[eval]") {
+    auto f = write_temp("defaults.iql", "y = r + s\nwhere\nr ∈ [0, 2] default = √2\ns ∈ [0, sin(π/2)] default = cos(π/3)\n");
+    RunResult r = run_iqc("eval " + f.string());
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    auto value = [](const std::string& out) { return out.rfind("y = ", 0) == 0 ? std::stod(out.substr(4)) : NAN; };
+    CHECK(value(r.out) == Approx(std::sqrt(2.0) + 0.5).epsilon(1e-15));
+    RunResult s = run_iqc("eval " + f.string() + " --set 'r=√3/2'");
+    CHECK(value(s.out) == Approx(std::sqrt(3.0) / 2 + 0.5).epsilon(1e-15));
+    auto bad = write_temp("bad_default.iql", "y = r\nwhere\nr ∈ [0, 2] default = q + 1\n");
+    RunResult b = run_iqc("eval " + bad.string());
+    CHECK(b.exit_code == 1);
+    CHECK_THAT(b.err, Catch::Contains("bad_default.iql:3:22: error: a default must be a constant (numbers, π, and arithmetic and "
+                                      "functions of them, such as √2 or sin(π/8))\n  r ∈ [0, 2] default = q + 1\n"
+                                      "                       ^~~~~"));
+}
+
+TEST_CASE("eval means what the shader computes: guarded values, not NaN", "[eval]") {
+    auto f = write_temp("acos.iql", "acos from trigonometry\ny = acos(x)\nwhere\nx ∈ [0, 2] default = 1.5\n");
+    RunResult r = run_iqc("eval " + f.string());
+    CHECK(r.exit_code == 0);
+    CHECK(r.out == "y = 0\n");  // acos(clamp(1.5, -1, 1)), as the emitted GLSL
+    CHECK_THAT(r.err, Catch::Contains("acos.iql:2:1: warning: acos of a value outside [-1, 1]: with the parameters' bounds it "
+                                      "ranges over [0, 2]"));
 }

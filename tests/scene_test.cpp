@@ -272,3 +272,23 @@ TEST_CASE("`bound` must be a positive number, reported at the value", "[scene]")
     CHECK(text.result.exit_code != 0);
     CHECK_THAT(text.diagnostics, Catch::Contains("bound_text.iq:3:9: error: 'bound' must be a number, not a string"));
 }
+
+TEST_CASE("overrides may be numbers or vectors or a matrix's rows or constant expressions", "[scene]") {
+    const std::string head = "[modules]\nsq = \"\"\"\nshape\nD = ‖A p‖ - r\nwhere\np ∈ ℝ³\nA ∈ ℝ^(3×3)\nr ∈ [0, 3] default = 1\n\"\"\"\n";
+    auto ok = compile_text("overrides.iq", head + "[[shapes]]\ntype = \"sq\"\nshape_params = { r = \"√2/2\", A = [[1, 0, 0], [0, 2, 0], [0, 0, 1]] }\n"
+                                                  "[[shapes]]\ntype = \"sq\"\nshape_params = { A = \"[1 0 0; 0 3 0; 0 0 1]\" }\n");
+    INFO(ok.diagnostics);
+    REQUIRE(ok.result.exit_code == 0);
+    CHECK_THAT(ok.result.code, Catch::Contains("const mat3 sq_1_shape_A = mat3(1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 1.0);"));
+    CHECK_THAT(ok.result.code, Catch::Contains("const float sq_1_shape_r = 0.70710677;"));
+    CHECK_THAT(ok.result.code, Catch::Contains("const mat3 sq_2_shape_A = mat3(1.0, 0.0, 0.0, 0.0, 3.0, 0.0, 0.0, 0.0, 1.0);"));
+    auto rows = compile_text("override_rows.iq", head + "[[shapes]]\ntype = \"sq\"\nshape_params = { A = [[1, 0], [0, 2]] }\n");
+    CHECK(rows.result.exit_code == 1);
+    CHECK_THAT(rows.diagnostics, Catch::Contains("override_rows.iq:12:18: error: 'A' is ℝ^(3×3) but the value is 2 rows of 2"));
+    auto ragged = compile_text("override_ragged.iq", head + "[[shapes]]\ntype = \"sq\"\nshape_params = { A = [[1, 0, 0], [0, 2]] }\n");
+    CHECK_THAT(ragged.diagnostics, Catch::Contains("override_ragged.iq:12:34: error: the rows of 'A' must have one length: this one "
+                                                   "has 2, the first 3"));
+    auto text = compile_text("override_text.iq", head + "[[shapes]]\ntype = \"sq\"\nshape_params = { r = \"two\" }\n");
+    CHECK_THAT(text.diagnostics, Catch::Contains("override_text.iq:12:22: error: 'r' must be a number, an array, or a constant "
+                                                 "expression such as \"√2\"; this string is not one"));
+}

@@ -141,7 +141,8 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     if (s_.camera.orbit) F.insert("ORBIT");
     if (scene.module.find(ir::names::kPrepare) >= 0) F.insert("PREPARE");
     if (opts_.instrument || opts_.bench) F.insert("INSTRUMENT");
-    if (opts_.geometry || opts_.bench) F.insert("GEOMETRY");
+    if (opts_.geometry || opts_.ids || opts_.bench) F.insert("GEOMETRY");
+    if (opts_.ids) F.insert("IDS");
     if (opts_.bench) F.insert("BENCH");
     nlohmann::ordered_json j;
     j["title"] = s_.title;

@@ -42,6 +42,8 @@ struct CompileOptions {
     bool instrument = false;
     // Geometry probe: each pixel is (distance along the camera ray or -1, unit normal) (tests).
     bool geometry = false;
+    // Instance probe: each pixel is (distance along the camera ray or -1, the hit instance's id or -1) (tests).
+    bool ids = false;
     // Range-analysis warnings (a slider can push an operation out of its domain) become errors.
     bool strict_ranges = false;
     // Overrides of [render] for benchmark sweeps (unset: the scene's own values).

@@ -22,33 +22,11 @@ void report_eval_limit(Diagnostics& d, const ir::EvalLimit& limit) {
                                     "evaluate (iqc eval stops there)", limits::kMaxEvalSteps));
 }
 
-// Evaluates a literal such as `3`, `-0.5`, `(1, 2, 3)` or `[1 2; 3 4]` (any constant expression).
+// Evaluates a value such as `3`, `-0.5`, `(1, 2, 3)`, `[1 2; 3 4]` or `√2` (any constant expression).
 bool parse_value(const std::string& name, const std::string& text, SourceManager& sm, Diagnostics& d, ir::Value& out) {
-    FileId f = sm.add(fmt::format("--set {}", name), text);
-    ModuleSource src;
-    src.name = "value";
-    src.file = f;
-    src.ranges = {{0, uint32_t(text.size())}};
-    src.where = {f, 0, 1};
-    ModuleLibrary lib(sm, d);
-    size_t before = d.error_count();
-    auto m = lib.parse_check(src, "value", false);
-    if (d.error_count() != before) return false;
-    if (!m->ret || !m->params.empty() || !(m->primary_type.is_numeric() || m->primary_type.is_array())) {
-        d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
-                fmt::format("the value of '{}' must be a number, a vector (1, 2, 3), a matrix [1 2; 3 4] or a sequence "
-                            "{{(1, 2), (3, 4)}}", name));
-        return false;
-    }
-    ir::Module irm;
-    LowerContext ctx{irm, {}, {}};
-    int fn = lower_module(*m, "value", "value", ctx);
-    try {
-        out = ir::evaluate(irm, fn, {});
-    } catch (const ir::EvalLimit& limit) {
-        report_eval_limit(d, limit);
-        return false;
-    }
+    auto v = ModuleLibrary::evaluate_constant(fmt::format("--set {}", name), text, sm, d);
+    if (!v) return false;
+    out = std::move(*v);
     return true;
 }
 

@@ -1,11 +1,15 @@
 #include "scene/Modules.h"
 
+#include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
 
 #include "resources/Embedded.h"
 #include "source/Limits.h"
+#include "ir/Lower.h"
+#include "ir/Pipeline.h"
 #include "sema/Builtins.h"
+#include "source/Limits.h"
 #include "syntax/Parser.h"
 
 namespace iqc {
@@ -108,6 +112,45 @@ std::shared_ptr<const ast::Module> ModuleLibrary::parse_function(const ModuleSou
     return std::make_shared<const ast::Module>(parse_module(sm_, src.file, src.ranges, src.name, po, d_));
 }
 
+std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& name, const std::string& text, SourceManager& sm,
+                                                         Diagnostics& d) {
+    FileId f = sm.add(name, text);
+    ModuleSource src;
+    src.name = "value";
+    src.file = f;
+    src.ranges = {{0, uint32_t(text.size())}};
+    src.where = {f, 0, 1};
+    ModuleLibrary lib(sm, d);
+    size_t before = d.error_count();
+    lib.constants_ = true;
+    auto m = lib.parse_check(src, "value", false);
+    if (d.error_count() != before) return std::nullopt;
+    if (!m->ret || !m->params.empty() || !(m->primary_type.is_numeric() || m->primary_type.is_array())) {
+        d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
+                fmt::format("the value of '{}' must be a number, a vector (1, 2, 3), a matrix [1 2; 3 4] or a sequence "
+                            "{{(1, 2), (3, 4)}}", name));
+        return std::nullopt;
+    }
+    ir::Module irm;
+    LowerContext ctx{irm, {}, {}};
+    int fn = lower_module(*m, "value", "value", ctx);
+    irm.functions[size_t(fn)].entry = true;
+    ir::run_pipeline(irm, {});
+    try {
+        ir::Value v = ir::evaluate(irm, irm.find("value"), {});
+        for (double x : v.v)
+            if (!std::isfinite(x)) {
+                d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
+                        fmt::format("the value of '{}' is not a finite number ({})", name, ir::format_value(v)));
+                return std::nullopt;
+            }
+        return v;
+    } catch (const ir::EvalLimit& limit) {
+        d.error(limit.span, fmt::format("evaluating this would take more than {} steps", limits::kMaxEvalSteps));
+        return std::nullopt;
+    }
+}
+
 std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& src, const std::string& name, bool transform,
                                                          const std::map<std::string, Type>& given_types,
                                                          const std::map<std::string, std::shared_ptr<const ast::Module>>& given_functions) {
@@ -116,6 +159,22 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
     CheckOptions co;
     co.given_types = given_types;
     co.given_functions = given_functions;
+    if (constants_) {  // a constant may use the trigonometric functions without importing them
+        for (const auto& b : builtins())
+            if (std::string(b.module) == "trigonometry") {
+                co.implicit_imports.push_back({b.name, "trigonometry"});
+                po.known_names.insert(b.name);  // cot, asinh: names after an import
+            }
+    } else {
+        // Defaults and bounds that need more than folding: the evaluator, on a scratch source.
+        co.constant = [this](const ast::Expr& e) -> std::optional<std::vector<double>> {
+            SourceManager scratch;
+            Diagnostics quiet(scratch);  // not a constant: the checker reports it where it is
+            auto v = evaluate_constant("constant", std::string(sm_.slice(e.span)), scratch, quiet);
+            if (!v) return std::nullopt;
+            return v->v;
+        };
+    }
     if (transform) {
         po.allow_header = false;
         for (auto& [n, mod] : transform_imports()) po.known_names.insert(n);

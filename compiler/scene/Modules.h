@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "scene/Scene.h"
+#include "ir/Eval.h"
 #include "sema/Check.h"
 
 namespace iqc {
@@ -47,6 +48,13 @@ public:
     // The names a scene transform imports without saying so.
     static const std::vector<std::pair<std::string, std::string>>& transform_imports();
 
+    // The value of a constant expression written as text (a default such as √2, a `--set` value, an
+    // override): parsed and checked as a module of its own (trigonometry imported), lowered, run through
+    // the pass pipeline and evaluated — the one meaning every value gets. `name` names it in diagnostics.
+    // Returns nullopt after reporting to `d` when it is not a constant number, vector or matrix.
+    static std::optional<ir::Value> evaluate_constant(const std::string& name, const std::string& text, SourceManager& sm,
+                                                      Diagnostics& d);
+
 private:
     SourceManager& sm_;
     Diagnostics& d_;
@@ -55,6 +63,7 @@ private:
     std::vector<std::unique_ptr<ModuleSource>> owned_;
     std::map<std::string, std::unique_ptr<CheckedModule>> checked_;
     std::set<std::string> in_progress_;
+    bool constants_ = false;  // checking a constant expression (trigonometry is imported)
 
     // `where`: where the name was written (for a file that exists but cannot be read); may be empty.
     const ModuleSource* find_source(const std::string& name, Span where);

@@ -105,6 +105,12 @@ struct Planner {
                 continue;
             }
             const ParamInfo& p = m.params[size_t(pi)];
+            if (ov.rows > 0 && !(p.type.is_matrix() && p.type.rows == ov.rows && p.type.cols == ov.cols)) {
+                d.error(ov.span, fmt::format("'{}' is {} but the value is {} row{} of {}", ov.name, p.type.str(), ov.rows,
+                                             ov.rows == 1 ? "" : "s", ov.cols));
+                ok = false;
+                continue;
+            }
             if (int(ov.value.size()) != p.type.components()) {
                 d.error(ov.span, fmt::format("'{}' is {} but the value has {} component{}", ov.name, p.type.str(),
                                              ov.value.size(), ov.value.size() == 1 ? "" : "s"));

@@ -9,6 +9,7 @@
 #include <toml++/toml.h>
 #include <unordered_map>
 
+#include "scene/Modules.h"
 #include "sema/Check.h"
 #include "source/Limits.h"
 
@@ -263,9 +264,46 @@ private:
             return;
         }
         for (auto&& [k, v] : *n.as_table()) {
-            auto nums = get_numbers(v, std::string(k.str()));
+            std::string name(k.str());
+            ParamOverride ov{name, {}, span_of(k.source())};
+            if (auto* s = v.as_string()) {  // a constant expression, evaluated as any value is
+                SourceManager scratch;
+                Diagnostics quiet(scratch);
+                auto value = ModuleLibrary::evaluate_constant(name, s->get(), scratch, quiet);
+                if (!value) {
+                    std::string why = quiet.all().empty() ? "" : ": " + quiet.all().front().message;
+                    d_.error(span_of(v), fmt::format("'{}' must be a number, an array, or a constant expression such as "
+                                                     "\"√2\"; this string is not one{}", name, why));
+                    continue;
+                }
+                ov.value = value->v;
+                if (value->type.is_matrix()) ov.rows = value->type.rows, ov.cols = value->type.cols;
+                out.push_back(std::move(ov));
+                continue;
+            }
+            if (auto* rows = v.as_array(); rows && !rows->empty() && (*rows)[0].is_array()) {  // a matrix, row by row
+                bool ok = true;
+                for (auto& row : *rows) {
+                    auto nums = row.is_array() ? get_numbers(row, name) : std::nullopt;
+                    if (!row.is_array()) wrong_type(row, name, "a row: an array of numbers");
+                    if (!nums) { ok = false; break; }
+                    if (ov.rows > 0 && int(nums->size()) != ov.cols) {
+                        d_.error(span_of(row), fmt::format("the rows of '{}' must have one length: this one has {}, the first {}",
+                                                           name, nums->size(), ov.cols));
+                        ok = false;
+                        break;
+                    }
+                    ov.cols = int(nums->size());
+                    ++ov.rows;
+                    ov.value.insert(ov.value.end(), nums->begin(), nums->end());
+                }
+                if (ok) out.push_back(std::move(ov));
+                continue;
+            }
+            auto nums = get_numbers(v, name);
             if (!nums) continue;
-            out.push_back({std::string(k.str()), *nums, span_of(k.source())});
+            ov.value = *nums;
+            out.push_back(std::move(ov));
         }
     }
 };

@@ -23,10 +23,14 @@ struct ModuleSource {
 };
 
 // A parameter override from `shape_params` / `material_params`.
+// A value is a number, an array of numbers (a vector), an array of arrays of numbers (a matrix's rows), or
+// a string holding a constant expression ("√2", "(cos(π/6), sin(π/6), 0)"), evaluated when the scene is read.
 struct ParamOverride {
     std::string name;
-    std::vector<double> value;
+    std::vector<double> value;  // components, row-major
     Span span;
+    int rows = 0;               // an array of rows: how many (0: not written as rows)
+    int cols = 0;
 };
 
 struct InstanceDesc {

@@ -157,6 +157,11 @@ private:
     CheckedModule& m_;
     const ModuleLookup& lookup_;
     const CheckOptions& opts_;
+    // A constant expression's value: folded here where it can be, else by the evaluator (CheckOptions::constant).
+    std::optional<std::vector<double>> constant(const Expr& e) const {
+        if (auto v = const_eval(e)) return v;
+        return opts_.constant ? opts_.constant(e) : std::nullopt;
+    }
     Diagnostics& d_;
     std::map<std::string, const Stmt*> assigns_;
     std::map<std::string, Decl*> decls_;
@@ -391,7 +396,7 @@ void Checker::collect_declarations() {
             if (!decl.bounds.empty()) {
                 p.bounded = true;
                 for (auto& iv : decl.bounds) {
-                    auto lo = const_eval(*iv.lo), hi = const_eval(*iv.hi);
+                    auto lo = constant(*iv.lo), hi = constant(*iv.hi);
                     if (!lo || lo->size() != 1) { d_.error(iv.lo->span, "an interval bound must be a constant number"); continue; }
                     if (!hi || hi->size() != 1) { d_.error(iv.hi->span, "an interval bound must be a constant number"); continue; }
                     if ((*lo)[0] > (*hi)[0])
@@ -402,9 +407,10 @@ void Checker::collect_declarations() {
                 if (int(p.lo.size()) != n) continue;
             }
             if (decl.default_value) {
-                auto v = const_eval(*decl.default_value);
+                auto v = constant(*decl.default_value);
                 if (!v) {
-                    d_.error(decl.default_value->span, "a default must be a constant (numbers, π, and arithmetic on them)");
+                    d_.error(decl.default_value->span, "a default must be a constant (numbers, π, and arithmetic and functions "
+                                                       "of them, such as √2 or sin(π/8))");
                 } else if (int(v->size()) != n) {
                     auto& e = d_.error(decl.default_value->span,
                                        fmt::format("the default has {} component{} but '{}' is {}", v->size(),

@@ -157,6 +157,10 @@ struct CheckOptions {
     // Definitions of the module's function parameters (f: ℝ → ℝ), given from outside (`iqc eval --set
     // 'f(x)=x²'`): each a parsed module whose first statement defines the function.
     std::map<std::string, std::shared_ptr<const ast::Module>> given_functions;
+    // The value of a constant expression that const_eval cannot fold (√2, sin(1), 2^(1/3), …) for defaults
+    // and bounds: the scene layer lowers it and runs the evaluator (one meaning for every value). Empty, or
+    // nullopt: not a constant.
+    std::function<std::optional<std::vector<double>>(const ast::Expr&)> constant;
 };
 
 std::unique_ptr<CheckedModule> check_module(ast::Module module, const ModuleLookup& lookup,

@@ -1,0 +1,156 @@
+// Instancing: many instances of one shape with one material are one loop over per-instance data, one case
+// of each dispatch, on every target; and they draw what the double-precision reference (SceneModel, the
+// same IR run by the evaluator) says: the same instance at the same depth, through both `iqc render`
+// targets (Shadertoy constants; webgl2 uniform blocks or the data texture).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "TestUtil.h"
+
+using namespace iqc;
+using namespace iqc::test;
+
+namespace {
+
+// A ground and n rings on a grid of layers, each with its own constant transform. `irregular`: the rings
+// are jittered and tilted (their tables stay tables: no lattice), else they sit on a regular grid.
+std::string rings_scene(int n, bool irregular) {
+    std::string s =
+        "title = \"rings\"\n[modules]\nring = \"\"\"\nshape\nD = ‖q‖ - t_2\nq = (‖(p_1, p_3)‖ - t_1, p_2)\nwhere\np ∈ ℝ³\n"
+        "t ∈ [0,2]x[0,2] default = (0.3, 0.08)\n\"\"\"\nground = \"\"\"\nshape\nD = p_2 + h\nwhere\np ∈ ℝ³\nh ∈ [0,5] default = 1\n\"\"\"\n"
+        "lambert = \"\"\"\nmaterial\nC = max(0, L̂⋅N̂)`k_d` + 0.05`k_d`\nL̂ = (`P_L` - p)/‖`P_L` - p‖\nwhere\np ∈ ℝ³\nN̂ ∈ ℝ³\nI ∈ ℝ³\n"
+        "`P_L` ∈ ℝ³\n`k_d` ∈ [0,1]x[0,1]x[0,1] default = (0.8, 0.5, 0.2)\n\"\"\"\n"
+        "[camera]\nposition = [0, 7, -13]\ntarget = [0, 0, 0]\n[[lights]]\nposition = [-5, 8, -6]\n"
+        "[[shapes]]\ntype = \"ground\"\nmaterial = \"lambert\"\nmaterial_params = { k_d = [0.5, 0.5, 0.5] }\n";
+    int side = 1;
+    while (side * side * 10 < n) ++side;
+    uint32_t h = 12345;
+    auto rnd = [&] {  // deterministic jitter in [-0.5, 0.5)
+        h = h * 1664525u + 1013904223u;
+        return double(h >> 8) / double(1u << 24) - 0.5;
+    };
+    for (int i = 0; i < n; ++i) {
+        double x = (i % side) - side / 2.0, z = (i / side) % side - side / 2.0, y = (i / (side * side)) * 0.5 - 0.7;
+        std::string t;
+        if (irregular) t = fmt::format("T(({:.4f}, {:.4f}, {:.4f}))⋅`R_x`({:.3f})", x + 0.3 * rnd(), y, z + 0.3 * rnd(), 0.4 * (i % 7));
+        else t = fmt::format("T(({}, {}, {}))", x, y, z);
+        s += fmt::format("[[shapes]]\ntype = \"ring\"\nmaterial = \"lambert\"\ntransform = \"{}\"\n", t);
+    }
+    return s;
+}
+
+int count(const std::string& s, const std::string& what) {
+    int n = 0;
+    for (size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
+    return n;
+}
+
+}  // namespace
+
+TEST_CASE("1000 rings are one loop and one case of each dispatch on every target", "[instancing]") {
+    auto path = write_temp("rings_1000.iq", rings_scene(1000, false));
+    for (Target t : {Target::Shadertoy, Target::WebGL2, Target::GLSL330}) {
+        CompileOptions o;
+        o.target = t;
+        o.verify_each = true;
+        Compiled c = compile_path(path, o);
+        INFO(target_name(t) << "\n" << c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);  // glslang accepted it
+        const std::string& code = c.result.code;
+        CHECK(count(code, "for (int k = 0; k <= 999; k++) {  // ring_lambert: 1000 instances") == 1);
+        CHECK(count(code, "ring(q, ") == 1);                             // one copy of the shape's call
+        CHECK(count(code, "if (id >= 1 && id < 1001) c = lambert(") == 1);  // one branch for all of them
+        CHECK(count(code, "if (id ==") < 5);
+    }
+    // Shadertoy: the grid's offsets are arithmetic on k (a lattice), and a value every ring shares is one
+    // constant.
+    Compiled st = compile_path(path);
+    CHECK_THAT(st.result.code, Catch::Contains("vec3 q = p + vec3(5.0 - float(k % 10), 0.7 - (0.5 * float(k / 100)), 5.0 - float((k / 10) % 10));"));
+    CHECK(count(st.result.code, "const vec2 ring_shape_t = vec2(0.3, 0.08);") == 1);
+}
+
+TEST_CASE("the shader for 1000 instances is at most 3 times the one for 10", "[instancing]") {
+    for (bool irregular : {false, true})
+        for (Target t : {Target::Shadertoy, Target::WebGL2, Target::GLSL330}) {
+            CompileOptions o;
+            o.target = t;
+            Compiled small = compile_path(write_temp("rings_10.iq", rings_scene(10, irregular)), o);
+            Compiled large = compile_path(write_temp("rings_1000.iq", rings_scene(1000, irregular)), o);
+            REQUIRE(small.result.exit_code == 0);
+            REQUIRE(large.result.exit_code == 0);
+            INFO(target_name(t) << (irregular ? " irregular" : " grid") << ": " << small.result.code.size() << " and "
+                                << large.result.code.size() << " bytes");
+            // Irregular tables on Shadertoy are data in the code: compact, but they grow with the count.
+            if (irregular && t == Target::Shadertoy) CHECK(large.result.code.size() < 40 * small.result.code.size());
+            else CHECK(large.result.code.size() <= 3 * small.result.code.size());
+        }
+}
+
+TEST_CASE("webgl2 puts per-instance data in uniform blocks, or past 16 KiB a data texture, described in --meta", "[instancing]") {
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled hundred = compile_path(write_temp("rings_100i.iq", rings_scene(100, true)), o);
+    REQUIRE(hundred.result.exit_code == 0);
+    CHECK_THAT(hundred.result.code, Catch::Contains("layout(std140) uniform iqc_block_0 {"));
+    CHECK(hundred.result.inputs.texture.name.empty());
+    auto meta = nlohmann::json::parse(hundred.result.meta);
+    REQUIRE(meta["blocks"].size() >= 1);
+    CHECK(meta["blocks"][0]["name"] == "iqc_block_0");
+    // A thousand tilted rings: their matrices alone are 48 KB in std140, past one block: the texture.
+    Compiled thousand = compile_path(write_temp("rings_1000i.iq", rings_scene(1000, true)), o);
+    REQUIRE(thousand.result.exit_code == 0);
+    CHECK_THAT(thousand.result.code, Catch::Contains("uniform highp sampler2D iqc_data;"));
+    auto tm = nlohmann::json::parse(thousand.result.meta);
+    CHECK(tm["texture"]["name"] == "iqc_data");
+    CHECK(tm["texture"]["width"] == 1024);
+    // Every ring's material parameter is a slider of its own, with its place in the texture.
+    int rings = 0;
+    for (const auto& p : tm["parameters"])
+        if (p["module"] == "lambert" && p["name"] == "k_d" && p["instance"] != "ground_1") {
+            ++rings;
+            CHECK(p["storage"] == "texture");
+            CHECK(p["offsets"].size() == 3);
+        }
+    CHECK(rings == 1000);
+}
+
+TEST_CASE("100 and 1000 rings draw the reference's instances at the reference's depths on both targets", "[instancing][render]") {
+    const int W = 96, H = 54;
+    for (int n : {100, 1000})
+        for (bool irregular : {false, true})
+            for (Target t : {Target::Shadertoy, Target::WebGL2}) {
+                CompileOptions o;
+                o.target = t;
+                o.ids = true;
+                Compiled c = compile_path(write_temp(fmt::format("rings_{}_{}.iq", n, irregular), rings_scene(n, irregular)), o);
+                INFO(n << " rings, " << (irregular ? "irregular, " : "grid, ") << target_name(t) << "\n" << c.diagnostics);
+                REQUIRE(c.result.exit_code == 0);
+                render::RenderResult r = render_compiled(c.result, W, H);
+                INFO(r.error);
+                REQUIRE(r.ok);
+                const SceneModel& model = *c.result.model;
+                int samples = 0, disagree = 0, rings = 0;
+                for (int y = 1; y < H; y += 4)
+                    for (int x = 1; x < W; x += 4) {
+                        std::array<double, 3> ro, rd;
+                        model.ray(x, y, W, H, ro, rd);
+                        int id = -1;
+                        double tm = model.trace(ro, rd, &id);
+                        const float* px = r.image.pixel(x, y);
+                        int gid = int(std::lround(px[1]));
+                        ++samples;
+                        rings += gid >= 1;
+                        bool same = gid == id && (id < 0 || std::fabs(px[0] - tm) <= 1e-2 * std::max(1.0, tm));
+                        if (!same) {
+                            ++disagree;
+                            UNSCOPED_INFO(fmt::format("pixel ({}, {}): shader id {} at {}, reference id {} at {}", x, y, gid, px[0], id, tm));
+                        }
+                    }
+                // Silhouettes may differ between float and double by a sample or two; a wrong or black ring would not.
+                CHECK(disagree <= samples / 50);
+                CHECK(rings > (n == 100 ? samples / 100 : samples / 8));  // the rings are visible
+            }
+}
