@@ -217,6 +217,98 @@ struct Env {
         return ir::eval_instr(ctx.module, f, in, ptrs).v;
     }
 
+    // [a b; c d]: element by element, row-major, from the blocks (sized by the checker).
+    ValueId matrix_literal(const Expr& e) {
+        std::vector<std::vector<ValueId>> blocks;
+        for (auto& row : e.rows) {
+            blocks.emplace_back();
+            for (auto& a : row)
+                blocks.back().push_back(a->resolved == R_BlockZero || a->resolved == R_BlockOnes ||
+                                                a->resolved == R_BlockIdentity
+                                            ? ValueId(-1)
+                                            : lower(*a));
+        }
+        std::vector<ValueId> items;
+        ValueId zero = ValueId(-1), one = ValueId(-1);
+        auto konst = [&](double v) {
+            ValueId& slot = v == 0 ? zero : one;
+            if (slot == ValueId(-1)) slot = f.scalar(v);
+            return slot;
+        };
+        for (size_t br = 0; br < e.rows.size(); ++br)
+            for (int i = 0; i < e.block_rows[br]; ++i)
+                for (size_t bc = 0; bc < e.rows[br].size(); ++bc)
+                    for (int j = 0; j < e.block_cols[bc]; ++j) {
+                        const Expr& item = *e.rows[br][bc];
+                        ValueId v = blocks[br][bc];
+                        if (item.resolved == R_BlockZero) items.push_back(konst(0));
+                        else if (item.resolved == R_BlockOnes) items.push_back(konst(1));
+                        else if (item.resolved == R_BlockIdentity) items.push_back(konst(i == j ? 1 : 0));
+                        else if (type_of(v).is_scalar()) items.push_back(v);
+                        else if (type_of(v).is_vector()) items.push_back(emit(Op::Extract, Type::scalar(), {v}, i, item.span));
+                        else items.push_back(emit(Op::Extract, Type::scalar(), {v}, i * type_of(v).cols + j, item.span));
+                    }
+        if (items.size() == 1) return items[0];
+        int R = 0, C = 0;
+        for (int h : e.block_rows) R += h;
+        for (int w : e.block_cols) C += w;
+        return emit(Op::Construct, C == 1 ? Type::vector(R) : Type::matrix(R, C), std::move(items), 0, e.span);
+    }
+
+    // ∑_i e, unrolled: the range is a vector's, matrix's or sequence's size, known when checking.
+    ValueId sum(const Expr& e) {
+        ValueId acc = ValueId(-1);
+        int n = sum_range(*e.args[0], e.text);
+        auto outer = sum_index.find(e.text);  // an enclosing sum with the same index letter
+        std::optional<int> shadowed = outer == sum_index.end() ? std::nullopt : std::optional<int>(outer->second);
+        for (int k = 0; k < n; ++k) {
+            sum_index[e.text] = k;
+            ValueId term = lower(*e.args[0]);
+            if (e.args.size() > 1) {  // ∑_(j for condition): a term counts where its condition holds
+                Type t = scalar_or(type_of(term));
+                ValueId zero = f.constant(t, std::vector<double>(size_t(t.components()), 0.0));
+                ValueId c = lower(*e.args[1]);
+                auto known = constant_value(c);
+                if (!known) term = emit(Op::Select, t, {c, term, zero}, 0, e.span);
+                else if ((*known)[0] == 0) term = acc == ValueId(-1) && k == n - 1 ? zero : ValueId(-1);
+                if (term == ValueId(-1)) continue;
+            }
+            acc = acc == ValueId(-1) ? term : op2(Op::Add, acc, term, e.span);
+        }
+        if (shadowed) sum_index[e.text] = *shadowed;
+        else sum_index.erase(e.text);
+        return acc;
+    }
+    ValueId compare(const Expr& e) {
+        ValueId a = lower(*e.args[0]);
+        ValueId b = lower(*e.args[1]);
+        ir::CompareKind k = ir::CompareKind::Eq;
+        switch (e.op) {
+            case BinOp::Eq: k = ir::CompareKind::Eq; break;
+            case BinOp::Neq: k = ir::CompareKind::Ne; break;
+            case BinOp::Lt: k = ir::CompareKind::Lt; break;
+            case BinOp::Le: k = ir::CompareKind::Le; break;
+            case BinOp::Gt: k = ir::CompareKind::Gt; break;
+            default: k = ir::CompareKind::Ge; break;
+        }
+        return emit(Op::Compare, Type::boolean(), {a, b}, int(k), e.span);
+    }
+
+    // Cases are tried in order: the first true condition wins (a chain of selects from the last).
+    ValueId piecewise(const Expr& e) {
+        ValueId acc = ValueId(-1);
+        if (e.otherwise) acc = lower(*e.otherwise);
+        for (size_t i = e.rows.size(); i-- > 0;) {
+            ValueId v = lower(*e.rows[i][0]);
+            ValueId c = lower(*e.rows[i][1]);
+            if (acc == ValueId(-1)) {  // no `otherwise`: 0
+                Type t = scalar_or(type_of(v));
+                acc = f.constant(t, std::vector<double>(size_t(t.components()), 0.0));
+            }
+            acc = emit(Op::Select, scalar_or(type_of(v)), {c, v, acc}, 0, e.span);
+        }
+        return acc;
+    }
     // A subscripted value (see Checker::check_index): constant subscripts extract, ∑ indices are constant
     // while unrolling, ℤ values known only when running index with At (0-based, rounded and clamped).
     ValueId index(const Expr& e) {
@@ -499,67 +591,8 @@ struct Env {
                 }
                 return emit(Op::Construct, Type::vector(n), std::move(items), 0, e.span);
             }
-            case ExprKind::Matrix: {
-                // Element by element, row-major, from the blocks (sized by the checker).
-                std::vector<std::vector<ValueId>> blocks;
-                for (auto& row : e.rows) {
-                    blocks.emplace_back();
-                    for (auto& a : row)
-                        blocks.back().push_back(a->resolved == R_BlockZero || a->resolved == R_BlockOnes ||
-                                                        a->resolved == R_BlockIdentity
-                                                    ? ValueId(-1)
-                                                    : lower(*a));
-                }
-                std::vector<ValueId> items;
-                ValueId zero = ValueId(-1), one = ValueId(-1);
-                auto konst = [&](double v) {
-                    ValueId& slot = v == 0 ? zero : one;
-                    if (slot == ValueId(-1)) slot = f.scalar(v);
-                    return slot;
-                };
-                for (size_t br = 0; br < e.rows.size(); ++br)
-                    for (int i = 0; i < e.block_rows[br]; ++i)
-                        for (size_t bc = 0; bc < e.rows[br].size(); ++bc)
-                            for (int j = 0; j < e.block_cols[bc]; ++j) {
-                                const Expr& item = *e.rows[br][bc];
-                                ValueId v = blocks[br][bc];
-                                if (item.resolved == R_BlockZero) items.push_back(konst(0));
-                                else if (item.resolved == R_BlockOnes) items.push_back(konst(1));
-                                else if (item.resolved == R_BlockIdentity) items.push_back(konst(i == j ? 1 : 0));
-                                else if (type_of(v).is_scalar()) items.push_back(v);
-                                else if (type_of(v).is_vector()) items.push_back(emit(Op::Extract, Type::scalar(), {v}, i, item.span));
-                                else items.push_back(emit(Op::Extract, Type::scalar(), {v}, i * type_of(v).cols + j, item.span));
-                            }
-                if (items.size() == 1) return items[0];
-                int R = 0, C = 0;
-                for (int h : e.block_rows) R += h;
-                for (int w : e.block_cols) C += w;
-                return emit(Op::Construct, C == 1 ? Type::vector(R) : Type::matrix(R, C), std::move(items), 0, e.span);
-            }
-            case ExprKind::Sum: {
-                // Unrolled: the range is a vector's or matrix's size, known when checking.
-                ValueId acc = ValueId(-1);
-                int n = sum_range(*e.args[0], e.text);
-                auto outer = sum_index.find(e.text);  // an enclosing sum with the same index letter
-                std::optional<int> shadowed = outer == sum_index.end() ? std::nullopt : std::optional<int>(outer->second);
-                for (int k = 0; k < n; ++k) {
-                    sum_index[e.text] = k;
-                    ValueId term = lower(*e.args[0]);
-                    if (e.args.size() > 1) {  // ∑_(j for condition): a term counts where its condition holds
-                        Type t = scalar_or(type_of(term));
-                        ValueId zero = f.constant(t, std::vector<double>(size_t(t.components()), 0.0));
-                        ValueId c = lower(*e.args[1]);
-                        auto known = constant_value(c);
-                        if (!known) term = emit(Op::Select, t, {c, term, zero}, 0, e.span);
-                        else if ((*known)[0] == 0) term = acc == ValueId(-1) && k == n - 1 ? zero : ValueId(-1);
-                        if (term == ValueId(-1)) continue;
-                    }
-                    acc = acc == ValueId(-1) ? term : op2(Op::Add, acc, term, e.span);
-                }
-                if (shadowed) sum_index[e.text] = *shadowed;
-                else sum_index.erase(e.text);
-                return acc;
-            }
+            case ExprKind::Matrix: return matrix_literal(e);
+            case ExprKind::Sum: return sum(e);
             case ExprKind::Norm:
             case ExprKind::Abs: return norm(e);
             case ExprKind::Inner: {
@@ -570,40 +603,13 @@ struct Env {
             case ExprKind::Floor: return builtin("floor", {lower(*e.args[0])}, e.span);
             case ExprKind::Ceil: return builtin("ceil", {lower(*e.args[0])}, e.span);
             case ExprKind::Sqrt: return builtin("sqrt", {lower(*e.args[0])}, e.span);
-            case ExprKind::Compare: {
-                ValueId a = lower(*e.args[0]);
-                ValueId b = lower(*e.args[1]);
-                ir::CompareKind k = ir::CompareKind::Eq;
-                switch (e.op) {
-                    case BinOp::Eq: k = ir::CompareKind::Eq; break;
-                    case BinOp::Neq: k = ir::CompareKind::Ne; break;
-                    case BinOp::Lt: k = ir::CompareKind::Lt; break;
-                    case BinOp::Le: k = ir::CompareKind::Le; break;
-                    case BinOp::Gt: k = ir::CompareKind::Gt; break;
-                    default: k = ir::CompareKind::Ge; break;
-                }
-                return emit(Op::Compare, Type::boolean(), {a, b}, int(k), e.span);
-            }
+            case ExprKind::Compare: return compare(e);
             case ExprKind::Logic: {
                 ValueId a = lower(*e.args[0]);
                 ValueId b = lower(*e.args[1]);
                 return emit(e.op == BinOp::And ? Op::And : Op::Or, Type::boolean(), {a, b}, 0, e.span);
             }
-            case ExprKind::Piecewise: {
-                // Cases are tried in order: the first true condition wins.
-                ValueId acc = ValueId(-1);
-                if (e.otherwise) acc = lower(*e.otherwise);
-                for (size_t i = e.rows.size(); i-- > 0;) {
-                    ValueId v = lower(*e.rows[i][0]);
-                    ValueId c = lower(*e.rows[i][1]);
-                    if (acc == ValueId(-1)) {  // no `otherwise`: 0
-                        Type t = scalar_or(type_of(v));
-                        acc = f.constant(t, std::vector<double>(size_t(t.components()), 0.0));
-                    }
-                    acc = emit(Op::Select, scalar_or(type_of(v)), {c, v, acc}, 0, e.span);
-                }
-                return acc;
-            }
+            case ExprKind::Piecewise: return piecewise(e);
         }
         internal_error("lowering: unknown expression");
     }

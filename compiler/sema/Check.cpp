@@ -205,6 +205,7 @@ private:
     Type check_binary(Expr& e);
     Type check_norm(Expr& e);
     Type check_block(Expr& e);
+    Type check_matrix_literal(Expr& e);
     Type check_index(Expr& e);
     Type check_sequence_literal(Expr& e);
     Type check_elementwise(const Stmt& s);
@@ -1477,92 +1478,7 @@ Type Checker::check_kind(Expr& e) {
         case ExprKind::Index: t = check_index(e); break;
         case ExprKind::Sequence: t = check_sequence_literal(e); break;
         case ExprKind::Vector: t = check_vector_items(e); break;
-        case ExprKind::Matrix: {
-            // Entries may be scalars, vectors (columns) or matrices (blocks); 0, 1 and I are blocks sized
-            // from their neighbours in the same block row and column.
-            size_t ncols = e.rows[0].size();
-            bool ok = true;
-            size_t nrows = e.rows.size();
-            std::vector<std::vector<std::pair<int, int>>> size(nrows);
-            for (size_t r = 0; r < nrows; ++r) {
-                auto& row = e.rows[r];
-                if (row.size() != ncols) {
-                    d_.error(Span::join(row.front()->span, row.back()->span),
-                             fmt::format("this row has {} entr{} but the first row has {}", row.size(),
-                                         row.size() == 1 ? "y" : "ies", ncols));
-                    ok = false;
-                }
-                for (auto& item : row) {
-                    bool declared_I = m_.find_param("I") >= 0 || assigns_.count("I") || (scope_ && scope_->locals.count("I"));
-                    if (item->kind == ExprKind::Number && (item->number == 0 || item->number == 1)) {
-                        item->resolved = item->number == 0 ? R_BlockZero : R_BlockOnes;
-                        item->type = Type::scalar();
-                        size[r].push_back({-1, -1});
-                        continue;
-                    }
-                    if (item->kind == ExprKind::Name && item->text == "I" && !declared_I) {
-                        item->resolved = R_BlockIdentity;
-                        size[r].push_back({-1, -1});
-                        continue;
-                    }
-                    Type it = check(*item);
-                    if (!it.valid()) { ok = false; size[r].push_back({1, 1}); continue; }
-                    if (it.is_scalar()) size[r].push_back({1, 1});
-                    else if (it.is_vector()) size[r].push_back({it.rows, 1});
-                    else if (it.is_matrix()) size[r].push_back({it.rows, it.cols});
-                    else { d_.error(item->span, fmt::format("a matrix entry cannot be a {}", it.str())); ok = false; size[r].push_back({1, 1}); }
-                }
-            }
-            if (!ok) break;
-            std::vector<int> heights(nrows, -1), widths(ncols, -1);
-            for (size_t r = 0; r < nrows; ++r)
-                for (size_t c = 0; c < ncols; ++c) {
-                    auto [h, w] = size[r][c];
-                    if (h >= 0) {
-                        if (heights[r] >= 0 && heights[r] != h) {
-                            d_.error(e.rows[r][c]->span, fmt::format("this block has {} rows but the blocks beside it have {}", h, heights[r]));
-                            ok = false;
-                        }
-                        heights[r] = h;
-                    }
-                    if (w >= 0) {
-                        if (widths[c] >= 0 && widths[c] != w) {
-                            d_.error(e.rows[r][c]->span, fmt::format("this block has {} columns but the blocks above or below it have {}", w, widths[c]));
-                            ok = false;
-                        }
-                        widths[c] = w;
-                    }
-                }
-            // I is square: it can size its row from its column and the other way round.
-            for (int pass = 0; pass < 2; ++pass)
-                for (size_t r = 0; r < nrows; ++r)
-                    for (size_t c = 0; c < ncols; ++c)
-                        if (e.rows[r][c]->resolved == R_BlockIdentity) {
-                            if (heights[r] < 0 && widths[c] >= 0) heights[r] = widths[c];
-                            if (widths[c] < 0 && heights[r] >= 0) widths[c] = heights[r];
-                        }
-            for (auto& h : heights) if (h < 0) h = 1;
-            for (auto& w : widths) if (w < 0) w = 1;
-            for (size_t r = 0; r < nrows; ++r)
-                for (size_t c = 0; c < ncols; ++c)
-                    if (e.rows[r][c]->resolved == R_BlockIdentity && heights[r] != widths[c]) {
-                        d_.error(e.rows[r][c]->span, fmt::format("I must be square here, but its place is {}×{}", heights[r], widths[c]));
-                        ok = false;
-                    }
-            if (!ok) break;
-            e.block_rows = heights;
-            e.block_cols = widths;
-            int64_t R = 0, C = 0;
-            for (int h : heights) R += h;
-            for (int w : widths) C += w;
-            if (R * C > limits::kMaxComponents) {
-                d_.error(e.span, fmt::format("this matrix has {}×{} entries: iqc allows at most {} per vector or matrix", R,
-                                             C, limits::kMaxComponents));
-                break;
-            }
-            t = C == 1 ? Type::vector(int(R)) : Type::matrix(int(R), int(C));
-            break;
-        }
+        case ExprKind::Matrix: t = check_matrix_literal(e); break;
         case ExprKind::Sum: {
             int n = sum_range(*e.args[0], e.text);
             if (n <= 0) {
@@ -1767,6 +1683,92 @@ Type Checker::check_index(Expr& e) {
     }
     d_.error(e.span, fmt::format("cannot subscript {}", base.str()));
     return {};
+}
+
+// [a b; c d]: entries may be scalars, vectors (columns) or matrices (blocks); 0, 1 and I are blocks sized
+// from their neighbours in the same block row and column.
+Type Checker::check_matrix_literal(Expr& e) {
+    size_t ncols = e.rows[0].size();
+    bool ok = true;
+    size_t nrows = e.rows.size();
+    std::vector<std::vector<std::pair<int, int>>> size(nrows);
+    for (size_t r = 0; r < nrows; ++r) {
+        auto& row = e.rows[r];
+        if (row.size() != ncols) {
+            d_.error(Span::join(row.front()->span, row.back()->span),
+                     fmt::format("this row has {} entr{} but the first row has {}", row.size(),
+                                 row.size() == 1 ? "y" : "ies", ncols));
+            ok = false;
+        }
+        for (auto& item : row) {
+            bool declared_I = m_.find_param("I") >= 0 || assigns_.count("I") || (scope_ && scope_->locals.count("I"));
+            if (item->kind == ExprKind::Number && (item->number == 0 || item->number == 1)) {
+                item->resolved = item->number == 0 ? R_BlockZero : R_BlockOnes;
+                item->type = Type::scalar();
+                size[r].push_back({-1, -1});
+                continue;
+            }
+            if (item->kind == ExprKind::Name && item->text == "I" && !declared_I) {
+                item->resolved = R_BlockIdentity;
+                size[r].push_back({-1, -1});
+                continue;
+            }
+            Type it = check(*item);
+            if (!it.valid()) { ok = false; size[r].push_back({1, 1}); continue; }
+            if (it.is_scalar()) size[r].push_back({1, 1});
+            else if (it.is_vector()) size[r].push_back({it.rows, 1});
+            else if (it.is_matrix()) size[r].push_back({it.rows, it.cols});
+            else { d_.error(item->span, fmt::format("a matrix entry cannot be a {}", it.str())); ok = false; size[r].push_back({1, 1}); }
+        }
+    }
+    if (!ok) return {};
+    std::vector<int> heights(nrows, -1), widths(ncols, -1);
+    for (size_t r = 0; r < nrows; ++r)
+        for (size_t c = 0; c < ncols; ++c) {
+            auto [h, w] = size[r][c];
+            if (h >= 0) {
+                if (heights[r] >= 0 && heights[r] != h) {
+                    d_.error(e.rows[r][c]->span, fmt::format("this block has {} rows but the blocks beside it have {}", h, heights[r]));
+                    ok = false;
+                }
+                heights[r] = h;
+            }
+            if (w >= 0) {
+                if (widths[c] >= 0 && widths[c] != w) {
+                    d_.error(e.rows[r][c]->span, fmt::format("this block has {} columns but the blocks above or below it have {}", w, widths[c]));
+                    ok = false;
+                }
+                widths[c] = w;
+            }
+        }
+    // I is square: it can size its row from its column and the other way round.
+    for (int pass = 0; pass < 2; ++pass)
+        for (size_t r = 0; r < nrows; ++r)
+            for (size_t c = 0; c < ncols; ++c)
+                if (e.rows[r][c]->resolved == R_BlockIdentity) {
+                    if (heights[r] < 0 && widths[c] >= 0) heights[r] = widths[c];
+                    if (widths[c] < 0 && heights[r] >= 0) widths[c] = heights[r];
+                }
+    for (auto& h : heights) if (h < 0) h = 1;
+    for (auto& w : widths) if (w < 0) w = 1;
+    for (size_t r = 0; r < nrows; ++r)
+        for (size_t c = 0; c < ncols; ++c)
+            if (e.rows[r][c]->resolved == R_BlockIdentity && heights[r] != widths[c]) {
+                d_.error(e.rows[r][c]->span, fmt::format("I must be square here, but its place is {}×{}", heights[r], widths[c]));
+                ok = false;
+            }
+    if (!ok) return {};
+    e.block_rows = heights;
+    e.block_cols = widths;
+    int64_t R = 0, C = 0;
+    for (int h : heights) R += h;
+    for (int w : widths) C += w;
+    if (R * C > limits::kMaxComponents) {
+        d_.error(e.span, fmt::format("this matrix has {}×{} entries: iqc allows at most {} per vector or matrix", R,
+                                     C, limits::kMaxComponents));
+        return {};
+    }
+    return C == 1 ? Type::vector(int(R)) : Type::matrix(int(R), int(C));
 }
 
 // {a, b, c}: a sequence of values of one type.
