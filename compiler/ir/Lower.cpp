@@ -429,6 +429,44 @@ struct Env {
         return acc;
     }
 
+    // ‖A‖_*: the sum of A's singular values, the square roots of the eigenvalues of the smaller Gram matrix
+    // G (A Aᵀ or AᵀA). For a 2×2 G, σ₁ + σ₂ = √(tr G + 2√det G); for a 3×3 G the eigenvalues of a symmetric
+    // matrix in closed form (Smith, "Eigenvalues of a symmetric 3 × 3 matrix", CACM 4(4), 1961).
+    ValueId nuclear(ValueId a, Span span) {
+        const Type t = type_of(a);
+        int k = std::min(t.rows, t.cols);
+        if (k == 1) return builtin("sqrt", {frobenius(a, a, span)}, span);
+        ValueId at = emit(Op::Transpose, Type::matrix(t.cols, t.rows), {a}, 0, span);
+        ValueId G = t.rows <= t.cols ? emit(Op::Mul, Type::matrix(k, k), {a, at}, 0, span)
+                                     : emit(Op::Mul, Type::matrix(k, k), {at, a}, 0, span);
+        auto g = [&](int r, int c) { return emit(Op::Extract, Type::scalar(), {G}, r * k + c, span); };
+        auto add = [&](ValueId x, ValueId y) { return emit(Op::Add, Type::scalar(), {x, y}, 0, span); };
+        auto sub = [&](ValueId x, ValueId y) { return emit(Op::Sub, Type::scalar(), {x, y}, 0, span); };
+        auto mulv = [&](ValueId x, ValueId y) { return emit(Op::Mul, Type::scalar(), {x, y}, 0, span); };
+        auto root = [&](ValueId x) { return builtin("sqrt", {builtin("max", {x, f.scalar(0)}, span)}, span); };
+        if (k == 2) {
+            ValueId det = emit(Op::Det, Type::scalar(), {G}, 0, span);
+            return root(add(add(g(0, 0), g(1, 1)), mulv(f.scalar(2), root(det))));
+        }
+        ValueId q = emit(Op::Div, Type::scalar(), {add(add(g(0, 0), g(1, 1)), g(2, 2)), f.scalar(3)}, 0, span);
+        ValueId p1 = add(add(mulv(g(0, 1), g(0, 1)), mulv(g(0, 2), g(0, 2))), mulv(g(1, 2), g(1, 2)));
+        ValueId d0 = sub(g(0, 0), q), d1 = sub(g(1, 1), q), d2 = sub(g(2, 2), q);
+        ValueId p2 = add(add(add(mulv(d0, d0), mulv(d1, d1)), mulv(d2, d2)), mulv(f.scalar(2), p1));
+        ValueId p = builtin("max", {root(emit(Op::Div, Type::scalar(), {p2, f.scalar(6)}, 0, span)), f.scalar(1e-18)}, span);
+        std::vector<double> id(9, 0.0);
+        id[0] = id[4] = id[8] = 1;
+        ValueId shifted = emit(Op::Sub, Type::matrix(3, 3), {G, emit(Op::Mul, Type::matrix(3, 3), {q, f.constant(Type::matrix(3, 3), id)}, 0, span)}, 0, span);
+        ValueId B = emit(Op::Div, Type::matrix(3, 3), {shifted, p}, 0, span);
+        ValueId r = emit(Op::Div, Type::scalar(), {emit(Op::Det, Type::scalar(), {B}, 0, span), f.scalar(2)}, 0, span);
+        ValueId phi = emit(Op::Div, Type::scalar(),
+                           {builtin("acos", {builtin("clamp", {r, f.scalar(-1), f.scalar(1)}, span)}, span), f.scalar(3)}, 0, span);
+        ValueId two_p = mulv(f.scalar(2), p);
+        ValueId l1 = add(q, mulv(two_p, builtin("cos", {phi}, span)));
+        ValueId l3 = add(q, mulv(two_p, builtin("cos", {add(phi, f.scalar(2 * M_PI / 3))}, span)));
+        ValueId l2 = sub(sub(mulv(f.scalar(3), q), l1), l3);
+        return add(add(root(l1), root(l2)), root(l3));
+    }
+
     // ‖x‖ and |x| by what the checker resolved (see check_norm).
     ValueId norm(const Expr& e) {
         ValueId a = lower(*e.args[0]);
@@ -456,6 +494,17 @@ struct Env {
                 return builtin("sqrt", {emit(Op::Dot, Type::scalar(), {a, mv}, 0, span)}, span);
             }
             case R_Frobenius: return builtin("sqrt", {frobenius(a, a, span)}, span);
+            case R_Norm0: {  // the number of components that are not 0
+                ValueId zero = f.scalar(0), one = f.scalar(1), acc = ValueId(-1);
+                for (int i = 0; i < t.rows; ++i) {
+                    ValueId c = emit(Op::Compare, Type::boolean(), {emit(Op::Extract, Type::scalar(), {a}, i, span), zero},
+                                     int(ir::CompareKind::Ne), span);
+                    ValueId k = emit(Op::Select, Type::scalar(), {c, one, zero}, 0, span);
+                    acc = acc == ValueId(-1) ? k : emit(Op::Add, Type::scalar(), {acc, k}, 0, span);
+                }
+                return acc;
+            }
+            case R_Nuclear: return nuclear(a, span);
             default: return builtin("abs", {a}, span);
         }
     }

@@ -943,7 +943,9 @@ void Checker::check_function(LocalFunction& f, Span call_site, const std::vector
         if (!decl && !f.declared)
             if (auto it = decls_.find(pname); it != decls_.end()) decl = it->second;
         decls.push_back(decl);
-        if (decl && (!decl->type.sym_rows.empty() || !decl->type.sym_cols.empty())) f.generic = true;
+        // A parameter of a symbolic size (x ∈ ℝ^n, or f: ℝ^(k×k) → ℝ) makes the function generic.
+        const TypeSpec* spec = decl ? &decl->type : f.declared ? &f.declared->params[i] : nullptr;
+        if (spec && (!spec->sym_rows.empty() || !spec->sym_cols.empty())) f.generic = true;
     }
     std::vector<Type> key;
     if (f.generic) {
@@ -966,8 +968,10 @@ void Checker::check_function(LocalFunction& f, Span call_site, const std::vector
     f.params.clear();
     auto saved_sizes = sizes_;
     if (f.generic)
-        for (size_t i = 0; i < s.params.size() && i < key.size(); ++i)
+        for (size_t i = 0; i < s.params.size() && i < key.size(); ++i) {
             if (decls[i]) bind_sizes(decls[i]->type, key[i], s.params[i].first, call_site);
+            else if (f.declared) bind_sizes(f.declared->params[i], key[i], s.params[i].first, call_site);
+        }
     for (size_t i = 0; i < s.params.size(); ++i) {
         const auto& [pname, pspan] = s.params[i];
         const Decl* decl = decls[i];
@@ -1329,9 +1333,14 @@ Type Checker::check_norm(Expr& e) {
         return Type::scalar();
     }
     if (a.is_matrix()) {
-        if (e.text == "*") {
-            d_.error(where, "the nuclear norm ‖A‖_* is not supported: it needs the singular values of A");
-            return {};
+        if (e.text == "*") {  // the sum of the singular values: closed forms up to three of them
+            if (std::min(a.rows, a.cols) > 3) {
+                d_.error(where, fmt::format("the nuclear norm ‖A‖_* is supported for matrices with at most 3 rows or 3 "
+                                            "columns, not {}", a.str()));
+                return {};
+            }
+            e.resolved = R_Nuclear;
+            return Type::scalar();
         }
         if (e.args.size() > 1 || (!e.text.empty() && e.text != "F")) {
             d_.error(where, fmt::format("the norm of a matrix ({}) is ‖A‖ or ‖A‖_F (Frobenius)", a.str()));
@@ -1360,9 +1369,8 @@ Type Checker::check_norm(Expr& e) {
         } else if (!p.is_scalar()) {
             d_.error(e.args[1]->span, fmt::format("the subscript of a norm is a number p ≥ 1 or a matrix, not {}", p.str()));
             return {};
-        } else if (c && c->size() == 1 && (*c)[0] < 1) {
-            d_.error(e.args[1]->span, fmt::format("‖v‖_p needs p ≥ 1, not {}", (*c)[0]));
-            return {};
+        } else if (c && c->size() == 1 && (*c)[0] == 0) {
+            e.resolved = R_Norm0;  // ‖v‖_0: how many components are not 0 (I♥LA, after numpy)
         } else {
             e.resolved = c && (*c)[0] == 2 ? R_Length : c && (*c)[0] == 1 ? R_Norm1 : R_NormP;
         }

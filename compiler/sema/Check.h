@@ -54,6 +54,8 @@ enum Resolved : int {
     R_NormP,      // ‖v‖_p (args[1] is p)
     R_NormMatrix, // ‖v‖_M = √(vᵀ M v)
     R_Frobenius,  // ‖A‖, ‖A‖_F
+    R_Norm0,      // ‖v‖_0: the number of components that are not 0
+    R_Nuclear,    // ‖A‖_*: the sum of A's singular values
 };
 
 struct ParamInfo {

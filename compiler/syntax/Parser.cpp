@@ -91,7 +91,7 @@ std::set<std::string> prescan(const std::vector<Token>& toks) {
                 last = k;
                 std::string n = toks[k].text;
                 if (k + 2 < line_end && toks[k + 1].kind == Tok::Underscore && !toks[k + 1].space_before &&
-                    toks[k + 2].kind == Tok::Word && !toks[k + 2].space_before) {
+                    (toks[k + 2].kind == Tok::Word || toks[k + 2].kind == Tok::Backtick) && !toks[k + 2].space_before) {
                     // x_i ∈ ℝ³ (a sequence), q_i = … or B_i,j = … (element-wise): the name is x, q or B.
                     k += 2;
                     if (k + 2 < line_end && toks[k + 1].kind == Tok::Comma && !toks[k + 1].space_before &&
@@ -101,9 +101,8 @@ std::set<std::string> prescan(const std::vector<Token>& toks) {
                            !std::isdigit(static_cast<unsigned char>(toks[k + 1].text[0]))) {
                     k += 1;  // xᵢ
                 } else if (k + 2 < line_end && toks[k + 1].kind == Tok::Underscore && !toks[k + 1].space_before &&
-                           (toks[k + 2].kind == Tok::Backtick || toks[k + 2].kind == Tok::Number) &&
-                           !toks[k + 2].space_before && !sequences.count(n)) {
-                    names.push_back(n);  // x_1 = … and x_`max` ∈ ℝ are names of their own (an iqc extension)
+                           toks[k + 2].kind == Tok::Number && !toks[k + 2].space_before && !sequences.count(n)) {
+                    names.push_back(n);  // x_1 = … and x_1 ∈ ℝ are names of their own (an iqc extension)
                     n += "_" + toks[k + 2].text;
                     k += 2;
                 }
@@ -334,6 +333,7 @@ private:
     ExprPtr parse_condition();
     ExprPtr parse_comparison();
     ExprPtr parse_atom_comparison();
+    bool parenthesized_condition() const;
     ExprPtr parse_expr();
     ExprPtr parse_unary();
     ExprPtr parse_mult();
@@ -529,6 +529,19 @@ TypeSpec Parser::parse_type(bool allow_function) {
         }
         if (ts.kind == TypeSpec::Vector && ts.rows == 1 && ts.sym_rows.empty()) ts.kind = TypeSpec::Scalar;
     };
+    bool no_params = allow_function && ((at(Tok::LBrace) && peek_raw(1).kind == Tok::RBrace) ||
+                                        (at(Tok::Unknown) && cur().text == "∅"));
+    if (no_params) {  // {} → T, ∅ → T: a function of no arguments
+        if (at(Tok::LBrace)) advance();
+        advance();
+        if (!at(Tok::Arrow)) fail(cur().span, fmt::format("expected '→' after a function's empty argument list, found {}", describe(cur())));
+        advance();
+        TypeSpec f;
+        f.kind = TypeSpec::Function;
+        f.result = std::make_unique<TypeSpec>(parse_type(false));
+        f.span = Span::join(start, prev_span());
+        return f;
+    }
     if (accept(Tok::Reals) || (at(Tok::Word) && cur().text == "R" && (advance(), true))) {
         ts.kind = TypeSpec::Scalar;
         parse_dims();
@@ -709,7 +722,7 @@ Stmt Parser::parse_statement() {
         s.kind = StmtKind::Function;
         expect(Tok::LParen, "");
         ctx_.push_back(Ctx::Paren);
-        s.params = parse_name_list();
+        if (!at(Tok::RParen)) s.params = parse_name_list();  // f() = …: no arguments
         ctx_.pop_back();
         expect(Tok::RParen, "to close the parameter list");
     }
@@ -938,6 +951,14 @@ ExprPtr Parser::parse_condition() {
 // comparison := expr (= | ≠ | < | ≤ | > | ≥) expr | expr (∈ | ∉) interval
 //   interval := ([ | () expr , expr (] | ))     — closed or open at either end
 ExprPtr Parser::parse_comparison() {
+    if (parenthesized_condition()) {  // ( condition ): (j > 2 or j > 3) and j > 4
+        Span open = advance().span;
+        ctx_.push_back(Ctx::Paren);
+        ExprPtr c = parse_condition();
+        ctx_.pop_back();
+        c->span = Span::join(open, expect(Tok::RParen, "to close the condition").span);
+        return c;
+    }
     ++in_condition_;
     ExprPtr c = parse_atom_comparison();
     --in_condition_;
@@ -959,6 +980,23 @@ ExprPtr Parser::parse_comparison() {
     e->kind = ExprKind::Logic;
     e->span = whole;
     return e;
+}
+
+// Whether the parenthesis at the current token holds a condition (a comparison, `and` or `or` directly
+// inside it), not a value such as (x + 1).
+bool Parser::parenthesized_condition() const {
+    if (toks_[pos_].kind != Tok::LParen) return false;
+    int depth = 0;
+    for (size_t k = pos_; k < toks_.size() && toks_[k].kind != Tok::End; ++k) {
+        Tok t = toks_[k].kind;
+        if (t == Tok::LParen || t == Tok::LBracket || t == Tok::LBrace) ++depth;
+        if (t == Tok::RParen || t == Tok::RBracket || t == Tok::RBrace)
+            if (--depth == 0) return false;
+        if (depth == 1 && (t == Tok::Eq || t == Tok::Neq || t == Tok::Lt || t == Tok::Le || t == Tok::Gt || t == Tok::Ge ||
+                           t == Tok::In || t == Tok::NotIn || is_kw(toks_[k], "and") || is_kw(toks_[k], "or")))
+            return true;
+    }
+    return false;
 }
 
 ExprPtr Parser::parse_atom_comparison() {
@@ -1211,10 +1249,30 @@ ExprPtr Parser::parse_postfix(bool exponent) {
             e = parse_sized_block(std::move(e));
             continue;
         }
-        if ((e->kind == ExprKind::Norm || e->kind == ExprKind::Abs) && e->args.size() == 1 && e->text.empty() &&
-            (at(Tok::Sub) || (at(Tok::Underscore) && !cur().space_before))) {
-            parse_norm_subscript(*e);
-            continue;
+        if ((e->kind == ExprKind::Norm || e->kind == ExprKind::Abs) && e->args.size() == 1 && e->text.empty()) {
+            if ((at(Tok::Sub) || (at(Tok::Underscore) && !cur().space_before))) {
+                parse_norm_subscript(*e);
+                continue;
+            }
+            // ‖A‖²_F, ‖v‖^2_2: I♥LA lets the power come before the subscript.
+            size_t k = pos_;
+            bool sup = toks_[k].kind == Tok::Super && !toks_[k].space_before && toks_[k].text.find_first_not_of("0123456789") == std::string::npos;
+            bool caret = toks_[k].kind == Tok::Caret && toks_[k + 1].kind == Tok::Number;
+            size_t after = k + (sup ? 1 : caret ? 2 : 0);
+            if ((sup || caret) && (toks_[after].kind == Tok::Sub || toks_[after].kind == Tok::Underscore) &&
+                !toks_[after].space_before) {
+                const Token& pw = toks_[after - 1];
+                auto ex = make(ExprKind::Number, pw.span);
+                ex->number = literal_value(pw);
+                ex->text = pw.text;
+                pos_ = after;
+                parse_norm_subscript(*e);
+                auto power = make(ExprKind::Power, Span::join(e->span, ex->span));
+                power->args.push_back(std::move(e));
+                power->args.push_back(std::move(ex));
+                e = std::move(power);
+                continue;
+            }
         }
         if (at(Tok::Sub)) {
             nest(depth, cur().span);
