@@ -52,7 +52,9 @@ TEST_CASE("conformance suite through emitted GLSL agrees with the evaluator", "[
             if (size_t paren = n.find('('); paren != std::string::npos) {  // f(x)=…: a function parameter's definition
                 std::string def = n + " = " + text;
                 FileId df = sm.add("function", def);
-                given_functions[n.substr(0, paren)] = lib.parse_function({"value", df, {{0, uint32_t(def.size())}}, {df, 0, 1}, "value"});
+                std::string fname = n.substr(0, paren);
+                if (fname.size() > 2 && fname.front() == '`') fname = fname.substr(1, fname.size() - 2);
+                given_functions[fname] = lib.parse_function({"value", df, {{0, uint32_t(def.size())}}, {df, 0, 1}, "value"});
                 continue;
             }
             if (n.size() > 2 && n.front() == '`') n = n.substr(1, n.size() - 2);

@@ -87,7 +87,9 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
             std::string text = sname + " = " + stext;
             FileId ff = sm.add(fmt::format("--set {}", sname), text);
             ModuleSource fs{"value", ff, {{0, uint32_t(text.size())}}, {ff, 0, 1}, "value"};
-            given_functions[sname.substr(0, paren)] = lib.parse_function(fs);
+            std::string fname = sname.substr(0, paren);
+            if (fname.size() > 2 && fname.front() == '`' && fname.back() == '`') fname = fname.substr(1, fname.size() - 2);
+            given_functions[fname] = lib.parse_function(fs);
             continue;
         }
         ir::Value v;
