@@ -78,7 +78,7 @@ TEST_CASE("an undefined name inside a module of a document", "[cli]") {
     RunResult r = compile_doc("undefined.md", "❤: ball\n```iheartla\nshape\nD = ‖p‖ - radius\nwhere\np ∈ ℝ³\n```\n"
                                               "```scene\n[[shapes]]\ntype = \"ball\"\n```\n");
     CHECK(r.exit_code == 1);
-    CHECK_THAT(r.err, Catch::Contains("undefined.md:4:11: error: undefined name 'r'"));
+    CHECK_THAT(r.err, Catch::Contains("undefined.md:4:11: error: undefined name 'radius'"));
 }
 
 TEST_CASE("TOML syntax errors carry their line", "[cli]") {
@@ -177,4 +177,33 @@ TEST_CASE("the IR after a named pass (--dump-ir=after-PASS), and an unknown pass
     RunResult bad = run_iqc(in.string() + " --dump-ir=after-frobnicate");
     CHECK(bad.exit_code == 2);
     CHECK_THAT(bad.err, Catch::Contains("--dump-ir takes after-PASS with PASS one of lower, inline, tables, fold"));
+}
+
+TEST_CASE("scene keys: a Greek letter by its ASCII name, a name without its underscore, an unquoted θ", "[cli]") {
+    // theta is θ: the same shader as the quoted key, and not the default's.
+    auto quoted = write_temp("greek_q.iq", "[[shapes]]\ntype = \"capped_torus\"\nshape_params = { \"θ\" = 1.0 }\n");
+    auto ascii = write_temp("greek_a.iq", "[[shapes]]\ntype = \"capped_torus\"\nshape_params = { theta = 1.0 }\n");
+    auto plain = write_temp("greek_d.iq", "[[shapes]]\ntype = \"capped_torus\"\n");
+    std::string out_q = (quoted.parent_path() / "greek_q.glsl").string(), out_a = (quoted.parent_path() / "greek_a.glsl").string(),
+                out_d = (quoted.parent_path() / "greek_d.glsl").string();
+    REQUIRE(run_iqc(quoted.string() + " -o " + out_q).exit_code == 0);
+    REQUIRE(run_iqc(ascii.string() + " -o " + out_a).exit_code == 0);
+    REQUIRE(run_iqc(plain.string() + " -o " + out_d).exit_code == 0);
+    auto body = [](const std::string& path) {  // the shader without its header, which names the input file
+        std::string t = read_text(path);
+        return t.substr(t.find("// ---- settings"));
+    };
+    CHECK(body(out_a) == body(out_q));
+    CHECK(body(out_a) != body(out_d));
+    // kd is k_d: did you mean, at the key.
+    RunResult kd = compile_doc("kd.iq", "[[shapes]]\ntype = \"torus\"\nmaterial = \"phong\"\nmaterial_params = { kd = [0.1, 0.2, 0.3] }\n");
+    CHECK(kd.exit_code == 1);
+    CHECK_THAT(kd.err, Catch::Contains("kd.iq:4:21: error: material 'phong' has no parameter 'kd'"));
+    CHECK_THAT(kd.err, Catch::Contains("kd.iq:4:21: note: did you mean 'k_d'?"));
+    // An unquoted θ is not a TOML key: say to quote it.
+    RunResult th = compile_doc("theta.iq", "[[shapes]]\ntype = \"capped_torus\"\nshape_params = { θ = 1.0 }\n");
+    CHECK(th.exit_code == 1);
+    CHECK_THAT(th.err, Catch::Contains("theta.iq:3:18: error: invalid TOML"));
+    CHECK_THAT(th.err, Catch::Contains("theta.iq:3:18: note: a TOML key with letters such as θ must be quoted (\"θ\" = 1); "
+                                       "a Greek letter may also be written with its ASCII name (theta = 1)"));
 }

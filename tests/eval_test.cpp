@@ -76,6 +76,42 @@ TEST_CASE("eval binds symbolic sizes from --set values and checks integers", "[e
     CHECK_THAT(frac.err, Catch::Contains("--set N: 'N' is ℤ, but the value 2.5 is not a whole number"));
 }
 
+TEST_CASE("eval: sequences and function parameters from --set, and their errors", "[eval]") {
+    auto seq = write_temp("seq.iql", "s = ∑_i x_i\nf = x_2\nwhere\nx_i ∈ ℝ²\n");
+    RunResult a = run_iqc("eval " + seq.string() + " --set 'x={(1, 2), (3, 4), (5, 6)}'");
+    INFO(a.err);
+    CHECK(a.exit_code == 0);
+    CHECK(a.out == "s = (9, 12)\nf = (3, 4)\n");
+    RunResult wrong = run_iqc("eval " + seq.string() + " --set 'x={1, 2}'");
+    CHECK(wrong.exit_code == 1);
+    CHECK_THAT(wrong.err, Catch::Contains("--set x: 'x' is ℝ²[2], but the value is ℝ[2]"));
+    // A sequence whose default is too large for iqc's sizes.
+    std::string zeros = "(0";
+    for (int i = 1; i < 4096; ++i) zeros += ", 0";
+    zeros += ")";
+    auto big = write_temp("big.iql", "y = x_1_1\nwhere\nx_i ∈ ℝ^4096 default = {" + zeros + ", " + zeros + "}\n");
+    RunResult b = run_iqc("eval " + big.string());
+    CHECK(b.exit_code == 1);
+    CHECK_THAT(b.err, Catch::Contains("big.iql:3:1: error: the sequence 'x' would have 8192 components: iqc allows at most 4096"));
+    // f(x)=… defines a function parameter; its arity and result type are checked where it is written.
+    auto fn = write_temp("fn.iql", "y = f(x, v)\nwhere\nf: ℝ, ℝ² → ℝ²\nx ∈ ℝ\nv ∈ ℝ²\n");
+    RunResult ok = run_iqc("eval " + fn.string() + " --set 'f(s, w)=s w' --set x=3 --set 'v=(1, 2)'");
+    INFO(ok.err);
+    CHECK(ok.out == "y = (3, 6)\n");
+    RunResult arity = run_iqc("eval " + fn.string() + " --set 'f(s)=s' --set x=3 --set 'v=(1, 2)'");
+    CHECK(arity.exit_code == 1);
+    CHECK_THAT(arity.err, Catch::Contains("--set f(s):1:1: error: 'f' takes 2 arguments (its declaration: ℝ, ℝ² → ℝ²), but "
+                                          "the definition has 1"));
+    RunResult result = run_iqc("eval " + fn.string() + " --set 'f(s, w)=s' --set x=3 --set 'v=(1, 2)'");
+    CHECK(result.exit_code == 1);
+    CHECK_THAT(result.err, Catch::Contains("--set f(s, w):1:11: error: 'f' is declared to give ℝ², but its definition gives ℝ"));
+    RunResult not_def = run_iqc("eval " + fn.string() + " --set 'f(s, w)' --set x=3 --set 'v=(1, 2)'");
+    CHECK(not_def.exit_code == 2);  // NAME=VALUE is a usage error
+    RunResult broken = run_iqc("eval " + fn.string() + " --set 'f(s, w)=)' --set x=3 --set 'v=(1, 2)'");
+    CHECK(broken.exit_code == 1);
+    CHECK_THAT(broken.err, Catch::Contains("--set f(s, w):1:11: error: expected an expression, found ')'"));
+}
+
 TEST_CASE("defaults and bounds may be any constant expression, evaluated by the evaluator", "[eval]") {
     auto f = write_temp("defaults.iql", "y = r + s\nwhere\nr ∈ [0, 2] default = √2\ns ∈ [0, sin(π/2)] default = cos(π/3)\n");
     RunResult r = run_iqc("eval " + f.string());

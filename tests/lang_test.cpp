@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "TestUtil.h"
+#include "scene/Modules.h"
 
 using namespace iqc;
 using namespace iqc::test;
@@ -221,4 +222,17 @@ TEST_CASE("a recurrence whose step is a piecewise definition over two lines", "[
     REQUIRE(e.ok);
     CHECK(e.text["q"] == "6");
     CHECK(e.text["w"] == "(1.62890625, 1.62890625)");  // escaped after three steps, then held
+}
+
+TEST_CASE("a function parameter's given module must define the function", "[lang]") {
+    SourceManager sm;
+    Diagnostics d(sm);
+    std::string src = "y = f(1)\nwhere\nf: ℝ → ℝ\n", given = "g(t) = t\n";
+    FileId f = sm.add("m.iql", src), gf = sm.add("given", given);
+    ModuleLibrary lib(sm, d, {});
+    auto def = lib.parse_function({"value", gf, {{0, uint32_t(given.size())}}, {gf, 0, 1}, "value"});
+    auto m = lib.parse_check({"m", f, {{0, uint32_t(src.size())}}, {f, 0, 1}, "test"}, "m", false, {}, {{"f", def}});
+    CHECK_FALSE(m->ok);
+    CHECK(d.render() == "m.iql:3:1: error: the value given for the function 'f' must define it: f(x) = …\n"
+                        "  f: ℝ → ℝ\n  ^\n");
 }

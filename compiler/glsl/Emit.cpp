@@ -256,7 +256,7 @@ struct FunctionEmitter {
         const Instr& in = f.body[v];
         if (!var[v].empty() || in.op == Op::Param || in.op == Op::Builtin || in.op == Op::Call || in.op == Op::Construct ||
             in.op == Op::Dot || in.op == Op::Cross || in.op == Op::Transpose || in.op == Op::Inverse || in.op == Op::Global ||
-            in.op == Op::Index)
+            in.op == Op::Index || in.op == Op::Element || in.op == Op::At)
             return s;
         return "(" + s + ")";
     }
@@ -290,9 +290,17 @@ struct FunctionEmitter {
         return fmt::format("{}({})", type_of(t, in.span), fmt::join(cols, ", "));
     }
 
+    // An array's declarator after the name (`vec3 P[3]`); empty for other types.
+    static std::string array_suffix(const Type& t) { return t.is_array() ? fmt::format("[{}]", t.count) : ""; }
+
     std::string construct(const Instr& in, ValueId v) {
         auto plain = [&](size_t i) { return arg(in, i, false); };
         std::string tn = type_of(in.type, in.span);
+        if (in.type.is_array()) {  // a sequence's elements: vec3[3](a, b, c)
+            std::vector<std::string> items;
+            for (size_t i = 0; i < in.args.size(); ++i) items.push_back(plain(i));
+            return fmt::format("{}{}({})", tn, array_suffix(in.type), fmt::join(items, ", "));
+        }
         // vec3(x, x, x) -> vec3(x)
         bool same = in.args.size() > 1;
         for (ValueId x : in.args) same &= (x == in.args[0]);
@@ -421,9 +429,10 @@ struct FunctionEmitter {
             case Op::Builtin: {
                 std::vector<std::string> args;
                 for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
-                // GLSL's round() leaves halves to the implementation; the evaluator rounds them up.
-                if (std::string(builtin(in.aux).name) == "round") return fmt::format("floor({} + 0.5)", a(0));
-                return fmt::format("{}({})", builtin(in.aux).glsl, fmt::join(args, ", "));
+                // A template such as `1.0 / tan(#)`: # is the (parenthesised) argument.
+                std::string spelling = builtin(in.aux).glsl;
+                if (size_t at = spelling.find('#'); at != std::string::npos) return spelling.replace(at, 1, a(0));
+                return fmt::format("{}({})", spelling, fmt::join(args, ", "));
             }
             case Op::Construct: return construct(in, v);
             case Op::Extract: {
@@ -432,6 +441,17 @@ struct FunctionEmitter {
                 return fmt::format("{}[{}][{}]", postfix_base(in.args[0]), in.aux % st.cols, in.aux / st.cols);
             }
             case Op::Column: return fmt::format("{}[{}]", postfix_base(in.args[0]), in.aux);
+            case Op::Element: return fmt::format("{}[{}]", postfix_base(in.args[0]), in.aux);
+            case Op::At: {  // indices rounded and clamped, as the evaluator does
+                const Type& st = f.body[in.args[0]].type;
+                auto index = [&](size_t k, int n) {
+                    if (f.body[in.args[k]].type.kind == Type::Integer) return fmt::format("clamp({}, 0, {})", expr(in.args[k]), n - 1);
+                    return fmt::format("clamp(int(floor({} + 0.5)), 0, {})", expr(in.args[k]), n - 1);
+                };
+                if (st.is_matrix())  // GLSL indexes columns first
+                    return fmt::format("{}[{}][{}]", postfix_base(in.args[0]), index(2, st.cols), index(1, st.rows));
+                return fmt::format("{}[{}]", postfix_base(in.args[0]), index(1, st.is_array() ? st.count : st.rows));
+            }
             case Op::Row: {
                 const Type& st = f.body[in.args[0]].type;
                 if (st.rows == 1) return expr(in.args[0]);
@@ -502,7 +522,7 @@ struct FunctionEmitter {
         const Instr& in = f.body[v];
         std::string value = expr(v);
         std::string vn = locals.unique(name);
-        std::string out = fmt::format("{}{} {} = {};", indent, type_of(in.type, in.span), vn, value);
+        std::string out = fmt::format("{}{} {}{} = {};", indent, type_of(in.type, in.span), vn, array_suffix(in.type), value);
         if (!source.empty()) out += " // " + one_line(source);
         var[v] = vn;
         return out + "\n";
@@ -621,7 +641,7 @@ struct FunctionEmitter {
         std::vector<std::string> params;
         for (size_t i = 0; i < f.params.size(); ++i) {
             std::string pn = locals.unique(f.params[i].name);
-            params.push_back(fmt::format("{} {}", type_of(f.params[i].type, {}), pn));
+            params.push_back(fmt::format("{} {}{}", type_of(f.params[i].type, {}), pn, array_suffix(f.params[i].type)));
             for (size_t k = 0; k < f.body.size(); ++k)
                 if (f.body[k].op == Op::Param && f.body[k].aux == int(i)) var[k] = pn;
         }
@@ -633,7 +653,8 @@ struct FunctionEmitter {
         std::string out;
         if (!comment.empty()) out += "// " + comment_text(comment) + "\n";
         std::vector<std::string> params = declare_params();
-        out += fmt::format("{} {}({}) {{\n", type_of(f.result_type(), {}), name, fmt::join(params, ", "));
+        out += fmt::format("{}{} {}({}) {{\n", type_of(f.result_type(), {}), array_suffix(f.result_type()), name,
+                           fmt::join(params, ", "));
         out += region(0, "    ", f.result);
         const Instr& r = f.body[f.result];
         std::string rv = expr(f.result);

@@ -44,12 +44,19 @@ Probe make_probe(const ir::Module& m, int fn, const std::vector<ir::Value>& args
     for (auto [idx, j] : probes) {
         const ProbeOutput& po = probe.outputs[j];
         int n = po.type.components();
-        code += fmt::format("    if (i >= {} && i < {}) {{\n        {} r = {}({});\n        int k = i - {};\n", po.first_pixel,
-                            po.first_pixel + n, type_name(po.type), em.function_name(idx), fmt::join(arg_text, ", "),
+        code += fmt::format("    if (i >= {} && i < {}) {{\n        {} r{} = {}({});\n        int k = i - {};\n", po.first_pixel,
+                            po.first_pixel + n, type_name(po.type),
+                            po.type.is_array() ? fmt::format("[{}]", po.type.count) : "", em.function_name(idx), fmt::join(arg_text, ", "),
                             po.first_pixel);
-        if (po.type.is_scalar()) code += "        v = r;\n";
-        else if (po.type.is_vector() || po.type.rows == 1) code += "        v = r[k];\n";
-        else code += fmt::format("        v = r[k % {}][k / {}];\n", po.type.cols, po.type.cols);
+        Type t = po.type.is_array() ? po.type.element() : po.type;
+        std::string r = "r";
+        if (po.type.is_array()) {  // a sequence: element k / (its size), then the component within it
+            r = "r[e]";
+            code += fmt::format("        int e = k / {};\n        k -= e * {};\n", t.components(), t.components());
+        }
+        if (t.is_scalar()) code += fmt::format("        v = float({});\n", r);  // a ℤ output is an int
+        else if (t.is_vector() || t.rows == 1) code += fmt::format("        v = {}[k];\n", r);
+        else code += fmt::format("        v = {}[k % {}][k / {}];\n", r, t.cols, t.cols);
         code += "    }\n";
     }
     code += "    fragColor = vec4(v, 0.0, 0.0, 1.0);\n}\n";

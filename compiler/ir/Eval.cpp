@@ -123,6 +123,8 @@ void run_builtin(const Instr& in, const Arg* a, double* r) {
             for (size_t i = 0; i < n; ++i) r[i] = a[0].p[i] / s;
             return;
         }
+        default:  // lowered to other operations (sema/Builtins.h): never an Op::Builtin
+            internal_error(fmt::format("evaluator: '{}' has no built-in form", b.name));
     }
 }
 
@@ -203,6 +205,26 @@ void run_op(const Instr& in, const Arg* a, double* r) {
             return;
         }
         case Op::Extract: r[0] = a[0].p[in.aux]; return;
+        case Op::Element:
+            for (size_t i = 0; i < n; ++i) r[i] = a[0].p[size_t(in.aux) * n + i];
+            return;
+        case Op::At: {
+            // Indices are rounded and clamped to the range (a shader cannot stop; GLSL does the same).
+            const Type& t = *a[0].t;
+            auto index = [&](size_t k, int count) {
+                double x = std::floor(a[k].p[0] + 0.5);
+                return size_t(std::isnan(x) ? 0 : std::min(std::max(x, 0.0), double(count - 1)));
+            };
+            if (t.is_array()) {
+                size_t i = index(1, t.count);
+                for (size_t c = 0; c < n; ++c) r[c] = a[0].p[i * n + c];
+            } else if (t.is_vector()) {
+                r[0] = a[0].p[index(1, t.rows)];
+            } else {
+                r[0] = a[0].p[index(1, t.rows) * size_t(t.cols) + index(2, t.cols)];
+            }
+            return;
+        }
         case Op::Row: {
             int c = a[0].t->cols;
             for (int k = 0; k < c; ++k) r[k] = a[0].p[in.aux * c + k];
@@ -510,6 +532,15 @@ std::string format_value(const Value& v) {
             for (int c = 0; c < v.type.cols; ++c) s += (c ? " " : "") + num(v.v[size_t(r * v.type.cols + c)]);
         }
         return s + "]";
+    }
+    if (v.type.is_array()) {  // a sequence: {x_1, x_2, ...}
+        std::string s = "{";
+        size_t n = size_t(v.type.element().components());
+        for (int i = 0; i < v.type.count; ++i) {
+            Value e{v.type.element(), std::vector<double>(v.v.begin() + long(n * size_t(i)), v.v.begin() + long(n * size_t(i + 1)))};
+            s += (i ? ", " : "") + format_value(e);
+        }
+        return s + "}";
     }
     if (v.type.kind == Type::Bool) return v.v[0] != 0 ? "true" : "false";
     return num(v.v.empty() ? NAN : v.v[0]);

@@ -140,6 +140,16 @@ Type result_type(Op op, const std::vector<Type>& a, int aux) {
         }
         case Op::Extract:
             return (is_num(a[0]) && aux >= 0 && aux < a[0].components()) ? Type::scalar() : Type{};
+        case Op::Element:
+            return (a[0].is_array() && aux >= 0 && aux < a[0].count) ? a[0].element() : Type{};
+        case Op::At: {
+            for (size_t k = 1; k < a.size(); ++k)
+                if (!a[k].is_scalar()) return {};
+            if (a[0].is_array() && a.size() == 2) return a[0].element();
+            if (a[0].is_vector() && a.size() == 2) return Type::scalar();
+            if (a[0].is_matrix() && a.size() == 3) return Type::scalar();
+            return {};
+        }
         case Op::Row:
             return (a[0].is_matrix() && aux >= 0 && aux < a[0].rows) ? Type::vector(a[0].cols) : Type{};
         case Op::Column:
@@ -205,6 +215,7 @@ static std::string instr_text(const Function& f, const Instr& in, const Module* 
                                                                : fmt::format("@{}", in.aux));
             break;
         case Op::Extract:
+        case Op::Element:
         case Op::Row:
         case Op::Column: s += fmt::format(" [{}]", in.aux); break;
         case Op::Compare: {

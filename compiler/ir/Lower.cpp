@@ -2,8 +2,10 @@
 
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <fmt/format.h>
 
+#include "ir/Eval.h"
 #include "sema/Builtins.h"
 #include "source/Internal.h"
 
@@ -103,9 +105,12 @@ struct Env {
                 for (size_t k = 0; k < x.indices.size(); ++k) {
                     const auto& it = x.indices[k];
                     if (!it.expr || it.expr->kind != ExprKind::Name || it.expr->text != index) continue;
-                    const Type& t = type_of(lower(*x.args[0]));
-                    if (t.is_vector()) n = t.rows;
-                    else if (t.is_matrix()) n = k == 0 ? t.rows : t.cols;
+                    Type t = type_of(lower(*x.args[0]));
+                    size_t pos = k;
+                    if (t.is_array() && k > 0) t = t.element(), pos = k - 1;  // x_i,j: a component of an element
+                    if (t.is_array()) n = t.count;
+                    else if (t.is_vector()) n = t.rows;
+                    else if (t.is_matrix()) n = pos == 0 ? t.rows : t.cols;
                 }
             for (const auto& a : x.args) walk(*a);
             for (const auto& r : x.rows)
@@ -131,14 +136,24 @@ struct Env {
     }
 
     ValueId builtin(const char* name, std::vector<ValueId> args, Span span) {
-        int id = *find_builtin(name);
+        return builtin_id(*find_builtin(name), std::move(args), span);
+    }
+
+    ValueId builtin_id(int id, std::vector<ValueId> args, Span span) {
         const BuiltinInfo& b = iqc::builtin(id);
         if (b.sig == Sig::Nary && args.size() > 2) {
-            ValueId acc = builtin(name, {args[0], args[1]}, span);
-            for (size_t i = 2; i < args.size(); ++i) acc = builtin(name, {acc, args[i]}, span);
+            ValueId acc = builtin_id(id, {args[0], args[1]}, span);
+            for (size_t i = 2; i < args.size(); ++i) acc = builtin_id(id, {acc, args[i]}, span);
             return acc;
         }
-        Type t;
+        if (b.sig == Sig::Elementwise1 && type_of(args[0]).is_matrix()) {
+            // sin(A) entry by entry: row by row (GLSL's functions take vectors, not matrices).
+            const Type t = type_of(args[0]);
+            std::vector<ValueId> rows;
+            for (int r = 0; r < t.rows; ++r)
+                rows.push_back(builtin_id(id, {emit(Op::Row, Type::vector(t.cols), {args[0]}, r, span)}, span));
+            return emit(Op::Construct, t, std::move(rows), 0, span);
+        }
         if (b.sig == Sig::Elementwise2 || b.sig == Sig::Nary || b.sig == Sig::Clamp || b.sig == Sig::Mix) {
             Type common = Type::scalar();
             for (ValueId a : args)
@@ -148,8 +163,350 @@ struct Env {
         }
         std::vector<Type> ts;
         for (ValueId a : args) ts.push_back(type_of(a));
-        t = check_builtin(id, ts).type;
+        Type t = check_builtin(id, ts).type;
         return emit(Op::Builtin, t, std::move(args), id, span);
+    }
+
+    // The linear algebra module's functions, in terms of the IR's own operations.
+    ValueId linear_algebra(int id, ValueId a, Span span) {
+        const Type t = type_of(a);
+        switch (iqc::builtin(id).sig) {
+            case Sig::Det: return emit(Op::Det, Type::scalar(), {a}, 0, span);
+            case Sig::Inverse: return emit(Op::Inverse, t, {a}, 0, span);
+            case Sig::Trace: {
+                ValueId acc = emit(Op::Extract, Type::scalar(), {a}, 0, span);
+                for (int i = 1; i < t.rows; ++i)
+                    acc = emit(Op::Add, Type::scalar(), {acc, emit(Op::Extract, Type::scalar(), {a}, i * t.cols + i, span)}, 0, span);
+                return acc;
+            }
+            case Sig::Diag: {
+                std::vector<ValueId> items;
+                if (t.is_vector()) {
+                    ValueId zero = f.scalar(0);
+                    for (int r = 0; r < t.rows; ++r)
+                        for (int c = 0; c < t.rows; ++c)
+                            items.push_back(r == c ? emit(Op::Extract, Type::scalar(), {a}, r, span) : zero);
+                    return emit(Op::Construct, Type::matrix(t.rows, t.rows), std::move(items), 0, span);
+                }
+                for (int i = 0; i < t.rows; ++i) items.push_back(emit(Op::Extract, Type::scalar(), {a}, i * t.cols + i, span));
+                return emit(Op::Construct, Type::vector(t.rows), std::move(items), 0, span);
+            }
+            case Sig::Vec: {  // the columns, one after the other
+                std::vector<ValueId> cols;
+                for (int c = 0; c < t.cols; ++c) cols.push_back(emit(Op::Column, Type::vector(t.rows), {a}, c, span));
+                return emit(Op::Construct, Type::vector(t.rows * t.cols), std::move(cols), 0, span);
+            }
+            default: throw std::logic_error("lowering: not a linear algebra function");
+        }
+    }
+
+    // The value of `v` when it depends on constants only (a sum's condition on its index), else nullopt.
+    std::optional<std::vector<double>> constant_value(ValueId v) {
+        const Instr& in = f.body[v];
+        if (in.op == Op::Const) return in.data;
+        if (in.op == Op::Param || in.op == Op::Input || in.op == Op::Call || in.op == Op::Loop || in.op == Op::Member)
+            return std::nullopt;
+        std::vector<ir::Value> vals;
+        for (ValueId a : in.args) {
+            auto c = constant_value(a);
+            if (!c) return std::nullopt;
+            vals.push_back({type_of(a), *c});
+        }
+        std::vector<const ir::Value*> ptrs;
+        for (auto& x : vals) ptrs.push_back(&x);
+        return ir::eval_instr(ctx.module, f, in, ptrs).v;
+    }
+
+    // [a b; c d]: element by element, row-major, from the blocks (sized by the checker).
+    ValueId matrix_literal(const Expr& e) {
+        std::vector<std::vector<ValueId>> blocks;
+        for (auto& row : e.rows) {
+            blocks.emplace_back();
+            for (auto& a : row)
+                blocks.back().push_back(a->resolved == R_BlockZero || a->resolved == R_BlockOnes ||
+                                                a->resolved == R_BlockIdentity
+                                            ? ValueId(-1)
+                                            : lower(*a));
+        }
+        std::vector<ValueId> items;
+        ValueId zero = ValueId(-1), one = ValueId(-1);
+        auto konst = [&](double v) {
+            ValueId& slot = v == 0 ? zero : one;
+            if (slot == ValueId(-1)) slot = f.scalar(v);
+            return slot;
+        };
+        for (size_t br = 0; br < e.rows.size(); ++br)
+            for (int i = 0; i < e.block_rows[br]; ++i)
+                for (size_t bc = 0; bc < e.rows[br].size(); ++bc)
+                    for (int j = 0; j < e.block_cols[bc]; ++j) {
+                        const Expr& item = *e.rows[br][bc];
+                        ValueId v = blocks[br][bc];
+                        if (item.resolved == R_BlockZero) items.push_back(konst(0));
+                        else if (item.resolved == R_BlockOnes) items.push_back(konst(1));
+                        else if (item.resolved == R_BlockIdentity) items.push_back(konst(i == j ? 1 : 0));
+                        else if (type_of(v).is_scalar()) items.push_back(v);
+                        else if (type_of(v).is_vector()) items.push_back(emit(Op::Extract, Type::scalar(), {v}, i, item.span));
+                        else items.push_back(emit(Op::Extract, Type::scalar(), {v}, i * type_of(v).cols + j, item.span));
+                    }
+        if (items.size() == 1) return items[0];
+        int R = 0, C = 0;
+        for (int h : e.block_rows) R += h;
+        for (int w : e.block_cols) C += w;
+        return emit(Op::Construct, C == 1 ? Type::vector(R) : Type::matrix(R, C), std::move(items), 0, e.span);
+    }
+
+    // ∑_i e, unrolled: the range is a vector's, matrix's or sequence's size, known when checking.
+    ValueId sum(const Expr& e) {
+        ValueId acc = ValueId(-1);
+        int n = sum_range(*e.args[0], e.text);
+        auto outer = sum_index.find(e.text);  // an enclosing sum with the same index letter
+        std::optional<int> shadowed = outer == sum_index.end() ? std::nullopt : std::optional<int>(outer->second);
+        for (int k = 0; k < n; ++k) {
+            sum_index[e.text] = k;
+            ValueId term = lower(*e.args[0]);
+            if (e.args.size() > 1) {  // ∑_(j for condition): a term counts where its condition holds
+                Type t = scalar_or(type_of(term));
+                ValueId zero = f.constant(t, std::vector<double>(size_t(t.components()), 0.0));
+                ValueId c = lower(*e.args[1]);
+                auto known = constant_value(c);
+                if (!known) term = emit(Op::Select, t, {c, term, zero}, 0, e.span);
+                else if ((*known)[0] == 0) term = acc == ValueId(-1) && k == n - 1 ? zero : ValueId(-1);
+                if (term == ValueId(-1)) continue;
+            }
+            acc = acc == ValueId(-1) ? term : op2(Op::Add, acc, term, e.span);
+        }
+        if (shadowed) sum_index[e.text] = *shadowed;
+        else sum_index.erase(e.text);
+        return acc;
+    }
+    ValueId compare(const Expr& e) {
+        ValueId a = lower(*e.args[0]);
+        ValueId b = lower(*e.args[1]);
+        ir::CompareKind k = ir::CompareKind::Eq;
+        switch (e.op) {
+            case BinOp::Eq: k = ir::CompareKind::Eq; break;
+            case BinOp::Neq: k = ir::CompareKind::Ne; break;
+            case BinOp::Lt: k = ir::CompareKind::Lt; break;
+            case BinOp::Le: k = ir::CompareKind::Le; break;
+            case BinOp::Gt: k = ir::CompareKind::Gt; break;
+            default: k = ir::CompareKind::Ge; break;
+        }
+        return emit(Op::Compare, Type::boolean(), {a, b}, int(k), e.span);
+    }
+
+    // Cases are tried in order: the first true condition wins (a chain of selects from the last).
+    ValueId piecewise(const Expr& e) {
+        ValueId acc = ValueId(-1);
+        if (e.otherwise) acc = lower(*e.otherwise);
+        for (size_t i = e.rows.size(); i-- > 0;) {
+            ValueId v = lower(*e.rows[i][0]);
+            ValueId c = lower(*e.rows[i][1]);
+            if (acc == ValueId(-1)) {  // no `otherwise`: 0
+                Type t = scalar_or(type_of(v));
+                acc = f.constant(t, std::vector<double>(size_t(t.components()), 0.0));
+            }
+            acc = emit(Op::Select, scalar_or(type_of(v)), {c, v, acc}, 0, e.span);
+        }
+        return acc;
+    }
+    // A subscripted value (see Checker::check_index): constant subscripts extract, ∑ indices are constant
+    // while unrolling, ℤ values known only when running index with At (0-based, rounded and clamped).
+    ValueId index(const Expr& e) {
+        ValueId a = lower(*e.args[0]);
+        auto constant = [&](size_t k) {
+            const IndexItem& it = e.indices[k];
+            return it.value == -2 ? sum_index.at(it.expr->text) : it.value;
+        };
+        auto dynamic = [&](size_t k) { return e.indices[k].value == -3; };
+        auto position = [&](size_t k) {  // the 0-based position as a value
+            const IndexItem& it = e.indices[k];
+            if (!dynamic(k)) return f.scalar(double(constant(k)));
+            ValueId v = lower(*it.expr);
+            return it.zero_based ? v : emit(Op::Sub, Type::scalar(), {v, f.scalar(1)}, 0, it.span);
+        };
+        size_t first = 0;
+        if (type_of(a).is_array()) {
+            Type elem = type_of(a).element();
+            a = dynamic(0) ? emit(Op::At, elem, {a, position(0)}, 0, e.span) : emit(Op::Element, elem, {a}, constant(0), e.span);
+            if (e.indices.size() == 1) return a;
+            first = 1;
+        }
+        const Type t = type_of(a);
+        if (t.is_vector()) {
+            if (dynamic(first)) return emit(Op::At, Type::scalar(), {a, position(first)}, 0, e.span);
+            return emit(Op::Extract, Type::scalar(), {a}, constant(first), e.span);
+        }
+        if (dynamic(first) || dynamic(first + 1))
+            return emit(Op::At, Type::scalar(), {a, position(first), position(first + 1)}, 0, e.span);
+        int r = constant(first), c = constant(first + 1);
+        if (r < 0 && c < 0) return a;
+        if (r < 0) return emit(Op::Column, Type::vector(t.rows), {a}, c, e.span);
+        if (c < 0) return emit(Op::Row, Type::vector(t.cols), {a}, r, e.span);
+        return emit(Op::Extract, Type::scalar(), {a}, r * t.cols + c, e.span);
+    }
+
+    // An element-wise definition (see Checker::check_elementwise), unrolled over its indices.
+    ValueId elementwise(const Stmt& s) {
+        std::vector<int> ranges;
+        for (const auto& [letter, span] : s.elem_indices) ranges.push_back(sum_range(*s.value, letter));
+        const std::string& i = s.elem_indices[0].first;
+        std::vector<ValueId> items;
+        if (ranges.size() == 1) {
+            for (int k = 0; k < ranges[0]; ++k) {
+                sum_index[i] = k;
+                items.push_back(lower(*s.value));
+            }
+            sum_index.erase(i);
+            Type elem = scalar_or(type_of(items[0]));
+            Type t = elem.is_scalar() ? Type::vector(ranges[0]) : Type::array(elem, ranges[0]);
+            return items.size() == 1 ? items[0] : emit(Op::Construct, t, std::move(items), 0, s.span);
+        }
+        const std::string& j = s.elem_indices[1].first;
+        bool diagonal = i == j;
+        ValueId zero = diagonal ? f.scalar(0) : ValueId(-1);
+        for (int r = 0; r < ranges[0]; ++r)
+            for (int c = 0; c < ranges[1]; ++c) {
+                if (diagonal && r != c) {
+                    items.push_back(zero);
+                    continue;
+                }
+                sum_index[i] = r;
+                sum_index[j] = c;
+                items.push_back(lower(*s.value));
+            }
+        sum_index.erase(i);
+        sum_index.erase(j);
+        Type t = ranges[1] == 1 ? Type::vector(ranges[0]) : Type::matrix(ranges[0], ranges[1]);
+        return items.size() == 1 ? items[0] : emit(Op::Construct, t, std::move(items), 0, s.span);
+    }
+
+    // A^k for a whole k (the checker made sure), by repeated squaring; k < 0 powers the inverse.
+    ValueId matrix_power(ValueId a, int k, Span span) {
+        const Type t = type_of(a);
+        if (k < 0) {
+            a = emit(Op::Inverse, t, {a}, 0, span);
+            k = -k;
+        }
+        if (k == 0) {
+            std::vector<double> id(size_t(t.rows * t.cols), 0.0);
+            for (int i = 0; i < t.rows; ++i) id[size_t(i * t.cols + i)] = 1;
+            return f.constant(t, id);
+        }
+        ValueId result = ValueId(-1), square = a;
+        while (true) {
+            if (k & 1) result = result == ValueId(-1) ? square : emit(Op::Mul, t, {result, square}, 0, span);
+            k >>= 1;
+            if (!k) return result;
+            square = emit(Op::Mul, t, {square, square}, 0, span);
+        }
+    }
+
+    // A ⊗ B: entry (i₁·r₂ + i₂, j₁·c₂ + j₂) is A(i₁, j₁)·B(i₂, j₂); vectors are columns.
+    ValueId kronecker(ValueId a, ValueId b, Span span) {
+        const Type ta = type_of(a), tb = type_of(b);
+        int ac = ta.is_matrix() ? ta.cols : 1, bc = tb.is_matrix() ? tb.cols : 1;
+        int rows = ta.rows * tb.rows, cols = ac * bc;
+        std::vector<ValueId> items;
+        for (int i = 0; i < rows; ++i)
+            for (int j = 0; j < cols; ++j) {
+                ValueId x = emit(Op::Extract, Type::scalar(), {a}, (i / tb.rows) * ac + j / bc, span);
+                ValueId y = emit(Op::Extract, Type::scalar(), {b}, (i % tb.rows) * bc + j % bc, span);
+                items.push_back(emit(Op::Mul, Type::scalar(), {x, y}, 0, span));
+            }
+        return emit(Op::Construct, cols == 1 ? Type::vector(rows) : Type::matrix(rows, cols), std::move(items), 0, span);
+    }
+
+    // A : B = ∑ A_ij B_ij: the dot product of vectors, row by row for matrices.
+    ValueId frobenius(ValueId a, ValueId b, Span span) {
+        const Type t = type_of(a);
+        if (t.is_vector()) return emit(Op::Dot, Type::scalar(), {a, b}, 0, span);
+        ValueId acc = ValueId(-1);
+        for (int r = 0; r < t.rows; ++r) {
+            ValueId d = emit(Op::Dot, Type::scalar(), {emit(Op::Row, Type::vector(t.cols), {a}, r, span),
+                                                       emit(Op::Row, Type::vector(t.cols), {b}, r, span)}, 0, span);
+            acc = acc == ValueId(-1) ? d : emit(Op::Add, Type::scalar(), {acc, d}, 0, span);
+        }
+        return acc;
+    }
+
+    // ‖A‖_*: the sum of A's singular values, the square roots of the eigenvalues of the smaller Gram matrix
+    // G (A Aᵀ or AᵀA). For a 2×2 G, σ₁ + σ₂ = √(tr G + 2√det G); for a 3×3 G the eigenvalues of a symmetric
+    // matrix in closed form (Smith, "Eigenvalues of a symmetric 3 × 3 matrix", CACM 4(4), 1961).
+    ValueId nuclear(ValueId a, Span span) {
+        const Type t = type_of(a);
+        int k = std::min(t.rows, t.cols);
+        if (k == 1) return builtin("sqrt", {frobenius(a, a, span)}, span);
+        ValueId at = emit(Op::Transpose, Type::matrix(t.cols, t.rows), {a}, 0, span);
+        ValueId G = t.rows <= t.cols ? emit(Op::Mul, Type::matrix(k, k), {a, at}, 0, span)
+                                     : emit(Op::Mul, Type::matrix(k, k), {at, a}, 0, span);
+        auto g = [&](int r, int c) { return emit(Op::Extract, Type::scalar(), {G}, r * k + c, span); };
+        auto add = [&](ValueId x, ValueId y) { return emit(Op::Add, Type::scalar(), {x, y}, 0, span); };
+        auto sub = [&](ValueId x, ValueId y) { return emit(Op::Sub, Type::scalar(), {x, y}, 0, span); };
+        auto mulv = [&](ValueId x, ValueId y) { return emit(Op::Mul, Type::scalar(), {x, y}, 0, span); };
+        auto root = [&](ValueId x) { return builtin("sqrt", {builtin("max", {x, f.scalar(0)}, span)}, span); };
+        if (k == 2) {
+            ValueId det = emit(Op::Det, Type::scalar(), {G}, 0, span);
+            return root(add(add(g(0, 0), g(1, 1)), mulv(f.scalar(2), root(det))));
+        }
+        ValueId q = emit(Op::Div, Type::scalar(), {add(add(g(0, 0), g(1, 1)), g(2, 2)), f.scalar(3)}, 0, span);
+        ValueId p1 = add(add(mulv(g(0, 1), g(0, 1)), mulv(g(0, 2), g(0, 2))), mulv(g(1, 2), g(1, 2)));
+        ValueId d0 = sub(g(0, 0), q), d1 = sub(g(1, 1), q), d2 = sub(g(2, 2), q);
+        ValueId p2 = add(add(add(mulv(d0, d0), mulv(d1, d1)), mulv(d2, d2)), mulv(f.scalar(2), p1));
+        ValueId p = builtin("max", {root(emit(Op::Div, Type::scalar(), {p2, f.scalar(6)}, 0, span)), f.scalar(1e-18)}, span);
+        std::vector<double> id(9, 0.0);
+        id[0] = id[4] = id[8] = 1;
+        ValueId shifted = emit(Op::Sub, Type::matrix(3, 3), {G, emit(Op::Mul, Type::matrix(3, 3), {q, f.constant(Type::matrix(3, 3), id)}, 0, span)}, 0, span);
+        ValueId B = emit(Op::Div, Type::matrix(3, 3), {shifted, p}, 0, span);
+        ValueId r = emit(Op::Div, Type::scalar(), {emit(Op::Det, Type::scalar(), {B}, 0, span), f.scalar(2)}, 0, span);
+        ValueId phi = emit(Op::Div, Type::scalar(),
+                           {builtin("acos", {builtin("clamp", {r, f.scalar(-1), f.scalar(1)}, span)}, span), f.scalar(3)}, 0, span);
+        ValueId two_p = mulv(f.scalar(2), p);
+        ValueId l1 = add(q, mulv(two_p, builtin("cos", {phi}, span)));
+        ValueId l3 = add(q, mulv(two_p, builtin("cos", {add(phi, f.scalar(2 * M_PI / 3))}, span)));
+        ValueId l2 = sub(sub(mulv(f.scalar(3), q), l1), l3);
+        return add(add(root(l1), root(l2)), root(l3));
+    }
+
+    // ‖x‖ and |x| by what the checker resolved (see check_norm).
+    ValueId norm(const Expr& e) {
+        ValueId a = lower(*e.args[0]);
+        const Type t = type_of(a);
+        Span span = e.span;
+        auto ones = [&] { return f.constant(t, std::vector<double>(size_t(t.rows), 1.0)); };
+        switch (e.resolved) {
+            case R_Det: return emit(Op::Det, Type::scalar(), {a}, 0, span);
+            case R_Length: return builtin("length", {a}, span);
+            case R_Norm1: return emit(Op::Dot, Type::scalar(), {builtin("abs", {a}, span), ones()}, 0, span);
+            case R_NormMax: {
+                ValueId m = builtin("abs", {a}, span);
+                std::vector<ValueId> items;
+                for (int i = 0; i < t.rows; ++i) items.push_back(emit(Op::Extract, Type::scalar(), {m}, i, span));
+                return builtin("max", items, span);
+            }
+            case R_NormP: {  // (∑ |v_i|^p)^(1/p)
+                ValueId p = lower(*e.args[1]);
+                ValueId powered = builtin("pow", {builtin("abs", {a}, span), p}, span);
+                ValueId sum = emit(Op::Dot, Type::scalar(), {powered, ones()}, 0, span);
+                return builtin("pow", {sum, emit(Op::Div, Type::scalar(), {f.scalar(1), p}, 0, span)}, span);
+            }
+            case R_NormMatrix: {  // √(vᵀ M v)
+                ValueId mv = mul(lower(*e.args[1]), a, span);
+                return builtin("sqrt", {emit(Op::Dot, Type::scalar(), {a, mv}, 0, span)}, span);
+            }
+            case R_Frobenius: return builtin("sqrt", {frobenius(a, a, span)}, span);
+            case R_Norm0: {  // the number of components that are not 0
+                ValueId zero = f.scalar(0), one = f.scalar(1), acc = ValueId(-1);
+                for (int i = 0; i < t.rows; ++i) {
+                    ValueId c = emit(Op::Compare, Type::boolean(), {emit(Op::Extract, Type::scalar(), {a}, i, span), zero},
+                                     int(ir::CompareKind::Ne), span);
+                    ValueId k = emit(Op::Select, Type::scalar(), {c, one, zero}, 0, span);
+                    acc = acc == ValueId(-1) ? k : emit(Op::Add, Type::scalar(), {acc, k}, 0, span);
+                }
+                return acc;
+            }
+            case R_Nuclear: return nuclear(a, span);
+            default: return builtin("abs", {a}, span);
+        }
     }
 
     ValueId mul(ValueId a, ValueId b, Span span) {
@@ -175,6 +532,7 @@ struct Env {
                     case R_Local: return locals[size_t(e.aux)];
                     case R_Capture: return captures[size_t(e.aux)];
                     case R_Pi: return f.scalar(M_PI);
+                    case R_Constant: return f.scalar(M_E);
                     case R_Input: return emit(Op::Input, e.aux == 0 ? Type::scalar() : Type::vector(2), {}, e.aux, e.span);
                     case R_SumIndex: return f.scalar(double(sum_index.at(e.text) + 1));
                     default: internal_error("lowering: unresolved name " + e.text);
@@ -183,7 +541,12 @@ struct Env {
                 if (e.resolved == R_Scale) return mul(lower(*e.args[0]), lower(*e.args[1]), e.span);
                 std::vector<ValueId> args;
                 for (auto& a : e.args) args.push_back(lower(*a));
-                if (e.resolved == R_Builtin) return builtin(iqc::builtin(e.aux).name, std::move(args), e.span);
+                if (e.resolved == R_Builtin) {
+                    Sig sig = iqc::builtin(e.aux).sig;
+                    if (sig == Sig::Det || sig == Sig::Inverse || sig == Sig::Trace || sig == Sig::Diag || sig == Sig::Vec)
+                        return linear_algebra(e.aux, args[0], e.span);
+                    return builtin_id(e.aux, std::move(args), e.span);
+                }
                 if (e.resolved == R_ImportModule) {
                     const CheckedModule& callee = *m.imports[size_t(e.aux)].from;
                     int idx = lower_module_cached(callee, ctx);
@@ -221,6 +584,9 @@ struct Env {
                     case BinOp::Div: return op2(Op::Div, a, b, e.span);
                     case BinOp::Hadamard: return op2(type_of(a).is_scalar() ? Op::Mul : Op::Hadamard, a, b, e.span);
                     case BinOp::Cross: return op2(Op::Cross, a, b, e.span);
+                    case BinOp::Solve: return mul(emit(Op::Inverse, type_of(a), {a}, 0, e.span), b, e.span);
+                    case BinOp::Kronecker: return kronecker(a, b, e.span);
+                    case BinOp::Frobenius: return frobenius(a, b, e.span);
                     default:
                         if (e.op == BinOp::Dot && type_of(a).is_vector() && type_of(a) == type_of(b))
                             return emit(Op::Dot, Type::scalar(), {a, b}, 0, e.span);
@@ -232,8 +598,10 @@ struct Env {
                 return emit(Op::Neg, scalar_or(type_of(a)), {a}, 0, e.span);
             }
             case ExprKind::Power: {
+                if (e.args[0]->kind == ExprKind::Name && e.args[0]->resolved == R_Constant)  // eˣ
+                    return builtin("exp", {lower(*e.args[1])}, e.span);
                 ValueId base = lower(*e.args[0]);
-                if (type_of(base).is_matrix()) return emit(Op::Inverse, type_of(base), {base}, 0, e.span);
+                if (type_of(base).is_matrix()) return matrix_power(base, e.aux, e.span);
                 return power(base, *e.args[1], e.span);
             }
             case ExprKind::Transpose: {
@@ -241,24 +609,27 @@ struct Env {
                 if (type_of(a).is_scalar()) return a;
                 return emit(Op::Transpose, ir::result_type(Op::Transpose, {type_of(a)}, 0), {a}, 0, e.span);
             }
+            case ExprKind::Block:
             case ExprKind::Index: {
+                if (e.resolved == R_BlockZero || e.resolved == R_BlockOnes || e.resolved == R_BlockIdentity) {
+                    int rows = e.block_rows[0], cols = e.block_cols[0];
+                    std::vector<double> data(size_t(rows * cols), e.resolved == R_BlockOnes ? 1.0 : 0.0);
+                    if (e.resolved == R_BlockIdentity)
+                        for (int i = 0; i < rows; ++i) data[size_t(i * cols + i)] = 1;
+                    return f.constant(cols == 1 ? Type::vector(rows) : Type::matrix(rows, cols), std::move(data));
+                }
                 if (e.resolved == R_SeqCurrent) return seq_current.at(e.aux);
                 if (e.resolved == R_SeqFirst || e.resolved == R_SeqLast) {
                     if (parent) return capture(parent->lower(e));
                     return (e.resolved == R_SeqFirst ? seq_first : seq_last).at(e.aux);
                 }
-                ValueId a = lower(*e.args[0]);
-                const Type& t = type_of(a);
-                auto index = [&](size_t k) {
-                    const IndexItem& it = e.indices[k];
-                    return it.value == -2 ? sum_index.at(it.expr->text) : it.value;
-                };
-                if (t.is_vector()) return emit(Op::Extract, Type::scalar(), {a}, index(0), e.span);
-                int r = index(0), c = index(1);
-                if (r < 0 && c < 0) return a;
-                if (r < 0) return emit(Op::Column, Type::vector(t.rows), {a}, c, e.span);
-                if (c < 0) return emit(Op::Row, Type::vector(t.cols), {a}, r, e.span);
-                return emit(Op::Extract, Type::scalar(), {a}, r * t.cols + c, e.span);
+                return index(e);
+            }
+            case ExprKind::Sequence: {
+                std::vector<ValueId> items;
+                for (auto& a : e.args) items.push_back(lower(*a));
+                Type t = Type::array(scalar_or(type_of(items[0])), int(items.size()));
+                return emit(Op::Construct, t, std::move(items), 0, e.span);
             }
             case ExprKind::Vector: {
                 std::vector<ValueId> items;
@@ -269,98 +640,25 @@ struct Env {
                 }
                 return emit(Op::Construct, Type::vector(n), std::move(items), 0, e.span);
             }
-            case ExprKind::Matrix: {
-                // Element by element, row-major, from the blocks (sized by the checker).
-                std::vector<std::vector<ValueId>> blocks;
-                for (auto& row : e.rows) {
-                    blocks.emplace_back();
-                    for (auto& a : row)
-                        blocks.back().push_back(a->resolved == R_BlockZero || a->resolved == R_BlockOnes ||
-                                                        a->resolved == R_BlockIdentity
-                                                    ? ValueId(-1)
-                                                    : lower(*a));
-                }
-                std::vector<ValueId> items;
-                ValueId zero = ValueId(-1), one = ValueId(-1);
-                auto konst = [&](double v) {
-                    ValueId& slot = v == 0 ? zero : one;
-                    if (slot == ValueId(-1)) slot = f.scalar(v);
-                    return slot;
-                };
-                for (size_t br = 0; br < e.rows.size(); ++br)
-                    for (int i = 0; i < e.block_rows[br]; ++i)
-                        for (size_t bc = 0; bc < e.rows[br].size(); ++bc)
-                            for (int j = 0; j < e.block_cols[bc]; ++j) {
-                                const Expr& item = *e.rows[br][bc];
-                                ValueId v = blocks[br][bc];
-                                if (item.resolved == R_BlockZero) items.push_back(konst(0));
-                                else if (item.resolved == R_BlockOnes) items.push_back(konst(1));
-                                else if (item.resolved == R_BlockIdentity) items.push_back(konst(i == j ? 1 : 0));
-                                else if (type_of(v).is_scalar()) items.push_back(v);
-                                else if (type_of(v).is_vector()) items.push_back(emit(Op::Extract, Type::scalar(), {v}, i, item.span));
-                                else items.push_back(emit(Op::Extract, Type::scalar(), {v}, i * type_of(v).cols + j, item.span));
-                            }
-                if (items.size() == 1) return items[0];
-                int R = 0, C = 0;
-                for (int h : e.block_rows) R += h;
-                for (int w : e.block_cols) C += w;
-                return emit(Op::Construct, C == 1 ? Type::vector(R) : Type::matrix(R, C), std::move(items), 0, e.span);
-            }
-            case ExprKind::Sum: {
-                // Unrolled: the range is a vector's or matrix's size, known when checking.
-                ValueId acc = ValueId(-1);
-                int n = sum_range(*e.args[0], e.text);
-                for (int k = 0; k < n; ++k) {
-                    sum_index[e.text] = k;
-                    ValueId term = lower(*e.args[0]);
-                    acc = acc == ValueId(-1) ? term : op2(Op::Add, acc, term, e.span);
-                }
-                sum_index.erase(e.text);
-                return acc;
-            }
+            case ExprKind::Matrix: return matrix_literal(e);
+            case ExprKind::Sum: return sum(e);
             case ExprKind::Norm:
-            case ExprKind::Abs: {
-                ValueId a = lower(*e.args[0]);
-                if (type_of(a).is_matrix()) return emit(Op::Det, Type::scalar(), {a}, 0, e.span);
-                return builtin(e.kind == ExprKind::Norm && type_of(a).is_vector() ? "length" : "abs", {a}, e.span);
+            case ExprKind::Abs: return norm(e);
+            case ExprKind::Inner: {
+                ValueId u = lower(*e.args[0]), v = lower(*e.args[1]);
+                if (e.args.size() > 2) u = mul(lower(*e.args[2]), u, e.span);  // ⟨u, v⟩_M = vᵀ(M u)
+                return emit(Op::Dot, Type::scalar(), {u, v}, 0, e.span);
             }
             case ExprKind::Floor: return builtin("floor", {lower(*e.args[0])}, e.span);
             case ExprKind::Ceil: return builtin("ceil", {lower(*e.args[0])}, e.span);
             case ExprKind::Sqrt: return builtin("sqrt", {lower(*e.args[0])}, e.span);
-            case ExprKind::Compare: {
-                ValueId a = lower(*e.args[0]);
-                ValueId b = lower(*e.args[1]);
-                ir::CompareKind k = ir::CompareKind::Eq;
-                switch (e.op) {
-                    case BinOp::Eq: k = ir::CompareKind::Eq; break;
-                    case BinOp::Neq: k = ir::CompareKind::Ne; break;
-                    case BinOp::Lt: k = ir::CompareKind::Lt; break;
-                    case BinOp::Le: k = ir::CompareKind::Le; break;
-                    case BinOp::Gt: k = ir::CompareKind::Gt; break;
-                    default: k = ir::CompareKind::Ge; break;
-                }
-                return emit(Op::Compare, Type::boolean(), {a, b}, int(k), e.span);
-            }
+            case ExprKind::Compare: return compare(e);
             case ExprKind::Logic: {
                 ValueId a = lower(*e.args[0]);
                 ValueId b = lower(*e.args[1]);
                 return emit(e.op == BinOp::And ? Op::And : Op::Or, Type::boolean(), {a, b}, 0, e.span);
             }
-            case ExprKind::Piecewise: {
-                // Cases are tried in order: the first true condition wins.
-                ValueId acc = ValueId(-1);
-                if (e.otherwise) acc = lower(*e.otherwise);
-                for (size_t i = e.rows.size(); i-- > 0;) {
-                    ValueId v = lower(*e.rows[i][0]);
-                    ValueId c = lower(*e.rows[i][1]);
-                    if (acc == ValueId(-1)) {  // no `otherwise`: 0
-                        Type t = scalar_or(type_of(v));
-                        acc = f.constant(t, std::vector<double>(size_t(t.components()), 0.0));
-                    }
-                    acc = emit(Op::Select, scalar_or(type_of(v)), {c, v, acc}, 0, e.span);
-                }
-                return acc;
-            }
+            case ExprKind::Piecewise: return piecewise(e);
         }
         internal_error("lowering: unknown expression");
     }
@@ -536,7 +834,7 @@ int lower_module(const CheckedModule& m, const std::string& name, const std::str
                 if (g.leader == s) env.lower_group(g);
             continue;
         }
-        ValueId v = env.name_value(env.lower(*s->value), *s);
+        ValueId v = env.name_value(s->elem_indices.empty() ? env.lower(*s->value) : env.elementwise(*s), *s);
         if (s->kind == StmtKind::Assign) {
             env.values[s->name] = v;
             fn.outputs.push_back({s->name, v});

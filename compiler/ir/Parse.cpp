@@ -255,6 +255,7 @@ struct Parser {
             }
             case Op::Call: in.aux = function_index(l.word()); break;
             case Op::Extract:
+            case Op::Element:
             case Op::Row:
             case Op::Column:
                 l.expect("[");

@@ -81,14 +81,24 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
     // The values set from the command line first: their types bind symbolic sizes (v ∈ ℝ^n).
     std::map<std::string, ir::Value> given;
     std::map<std::string, Type> given_types;
+    std::map<std::string, std::shared_ptr<const ast::Module>> given_functions;
     for (const auto& [sname, stext] : req.sets) {
+        if (size_t paren = sname.find('('); paren != std::string::npos) {  // f(x)=x²: a function parameter's definition
+            std::string text = sname + " = " + stext;
+            FileId ff = sm.add(fmt::format("--set {}", sname), text);
+            ModuleSource fs{"value", ff, {{0, uint32_t(text.size())}}, {ff, 0, 1}, "value"};
+            std::string fname = sname.substr(0, paren);
+            if (fname.size() > 2 && fname.front() == '`' && fname.back() == '`') fname = fname.substr(1, fname.size() - 2);
+            given_functions[fname] = lib.parse_function(fs);
+            continue;
+        }
         ir::Value v;
         if (!parse_value(sname, stext, sm, d, v)) continue;
         given[sname] = v;
         given_types[sname] = v.type;
     }
     if (d.error_count() != before) return false;
-    std::unique_ptr<CheckedModule> checked = lib.check_with(name, given_types);
+    std::unique_ptr<CheckedModule> checked = lib.check_with(name, given_types, given_functions);
     lap("lex + parse + check");
     const CheckedModule* m = checked.get();
     if (!m) {

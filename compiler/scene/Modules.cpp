@@ -96,12 +96,20 @@ std::vector<std::string> ModuleLibrary::names() const {
 }
 
 std::unique_ptr<CheckedModule> ModuleLibrary::check_with(const std::string& name,
-                                                        const std::map<std::string, Type>& given_types) {
+                                                        const std::map<std::string, Type>& given_types,
+                                                        const std::map<std::string, std::shared_ptr<const ast::Module>>& given_functions) {
     const ModuleSource* src = find_source(name, {});
     if (!src) return nullptr;
-    auto m = parse_check(*src, name, false, given_types);
+    auto m = parse_check(*src, name, false, given_types, given_functions);
     m->ast.span = src->where;
     return m;
+}
+
+std::shared_ptr<const ast::Module> ModuleLibrary::parse_function(const ModuleSource& src) {
+    ParseOptions po;
+    for (const auto& n : known_names()) po.known_names.insert(n);
+    po.allow_header = false;
+    return std::make_shared<const ast::Module>(parse_module(sm_, src.file, src.ranges, src.name, po, d_));
 }
 
 std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& name, const std::string& text, SourceManager& sm,
@@ -117,9 +125,10 @@ std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& nam
     lib.constants_ = true;
     auto m = lib.parse_check(src, "value", false);
     if (d.error_count() != before) return std::nullopt;
-    if (!m->ret || !m->params.empty() || !m->primary_type.is_numeric()) {
+    if (!m->ret || !m->params.empty() || !(m->primary_type.is_numeric() || m->primary_type.is_array())) {
         d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
-                fmt::format("the value of '{}' must be a number, a vector (1, 2, 3) or a matrix [1 2; 3 4]", name));
+                fmt::format("the value of '{}' must be a number, a vector (1, 2, 3), a matrix [1 2; 3 4] or a sequence "
+                            "{{(1, 2), (3, 4)}}", name));
         return std::nullopt;
     }
     ir::Module irm;
@@ -143,14 +152,19 @@ std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& nam
 }
 
 std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& src, const std::string& name, bool transform,
-                                                         const std::map<std::string, Type>& given_types) {
+                                                         const std::map<std::string, Type>& given_types,
+                                                         const std::map<std::string, std::shared_ptr<const ast::Module>>& given_functions) {
     ParseOptions po;
     for (const auto& n : known_names()) po.known_names.insert(n);
     CheckOptions co;
     co.given_types = given_types;
+    co.given_functions = given_functions;
     if (constants_) {  // a constant may use the trigonometric functions without importing them
         for (const auto& b : builtins())
-            if (std::string(b.module) == "trigonometry") co.implicit_imports.push_back({b.name, "trigonometry"});
+            if (std::string(b.module) == "trigonometry") {
+                co.implicit_imports.push_back({b.name, "trigonometry"});
+                po.known_names.insert(b.name);  // cot, asinh: names after an import
+            }
     } else {
         // Defaults and bounds that need more than folding: the evaluator, on a scratch source.
         co.constant = [this](const ast::Expr& e) -> std::optional<std::vector<double>> {

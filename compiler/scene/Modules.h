@@ -29,10 +29,16 @@ public:
     // The checked module of that name, or null when there is none (unknown names are the caller's to report).
     const CheckedModule* get(const std::string& name, Span where);
     // Parses and checks a module's text; `transform` gives it the implicit transformation imports.
+    // `given` types parameters from outside (binding symbolic sizes and sequence lengths) and defines its
+    // function parameters (f: ℝ → ℝ).
     std::unique_ptr<CheckedModule> parse_check(const ModuleSource& src, const std::string& name, bool transform,
-                                               const std::map<std::string, Type>& given_types = {});
+                                               const std::map<std::string, Type>& given_types = {},
+                                               const std::map<std::string, std::shared_ptr<const ast::Module>>& given_functions = {});
     // Checks the named module afresh (not cached) with parameter types known from outside; null if none.
-    std::unique_ptr<CheckedModule> check_with(const std::string& name, const std::map<std::string, Type>& given_types);
+    std::unique_ptr<CheckedModule> check_with(const std::string& name, const std::map<std::string, Type>& given_types,
+                                              const std::map<std::string, std::shared_ptr<const ast::Module>>& given_functions = {});
+    // Parses `NAME(params) = expression` given for a function parameter (iqc eval --set 'f(x)=x²').
+    std::shared_ptr<const ast::Module> parse_function(const ModuleSource& src);
     // Every module name that lookup can find, for "did you mean".
     std::vector<std::string> names() const;
 

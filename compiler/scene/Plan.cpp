@@ -9,6 +9,7 @@
 
 #include "ir/Eval.h"
 #include "ir/Lower.h"
+#include "sema/Hints.h"
 
 namespace iqc {
 
@@ -84,12 +85,16 @@ struct Planner {
         bool ok = true;
         for (const auto& ov : ovs) {
             int pi = m.find_param(ov.name);
+            std::vector<std::string> cands;
+            for (size_t i = 0; i < m.params.size(); ++i)
+                if (std::find(bound.begin(), bound.end(), int(i)) == bound.end()) cands.push_back(m.params[i].name);
+            bool accept = false;
+            auto key = pi < 0 ? match_key(ov.name, cands, &accept) : std::nullopt;  // theta for θ; kd → k_d
+            if (accept) pi = m.find_param(*key);
             if (pi < 0) {
-                std::vector<std::string> cands;
-                for (size_t i = 0; i < m.params.size(); ++i)
-                    if (std::find(bound.begin(), bound.end(), int(i)) == bound.end()) cands.push_back(m.params[i].name);
                 auto& e = d.error(ov.span, fmt::format("{} '{}' has no parameter '{}'", role, m.ast.name, ov.name));
-                if (auto sug = did_you_mean(ov.name, cands)) Diagnostics::note(e, ov.span, fmt::format("did you mean '{}'?", *sug));
+                if (key) Diagnostics::note(e, ov.span, fmt::format("did you mean '{}'?", *key));
+                else if (auto sug = did_you_mean(ov.name, cands)) Diagnostics::note(e, ov.span, fmt::format("did you mean '{}'?", *sug));
                 else if (!cands.empty()) Diagnostics::note(e, ov.span, fmt::format("its parameters are: {}", fmt::join(cands, ", ")));
                 ok = false;
                 continue;

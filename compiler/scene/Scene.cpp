@@ -320,7 +320,12 @@ void SceneReader::read(std::string_view text) {
         root = toml::parse(text, sm_.name(file_));
     } catch (const toml::parse_error& e) {
         Span s = span_of(e.source());
-        d_.error(s, fmt::format("invalid TOML: {}", e.description()));
+        auto& err = d_.error(s, fmt::format("invalid TOML: {}", e.description()));
+        // An unquoted key with a letter such as θ: TOML's bare keys are ASCII.
+        std::string_view at = sm_.text(s.file).substr(std::min<size_t>(s.begin, sm_.text(s.file).size()));
+        if (!at.empty() && static_cast<unsigned char>(at[0]) >= 0x80)
+            Diagnostics::note(err, s, "a TOML key with letters such as θ must be quoted (\"θ\" = 1); a Greek letter may also "
+                                      "be written with its ASCII name (theta = 1)");
         return;
     }
     check_keys(root, kTopKeys, " in the scene");

@@ -8,6 +8,7 @@
 
 #include "ir/IR.h"
 #include "sema/Builtins.h"
+#include "sema/Hints.h"
 #include "source/Limits.h"
 
 namespace iqc {
@@ -77,6 +78,16 @@ std::optional<std::vector<double>> const_eval(const Expr& e) {
             if (!v) return std::nullopt;
             for (auto& x : *v) x = -x;
             return v;
+        }
+        case ExprKind::Matrix: {  // [1 0; 0 1]: numbers only, row-major
+            std::vector<double> out;
+            for (const auto& row : e.rows)
+                for (const auto& a : row) {
+                    auto v = const_eval(*a);
+                    if (!v || v->size() != 1 || row.size() != e.rows[0].size()) return std::nullopt;
+                    out.push_back((*v)[0]);
+                }
+            return out;
         }
         case ExprKind::Vector: {
             std::vector<double> out;
@@ -172,6 +183,11 @@ private:
     int sum_range(const Expr& body, const std::string& index);
 
     void collect_declarations();
+    void declare_sequence(const Decl& decl, const std::string& name, Span span, const std::string& index);
+    void bind_function(const Decl& decl, const std::string& name, Span span);
+    std::set<std::string> unbound_functions_;  // function parameters without a definition, and sequences whose
+                                               // declaration failed (already reported: not undefined at each use)
+    std::map<std::string, int> seq_lengths_;  // a sequence index letter -> the length of its sequences
     void collect_imports();
     void collect_statements();
     void order_statements();
@@ -187,15 +203,88 @@ private:
     Type check_name(Expr& e);
     Type check_call(Expr& e);
     Type check_binary(Expr& e);
+    Type check_norm(Expr& e);
+    Type check_block(Expr& e);
+    Type check_matrix_literal(Expr& e);
+    Type check_index(Expr& e);
+    Type check_sequence_literal(Expr& e);
+    Type check_elementwise(const Stmt& s);
+    bool zero_based(const Expr& x) const;
+    // Whether a sum, difference or product of two scalars is a whole number: a ℤ value with another, or
+    // with a whole-number literal (b + 1, 2k).
+    static bool integer_result(const Expr& e, const Type& a, const Type& b) {
+        auto whole = [](const Expr& x, const Type& t) {
+            return t.kind == Type::Integer || (x.kind == ExprKind::Number && x.number == std::floor(x.number) &&
+                                               std::fabs(x.number) < 1e9);
+        };
+        return (a.kind == Type::Integer || b.kind == Type::Integer) && whole(*e.args[0], a) && whole(*e.args[1], b);
+    }
+    bool allow_sequence_ = false;               // the Name being checked is subscripted (x_1): it may be a sequence
+    std::set<std::string> zero_based_values_;   // assigned ℤ values that count from 0 (c = b + 1, b ∈ ℤ index)
+    // Whether the module (or the local function being checked) gives `name` a meaning of its own.
+    bool defines(const std::string& name) const {
+        return m_.find_param(name) >= 0 || assigns_.count(name) || decls_.count(name) ||
+               (scope_ && scope_->locals.count(name)) || m_.find_sequence(name) >= 0;
+    }
+    Type check_inner(Expr& e);
+    Type check_matrix_product(Expr& e, const Type& a, const Type& b);
     Type mul_type(Expr& e, const Type& a, const Type& b, bool dot);
     Type param_type(const TypeSpec& ts, const std::string& name);
+    std::optional<int> computed_size(const Expr& x, const std::string& name);
     std::vector<std::string> visible_names() const;
-    void undefined(const std::string& name, Span s);
+    void undefined(const Expr& e);
+    std::set<std::pair<uint32_t, uint32_t>> reported_words_;  // split words already reported (file, offset)
+    // The built-in id of a constant imported by this name (e from trigonometry), or -1.
+    int imported_constant(const std::string& name) const {
+        for (const auto& im : m_.imports)
+            if (im.name == name && im.builtin >= 0 && builtin(im.builtin).sig == Sig::Constant) return im.builtin;
+        return -1;
+    }
     Type value_type_for_scope(const std::string& name, Type t, Expr& e, int resolved, int aux);
 };
 
+// A size written as arithmetic on size symbols (ℝ^((p+1)×k)), once the symbols are bound.
+std::optional<int> Checker::computed_size(const Expr& x, const std::string& name) {
+    std::function<std::optional<double>(const Expr&)> eval = [&](const Expr& e) -> std::optional<double> {
+        if (e.kind == ExprKind::Number) return e.number;
+        if (e.kind == ExprKind::Name) {
+            auto it = sizes_.find(e.text);
+            if (it == sizes_.end()) {
+                d_.error(e.span, fmt::format("the size {} of '{}' is not known: it must be a size of another declaration, "
+                                             "such as n in v ∈ ℝ^n", e.text, name));
+                return std::nullopt;
+            }
+            return double(it->second);
+        }
+        if (e.kind != ExprKind::Binary) return std::nullopt;
+        auto a = eval(*e.args[0]);
+        if (!a) return std::nullopt;
+        auto b = eval(*e.args[1]);
+        if (!b) return std::nullopt;
+        switch (e.op) {
+            case BinOp::Add: return *a + *b;
+            case BinOp::Sub: return *a - *b;
+            case BinOp::Div: return *b == 0 ? std::optional<double>() : *a / *b;
+            default: return *a * *b;
+        }
+    };
+    auto v = eval(x);
+    if (!v) return std::nullopt;
+    if (!(*v >= 1) || *v != std::floor(*v) || *v > limits::kMaxComponents) {
+        d_.error(x.span, fmt::format("the size of '{}' must be a whole number ≥ 1, but it is {}", name, *v));
+        return std::nullopt;
+    }
+    return int(*v);
+}
+
 Type Checker::param_type(const TypeSpec& ts, const std::string& name) {
     int rows = ts.rows, cols = ts.cols;
+    for (auto [ex, dim] : {std::pair<const ExprPtr*, int*>{&ts.rows_expr, &rows}, {&ts.cols_expr, &cols}}) {
+        if (!*ex) continue;
+        auto n = computed_size(**ex, name);
+        if (!n) return {};
+        *dim = *n;
+    }
     for (auto [sym, dim] : {std::pair<const std::string*, int*>{&ts.sym_rows, &rows}, {&ts.sym_cols, &cols}}) {
         if (sym->empty()) continue;
         auto it = sizes_.find(*sym);
@@ -219,7 +308,8 @@ Type Checker::param_type(const TypeSpec& ts, const std::string& name) {
             if (cols == 1) return Type::vector(rows);
             return Type::matrix(rows, cols);
         case TypeSpec::Function:
-            d_.error(ts.span, fmt::format("function parameters such as '{}' are not supported yet", name));
+            d_.error(ts.span, fmt::format("'{}' is a function: a local function's parameters are values (define the "
+                                          "function in the module and call it by name)", name));
             return {};
     }
     return {};
@@ -276,9 +366,10 @@ void Checker::collect_declarations() {
         for (auto& [name, span] : decl.names)
             if (auto it = opts_.given_types.find(name);
                 it != opts_.given_types.end() && (!decl.type.sym_rows.empty() || !decl.type.sym_cols.empty()))
-                bind_sizes(decl.type, it->second, name, span);
+                bind_sizes(decl.type, it->second.is_array() ? it->second.element() : it->second, name, span);
     for (auto& decl : m_.ast.decls) {
-        for (auto& [name, span] : decl.names) {
+        for (size_t ni = 0; ni < decl.names.size(); ++ni) {
+            auto& [name, span] = decl.names[ni];
             if (decl_spans_.count(name)) {
                 auto& e = d_.error(span, fmt::format("'{}' is declared twice", name));
                 Diagnostics::note(e, decl_spans_[name].second, "first declared here");
@@ -286,11 +377,20 @@ void Checker::collect_declarations() {
             }
             decl_spans_[name] = {name, span};
             decls_[name] = &decl;
+            if (ni < decl.indices.size() && !decl.indices[ni].empty()) {  // x_i ∈ ℝ³
+                declare_sequence(decl, name, span, decl.indices[ni]);
+                continue;
+            }
             if (fn_params.count(name) && !used_at_module.count(name)) continue;  // a local function's parameter
+            if (decl.type.kind == TypeSpec::Function) {  // f: ℝ → ℝ, bound to a definition given from outside
+                bind_function(decl, name, span);
+                continue;
+            }
             ParamInfo p;
             p.name = name;
             p.span = span;
             p.description = decl.description;
+            p.zero_based = decl.zero_based;
             p.type = param_type(decl.type, name);
             if (!p.type.valid()) continue;
             int n = p.type.components();
@@ -341,6 +441,95 @@ void Checker::collect_declarations() {
     }
 }
 
+// x_i ∈ ℝ³: a sequence parameter. Its length comes from its value (iqc eval --set 'x={…}') or its default
+// {…}; sequences indexed by one letter have one length (I♥LA: the index ranges over them all).
+void Checker::declare_sequence(const Decl& decl, const std::string& name, Span span, const std::string& index) {
+    unbound_functions_.insert(name);  // until it is declared below
+    if (!decl.bounds.empty()) {
+        d_.error(Span::join(decl.bounds.front().span, decl.bounds.back().span),
+                 fmt::format("the sequence '{}' cannot have bounds (give its elements' type, such as ℝ³)", name));
+        return;
+    }
+    Type elem = param_type(decl.type, name);
+    if (!elem.valid()) return;
+    if (elem.is_scalar()) elem = Type::scalar();
+    ParamInfo p;
+    p.name = name;
+    p.span = span;
+    p.description = decl.description;
+    p.seq_index = index;
+    int count = 0;
+    if (auto it = opts_.given_types.find(name); it != opts_.given_types.end() && it->second.is_array()) {
+        count = it->second.count;
+    } else if (decl.default_value && decl.default_value->kind == ExprKind::Sequence) {
+        count = int(decl.default_value->args.size());
+        for (const auto& item : decl.default_value->args) {
+            auto v = const_eval(*item);
+            if (!v || int(v->size()) != elem.components()) {
+                d_.error(item->span, fmt::format("each element of '{}' must be a constant {}", name, elem.str()));
+                return;
+            }
+            p.value.insert(p.value.end(), v->begin(), v->end());
+        }
+        p.has_default = true;
+    } else if (decl.default_value) {
+        d_.error(decl.default_value->span, fmt::format("the default of the sequence '{}' lists its elements: {{x_1, x_2, …}}", name));
+        return;
+    } else {
+        d_.error(span, fmt::format("the length of the sequence '{}' is not known: give its elements as a default "
+                                   "({}_{} ∈ {} default = {{…}}) or a value (iqc eval --set '{}={{…}}')", name, name, index,
+                                   elem.str(), name));
+        return;
+    }
+    if (auto [it, fresh] = seq_lengths_.emplace(index, count); !fresh && it->second != count) {
+        d_.error(span, fmt::format("'{}' has {} elements but another sequence indexed by {} has {}", name, count, index,
+                                   it->second));
+        return;
+    }
+    if (int64_t(count) * elem.components() > limits::kMaxComponents) {
+        d_.error(span, fmt::format("the sequence '{}' would have {} components: iqc allows at most {}", name,
+                                   int64_t(count) * elem.components(), limits::kMaxComponents));
+        return;
+    }
+    p.type = Type::array(elem, count);
+    if (p.value.empty()) p.value.assign(size_t(p.type.components()), 0.0);
+    m_.params.push_back(std::move(p));
+    unbound_functions_.erase(name);
+}
+
+// A function parameter of the module: its definition comes from outside (iqc eval --set 'f(x)=…'), typed
+// by the declaration; calls to it are calls of that definition.
+void Checker::bind_function(const Decl& decl, const std::string& name, Span span) {
+    auto it = opts_.given_functions.find(name);
+    if (it == opts_.given_functions.end() || !it->second) {
+        unbound_functions_.insert(name);
+        d_.error(span, fmt::format("'{}' is a function parameter: give its definition, e.g. iqc eval --set '{}(x)=…' "
+                                   "(a shader needs it defined in the module: {}(x) = … where x ∈ …)", name, name, name));
+        return;
+    }
+    const ast::Module& given = *it->second;
+    const Stmt* def = nullptr;
+    for (const auto& st : given.stmts)
+        if (st.kind == StmtKind::Function && st.name == name) def = &st;
+    unbound_functions_.insert(name);  // until bound below: its errors are reported here, not at each call
+    if (!def) {
+        d_.error(span, fmt::format("the value given for the function '{}' must define it: {}(x) = …", name, name));
+        return;
+    }
+    if (def->params.size() != decl.type.params.size()) {
+        d_.error(def->name_span, fmt::format("'{}' takes {} argument{} (its declaration: {}), but the definition has {}", name,
+                                             decl.type.params.size(), decl.type.params.size() == 1 ? "" : "s",
+                                             d_.sources().slice(decl.type.span), def->params.size()));
+        return;
+    }
+    unbound_functions_.erase(name);
+    m_.bound_functions.push_back(it->second);
+    LocalFunction f;
+    f.stmt = def;
+    f.declared = &decl.type;
+    m_.functions.push_back(std::move(f));
+}
+
 void Checker::collect_imports() {
     auto add_import = [&](const std::string& name, const std::string& module, Span span, Span from_span) {
         for (auto& im : m_.imports)
@@ -352,9 +541,7 @@ void Checker::collect_imports() {
         if (is_builtin_module(module)) {
             auto b = find_builtin(name);
             if (!b || module != builtin(*b).module) {
-                std::vector<std::string> cands;
-                for (auto& bi : builtins())
-                    if (module == bi.module) cands.push_back(bi.name);
+                std::vector<std::string> cands = builtin_module_names(module);
                 auto& e = d_.error(span, fmt::format("module '{}' has no function '{}'", module, name));
                 if (auto s = did_you_mean(name, cands)) Diagnostics::note(e, span, fmt::format("did you mean '{}'?", *s));
                 return;
@@ -408,6 +595,9 @@ void Checker::collect_statements() {
                                                     ? fmt::format("'{}' is a declared parameter and cannot be assigned", s.name)
                                                     : fmt::format("'{}' is assigned twice", s.name));
                 Diagnostics::note(e, it->second, "first defined here");
+                if (!s.elem_indices.empty())
+                    Diagnostics::note(e, s.name_span, "an element-wise definition defines the whole of its name; changing "
+                                                      "some entries of a value defined elsewhere is not supported");
                 continue;
             }
             defined[s.name] = s.name_span;
@@ -639,13 +829,38 @@ std::vector<std::string> Checker::visible_names() const {
     return v;
 }
 
-void Checker::undefined(const std::string& name, Span s) {
-    if (auto b = find_builtin(name)) {
-        d_.error(s, fmt::format("'{}' needs an import: add '{} from {}'", name, name, builtin(*b).module));
+void Checker::undefined(const Expr& e) {
+    const std::string& name = e.text;
+    if (unbound_functions_.count(name)) return;  // reported at its declaration
+    Span s = e.name_span;
+    if (e.word_span.end > e.word_span.begin) {
+        // A letter of a longer word (`dot` is d·o·t): report the word once, as written, with a hint.
+        if (!reported_words_.insert({e.word_span.file, e.word_span.begin}).second) return;
+        std::string word(d_.sources().slice(e.word_span));
+        if (auto b = find_builtin(word); b && *builtin(*b).module) {
+            d_.error(e.word_span, fmt::format("'{}' needs an import: add '{} from {}'", word, word, builtin(*b).module));
+            return;
+        }
+        auto& err = d_.error(e.word_span, fmt::format("undefined name '{}'", word));
+        if (auto hint = word_hint(word)) {
+            Diagnostics::note(err, e.word_span, *hint);
+        } else {
+            Diagnostics::note(err, e.word_span,
+                              fmt::format("names are one letter, so '{}' reads as {}: declare `{}` to use it as one name, "
+                                          "or write {}", word, spell_letters(word, "·"), word, spell_letters(word, " ")));
+        }
         return;
     }
-    auto& e = d_.error(s, fmt::format("undefined name '{}'", name));
-    if (auto sug = did_you_mean(name, visible_names())) Diagnostics::note(e, s, fmt::format("did you mean '{}'?", *sug));
+    if (auto b = find_builtin(name)) {
+        if (*builtin(*b).module)
+            d_.error(s, fmt::format("'{}' needs an import: add '{} from {}'", name, name, builtin(*b).module));
+        else
+            d_.error(s, fmt::format("'{}' is a function: call it with arguments, as in {}(x)", name, name));
+        return;
+    }
+    auto& err = d_.error(s, fmt::format("undefined name '{}'", name));
+    if (auto sug = did_you_mean(name, visible_names())) Diagnostics::note(err, s, fmt::format("did you mean '{}'?", *sug));
+    else if (auto hint = word_hint(name)) Diagnostics::note(err, s, *hint);
 }
 
 Type Checker::value_type_for_scope(const std::string& name, Type t, Expr& e, int resolved, int aux) {
@@ -698,6 +913,11 @@ Type Checker::check_name(Expr& e) {
         e.resolved = R_Pi;
         return Type::scalar();
     }
+    if (int b = imported_constant(n); b >= 0) {
+        e.resolved = R_Constant;
+        e.aux = b;
+        return Type::scalar();
+    }
     if (n == "time" || n == "mouse") {  // reserved inputs (a declaration of the same name wins)
         e.resolved = R_Input;
         e.aux = n == "time" ? 0 : 1;
@@ -707,7 +927,7 @@ Type Checker::check_name(Expr& e) {
         d_.error(e.span, fmt::format("'{}' is a function: call it with arguments, as in {}(x)", n, n));
         return {};
     }
-    undefined(n, e.name_span);
+    undefined(e);
     return {};
 }
 
@@ -720,10 +940,12 @@ void Checker::check_function(LocalFunction& f, Span call_site, const std::vector
         for (auto& ld : s.local_decls)
             for (auto& nm : ld.names)
                 if (nm.first == pname) decl = &ld;
-        if (!decl)
+        if (!decl && !f.declared)
             if (auto it = decls_.find(pname); it != decls_.end()) decl = it->second;
         decls.push_back(decl);
-        if (decl && (!decl->type.sym_rows.empty() || !decl->type.sym_cols.empty())) f.generic = true;
+        // A parameter of a symbolic size (x ∈ ℝ^n, or f: ℝ^(k×k) → ℝ) makes the function generic.
+        const TypeSpec* spec = decl ? &decl->type : f.declared ? &f.declared->params[i] : nullptr;
+        if (spec && (!spec->sym_rows.empty() || !spec->sym_cols.empty())) f.generic = true;
     }
     std::vector<Type> key;
     if (f.generic) {
@@ -746,13 +968,17 @@ void Checker::check_function(LocalFunction& f, Span call_site, const std::vector
     f.params.clear();
     auto saved_sizes = sizes_;
     if (f.generic)
-        for (size_t i = 0; i < s.params.size() && i < key.size(); ++i)
+        for (size_t i = 0; i < s.params.size() && i < key.size(); ++i) {
             if (decls[i]) bind_sizes(decls[i]->type, key[i], s.params[i].first, call_site);
+            else if (f.declared) bind_sizes(f.declared->params[i], key[i], s.params[i].first, call_site);
+        }
     for (size_t i = 0; i < s.params.size(); ++i) {
         const auto& [pname, pspan] = s.params[i];
         const Decl* decl = decls[i];
         Type t;
-        if (!decl) {
+        if (!decl && f.declared) {
+            t = param_type(f.declared->params[i], pname);
+        } else if (!decl) {
             d_.error(pspan, fmt::format("the parameter '{}' of '{}' has no type: add 'where {} ∈ ℝ' (or its type)", pname,
                                         s.name, pname));
         } else if (!decl->bounds.empty()) {
@@ -767,6 +993,12 @@ void Checker::check_function(LocalFunction& f, Span call_site, const std::vector
     scope_ = &scope;
     f.result = check(*s.value);
     scope_ = saved;
+    if (f.declared && f.result.valid()) {
+        Type want = param_type(*f.declared->result, s.name);
+        if (want.valid() && want != f.result && !(want.is_scalar() && f.result.is_scalar()))
+            d_.error(s.value->span, fmt::format("'{}' is declared to give {}, but its definition gives {}", s.name, want.str(),
+                                                f.result.str()));
+    }
     sizes_ = saved_sizes;
     f.checking = false;
     f.checked = true;
@@ -799,7 +1031,7 @@ Type Checker::check_call(Expr& e) {
     };
     // A value followed by a parenthesis is a product: a(b + c).
     bool is_value = (scope_ && scope_->locals.count(n)) || m_.find_param(n) >= 0 || m_.values.count(n) ||
-                    assigns_.count(n) || n == "π";
+                    assigns_.count(n) || n == "π" || imported_constant(n) >= 0;
     if (is_value && e.args.empty()) {
         d_.error(e.span, fmt::format("'{}' is a value, not a function: '{}()' has nothing to multiply it by", n, n));
         return {};
@@ -883,21 +1115,22 @@ Type Checker::check_call(Expr& e) {
             bool imported = false;
             for (auto& im : m_.imports) imported |= im.builtin == *b;
             if (!imported) {
-                d_.error(e.name_span, fmt::format("'{}' needs an import: add '{} from {}'", n, n, bi.module));
+                if (e.word_span.end > e.word_span.begin) undefined(e);  // the last letter of a word: `translate(v)`
+                else d_.error(e.name_span, fmt::format("'{}' needs an import: add '{} from {}'", n, n, bi.module));
                 return {};
             }
         }
         e.resolved = R_Builtin;
         e.aux = *b;
         if (!args_ok) return {};
-        BuiltinCheck c = check_builtin(*b, at);
+        BuiltinCheck c = check_builtin(*b, at, n);
         if (!c.error.empty()) {
             d_.error(c.bad_arg >= 0 ? e.args[size_t(c.bad_arg)]->span : e.span, c.error);
             return {};
         }
         return c.type;
     }
-    undefined(n, e.name_span);
+    undefined(e);
     return {};
 }
 
@@ -918,6 +1151,7 @@ void Checker::note_operands(Diagnostic& d, const Expr& e) {
 
 Type Checker::mul_type(Expr& e, const Type& a, const Type& b, bool dot) {
     e.resolved = R_Mul;
+    if (a.is_scalar() && b.is_scalar() && integer_result(e, a, b)) return Type::integer();
     if (a.is_scalar()) return b.is_scalar() ? Type::scalar() : b;
     if (b.is_scalar()) return a;
     if (a.is_vector() && b.is_vector()) {
@@ -957,7 +1191,8 @@ Type Checker::check_binary(Expr& e) {
         case BinOp::Add:
         case BinOp::Sub:
             if (!numeric(a, *e.args[0]) || !numeric(b, *e.args[1])) return {};
-            if (a.is_scalar() && b.is_scalar()) return Type::scalar();
+            if (a.is_scalar() && b.is_scalar())  // ℤ ± ℤ stays ℤ (it may be a subscript: a_(b+1))
+                return integer_result(e, a, b) ? Type::integer() : Type::scalar();
             if (a != b) {
                 if (e.op == BinOp::Add) note_operands(d_.error(e.span, fmt::format("cannot add {} and {}", a.str(), b.str())), e);
                 else note_operands(d_.error(e.span, fmt::format("cannot subtract {} from {}", b.str(), a.str())), e);
@@ -984,6 +1219,13 @@ Type Checker::check_binary(Expr& e) {
                 return {};
             }
             return a;
+        case BinOp::Solve:
+        case BinOp::Kronecker:
+        case BinOp::Frobenius:
+            return check_matrix_product(e, a, b);
+        case BinOp::PlusMinus:
+            d_.error(e.span, "'±' can only be used in a condition, where x = a ± b means x = a + b or x = a - b");
+            return {};
         case BinOp::Cross:
             if (a != Type::vector(3) || b != Type::vector(3)) {
                 note_operands(d_.error(e.span, fmt::format("the cross product × needs two ℝ³ vectors, not {} and {}", a.str(), b.str())), e);
@@ -993,6 +1235,166 @@ Type Checker::check_binary(Expr& e) {
         default: break;
     }
     return {};
+}
+
+// A \ b (solve), A ⊗ B (Kronecker) and A : B (Frobenius), with I♥LA's type rules.
+Type Checker::check_matrix_product(Expr& e, const Type& a, const Type& b) {
+    auto fail = [&](std::string msg) {
+        note_operands(d_.error(e.span, std::move(msg)), e);
+        return Type{};
+    };
+    auto shaped = [](const Type& t) { return t.is_vector() || t.is_matrix(); };
+    switch (e.op) {
+        case BinOp::Solve:
+            if (!a.is_matrix() || a.rows != a.cols)
+                return fail(fmt::format("A \\ b needs a square matrix A on the left, not {}", a.str()));
+            if (!shaped(b)) return fail(fmt::format("A \\ b needs a vector or a matrix b on the right, not {}", b.str()));
+            if (b.rows != a.rows)
+                return fail(fmt::format("cannot solve {} \\ {}: the rows differ ({} and {})", a.str(), b.str(), a.rows, b.rows));
+            return b;
+        case BinOp::Kronecker: {
+            if (!shaped(a) || !shaped(b))
+                return fail(fmt::format("the Kronecker product ⊗ needs vectors or matrices, not {} and {}", a.str(), b.str()));
+            int rows = a.rows * b.rows, cols = (a.is_matrix() ? a.cols : 1) * (b.is_matrix() ? b.cols : 1);
+            return cols == 1 ? Type::vector(rows) : Type::matrix(rows, cols);
+        }
+        default:  // Frobenius
+            if (!shaped(a) || !shaped(b) || a != b)
+                return fail(fmt::format("the Frobenius product A : B needs two vectors or matrices of one size, not {} and {}",
+                                        a.str(), b.str()));
+            return Type::scalar();
+    }
+}
+
+// Sized blocks: 0_m,n (zeros), 1_n and 𝟙_m,n (ones), I_n (the identity, unless the module defines I).
+// A size is a whole number or a size symbol bound by a declaration (v ∈ ℝ^n).
+Type Checker::check_block(Expr& e) {
+    bool identity = e.kind == ExprKind::Index;
+    std::vector<int> dims;
+    for (auto& it : e.indices) {
+        if (!it.expr) {
+            d_.error(it.span, "a block's size cannot be *");
+            return {};
+        }
+        if (it.expr->kind == ExprKind::Name) {
+            auto s = sizes_.find(it.expr->text);
+            if (s == sizes_.end()) {
+                d_.error(it.span, fmt::format("the size '{}' is not known: a block's size is a whole number or a size "
+                                              "symbol such as n in v ∈ ℝ^n", it.expr->text));
+                return {};
+            }
+            dims.push_back(s->second);
+            continue;
+        }
+        auto c = const_eval(*it.expr);
+        if (!c || c->size() != 1 || !((*c)[0] >= 1) || (*c)[0] != std::floor((*c)[0]) || (*c)[0] > limits::kMaxComponents) {
+            d_.error(it.span, "a block's size must be a whole number ≥ 1");
+            return {};
+        }
+        dims.push_back(int((*c)[0]));
+    }
+    if (identity && dims.size() != 1) {
+        d_.error(e.span, "the identity I_n takes one size (it is n×n)");
+        return {};
+    }
+    int rows = dims[0], cols = identity ? dims[0] : dims.size() > 1 ? dims[1] : 1;
+    e.resolved = identity ? R_BlockIdentity : e.text == "0" ? R_BlockZero : R_BlockOnes;
+    e.block_rows = {rows};
+    e.block_cols = {cols};
+    if (cols == 1) return Type::vector(rows);
+    return Type::matrix(rows, cols);
+}
+
+// ‖x‖ and |x|, with I♥LA's subscripts: ‖v‖_1, ‖v‖_2, ‖v‖_∞, ‖v‖_p, ‖v‖_M; ‖A‖ and ‖A‖_F are Frobenius.
+Type Checker::check_norm(Expr& e) {
+    Type a = check(*e.args[0]);
+    if (!a.valid()) return {};
+    bool sub = e.args.size() > 1 || !e.text.empty();
+    Span where = e.span;
+    if (e.kind == ExprKind::Abs) {
+        if (a.is_matrix()) {
+            if (a.rows != a.cols) {
+                d_.error(where, fmt::format("the determinant |·| needs a square matrix, not {}", a.str()));
+                return {};
+            }
+            e.resolved = R_Det;
+            return Type::scalar();
+        }
+        if (!a.is_numeric()) return {};
+        if (sub && !a.is_scalar()) {
+            d_.error(where, "a norm with a subscript is written with double bars, as in ‖v‖_1 (|v| is elementwise)");
+            return {};
+        }
+        e.resolved = R_AbsValue;
+        return a.is_scalar() ? Type::scalar() : a;
+    }
+    if (a.is_scalar()) {
+        e.resolved = R_AbsValue;
+        return Type::scalar();
+    }
+    if (a.is_matrix()) {
+        if (e.text == "*") {  // the sum of the singular values: closed forms up to three of them
+            if (std::min(a.rows, a.cols) > 3) {
+                d_.error(where, fmt::format("the nuclear norm ‖A‖_* is supported for matrices with at most 3 rows or 3 "
+                                            "columns, not {}", a.str()));
+                return {};
+            }
+            e.resolved = R_Nuclear;
+            return Type::scalar();
+        }
+        if (e.args.size() > 1 || (!e.text.empty() && e.text != "F")) {
+            d_.error(where, fmt::format("the norm of a matrix ({}) is ‖A‖ or ‖A‖_F (Frobenius)", a.str()));
+            return {};
+        }
+        e.resolved = R_Frobenius;
+        return Type::scalar();
+    }
+    if (!a.is_vector()) return {};
+    if (e.text == "F" || e.text == "*") {
+        d_.error(where, fmt::format("‖·‖_{} is a norm of matrices; for a vector write ‖v‖, ‖v‖_1, ‖v‖_∞ or ‖v‖_p", e.text));
+        return {};
+    }
+    e.resolved = e.text == "∞" ? R_NormMax : R_Length;
+    if (e.args.size() > 1) {
+        Type p = check(*e.args[1]);
+        if (!p.valid()) return {};
+        auto c = const_eval(*e.args[1]);
+        if (p.is_matrix()) {
+            if (p.rows != p.cols || p.rows != a.rows) {
+                d_.error(e.args[1]->span, fmt::format("the matrix of ‖v‖_M must be {}×{} for v ∈ {}, not {}", a.rows, a.rows,
+                                                      a.str(), p.str()));
+                return {};
+            }
+            e.resolved = R_NormMatrix;
+        } else if (!p.is_scalar()) {
+            d_.error(e.args[1]->span, fmt::format("the subscript of a norm is a number p ≥ 1 or a matrix, not {}", p.str()));
+            return {};
+        } else if (c && c->size() == 1 && (*c)[0] == 0) {
+            e.resolved = R_Norm0;  // ‖v‖_0: how many components are not 0 (I♥LA, after numpy)
+        } else {
+            e.resolved = c && (*c)[0] == 2 ? R_Length : c && (*c)[0] == 1 ? R_Norm1 : R_NormP;
+        }
+    }
+    return Type::scalar();
+}
+
+// ⟨u, v⟩ (or <u, v>): the dot product of two vectors of one size; ⟨u, v⟩_M = vᵀ M u.
+Type Checker::check_inner(Expr& e) {
+    Type a = check(*e.args[0]);
+    Type b = check(*e.args[1]);
+    Type m = e.args.size() > 2 ? check(*e.args[2]) : Type::scalar();
+    if (!a.valid() || !b.valid() || !m.valid()) return {};
+    if (!a.is_vector() || a != b) {
+        note_operands(d_.error(e.span, fmt::format("the inner product ⟨u, v⟩ needs two vectors of one size, not {} and {}",
+                                                   a.str(), b.str())), e);
+        return {};
+    }
+    if (e.args.size() > 2 && (!m.is_matrix() || m.rows != a.rows || m.cols != a.rows)) {
+        d_.error(e.args[2]->span, fmt::format("the matrix of ⟨u, v⟩_M must be {}×{} for vectors in {}, not {}", a.rows,
+                                              a.rows, a.str(), m.str()));
+        return {};
+    }
+    return Type::scalar();
 }
 
 Type Checker::check(Expr& e) {
@@ -1018,13 +1420,20 @@ Type Checker::check_kind(Expr& e) {
     Type t;
     switch (e.kind) {
         case ExprKind::Number: t = Type::scalar(); break;
-        case ExprKind::Name: t = check_name(e); break;
+        case ExprKind::Name:
+            t = check_name(e);
+            if (t.is_array() && !allow_sequence_) {
+                d_.error(e.span, fmt::format("'{}' is a sequence: use an element, such as {}_1, or {}_i inside ∑_i", e.text,
+                                             e.text, e.text));
+                t = {};
+            }
+            break;
         case ExprKind::Call: t = check_call(e); break;
         case ExprKind::Binary: t = check_binary(e); break;
         case ExprKind::Negate: {
             Type a = check(*e.args[0]);
             if (a.valid() && !a.is_numeric()) d_.error(e.span, "a condition cannot be negated with '-'");
-            else t = a.is_scalar() ? Type::scalar() : a;
+            else t = a.kind == Type::Integer ? a : a.is_scalar() ? Type::scalar() : a;
             break;
         }
         case ExprKind::Power: {
@@ -1051,11 +1460,12 @@ Type Checker::check_kind(Expr& e) {
                 t = Type::scalar();
             } else if (a.is_matrix() && a.rows == a.cols && b.is_scalar()) {
                 auto c = const_eval(*e.args[1]);
-                if (c && c->size() == 1 && (*c)[0] == -1) {
-                    e.resolved = R_Inverse;
+                if (c && c->size() == 1 && (*c)[0] == std::floor((*c)[0]) && std::fabs((*c)[0]) <= 1024) {
+                    e.resolved = (*c)[0] == -1 ? R_Inverse : R_MatPow;
+                    e.aux = int((*c)[0]);
                     t = a;
                 } else {
-                    d_.error(e.args[1]->span, "a matrix power must be ⁻¹ (the inverse)");
+                    d_.error(e.args[1]->span, "a matrix power must be a whole number such as A², A^3 or A⁻¹");
                 }
             } else if (a.is_matrix()) {
                 d_.error(e.span, fmt::format("only square matrices have powers, not {}", a.str()));
@@ -1072,169 +1482,11 @@ Type Checker::check_kind(Expr& e) {
             if (a.valid()) t = ir::result_type(ir::Op::Transpose, {a}, 0);
             break;
         }
-        case ExprKind::Index: {
-            if (e.args[0]->kind == ExprKind::Name && m_.find_sequence(e.args[0]->text) >= 0 &&
-                !(scope_ && scope_->locals.count(e.args[0]->text))) {
-                t = check_sequence_index(e);
-                break;
-            }
-            Type a = check(*e.args[0]);
-            if (!a.valid()) break;
-            std::vector<int> idx;
-            bool ok = true;
-            for (auto& it : e.indices) {
-                if (!it.expr) {
-                    it.value = -1;
-                    idx.push_back(-1);
-                    continue;
-                }
-                if (it.expr->kind == ExprKind::Name &&
-                    std::any_of(sums_.begin(), sums_.end(), [&](auto& s) { return s.first == it.expr->text; })) {
-                    check(*it.expr);
-                    it.value = -2;  // bound by the enclosing ∑ (its range fits: see sum_range)
-                    idx.push_back(0);
-                    continue;
-                }
-                auto c = const_eval(*it.expr);
-                if (!c || c->size() != 1 || (*c)[0] != std::floor((*c)[0])) {
-                    d_.error(it.span, "a subscript must be a whole number such as p_1 (or * for a whole row or column)");
-                    ok = false;
-                    continue;
-                }
-                if (!((*c)[0] >= 1)) {
-                    d_.error(it.span, fmt::format("subscript {} is out of range: subscripts start at 1", (*c)[0]));
-                    ok = false;
-                    continue;
-                }
-                if ((*c)[0] > limits::kMaxComponents) {
-                    d_.error(it.span, fmt::format("subscript {} is out of range: {} has fewer components", (*c)[0], a.str()));
-                    ok = false;
-                    continue;
-                }
-                it.value = int((*c)[0]) - 1;
-                idx.push_back(it.value);
-            }
-            if (!ok) break;
-            auto range_error = [&](const IndexItem& it, int size, const char* what) {
-                d_.error(it.span, fmt::format("subscript {} is out of range: {} has {} {} (subscripts start at 1)",
-                                              it.value + 1, a.str(), size, what));
-            };
-            if (a.is_vector()) {
-                if (idx.size() != 1 || idx[0] < 0) {
-                    d_.error(e.span, fmt::format("a vector ({}) takes one subscript", a.str()));
-                } else if (idx[0] >= a.rows) {
-                    range_error(e.indices[0], a.rows, "components");
-                } else {
-                    t = Type::scalar();
-                }
-            } else if (a.is_matrix()) {
-                if (idx.size() != 2) {
-                    d_.error(e.span, fmt::format("a matrix ({}) takes two subscripts, as in A_2,3 or A_(2,3)", a.str()));
-                } else if (idx[0] >= a.rows) {
-                    range_error(e.indices[0], a.rows, "rows");
-                } else if (idx[1] >= a.cols) {
-                    range_error(e.indices[1], a.cols, "columns");
-                } else if (idx[0] < 0 && idx[1] < 0) {
-                    t = a;
-                } else if (idx[0] < 0) {
-                    t = Type::vector(a.rows);
-                } else if (idx[1] < 0) {
-                    t = Type::vector(a.cols);
-                } else {
-                    t = Type::scalar();
-                }
-            } else {
-                d_.error(e.span, fmt::format("cannot subscript {}", a.str()));
-            }
-            break;
-        }
+        case ExprKind::Block: t = check_block(e); break;
+        case ExprKind::Index: t = check_index(e); break;
+        case ExprKind::Sequence: t = check_sequence_literal(e); break;
         case ExprKind::Vector: t = check_vector_items(e); break;
-        case ExprKind::Matrix: {
-            // Entries may be scalars, vectors (columns) or matrices (blocks); 0, 1 and I are blocks sized
-            // from their neighbours in the same block row and column.
-            size_t ncols = e.rows[0].size();
-            bool ok = true;
-            size_t nrows = e.rows.size();
-            std::vector<std::vector<std::pair<int, int>>> size(nrows);
-            for (size_t r = 0; r < nrows; ++r) {
-                auto& row = e.rows[r];
-                if (row.size() != ncols) {
-                    d_.error(Span::join(row.front()->span, row.back()->span),
-                             fmt::format("this row has {} entr{} but the first row has {}", row.size(),
-                                         row.size() == 1 ? "y" : "ies", ncols));
-                    ok = false;
-                }
-                for (auto& item : row) {
-                    bool declared_I = m_.find_param("I") >= 0 || assigns_.count("I") || (scope_ && scope_->locals.count("I"));
-                    if (item->kind == ExprKind::Number && (item->number == 0 || item->number == 1)) {
-                        item->resolved = item->number == 0 ? R_BlockZero : R_BlockOnes;
-                        item->type = Type::scalar();
-                        size[r].push_back({-1, -1});
-                        continue;
-                    }
-                    if (item->kind == ExprKind::Name && item->text == "I" && !declared_I) {
-                        item->resolved = R_BlockIdentity;
-                        size[r].push_back({-1, -1});
-                        continue;
-                    }
-                    Type it = check(*item);
-                    if (!it.valid()) { ok = false; size[r].push_back({1, 1}); continue; }
-                    if (it.is_scalar()) size[r].push_back({1, 1});
-                    else if (it.is_vector()) size[r].push_back({it.rows, 1});
-                    else if (it.is_matrix()) size[r].push_back({it.rows, it.cols});
-                    else { d_.error(item->span, fmt::format("a matrix entry cannot be a {}", it.str())); ok = false; size[r].push_back({1, 1}); }
-                }
-            }
-            if (!ok) break;
-            std::vector<int> heights(nrows, -1), widths(ncols, -1);
-            for (size_t r = 0; r < nrows; ++r)
-                for (size_t c = 0; c < ncols; ++c) {
-                    auto [h, w] = size[r][c];
-                    if (h >= 0) {
-                        if (heights[r] >= 0 && heights[r] != h) {
-                            d_.error(e.rows[r][c]->span, fmt::format("this block has {} rows but the blocks beside it have {}", h, heights[r]));
-                            ok = false;
-                        }
-                        heights[r] = h;
-                    }
-                    if (w >= 0) {
-                        if (widths[c] >= 0 && widths[c] != w) {
-                            d_.error(e.rows[r][c]->span, fmt::format("this block has {} columns but the blocks above or below it have {}", w, widths[c]));
-                            ok = false;
-                        }
-                        widths[c] = w;
-                    }
-                }
-            // I is square: it can size its row from its column and the other way round.
-            for (int pass = 0; pass < 2; ++pass)
-                for (size_t r = 0; r < nrows; ++r)
-                    for (size_t c = 0; c < ncols; ++c)
-                        if (e.rows[r][c]->resolved == R_BlockIdentity) {
-                            if (heights[r] < 0 && widths[c] >= 0) heights[r] = widths[c];
-                            if (widths[c] < 0 && heights[r] >= 0) widths[c] = heights[r];
-                        }
-            for (auto& h : heights) if (h < 0) h = 1;
-            for (auto& w : widths) if (w < 0) w = 1;
-            for (size_t r = 0; r < nrows; ++r)
-                for (size_t c = 0; c < ncols; ++c)
-                    if (e.rows[r][c]->resolved == R_BlockIdentity && heights[r] != widths[c]) {
-                        d_.error(e.rows[r][c]->span, fmt::format("I must be square here, but its place is {}×{}", heights[r], widths[c]));
-                        ok = false;
-                    }
-            if (!ok) break;
-            e.block_rows = heights;
-            e.block_cols = widths;
-            int64_t R = 0, C = 0;
-            for (int h : heights) R += h;
-            for (int w : widths) C += w;
-            if (R * C > limits::kMaxComponents) {
-                d_.error(e.span, fmt::format("this matrix has {}×{} entries: iqc allows at most {} per vector or matrix", R,
-                                             C, limits::kMaxComponents));
-                break;
-            }
-            t = C == 1 ? Type::vector(int(R)) : Type::matrix(int(R), int(C));
-            break;
-        }
+        case ExprKind::Matrix: t = check_matrix_literal(e); break;
         case ExprKind::Sum: {
             int n = sum_range(*e.args[0], e.text);
             if (n <= 0) {
@@ -1246,32 +1498,19 @@ Type Checker::check_kind(Expr& e) {
             e.aux = n;
             sums_.push_back({e.text, n});
             Type b = check(*e.args[0]);
+            if (e.args.size() > 1) {  // ∑_(j for condition)
+                Type c = check(*e.args[1]);
+                if (c.valid() && c.kind != Type::Bool) d_.error(e.args[1]->span, "expected a condition such as j ≠ i");
+            }
             sums_.pop_back();
             if (!b.valid()) break;
             if (!b.is_numeric()) d_.error(e.args[0]->span, "a sum needs numbers to add");
             else t = b.is_scalar() ? Type::scalar() : b;
             break;
         }
-        case ExprKind::Norm: {
-            Type a = check(*e.args[0]);
-            if (!a.valid()) break;
-            if (a.is_vector()) { e.resolved = R_Length; t = Type::scalar(); }
-            else if (a.is_scalar()) { e.resolved = R_AbsValue; t = Type::scalar(); }
-            else d_.error(e.span, fmt::format("the norm ‖·‖ of {} is not supported (vectors and scalars only)", a.str()));
-            break;
-        }
-        case ExprKind::Abs: {
-            Type a = check(*e.args[0]);
-            if (!a.valid()) break;
-            if (a.is_matrix()) {
-                if (a.rows != a.cols) d_.error(e.span, fmt::format("the determinant |·| needs a square matrix, not {}", a.str()));
-                else { e.resolved = R_Det; t = Type::scalar(); }
-            } else if (a.is_numeric()) {
-                e.resolved = R_AbsValue;
-                t = a.is_scalar() ? Type::scalar() : a;
-            }
-            break;
-        }
+        case ExprKind::Norm:
+        case ExprKind::Abs: t = check_norm(e); break;
+        case ExprKind::Inner: t = check_inner(e); break;
         case ExprKind::Floor:
         case ExprKind::Ceil:
         case ExprKind::Sqrt: {
@@ -1322,6 +1561,296 @@ Type Checker::check_kind(Expr& e) {
             if (ok) t = common;
             break;
         }
+    }
+    return t;
+}
+
+// A subscripted value: p_1 (a component), A_2,3 / A_2,* / A_*,1 (an entry, a row, a column), x_1 or x_i (an
+// element of a sequence, then optionally its component: x_i,2). A subscript is a whole number, an enclosing
+// ∑'s index, or a ℤ value known only when running (a_b, b ∈ ℤ; counted from 0 for `ℤ index`).
+Type Checker::check_index(Expr& e) {
+    if (e.args[0]->kind == ExprKind::Name && e.args[0]->text == "I" && !defines("I")) return check_block(e);  // I_n
+    if (e.args[0]->kind == ExprKind::Name && m_.find_sequence(e.args[0]->text) >= 0 &&
+        !(scope_ && scope_->locals.count(e.args[0]->text)))
+        return check_sequence_index(e);
+    allow_sequence_ = e.args[0]->kind == ExprKind::Name;
+    Type a = check(*e.args[0]);
+    allow_sequence_ = false;
+    if (!a.valid()) return {};
+    std::vector<int> idx;
+    bool ok = true;
+    for (auto& it : e.indices) {
+        if (!it.expr) {
+            it.value = -1;
+            idx.push_back(-1);
+            continue;
+        }
+        if (it.expr->kind == ExprKind::Name &&
+            std::any_of(sums_.begin(), sums_.end(), [&](auto& s) { return s.first == it.expr->text; })) {
+            check(*it.expr);
+            it.value = -2;  // bound by the enclosing ∑ (its range fits: see sum_range)
+            idx.push_back(0);
+            continue;
+        }
+        auto c = const_eval(*it.expr);
+        if (!c && a.is_array() && &it == &e.indices[0] && it.expr->kind == ExprKind::Name && !defines(it.expr->text) &&
+            !m_.values.count(it.expr->text) && !assigns_.count(it.expr->text) && it.expr->text != "π") {
+            const std::string& x = e.args[0]->text;
+            auto& err = d_.error(it.span, fmt::format("the index '{}' of {}_{} is not bound: use {}_{} inside ∑_{} or an "
+                                                      "element-wise definition (y_{} = …), or an element such as {}_1",
+                                                      it.expr->text, x, it.expr->text, x, it.expr->text, it.expr->text,
+                                                      it.expr->text, x));
+            if (int pi = m_.find_param(x); pi >= 0)
+                Diagnostics::note(err, m_.params[size_t(pi)].span,
+                                  fmt::format("{}_{} declares the sequence {}; to name one parameter {}_{}, write `{}_{}`", x,
+                                              m_.params[size_t(pi)].seq_index, x, x, it.expr->text, x, it.expr->text));
+            ok = false;
+            continue;
+        }
+        if (!c) {
+            Type it_type = check(*it.expr);
+            if (it_type.kind == Type::Integer) {  // known when running: a_b with b ∈ ℤ
+                it.value = -3;
+                it.zero_based = zero_based(*it.expr);
+                idx.push_back(0);
+                continue;
+            }
+            if (it_type.valid())
+                d_.error(it.span, fmt::format("a subscript must be a whole number (p_1) or a ℤ value (p_k with k ∈ ℤ), not {}",
+                                              it_type.str()));
+            ok = false;
+            continue;
+        }
+        if (c->size() != 1 || (*c)[0] != std::floor((*c)[0])) {
+            d_.error(it.span, "a subscript must be a whole number such as p_1 (or * for a whole row or column)");
+            ok = false;
+            continue;
+        }
+        if (!((*c)[0] >= 1)) {
+            d_.error(it.span, fmt::format("subscript {} is out of range: subscripts start at 1", (*c)[0]));
+            ok = false;
+            continue;
+        }
+        if ((*c)[0] > limits::kMaxComponents) {
+            d_.error(it.span, fmt::format("subscript {} is out of range: {} has fewer components", (*c)[0], a.str()));
+            ok = false;
+            continue;
+        }
+        it.value = int((*c)[0]) - 1;
+        idx.push_back(it.value);
+    }
+    if (!ok) return {};
+    size_t first = 0;
+    Type base = a;
+    if (a.is_array()) {  // a sequence: its first subscript picks the element
+        if (idx[0] == -1) {
+            d_.error(e.indices[0].span, fmt::format("an element of the sequence '{}' is chosen by a subscript, not *", e.args[0]->text));
+            return {};
+        }
+        if (e.indices[0].value >= a.count) {
+            d_.error(e.indices[0].span, fmt::format("subscript {} is out of range: the sequence '{}' has {} elements (subscripts "
+                                                    "start at 1)", e.indices[0].value + 1, e.args[0]->text, a.count));
+            return {};
+        }
+        if (e.indices.size() == 1) return a.element();
+        base = a.element();
+        first = 1;
+    }
+    size_t n = e.indices.size() - first;
+    auto value = [&](size_t k) { return idx[first + k]; };
+    auto dynamic = [&](size_t k) { return e.indices[first + k].value == -3; };
+    auto range_error = [&](size_t k, int size, const char* what) {
+        d_.error(e.indices[first + k].span, fmt::format("subscript {} is out of range: {} has {} {} (subscripts start at 1)",
+                                                        e.indices[first + k].value + 1, base.str(), size, what));
+    };
+    if (base.is_vector()) {
+        if (n != 1 || value(0) < 0) d_.error(e.span, fmt::format("a vector ({}) takes one subscript", base.str()));
+        else if (value(0) >= base.rows) range_error(0, base.rows, "components");
+        else return Type::scalar();
+        return {};
+    }
+    if (base.is_matrix()) {
+        if (n != 2) {
+            d_.error(e.span, fmt::format("a matrix ({}) takes two subscripts, as in A_2,3 or A_(2,3)", base.str()));
+        } else if (value(0) >= base.rows) {
+            range_error(0, base.rows, "rows");
+        } else if (value(1) >= base.cols) {
+            range_error(1, base.cols, "columns");
+        } else if ((dynamic(0) || dynamic(1)) && (value(0) < 0 || value(1) < 0)) {
+            d_.error(e.span, "a row or a column (A_k,*) is chosen by a whole number, not a ℤ value known only when running");
+        } else if (value(0) < 0 && value(1) < 0) {
+            return base;
+        } else if (value(0) < 0) {
+            return Type::vector(base.rows);
+        } else if (value(1) < 0) {
+            return Type::vector(base.cols);
+        } else {
+            return Type::scalar();
+        }
+        return {};
+    }
+    d_.error(e.span, fmt::format("cannot subscript {}", base.str()));
+    return {};
+}
+
+// [a b; c d]: entries may be scalars, vectors (columns) or matrices (blocks); 0, 1 and I are blocks sized
+// from their neighbours in the same block row and column.
+Type Checker::check_matrix_literal(Expr& e) {
+    size_t ncols = e.rows[0].size();
+    bool ok = true;
+    size_t nrows = e.rows.size();
+    std::vector<std::vector<std::pair<int, int>>> size(nrows);
+    for (size_t r = 0; r < nrows; ++r) {
+        auto& row = e.rows[r];
+        if (row.size() != ncols) {
+            d_.error(Span::join(row.front()->span, row.back()->span),
+                     fmt::format("this row has {} entr{} but the first row has {}", row.size(),
+                                 row.size() == 1 ? "y" : "ies", ncols));
+            ok = false;
+        }
+        for (auto& item : row) {
+            bool declared_I = m_.find_param("I") >= 0 || assigns_.count("I") || (scope_ && scope_->locals.count("I"));
+            if (item->kind == ExprKind::Number && (item->number == 0 || item->number == 1)) {
+                item->resolved = item->number == 0 ? R_BlockZero : R_BlockOnes;
+                item->type = Type::scalar();
+                size[r].push_back({-1, -1});
+                continue;
+            }
+            if (item->kind == ExprKind::Name && item->text == "I" && !declared_I) {
+                item->resolved = R_BlockIdentity;
+                size[r].push_back({-1, -1});
+                continue;
+            }
+            Type it = check(*item);
+            if (!it.valid()) { ok = false; size[r].push_back({1, 1}); continue; }
+            if (it.is_scalar()) size[r].push_back({1, 1});
+            else if (it.is_vector()) size[r].push_back({it.rows, 1});
+            else if (it.is_matrix()) size[r].push_back({it.rows, it.cols});
+            else { d_.error(item->span, fmt::format("a matrix entry cannot be a {}", it.str())); ok = false; size[r].push_back({1, 1}); }
+        }
+    }
+    if (!ok) return {};
+    std::vector<int> heights(nrows, -1), widths(ncols, -1);
+    for (size_t r = 0; r < nrows; ++r)
+        for (size_t c = 0; c < ncols; ++c) {
+            auto [h, w] = size[r][c];
+            if (h >= 0) {
+                if (heights[r] >= 0 && heights[r] != h) {
+                    d_.error(e.rows[r][c]->span, fmt::format("this block has {} rows but the blocks beside it have {}", h, heights[r]));
+                    ok = false;
+                }
+                heights[r] = h;
+            }
+            if (w >= 0) {
+                if (widths[c] >= 0 && widths[c] != w) {
+                    d_.error(e.rows[r][c]->span, fmt::format("this block has {} columns but the blocks above or below it have {}", w, widths[c]));
+                    ok = false;
+                }
+                widths[c] = w;
+            }
+        }
+    // I is square: it can size its row from its column and the other way round.
+    for (int pass = 0; pass < 2; ++pass)
+        for (size_t r = 0; r < nrows; ++r)
+            for (size_t c = 0; c < ncols; ++c)
+                if (e.rows[r][c]->resolved == R_BlockIdentity) {
+                    if (heights[r] < 0 && widths[c] >= 0) heights[r] = widths[c];
+                    if (widths[c] < 0 && heights[r] >= 0) widths[c] = heights[r];
+                }
+    for (auto& h : heights) if (h < 0) h = 1;
+    for (auto& w : widths) if (w < 0) w = 1;
+    for (size_t r = 0; r < nrows; ++r)
+        for (size_t c = 0; c < ncols; ++c)
+            if (e.rows[r][c]->resolved == R_BlockIdentity && heights[r] != widths[c]) {
+                d_.error(e.rows[r][c]->span, fmt::format("I must be square here, but its place is {}×{}", heights[r], widths[c]));
+                ok = false;
+            }
+    if (!ok) return {};
+    e.block_rows = heights;
+    e.block_cols = widths;
+    int64_t R = 0, C = 0;
+    for (int h : heights) R += h;
+    for (int w : widths) C += w;
+    if (R * C > limits::kMaxComponents) {
+        d_.error(e.span, fmt::format("this matrix has {}×{} entries: iqc allows at most {} per vector or matrix", R,
+                                     C, limits::kMaxComponents));
+        return {};
+    }
+    return C == 1 ? Type::vector(int(R)) : Type::matrix(int(R), int(C));
+}
+
+// {a, b, c}: a sequence of values of one type.
+Type Checker::check_sequence_literal(Expr& e) {
+    Type elem;
+    for (auto& item : e.args) {
+        Type t = check(*item);
+        if (!t.valid()) return {};
+        if (t.is_scalar()) t = Type::scalar();
+        if (!t.is_numeric()) {
+            d_.error(item->span, fmt::format("a sequence's elements are numbers, vectors or matrices, not {}", t.str()));
+            return {};
+        }
+        if (elem.valid() && elem != t) {
+            d_.error(item->span, fmt::format("the elements of a sequence must have one type: {} and {}", elem.str(), t.str()));
+            return {};
+        }
+        elem = t;
+    }
+    return Type::array(elem, int(e.args.size()));
+}
+
+// Whether a ℤ subscript counts from 0: an I♥LA `ℤ index` (b ∈ ℤ index), or one plus or minus a count
+// (b + 1); the difference of two indices is a count again.
+bool Checker::zero_based(const Expr& x) const {
+    switch (x.kind) {
+        case ExprKind::Name:
+            if (int pi = m_.find_param(x.text); pi >= 0 && (x.resolved == R_Param || x.resolved == R_Capture))
+                return m_.params[size_t(pi)].zero_based;
+            return x.resolved == R_Value && zero_based_values_.count(x.text);
+        case ExprKind::Binary:
+            if (x.op == BinOp::Add) return zero_based(*x.args[0]) != zero_based(*x.args[1]);
+            if (x.op == BinOp::Sub) return zero_based(*x.args[0]) && !zero_based(*x.args[1]);
+            return false;
+        default: return false;
+    }
+}
+
+// An element-wise definition: q_i = p_i² (a vector, or a sequence when the elements are vectors or
+// matrices), B_ij = A_ij A_ij (a matrix), D_ii = v_i (a diagonal matrix). Each index runs over the size of
+// what it subscripts on the right side.
+Type Checker::check_elementwise(const Stmt& s) {
+    std::vector<int> ranges;
+    for (const auto& [letter, span] : s.elem_indices) {
+        int n = sum_range(*s.value, letter);
+        if (n == 0)
+            d_.error(span, fmt::format("cannot tell the range of {}: subscript a vector, a matrix or a sequence with {} on "
+                                       "the right side", letter, letter));
+        if (n <= 0) return {};
+        ranges.push_back(n);
+    }
+    size_t pushed = 0;
+    for (size_t k = 0; k < ranges.size(); ++k)
+        if (k == 0 || s.elem_indices[k].first != s.elem_indices[0].first) sums_.push_back({s.elem_indices[k].first, ranges[k]}), ++pushed;
+    Type b = check(*s.value);
+    sums_.resize(sums_.size() - pushed);
+    if (!b.valid()) return {};
+    if (!b.is_numeric()) {
+        d_.error(s.value->span, "an element-wise definition needs numbers");
+        return {};
+    }
+    Type t;
+    if (ranges.size() == 1) {
+        t = b.is_scalar() ? Type::vector(ranges[0]) : Type::array(b, ranges[0]);
+    } else if (!b.is_scalar()) {
+        d_.error(s.value->span, fmt::format("the entries of the matrix {} must be numbers, not {}", s.name, b.str()));
+        return {};
+    } else {
+        t = ranges[1] == 1 ? Type::vector(ranges[0]) : Type::matrix(ranges[0], ranges[1]);
+    }
+    if (t.components() > limits::kMaxComponents) {
+        d_.error(s.name_span, fmt::format("'{}' would have {} components: iqc allows at most {} per vector or matrix", s.name,
+                                          t.components(), limits::kMaxComponents));
+        return {};
     }
     return t;
 }
@@ -1425,10 +1954,15 @@ int Checker::sum_range(const Expr& body, const std::string& index) {
                 const auto& it = x.indices[k];
                 if (!it.expr || it.expr->kind != ExprKind::Name || it.expr->text != index) continue;
                 // The size of the subscripted thing: check it (its type does not depend on the index).
+                allow_sequence_ = x.args[0]->kind == ExprKind::Name;
                 Type bt = check(const_cast<Expr&>(*x.args[0]));
+                allow_sequence_ = false;
+                size_t pos = k;
+                if (bt.is_array() && k > 0) bt = bt.element(), pos = k - 1;  // x_i,j: a component of an element
                 int size = 0;
-                if (bt.is_vector()) size = bt.rows;
-                else if (bt.is_matrix()) size = k == 0 ? bt.rows : bt.cols;
+                if (bt.is_array()) size = bt.count;
+                else if (bt.is_vector()) size = bt.rows;
+                else if (bt.is_matrix()) size = pos == 0 ? bt.rows : bt.cols;
                 if (size == 0) continue;
                 if (n && n != size && !bad) {
                     d_.error(it.span, fmt::format("∑_{} runs over {} here but over {} elsewhere in the sum", index, size, n));
@@ -1459,8 +1993,11 @@ void Checker::run() {
                 if (g.leader == s) check_group(g);
             continue;
         }
-        Type t = check(*s->value);
-        if (s->kind == StmtKind::Assign && t.valid()) m_.values[s->name] = t;
+        Type t = s->elem_indices.empty() ? check(*s->value) : check_elementwise(*s);
+        if (s->kind == StmtKind::Assign && t.valid()) {
+            m_.values[s->name] = t;
+            if (t.kind == Type::Integer && zero_based(*s->value)) zero_based_values_.insert(s->name);
+        }
     }
     for (auto& f : m_.functions) check_function(f, f.stmt->name_span);
     // Outputs the module kind requires.

@@ -47,6 +47,15 @@ enum Resolved : int {
     R_SeqFirst,   // z_1: the sequence's first element, aux = sequence
     R_SeqLast,    // z_(N+1): the element the recurrence ends with, aux = sequence
     R_ImportModule,  // call of a whole module imported as a function, aux = index in CheckedModule::imports
+    R_Constant,   // a built-in constant imported by name (e from trigonometry), aux = builtin id
+    R_MatPow,     // matrix power A^k, aux = k (a whole number; -1 is the inverse)
+    R_Norm1,      // ‖v‖_1
+    R_NormMax,    // ‖v‖_∞
+    R_NormP,      // ‖v‖_p (args[1] is p)
+    R_NormMatrix, // ‖v‖_M = √(vᵀ M v)
+    R_Frobenius,  // ‖A‖, ‖A‖_F
+    R_Norm0,      // ‖v‖_0: the number of components that are not 0
+    R_Nuclear,    // ‖A‖_*: the sum of A's singular values
 };
 
 struct ParamInfo {
@@ -58,12 +67,17 @@ struct ParamInfo {
     std::vector<double> value;   // default: given, else the bounds' midpoint, else 0
     bool has_default = false;
     std::string description;
+    std::string seq_index;    // a sequence x_i ∈ ℝ³: its index letter (the type is then an array)
+    bool zero_based = false;  // `b ∈ ℤ index`: an index counting from 0
 };
 
 struct CheckedModule;
 
 struct LocalFunction {
     const ast::Stmt* stmt = nullptr;
+    // A function parameter of the module (f: ℝ → ℝ) bound to a definition given from outside: its declared
+    // type, which types the definition's parameters and result.
+    const ast::TypeSpec* declared = nullptr;
     std::vector<std::pair<std::string, Type>> params;
     Type result;
     // Module values and parameters the body uses; passed as extra arguments after the declared ones.
@@ -122,6 +136,7 @@ struct CheckedModule {
     // From the module's comment lines: `# lipschitz: K` (D changes at most K per unit: the renderer divides
     // by K so marching stays safe) and `# exact` / `# bound` (what D is; for documentation and tests).
     double lipschitz = 1;
+    std::vector<std::shared_ptr<const ast::Module>> bound_functions;  // keeps given definitions alive
     std::string exactness;
     Type primary_type;
     // The parameters the renderer binds (the only rules for them: the scene compiler uses these): a shape's
@@ -141,6 +156,9 @@ struct CheckOptions {
     std::vector<std::pair<std::string, std::string>> implicit_imports;  // name, module
     // Types of parameters known from outside (e.g. `iqc eval --set`), which bind symbolic sizes (ℝ^n).
     std::map<std::string, Type> given_types;
+    // Definitions of the module's function parameters (f: ℝ → ℝ), given from outside (`iqc eval --set
+    // 'f(x)=x²'`): each a parsed module whose first statement defines the function.
+    std::map<std::string, std::shared_ptr<const ast::Module>> given_functions;
     // The value of a constant expression that const_eval cannot fold (√2, sin(1), 2^(1/3), …) for defaults
     // and bounds: the scene layer lowers it and runs the evaluator (one meaning for every value). Empty, or
     // nullopt: not a constant.

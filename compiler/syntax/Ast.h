@@ -25,7 +25,7 @@ enum class ExprKind {
     Index,      // args[0] subscripted by indices (1-based; `*` is a whole row/column)
     Vector,     // (a, b, ...) — concatenation of scalars and vectors
     Matrix,     // [a b; c d]
-    Norm,       // ‖args[0]‖
+    Norm,       // ‖args[0]‖, with a subscript: text "∞", "*" or "F", or args[1] (‖v‖_1, ‖v‖_p, ‖v‖_M)
     Abs,        // |args[0]|
     Floor,      // ⌊args[0]⌋
     Ceil,       // ⌈args[0]⌉
@@ -34,6 +34,9 @@ enum class ExprKind {
     Logic,      // and / or
     Piecewise,  // cases: values[i] if conds[i]; otherwise
     Sum,        // ∑_text args[0]: a sum over the index `text` (range from the sizes it subscripts)
+    Inner,      // ⟨args[0], args[1]⟩ (or <a, b>), with a subscript args[2]: ⟨u, v⟩_M = vᵀ M u
+    Block,      // a sized block: text "0" (zeros) or "1" (ones, also 𝟙); indices: its sizes (0_2,3, 1_n, 𝟙₃)
+    Sequence,   // {a, b, c}: a sequence literal (an iqc extension, for values and defaults of x_i ∈ ℝ³)
 };
 
 enum class BinOp {
@@ -44,6 +47,10 @@ enum class BinOp {
     Div,        // a / b, a ÷ b
     Hadamard,   // a ∘ b
     Cross,      // a × b
+    Solve,      // A \ b: the x with A x = b
+    Kronecker,  // A ⊗ B
+    Frobenius,  // A : B, the sum of the elementwise products
+    PlusMinus,  // a ± b, only in conditions: x = a ± b is x = a + b or x = a - b
     Eq, Neq, Lt, Le, Gt, Ge,
     And, Or,
 };
@@ -56,7 +63,10 @@ using ExprPtr = std::unique_ptr<Expr>;
 struct IndexItem {
     ExprPtr expr;     // null for `*`
     Span span;
-    int value = 0;    // 0-based index, filled by the checker (-1 for `*`)
+    // Filled by the checker: the 0-based index; -1 for `*`, -2 for an enclosing ∑'s (or an element-wise
+    // definition's) index, -3 for a ℤ value known only when running (a_b with b ∈ ℤ).
+    int value = 0;
+    bool zero_based = false;  // -3: the value is an I♥LA `ℤ index` (counts from 0), not a position (from 1)
 };
 
 struct Expr {
@@ -65,6 +75,7 @@ struct Expr {
     double number = 0;
     std::string text;  // number as written; the name for Name/Call
     Span name_span;
+    Span word_span;    // Name/Call split out of a longer letter run: that run (see Token::word)
     BinOp op = BinOp::Add;
     std::vector<ExprPtr> args;
     std::vector<std::vector<ExprPtr>> rows;  // Matrix rows; Piecewise: {value, condition} per case
@@ -84,6 +95,7 @@ struct TypeSpec {
     enum Kind { Scalar, Integer, Vector, Matrix, Function } kind = Scalar;
     int rows = 1, cols = 1;
     std::string sym_rows, sym_cols;  // symbolic sizes (`ℝ^n`)
+    ExprPtr rows_expr, cols_expr;    // sizes computed from symbolic ones (`ℝ^((p+1)×k)`): rows/cols are then 0
     std::vector<TypeSpec> params;    // Function
     std::unique_ptr<TypeSpec> result;
     Span span;
@@ -96,7 +108,10 @@ struct Interval {
 
 struct Decl {
     std::vector<std::pair<std::string, Span>> names;
+    // Per name: the index of a sequence (`x_i ∈ ℝ³` declares the sequence x, indexed by i), else "".
+    std::vector<std::string> indices;
     TypeSpec type;
+    bool zero_based = false;  // `b ∈ ℤ index`: I♥LA's index type, which counts from 0
     std::vector<Interval> bounds;  // `[a,b]x[c,d]`: one interval per component (type is then derived)
     ExprPtr default_value;
     Span default_span;
@@ -119,6 +134,9 @@ struct Stmt {
     std::string from;                                   // Import: module
     Span from_span;
     ExprPtr index;                  // SeqInit / Recurrence: the subscript on the left
+    // Assign with subscripts on the left: an element-wise definition, q_i = p_i² or B_ij = A_ij A_ij (one or
+    // two index letters; the same letter twice, D_ii, defines a diagonal matrix).
+    std::vector<std::pair<std::string, Span>> elem_indices;
     std::string loop_var;           // Recurrence: the index variable
     Span loop_var_span;
     ExprPtr range_lo, range_hi;     // Recurrence: var ∈ lo..hi

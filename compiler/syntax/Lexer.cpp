@@ -202,6 +202,14 @@ struct Lexer {
                 continue;
             }
             if (const char* f = fraction(cp)) { push(Tok::Fraction, b, uint32_t(j), f); i = j; continue; }
+            if (cp == 0x1D7D9) { push(Tok::Number, b, uint32_t(j), "𝟙"); i = j; continue; }  // 𝟙: I♥LA's ones block
+            if (cp == 0x23A1) { push(Tok::LBracket, b, uint32_t(j)); i = j; continue; }     // ⎡ opens a matrix
+            if (cp == 0x23A6) { push(Tok::RBracket, b, uint32_t(j)); i = j; continue; }     // ⎦ closes it
+            if (cp == 0x23A4 || cp == 0x23A2 || cp == 0x23A5 || cp == 0x23A3) {               // ⎤ ⎢ ⎥ ⎣: its sides
+                i = j;
+                space = true;
+                continue;
+            }
             Tok k = Tok::Unknown;
             switch (cp) {
                 case '+': k = Tok::Plus; break;
@@ -243,6 +251,12 @@ struct Lexer {
                 case 0x211D: k = Tok::Reals; break;
                 case 0x2124: k = Tok::Integers; break;
                 case 0x2026: k = Tok::Ellipsis; break;
+                case '\\': k = Tok::Backslash; break;
+                case 0x2297: k = Tok::Kronecker; break;
+                case 0x27E8: k = Tok::LAngle; break;
+                case 0x27E9: k = Tok::RAngle; break;
+                case 0x221E: k = Tok::Infinity; break;
+                case 0xB1: k = Tok::PlusMinus; break;
                 default: break;
             }
             if (utf8::is_combining(cp) || cp == 0xFEFF || cp == 0x200B) {  // stray mark or BOM: whitespace

@@ -4,11 +4,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <fmt/format.h>
 #include <limits>
 
 #include "source/Limits.h"
 #include "syntax/WordSplit.h"
+
+#include "sema/Builtins.h"
 
 namespace iqc {
 
@@ -24,6 +27,10 @@ const char* ast::binop_spelling(BinOp op) {
         case BinOp::Div: return "/";
         case BinOp::Hadamard: return "∘";
         case BinOp::Cross: return "×";
+        case BinOp::Solve: return "\\";
+        case BinOp::Kronecker: return "⊗";
+        case BinOp::Frobenius: return ":";
+        case BinOp::PlusMinus: return "±";
         case BinOp::Eq: return "=";
         case BinOp::Neq: return "≠";
         case BinOp::Lt: return "<";
@@ -39,7 +46,7 @@ const char* ast::binop_spelling(BinOp op) {
 namespace {
 
 const std::set<std::string> kKeywords = {"where", "given", "from", "if", "otherwise", "and", "or", "in",
-                                         "default", "shape", "material", "scalar", "vector", "matrix", "for"};
+                                         "default", "shape", "material", "scalar", "vector", "matrix", "for", "sum"};
 
 bool is_name_token(const Token& t) { return t.kind == Tok::Word || t.kind == Tok::Backtick; }
 
@@ -84,9 +91,18 @@ std::set<std::string> prescan(const std::vector<Token>& toks) {
                 last = k;
                 std::string n = toks[k].text;
                 if (k + 2 < line_end && toks[k + 1].kind == Tok::Underscore && !toks[k + 1].space_before &&
-                    (is_name_token(toks[k + 2]) || toks[k + 2].kind == Tok::Number) && !toks[k + 2].space_before &&
-                    !sequences.count(n)) {
-                    names.push_back(n);
+                    (toks[k + 2].kind == Tok::Word || toks[k + 2].kind == Tok::Backtick) && !toks[k + 2].space_before) {
+                    // x_i ∈ ℝ³ (a sequence), q_i = … or B_i,j = … (element-wise): the name is x, q or B.
+                    k += 2;
+                    if (k + 2 < line_end && toks[k + 1].kind == Tok::Comma && !toks[k + 1].space_before &&
+                        toks[k + 2].kind == Tok::Word && !toks[k + 2].space_before)
+                        k += 2;
+                } else if (k + 1 < line_end && toks[k + 1].kind == Tok::Sub && !toks[k + 1].space_before &&
+                           !std::isdigit(static_cast<unsigned char>(toks[k + 1].text[0]))) {
+                    k += 1;  // xᵢ
+                } else if (k + 2 < line_end && toks[k + 1].kind == Tok::Underscore && !toks[k + 1].space_before &&
+                           toks[k + 2].kind == Tok::Number && !toks[k + 2].space_before && !sequences.count(n)) {
+                    names.push_back(n);  // x_1 = … and x_1 ∈ ℝ are names of their own (an iqc extension)
                     n += "_" + toks[k + 2].text;
                     k += 2;
                 }
@@ -148,6 +164,13 @@ std::vector<Token> split_words(const std::vector<Token>& toks, const std::set<st
             piece.span = {t.span.file, uint32_t(t.span.begin + b), uint32_t(t.span.begin + b + len)};
             piece.space_before = first && t.space_before;
             piece.line_start = first && t.line_start;
+            if (len < t.text.size()) {
+                piece.word = t.span;
+                // vec3(…), mat4(…): the digit belongs to the GLSL word.
+                if (i + 1 < toks.size() && toks[i + 1].kind == Tok::Number && !toks[i + 1].space_before &&
+                    toks[i + 1].text.size() == 1)
+                    piece.word.end = toks[i + 1].span.end;
+            }
             out.push_back(std::move(piece));
             first = false;
         }
@@ -175,6 +198,8 @@ private:
     size_t pos_ = 0;
     std::vector<Ctx> ctx_{Ctx::Top};
     bool failed_ = false;  // an error in the current statement: skip to its end
+    int in_condition_ = 0;  // inside a piecewise condition: `<` compares (elsewhere it may open ⟨u, v⟩)
+    bool colon_ends_ = false;  // a default's value: `:` starts the description, not A : B
     int depth_ = 0;        // grammar nesting (limits::kMaxNesting)
 
     struct Bail {};  // unwinds to the statement loop after an error
@@ -256,6 +281,13 @@ private:
         }
     }
     Span prev_span() const { return toks_[pos_ > 0 ? pos_ - 1 : 0].span; }
+    // The letter run the current token starts (a word split into letters, or the token itself).
+    Span word_span() const { const Token& t = toks_[pos_]; return t.word.end > t.word.begin ? t.word : t.span; }
+    bool word_is(const char* w) const { return sm_.slice(word_span()) == w; }
+    void skip_word() {
+        Span w = word_span();
+        while (toks_[pos_].kind == Tok::Word && toks_[pos_].span.begin >= w.begin && toks_[pos_].span.end <= w.end) ++pos_;
+    }
     void skip_line() {
         while (toks_[pos_].kind != Tok::Newline && toks_[pos_].kind != Tok::End) ++pos_;
     }
@@ -290,13 +322,18 @@ private:
     Stmt parse_statement();
     bool indexed_assignment();
     Stmt parse_indexed_assignment(std::pair<std::string, Span> name, Span start);
+    bool elementwise_indices(Stmt& s);
     Decl parse_decl();
-    TypeSpec parse_type();
+    TypeSpec parse_type(bool allow_function = true);
+    bool compound_dim() const;
+    ExprPtr parse_dim_expr();
     std::vector<std::pair<std::string, Span>> parse_name_list();
     std::pair<std::string, Span> parse_name();
 
     ExprPtr parse_condition();
     ExprPtr parse_comparison();
+    ExprPtr parse_atom_comparison();
+    bool parenthesized_condition() const;
     ExprPtr parse_expr();
     ExprPtr parse_unary();
     ExprPtr parse_mult();
@@ -304,9 +341,18 @@ private:
     ExprPtr parse_elem();
     ExprPtr parse_power();
     ExprPtr parse_postfix(bool exponent = false);
+    ExprPtr parse_call(ExprPtr callee);
+    bool function_power(ExprPtr& e);
+    bool log_base(ExprPtr& e);
     ExprPtr parse_primary();
     ExprPtr parse_matrix(Span open);
     ExprPtr parse_piecewise(Span open);
+    ExprPtr parse_sequence_literal(Span open, ExprPtr first);
+    ExprPtr parse_inner(const Token& open);
+    ExprPtr parse_sum(Span start);
+    ExprPtr parse_sized_block(ExprPtr symbol);
+    bool ascii_inner_ahead() const;
+    void parse_norm_subscript(Expr& norm);
     ExprPtr parse_delimited(ExprKind kind, Tok close, Span open, const char* what);
     bool starts_juxtaposed_operand();
     std::string statement_text(Span s) const;
@@ -347,12 +393,16 @@ bool Parser::line_is_decl() {
     while (true) {
         if (!is_name_token(toks_[k])) return false;
         ++k;
-        if (toks_[k].kind == Tok::Underscore && k + 1 < toks_.size() && is_name_token(toks_[k + 1]) &&
-            known_.count(toks_[k - 1].text + "_" + toks_[k + 1].text))
+        // x_i (a sequence), x_1 and `k_d` (names): the subscript is part of the declared name.
+        if (toks_[k].kind == Tok::Underscore && !toks_[k].space_before && k + 1 < toks_.size() &&
+            (is_name_token(toks_[k + 1]) || toks_[k + 1].kind == Tok::Number) && !toks_[k + 1].space_before) {
             k += 2;
-        else if (toks_[k].kind == Tok::Underscore && k + 1 < toks_.size() && toks_[k + 1].kind == Tok::Number &&
-                 known_.count(toks_[k - 1].text + "_" + toks_[k + 1].text))
-            k += 2;
+            while (toks_[k].kind == Tok::Word && toks_[k].word.end > toks_[k].word.begin &&
+                   toks_[k].word.begin == toks_[k - 1].word.begin)
+                ++k;  // the other letters of a word such as `ij`
+        } else if (toks_[k].kind == Tok::Sub && !toks_[k].space_before) {
+            ++k;
+        }
         if (toks_[k].kind == Tok::Comma) { ++k; continue; }
         break;
     }
@@ -370,8 +420,71 @@ bool Parser::line_is_import() {
     return is_kw(toks_[k], "from");
 }
 
+// Whether the size at the current token is arithmetic on sizes (`p+1`, `2k`, `(p+1)`), not one number or name.
+bool Parser::compound_dim() const {
+    const Token& t = toks_[pos_];
+    if (t.kind == Tok::LParen) return true;
+    if (t.kind != Tok::Number && !is_name_token(t)) return false;
+    const Token& n = toks_[pos_ + 1];
+    return !(n.kind == Tok::Cross || n.kind == Tok::Comma || n.kind == Tok::RParen || (n.kind == Tok::Word && n.text == "x"));
+}
+
+// dim_expr := dim_term {(+ | -) dim_term}     dim_term := dim_factor {[⋅ | * | /] dim_factor}
+// dim_factor := NUMBER | NAME | ( dim_expr )   (`x` and `×` separate the two sizes)
+ExprPtr Parser::parse_dim_expr() {
+    std::function<ExprPtr()> expr, term, factor;
+    factor = [&]() -> ExprPtr {
+        const Token& t = cur();
+        if (t.kind == Tok::Number) {
+            auto e = make(ExprKind::Number, t.span);
+            e->number = std::strtod(t.text.c_str(), nullptr);
+            e->text = t.text;
+            advance();
+            return e;
+        }
+        if (is_name_token(t) && !(t.kind == Tok::Word && t.text == "x")) {
+            auto e = make(ExprKind::Name, t.span);
+            e->text = t.text;
+            e->name_span = t.span;
+            advance();
+            return e;
+        }
+        if (t.kind == Tok::LParen) {
+            limits::DepthGuard depth(depth_);
+            nest(depth, t.span);
+            advance();
+            ExprPtr e = expr();
+            e->span = Span::join(t.span, expect(Tok::RParen, "to close the size").span);
+            return e;
+        }
+        fail(t.span, fmt::format("expected a size (a number, a size symbol or arithmetic on them), found {}", describe(t)));
+    };
+    term = [&]() {
+        ExprPtr lhs = factor();
+        while (true) {
+            BinOp op = BinOp::Juxtapose;
+            if (at(Tok::Dot) || at(Tok::Star)) advance(), op = BinOp::Star;
+            else if (at(Tok::Slash) || at(Tok::Divide)) advance(), op = BinOp::Div;
+            else if (!(at(Tok::Number) || at(Tok::LParen) || (is_name_token(cur()) && !(at(Tok::Word) && cur().text == "x"))))
+                break;
+            lhs = binary(op, std::move(lhs), factor());
+        }
+        return lhs;
+    };
+    expr = [&]() {
+        ExprPtr lhs = term();
+        while (at(Tok::Plus) || at(Tok::Minus)) {
+            BinOp op = at(Tok::Plus) ? BinOp::Add : BinOp::Sub;
+            advance();
+            lhs = binary(op, std::move(lhs), term());
+        }
+        return lhs;
+    };
+    return expr();
+}
+
 // type := ℝ [SUPER | ^ dims] | ℤ | R [^ dims] | Z | scalar | vector(n) | matrix(m, n) | type {, type} → type
-TypeSpec Parser::parse_type() {
+TypeSpec Parser::parse_type(bool allow_function) {
     limits::DepthGuard depth(depth_);
     nest(depth, cur().span);
     TypeSpec ts;
@@ -399,9 +512,11 @@ TypeSpec Parser::parse_type() {
         if (!accept(Tok::Caret)) return;
         if (accept(Tok::LParen)) {
             ctx_.push_back(Ctx::Paren);
-            parse_dim(ts.rows, ts.sym_rows);
+            if (compound_dim()) ts.rows_expr = parse_dim_expr(), ts.rows = 0;
+            else parse_dim(ts.rows, ts.sym_rows);
             if (accept(Tok::Cross) || (at(Tok::Word) && cur().text == "x" && (advance(), true)) || accept(Tok::Comma)) {
-                parse_dim(ts.cols, ts.sym_cols);
+                if (compound_dim()) ts.cols_expr = parse_dim_expr(), ts.cols = 0;
+                else parse_dim(ts.cols, ts.sym_cols);
                 ts.kind = TypeSpec::Matrix;
             } else {
                 ts.kind = TypeSpec::Vector;
@@ -414,6 +529,19 @@ TypeSpec Parser::parse_type() {
         }
         if (ts.kind == TypeSpec::Vector && ts.rows == 1 && ts.sym_rows.empty()) ts.kind = TypeSpec::Scalar;
     };
+    bool no_params = allow_function && ((at(Tok::LBrace) && peek_raw(1).kind == Tok::RBrace) ||
+                                        (at(Tok::Unknown) && cur().text == "∅"));
+    if (no_params) {  // {} → T, ∅ → T: a function of no arguments
+        if (at(Tok::LBrace)) advance();
+        advance();
+        if (!at(Tok::Arrow)) fail(cur().span, fmt::format("expected '→' after a function's empty argument list, found {}", describe(cur())));
+        advance();
+        TypeSpec f;
+        f.kind = TypeSpec::Function;
+        f.result = std::make_unique<TypeSpec>(parse_type(false));
+        f.span = Span::join(start, prev_span());
+        return f;
+    }
     if (accept(Tok::Reals) || (at(Tok::Word) && cur().text == "R" && (advance(), true))) {
         ts.kind = TypeSpec::Scalar;
         parse_dims();
@@ -445,7 +573,7 @@ TypeSpec Parser::parse_type() {
     }
     ts.span = Span::join(start, prev_span());
     // Function type: type {, type} → type
-    if (at(Tok::Comma) || at(Tok::Arrow)) {
+    if (allow_function && (at(Tok::Comma) || at(Tok::Arrow))) {
         size_t save = pos_;
         std::vector<TypeSpec> params;
         params.push_back(std::move(ts));
@@ -453,13 +581,13 @@ TypeSpec Parser::parse_type() {
         while (accept(Tok::Comma)) {
             if (!(at(Tok::Reals) || at(Tok::Integers) || at_kw("scalar") || at_kw("vector") || at_kw("matrix") ||
                   (at(Tok::Word) && (cur().text == "R" || cur().text == "Z")))) { ok = false; break; }
-            params.push_back(parse_type());
+            params.push_back(parse_type(false));
         }
         if (ok && accept(Tok::Arrow)) {
             TypeSpec f;
             f.kind = TypeSpec::Function;
             f.params = std::move(params);
-            f.result = std::make_unique<TypeSpec>(parse_type());
+            f.result = std::make_unique<TypeSpec>(parse_type(false));
             f.span = Span::join(start, prev_span());
             return f;
         }
@@ -473,7 +601,32 @@ TypeSpec Parser::parse_type() {
 Decl Parser::parse_decl() {
     Decl d;
     Span start = cur().span;
-    d.names = parse_name_list();
+    while (true) {
+        auto name = parse_name();  // x_1 and `k_d` are names; x_i is the sequence x with its index i
+        std::string index;
+        if (at(Tok::Underscore) && !cur().space_before && is_name_token(peek_raw(1)) && !peek_raw(1).space_before) {
+            advance();
+            const Token& t = advance();
+            Span sub = t.span;
+            index = t.text;
+            if (t.word.end > t.word.begin) {
+                sub = t.word;
+                auto& e = diags_.error(Span::join(name.second, sub),
+                                       fmt::format("the sequence '{}' needs a one-letter index, not '{}'", name.first,
+                                                   std::string(sm_.slice(t.word))));
+                Diagnostics::note(e, name.second, fmt::format("for a parameter named {}_{}, write it in backticks: `{}_{}`",
+                                                              name.first, sm_.slice(t.word), name.first, sm_.slice(t.word)));
+                throw Bail{};
+            }
+            name.second = Span::join(name.second, sub);
+        } else if (at(Tok::Sub) && !cur().space_before && !std::isdigit(static_cast<unsigned char>(cur().text[0]))) {
+            index = cur().text;
+            name.second = Span::join(name.second, advance().span);
+        }
+        d.names.push_back(name);
+        d.indices.push_back(index);
+        if (!accept(Tok::Comma)) break;
+    }
     if (!(accept(Tok::In) || accept(Tok::Colon) || (at_kw("in") && (advance(), true))))
         fail(cur().span, fmt::format("expected '∈' in the declaration, found {}", describe(cur())));
     if (at(Tok::LBracket)) {
@@ -501,11 +654,23 @@ Decl Parser::parse_decl() {
         d.type.span = Span::join(d.bounds.front().span, d.bounds.back().span);
     } else {
         d.type = parse_type();
+        // I♥LA's attributes: `b ∈ ℤ index` (an index counting from 0) and `A ∈ ℝ^(n×n) sparse` (a storage hint:
+        // the values are the same, so iqc ignores it).
+        while (at(Tok::Word) && (word_is("index") || word_is("sparse"))) {
+            if (word_is("index")) {
+                if (d.type.kind != TypeSpec::Integer)
+                    fail(word_span(), "only an integer can be an index: write 'b ∈ ℤ index'");
+                d.zero_based = true;
+            }
+            skip_word();
+        }
     }
     if (at_kw("default")) {
         Span ds = advance().span;
         expect(Tok::Eq, "after 'default'");
+        colon_ends_ = true;
         d.default_value = parse_expr();
+        colon_ends_ = false;
         d.default_span = Span::join(ds, d.default_value->span);
     }
     if (at(Tok::Colon)) {
@@ -557,7 +722,7 @@ Stmt Parser::parse_statement() {
         s.kind = StmtKind::Function;
         expect(Tok::LParen, "");
         ctx_.push_back(Ctx::Paren);
-        s.params = parse_name_list();
+        if (!at(Tok::RParen)) s.params = parse_name_list();  // f() = …: no arguments
         ctx_.pop_back();
         expect(Tok::RParen, "to close the parameter list");
     }
@@ -588,7 +753,15 @@ bool Parser::indexed_assignment() {
     size_t k = pos_;
     if (toks_[k].kind == Tok::Sub) return toks_[k + 1].kind == Tok::Eq;
     ++k;  // '_'
-    if (toks_[k].kind == Tok::Number || is_name_token(toks_[k])) return toks_[k + 1].kind == Tok::Eq;
+    if (toks_[k].kind == Tok::Number) return toks_[k + 1].kind == Tok::Eq;
+    if (is_name_token(toks_[k])) {  // q_i =, B_ij =, B_i,j =
+        ++k;
+        while (toks_[k].kind == Tok::Word && toks_[k].word.end > toks_[k].word.begin &&
+               toks_[k].word.begin == toks_[k - 1].word.begin)
+            ++k;
+        if (toks_[k].kind == Tok::Comma && !toks_[k].space_before && is_name_token(toks_[k + 1])) k += 2;
+        return toks_[k].kind == Tok::Eq;
+    }
     if (toks_[k].kind != Tok::LParen) return false;
     int depth = 0;
     for (; toks_[k].kind != Tok::Newline && toks_[k].kind != Tok::End; ++k) {
@@ -598,12 +771,55 @@ bool Parser::indexed_assignment() {
     return false;
 }
 
+// elementwise := NAME (_ LETTER [LETTER] | _ LETTER , LETTER | _( LETTER , LETTER ) | SUBSCRIPT) = expr
+//   q_i = p_i², B_ij = A_ij A_ij: the left side's subscripts are letters (a number starts a sequence).
+bool Parser::elementwise_indices(Stmt& s) {
+    size_t k = pos_;
+    std::vector<std::pair<std::string, Span>> letters;
+    auto letter = [&](const Token& t) { return t.kind == Tok::Word && letter_units(t.text).size() == 1; };
+    if (toks_[k].kind == Tok::Sub) {
+        if (std::isdigit(static_cast<unsigned char>(toks_[k].text[0]))) return false;
+        for (size_t i = 0; i < toks_[k].text.size(); ++i) letters.push_back({toks_[k].text.substr(i, 1), toks_[k].span});
+        ++k;
+    } else if (k + 5 < toks_.size() && toks_[k + 1].kind == Tok::LParen && letter(toks_[k + 2]) && toks_[k + 3].kind == Tok::Comma &&
+               letter(toks_[k + 4]) && toks_[k + 5].kind == Tok::RParen) {
+        letters = {{toks_[k + 2].text, toks_[k + 2].span}, {toks_[k + 4].text, toks_[k + 4].span}};
+        k += 6;
+    } else if (letter(toks_[k + 1])) {
+        letters.push_back({toks_[k + 1].text, toks_[k + 1].span});
+        k += 2;
+        while (letter(toks_[k]) && toks_[k].word.end > toks_[k].word.begin && toks_[k].word.begin == toks_[k - 1].word.begin)
+            letters.push_back({toks_[k].text, toks_[k].span}), ++k;
+        if (toks_[k].kind == Tok::Comma && !toks_[k].space_before && letter(toks_[k + 1]))
+            letters.push_back({toks_[k + 1].text, toks_[k + 1].span}), k += 2;
+    }
+    if (letters.empty() || toks_[k].kind != Tok::Eq) return false;
+    if (letters.size() > 2)
+        fail(Span::join(letters.front().second, letters.back().second),
+             fmt::format("an element-wise definition has one subscript (a vector or a sequence) or two (a matrix), not {}",
+                         letters.size()));
+    pos_ = k;
+    s.elem_indices = std::move(letters);
+    return true;
+}
+
 // sequence := NAME _ INDEX = expr                         (its first element, e.g. z_1 = p)
 //           | NAME _ ( VAR + 1 ) = expr for VAR (∈ | = | in) lo .. hi   (the recurrence)
 Stmt Parser::parse_indexed_assignment(std::pair<std::string, Span> name, Span start) {
     Stmt s;
     s.name = name.first;
     s.name_span = name.second;
+    if (elementwise_indices(s)) {
+        expect(Tok::Eq, "");
+        s.kind = StmtKind::Assign;
+        s.value = parse_expr();
+        s.span = Span::join(start, s.value->span);
+        if (at_kw("for"))
+            fail(cur().span, fmt::format("a recurrence defines the next element from the current one: write {}_({}+1) = … "
+                                         "for {} ∈ 1..N", s.name, s.elem_indices[0].first, s.elem_indices[0].first));
+        s.source_line = statement_text(s.span);
+        return s;
+    }
     if (at(Tok::Sub)) {
         const Token& t = advance();
         s.index = make(std::isdigit(static_cast<unsigned char>(t.text[0])) ? ExprKind::Number : ExprKind::Name, t.span);
@@ -687,6 +903,8 @@ Module Parser::parse(std::string name, bool allow_header) {
         if (at(Tok::Newline) || at(Tok::Semicolon)) { advance(); continue; }
         try {
             ctx_.assign(1, Ctx::Top);
+            in_condition_ = 0;
+            colon_ends_ = false;
             Span start = cur().span;
             parse_line(m);
             if (!at(Tok::Newline) && !at(Tok::End) && !at(Tok::Semicolon)) {
@@ -733,6 +951,55 @@ ExprPtr Parser::parse_condition() {
 // comparison := expr (= | ≠ | < | ≤ | > | ≥) expr | expr (∈ | ∉) interval
 //   interval := ([ | () expr , expr (] | ))     — closed or open at either end
 ExprPtr Parser::parse_comparison() {
+    if (parenthesized_condition()) {  // ( condition ): (j > 2 or j > 3) and j > 4
+        Span open = advance().span;
+        ctx_.push_back(Ctx::Paren);
+        ExprPtr c = parse_condition();
+        ctx_.pop_back();
+        c->span = Span::join(open, expect(Tok::RParen, "to close the condition").span);
+        return c;
+    }
+    ++in_condition_;
+    ExprPtr c = parse_atom_comparison();
+    --in_condition_;
+    // x = a ± b is x = a + b or x = a - b (I♥LA: one ± per comparison).
+    std::vector<Expr*> pm;
+    std::function<void(Expr&)> find = [&](Expr& x) {
+        if (x.kind == ExprKind::Binary && x.op == BinOp::PlusMinus) pm.push_back(&x);
+        for (auto& a : x.args) find(*a);
+    };
+    find(*c);
+    if (pm.empty()) return c;
+    if (pm.size() > 1) fail(pm[1]->span, "a comparison may hold only one ±");
+    pm[0]->op = BinOp::Add;
+    ExprPtr plus = clone_expr(*c);
+    pm[0]->op = BinOp::Sub;
+    ExprPtr minus = clone_expr(*c);
+    Span whole = c->span;
+    auto e = binary(BinOp::Or, std::move(plus), std::move(minus));
+    e->kind = ExprKind::Logic;
+    e->span = whole;
+    return e;
+}
+
+// Whether the parenthesis at the current token holds a condition (a comparison, `and` or `or` directly
+// inside it), not a value such as (x + 1).
+bool Parser::parenthesized_condition() const {
+    if (toks_[pos_].kind != Tok::LParen) return false;
+    int depth = 0;
+    for (size_t k = pos_; k < toks_.size() && toks_[k].kind != Tok::End; ++k) {
+        Tok t = toks_[k].kind;
+        if (t == Tok::LParen || t == Tok::LBracket || t == Tok::LBrace) ++depth;
+        if (t == Tok::RParen || t == Tok::RBracket || t == Tok::RBrace)
+            if (--depth == 0) return false;
+        if (depth == 1 && (t == Tok::Eq || t == Tok::Neq || t == Tok::Lt || t == Tok::Le || t == Tok::Gt || t == Tok::Ge ||
+                           t == Tok::In || t == Tok::NotIn || is_kw(toks_[k], "and") || is_kw(toks_[k], "or")))
+            return true;
+    }
+    return false;
+}
+
+ExprPtr Parser::parse_atom_comparison() {
     ExprPtr lhs = parse_expr();
     if (at(Tok::In) || at(Tok::NotIn) || at_kw("in")) {
         bool negate = at(Tok::NotIn);
@@ -803,11 +1070,16 @@ ExprPtr Parser::parse_expr() {
     ExprPtr lhs = parse_unary();
     while (true) {
         const Token& t = cur();
-        if (t.kind != Tok::Plus && t.kind != Tok::Minus) break;
+        if (t.kind != Tok::Plus && t.kind != Tok::Minus && t.kind != Tok::PlusMinus) break;
         // Inside a matrix, `a -b` is two items while `a - b` and `a-b` are one.
         if (ctx_.back() == Ctx::Bracket && t.space_before && !peek_raw(1).space_before) break;
         nest(depth, t.span);
-        BinOp op = t.kind == Tok::Plus ? BinOp::Add : BinOp::Sub;
+        BinOp op = t.kind == Tok::Plus ? BinOp::Add : t.kind == Tok::Minus ? BinOp::Sub : BinOp::PlusMinus;
+        // In a condition, `+-` written together is I♥LA's ASCII ±.
+        if (op == BinOp::Add && in_condition_ && peek_raw(1).kind == Tok::Minus && !peek_raw(1).space_before) {
+            op = BinOp::PlusMinus;
+            advance();
+        }
         advance();
         if (ctx_.back() == Ctx::Top) {  // `a +` continues on the next line, if there is one
             size_t k = pos_;
@@ -859,7 +1131,9 @@ bool Parser::starts_juxtaposed_operand() {
         case Tok::Sqrt: case Tok::Fraction: case Tok::Norm: case Tok::DoubleBar: case Tok::Sum: case Tok::LBracket:
             return !(ctx_.back() == Ctx::Bars && (t.kind == Tok::Norm || t.kind == Tok::DoubleBar));
         case Tok::Bar: return ctx_.back() != Ctx::Bars;
-        case Tok::Word: return !is_keyword(t.text);
+        case Tok::Word: return !is_keyword(t.text) || t.text == "sum";
+        case Tok::LAngle: return true;
+        case Tok::Lt: return in_condition_ == 0 && ascii_inner_ahead();  // 2<u, v> outside conditions
         default: return false;
     }
 }
@@ -884,13 +1158,19 @@ ExprPtr Parser::parse_mult() {
     return lhs;
 }
 
-// elem := power {(∘ | ×) power}
+// elem := power {(∘ | × | ⊗ | \ | :) power}      (I♥LA's product operators between factors)
 ExprPtr Parser::parse_elem() {
     limits::DepthGuard depth(depth_);
     ExprPtr lhs = parse_power();
-    while (at(Tok::Circle) || at(Tok::Cross)) {
+    while (true) {
+        BinOp op;
+        if (at(Tok::Circle)) op = BinOp::Hadamard;
+        else if (at(Tok::Cross)) op = BinOp::Cross;
+        else if (at(Tok::Kronecker)) op = BinOp::Kronecker;
+        else if (at(Tok::Backslash)) op = BinOp::Solve;
+        else if (at(Tok::Colon) && !colon_ends_) op = BinOp::Frobenius;
+        else break;
         nest(depth, cur().span);
-        BinOp op = at(Tok::Circle) ? BinOp::Hadamard : BinOp::Cross;
         advance();
         ExprPtr rhs = parse_power();
         lhs = binary(op, std::move(lhs), std::move(rhs));
@@ -912,6 +1192,9 @@ ExprPtr Parser::parse_power() {
                 base = std::move(e);
                 continue;
             }
+            if (t.text == "+")
+                fail(t.span, "the pseudo-inverse A⁺ is not supported (it needs a singular value decomposition); for an "
+                             "invertible matrix write A⁻¹");
             if (t.text.empty() || t.text.find_first_not_of("+-0123456789") != std::string::npos ||
                 t.text.find_first_of("0123456789") == std::string::npos)
                 fail(t.span, "a superscript power must be an integer such as ² or ⁻¹");
@@ -960,6 +1243,37 @@ ExprPtr Parser::parse_postfix(bool exponent) {
     limits::DepthGuard depth(depth_);
     ExprPtr e = parse_primary();
     while (true) {
+        if (e->kind == ExprKind::Name && (function_power(e) || log_base(e))) continue;
+        if (e->kind == ExprKind::Number && (e->text == "0" || e->text == "1" || e->text == "𝟙") &&
+            (at(Tok::Sub) || at(Tok::Underscore)) && !cur().space_before) {
+            e = parse_sized_block(std::move(e));
+            continue;
+        }
+        if ((e->kind == ExprKind::Norm || e->kind == ExprKind::Abs) && e->args.size() == 1 && e->text.empty()) {
+            if ((at(Tok::Sub) || (at(Tok::Underscore) && !cur().space_before))) {
+                parse_norm_subscript(*e);
+                continue;
+            }
+            // ‖A‖²_F, ‖v‖^2_2: I♥LA lets the power come before the subscript.
+            size_t k = pos_;
+            bool sup = toks_[k].kind == Tok::Super && !toks_[k].space_before && toks_[k].text.find_first_not_of("0123456789") == std::string::npos;
+            bool caret = toks_[k].kind == Tok::Caret && toks_[k + 1].kind == Tok::Number;
+            size_t after = k + (sup ? 1 : caret ? 2 : 0);
+            if ((sup || caret) && (toks_[after].kind == Tok::Sub || toks_[after].kind == Tok::Underscore) &&
+                !toks_[after].space_before) {
+                const Token& pw = toks_[after - 1];
+                auto ex = make(ExprKind::Number, pw.span);
+                ex->number = literal_value(pw);
+                ex->text = pw.text;
+                pos_ = after;
+                parse_norm_subscript(*e);
+                auto power = make(ExprKind::Power, Span::join(e->span, ex->span));
+                power->args.push_back(std::move(e));
+                power->args.push_back(std::move(ex));
+                e = std::move(power);
+                continue;
+            }
+        }
         if (at(Tok::Sub)) {
             nest(depth, cur().span);
             const Token& t = advance();
@@ -981,10 +1295,18 @@ ExprPtr Parser::parse_postfix(bool exponent) {
             continue;
         }
         if (at(Tok::Underscore) && !cur().space_before) {
+            if (e->kind == ExprKind::Name && peek_raw(1).kind == Tok::LParen &&
+                (e->text == "min" || e->text == "max" || sm_.slice(e->word_span) == "argmin" || sm_.slice(e->word_span) == "argmax"))
+                fail(e->word_span.end > e->word_span.begin ? e->word_span : e->span,
+                     "I♥LA's optimization (min_(x ∈ …), argmin_(x ∈ …)) is not supported: iqc compiles closed-form math");
             nest(depth, cur().span);
             advance();
             auto idx = make(ExprKind::Index, e->span);
             idx->args.push_back(std::move(e));
+            auto push = [&](IndexItem it) {
+                idx->span = Span::join(idx->span, it.span);
+                idx->indices.push_back(std::move(it));
+            };
             auto parse_index = [&]() {
                 IndexItem it;
                 const Token& t = cur();
@@ -1002,47 +1324,139 @@ ExprPtr Parser::parse_postfix(bool exponent) {
                     it.expr->name_span = t.span;
                     advance();
                 } else if (t.kind == Tok::LParen) {
+                    // _(i), _(k+1), _(2,3), _(i,*): one or two subscripts
                     advance();
                     ctx_.push_back(Ctx::Paren);
-                    it.expr = parse_expr();
-                    ctx_.pop_back();
-                    it.span = Span::join(t.span, expect(Tok::RParen, "to close the subscript").span);
+                    for (bool first = true;; first = false) {
+                        IndexItem item;
+                        item.span = cur().span;
+                        if (at(Tok::Star)) advance();
+                        else item.expr = parse_expr(), item.span = item.expr->span;
+                        if (!accept(Tok::Comma)) {
+                            ctx_.pop_back();
+                            Span close = expect(Tok::RParen, "to close the subscript").span;
+                            if (first) item.span = Span::join(t.span, close);  // _(k+1): the whole parenthesis
+                            push(std::move(item));
+                            idx->span = Span::join(idx->span, close);
+                            return;
+                        }
+                        push(std::move(item));
+                    }
                 } else {
                     fail(t.span, fmt::format("expected a subscript after '_', found {}", describe(t)));
                 }
-                idx->span = Span::join(idx->span, it.span);
-                idx->indices.push_back(std::move(it));
+                push(std::move(it));
             };
             parse_index();
-            // A second index (`A_2,3`) only outside parenthesised lists, written without spaces.
-            if (ctx_.back() == Ctx::Top && toks_[pos_].kind == Tok::Comma && !toks_[pos_].space_before &&
-                !peek_raw(1).space_before)
-                advance(), parse_index();
+            // A second subscript written against its comma (`A_2,3`, `A_i,j`, `A_i,*`) belongs to the name, in
+            // any context (I♥LA); `(p_1, p_2)` and `(p_1,p_2)` stay two items.
+            while (toks_[pos_].kind == Tok::Comma && !toks_[pos_].space_before && !peek_raw(1).space_before) {
+                const Token& n = peek_raw(1);
+                const Token& after = peek_raw(2);
+                bool index = n.kind == Tok::Number || n.kind == Tok::Star ||
+                             (is_name_token(n) && !((after.kind == Tok::Underscore || after.kind == Tok::Sub ||
+                                                     after.kind == Tok::LParen) && !after.space_before));
+                if (!index || idx->indices.size() >= 3) break;  // A_i,2,3: an entry of a sequence's matrix
+                advance();
+                parse_index();
+            }
+            // A_ij: two one-letter subscripts written together (a word split into letters).
+            while (idx->indices.size() == 1 && idx->indices[0].expr && idx->indices[0].expr->kind == ExprKind::Name &&
+                   pos_ > 0 && toks_[pos_ - 1].word.end > toks_[pos_ - 1].word.begin && is_name_token(toks_[pos_]) &&
+                   toks_[pos_].word.begin == toks_[pos_ - 1].word.begin && toks_[pos_].word.end == toks_[pos_ - 1].word.end)
+                parse_index();
             e = std::move(idx);
             continue;
         }
         bool callable = !exponent || functions_.count(e->text) || letter_units(e->text).size() > 1;
         if (at(Tok::LParen) && !cur().space_before && e->kind == ExprKind::Name && callable) {
-            nest(depth, cur().span);
-            Span open = advance().span;
-            ctx_.push_back(Ctx::Paren);
-            auto call = make(ExprKind::Call, e->span);
-            call->text = e->text;
-            call->name_span = e->name_span;
-            if (!at(Tok::RParen)) {
-                call->args.push_back(parse_expr());
-                while (accept(Tok::Comma)) call->args.push_back(parse_expr());
-            }
-            ctx_.pop_back();
-            Span close = expect(Tok::RParen, "to close the argument list").span;
-            (void)open;
-            call->span = Span::join(call->span, close);
-            e = std::move(call);
+            e = parse_call(std::move(e));
             continue;
         }
         break;
     }
     return e;
+}
+
+// call := NAME ( [expr {, expr}] )
+ExprPtr Parser::parse_call(ExprPtr callee) {
+    limits::DepthGuard depth(depth_);
+    nest(depth, cur().span);
+    advance();  // (
+    ctx_.push_back(Ctx::Paren);
+    auto call = make(ExprKind::Call, callee->span);
+    call->text = callee->text;
+    call->name_span = callee->name_span;
+    call->word_span = callee->word_span;
+    if (!at(Tok::RParen)) {
+        call->args.push_back(parse_expr());
+        while (accept(Tok::Comma)) call->args.push_back(parse_expr());
+    }
+    ctx_.pop_back();
+    Span close = expect(Tok::RParen, "to close the argument list").span;
+    call->span = Span::join(call->span, close);
+    return call;
+}
+
+// function_power := TRIG (SUPERSCRIPT | ^ INTEGER) ( args )      sin²(x) is (sin x)², as in I♥LA
+bool Parser::function_power(ExprPtr& e) {
+    if (!is_power_function(e->text)) return false;
+    size_t k = pos_;
+    std::string power;
+    Span power_span = toks_[k].span;
+    if (toks_[k].kind == Tok::Super && !toks_[k].space_before) {
+        power = toks_[k].text;
+        ++k;
+    } else if (toks_[k].kind == Tok::Caret) {
+        ++k;
+        if (toks_[k].kind == Tok::Minus) power = "-", ++k;
+        if (toks_[k].kind != Tok::Number) return false;
+        power += toks_[k].text;
+        power_span = Span::join(power_span, toks_[k].span);
+        ++k;
+    } else {
+        return false;
+    }
+    if (toks_[k].kind != Tok::LParen) return false;
+    if (power.empty() || power.find_first_not_of("0123456789") != std::string::npos) {
+        auto& d = diags_.error(power_span, fmt::format("'{}' with the power {} is ambiguous", e->text, power));
+        Diagnostics::note(d, e->span, power == "-1" ? fmt::format("for the inverse function write a{}(x) or arc{}(x); for "
+                                                                  "1/{}(x) write {}(x)⁻¹", e->text, e->text, e->text, e->text)
+                                                    : std::string("a function's power must be a whole number such as ² "
+                                                                  "(sin²(x) is sin(x)²)"));
+        throw Bail{};
+    }
+    pos_ = k;
+    auto ex = make(ExprKind::Number, power_span);
+    ex->number = std::strtod(power.c_str(), nullptr);
+    ex->text = power;
+    ExprPtr call = parse_call(std::move(e));
+    auto p = make(ExprKind::Power, call->span);
+    p->args.push_back(std::move(call));
+    p->args.push_back(std::move(ex));
+    e = std::move(p);
+    return true;
+}
+
+// log_base := log (_2 | _10 | ₂ | ₁₀) ( expr )     the logarithm to base 2 or 10
+bool Parser::log_base(ExprPtr& e) {
+    if (e->text != "log") return false;
+    size_t k = pos_;
+    std::string base;
+    if (toks_[k].kind == Tok::Sub && !toks_[k].space_before) {
+        base = toks_[k].text, ++k;
+    } else if (toks_[k].kind == Tok::Underscore && !toks_[k].space_before && toks_[k + 1].kind == Tok::Number) {
+        base = toks_[k + 1].text, k += 2;
+    } else {
+        return false;
+    }
+    if (toks_[k].kind != Tok::LParen || (base != "2" && base != "10")) return false;
+    Span s = Span::join(e->span, toks_[k - 1].span);
+    pos_ = k;
+    e->text = "log_" + base;
+    e->span = e->name_span = s;
+    e = parse_call(std::move(e));
+    return true;
 }
 
 ExprPtr Parser::parse_delimited(ExprKind kind, Tok close, Span open, const char* what) {
@@ -1098,6 +1512,226 @@ ExprPtr Parser::parse_matrix(Span open) {
     return m;
 }
 
+// sum := (∑ | sum) (_ NAME | SUBSCRIPT | _( NAME [for condition] )) term
+//   ∑_i a_i b_i + c is (∑_i a_i b_i) + c: the summand is one multiplicative term.
+//   ∑_(j for j ≠ i) x_j adds only the terms whose index satisfies the condition.
+ExprPtr Parser::parse_sum(Span start) {
+    std::string index;
+    ExprPtr condition;
+    if (at(Tok::Sub) && !cur().space_before) {
+        index = advance().text;
+    } else if (at(Tok::Underscore) && !cur().space_before) {
+        advance();
+        if (at(Tok::LParen)) {
+            Span open = advance().span;
+            ctx_.push_back(Ctx::Paren);
+            if (!is_name_token(cur()))
+                fail(cur().span, fmt::format("expected the summation index after '∑_(', found {}", describe(cur())));
+            index = advance().text;
+            if (at(Tok::Comma) || at(Tok::In) || at_kw("in"))
+                fail(cur().span, "a sum over the members of a set (∑_(i,j ∈ E)) is not supported: sets are not part of "
+                                 "iqc's language");
+            if (at_kw("for")) {
+                advance();
+                condition = parse_condition();
+            }
+            ctx_.pop_back();
+            if (!at(Tok::RParen)) {
+                auto& d = diags_.error(cur().span, fmt::format("expected ')' to close the sum's index, found {}", describe(cur())));
+                Diagnostics::note(d, open, "opened here");
+                throw Bail{};
+            }
+            advance();
+        } else if (is_name_token(cur())) {
+            index = advance().text;
+        } else {
+            fail(cur().span, fmt::format("expected the summation index after '∑_', found {}", describe(cur())));
+        }
+    } else {
+        fail(cur().span, "expected a summation index, as in ∑_i v_i");
+    }
+    ExprPtr body = parse_mult();
+    auto e = make(ExprKind::Sum, Span::join(start, body->span));
+    e->text = index;
+    e->args.push_back(std::move(body));
+    if (condition) e->args.push_back(std::move(condition));
+    return e;
+}
+
+// sized_block := (0 | 1 | 𝟙) (_ size [, size] | _( size [(, | × | x) size] ) | SUBSCRIPT [, SUBSCRIPT])
+//   size := INTEGER | NAME          0_2,3 is a 2×3 zero matrix, 1_n a vector of n ones
+ExprPtr Parser::parse_sized_block(ExprPtr symbol) {
+    auto e = make(ExprKind::Block, symbol->span);
+    e->text = symbol->text == "0" ? "0" : "1";
+    auto size = [&](const Token& t) {
+        IndexItem it;
+        it.span = t.span;
+        if (t.kind == Tok::Number || t.kind == Tok::Sub) {
+            it.expr = make(ExprKind::Number, t.span);
+            it.expr->number = std::atof(t.text.c_str());
+            it.expr->text = t.text;
+            if (t.kind == Tok::Sub && !std::isdigit(static_cast<unsigned char>(t.text[0]))) it.expr->kind = ExprKind::Name;
+        } else if (is_name_token(t)) {
+            it.expr = make(ExprKind::Name, t.span);
+            it.expr->text = t.text;
+            it.expr->name_span = t.span;
+        } else {
+            fail(t.span, fmt::format("expected the size of the {} block ({}_2,3 or {}_n), found {}", e->text == "0" ? "zero" : "ones",
+                                     symbol->text, symbol->text, describe(t)));
+        }
+        e->span = Span::join(e->span, t.span);
+        e->indices.push_back(std::move(it));
+        advance();
+    };
+    if (at(Tok::Sub)) {
+        size(cur());
+        if (at(Tok::Comma) && !cur().space_before && peek_raw(1).kind == Tok::Sub) advance(), size(cur());
+        return e;
+    }
+    advance();  // _
+    if (at(Tok::LParen)) {
+        advance();
+        size(cur());
+        if (accept(Tok::Comma) || accept(Tok::Cross) || (at(Tok::Word) && cur().text == "x" && (advance(), true))) size(cur());
+        e->span = Span::join(e->span, expect(Tok::RParen, "to close the block's size").span);
+        return e;
+    }
+    size(cur());
+    if (at(Tok::Comma) && !cur().space_before && !peek_raw(1).space_before &&
+        (peek_raw(1).kind == Tok::Number || is_name_token(peek_raw(1))))
+        advance(), size(cur());
+    return e;
+}
+
+// Whether the `<` at the current token opens <u, v>: a comma and then a `>` follow on the line, outside
+// any bracket opened after the `<`.
+bool Parser::ascii_inner_ahead() const {
+    int depth = 0;
+    bool comma = false;
+    for (size_t k = pos_ + 1; k < toks_.size(); ++k) {
+        Tok t = toks_[k].kind;
+        if (t == Tok::Newline || t == Tok::End || t == Tok::Eq || t == Tok::Lt || t == Tok::Semicolon) return false;
+        if (t == Tok::LParen || t == Tok::LBracket || t == Tok::LAngle) ++depth;
+        if (t == Tok::RParen || t == Tok::RBracket || t == Tok::RAngle) --depth;
+        if (depth < 0) return false;
+        if (depth == 0 && t == Tok::Comma) comma = true;
+        if (depth == 0 && t == Tok::Gt) return comma;
+    }
+    return false;
+}
+
+// inner := ⟨ expr , expr ⟩ [_ NAME] | < expr , expr > [_ NAME]     ⟨u, v⟩_M is vᵀ M u
+ExprPtr Parser::parse_inner(const Token& open_tok) {
+    bool angle = open_tok.kind == Tok::LAngle;
+    Span open = open_tok.span;
+    ctx_.push_back(Ctx::Paren);
+    ++in_condition_;  // `>` closes: no comparison or `<u, v>` inside
+    ExprPtr a = parse_expr();
+    --in_condition_;
+    if (!at(Tok::Comma)) {
+        auto& d = diags_.error(cur().span, fmt::format("expected ',' between the two vectors of the inner product, found {}",
+                                                       describe(cur())));
+        Diagnostics::note(d, open, angle ? "the inner product ⟨u, v⟩ opens here" : "'<' here opens an inner product <u, v>");
+        throw Bail{};
+    }
+    advance();
+    ++in_condition_;
+    ExprPtr b = parse_expr();
+    --in_condition_;
+    ctx_.pop_back();
+    if (!at(angle ? Tok::RAngle : Tok::Gt)) {
+        auto& d = diags_.error(cur().span, fmt::format("expected {} to close the inner product, found {}",
+                                                       angle ? "'⟩'" : "'>'", describe(cur())));
+        Diagnostics::note(d, open, "opened here");
+        throw Bail{};
+    }
+    auto e = make(ExprKind::Inner, Span::join(open, advance().span));
+    e->args.push_back(std::move(a));
+    e->args.push_back(std::move(b));
+    if (at(Tok::Underscore) && !cur().space_before && is_name_token(peek_raw(1))) {
+        advance();
+        auto m = make(ExprKind::Name, cur().span);
+        auto [n, sp] = parse_name();
+        m->text = n;
+        m->name_span = sp;
+        e->span = Span::join(e->span, sp);
+        e->args.push_back(std::move(m));
+    }
+    return e;
+}
+
+// norm_subscript := _ (INTEGER | ∞ | * | NAME | ( expr )) | SUBSCRIPT     ‖v‖_1, ‖v‖_∞, ‖A‖_F, ‖v‖_p, ‖v‖₁
+void Parser::parse_norm_subscript(Expr& norm) {
+    limits::DepthGuard depth(depth_);
+    nest(depth, cur().span);
+    if (at(Tok::Sub)) {
+        const Token& t = advance();
+        auto n = make(ExprKind::Number, t.span);
+        n->number = std::atof(t.text.c_str());
+        n->text = t.text;
+        if (!std::isdigit(static_cast<unsigned char>(t.text[0]))) {
+            n->kind = ExprKind::Name;
+            n->name_span = t.span;
+        }
+        norm.args.push_back(std::move(n));
+        norm.span = Span::join(norm.span, t.span);
+        return;
+    }
+    advance();  // _
+    const Token& t = cur();
+    if (t.kind == Tok::Infinity || t.kind == Tok::Star || (t.kind == Tok::Word && t.text == "F" && !known_.count("F"))) {
+        norm.text = t.kind == Tok::Infinity ? "∞" : t.kind == Tok::Star ? "*" : "F";
+        norm.span = Span::join(norm.span, advance().span);
+        return;
+    }
+    ExprPtr sub;
+    if (t.kind == Tok::Number) {
+        sub = make(ExprKind::Number, t.span);
+        sub->number = std::strtod(t.text.c_str(), nullptr);
+        sub->text = t.text;
+        advance();
+    } else if (is_name_token(t)) {
+        sub = make(ExprKind::Name, t.span);
+        auto [n, sp] = parse_name();
+        sub->text = n;
+        sub->name_span = sp;
+    } else if (t.kind == Tok::LParen) {
+        advance();
+        ctx_.push_back(Ctx::Paren);
+        if (at(Tok::Infinity) || at(Tok::Star)) {
+            norm.text = at(Tok::Infinity) ? "∞" : "*";
+            advance();
+        } else {
+            sub = parse_expr();
+        }
+        ctx_.pop_back();
+        Span close = expect(Tok::RParen, "to close the norm's subscript").span;
+        norm.span = Span::join(norm.span, close);
+        if (!sub) return;
+    } else {
+        fail(t.span, fmt::format("expected the norm's subscript (1, 2, ∞, F, a number or a name) after '_', found {}",
+                                 describe(t)));
+    }
+    norm.span = Span::join(norm.span, sub->span);
+    norm.args.push_back(std::move(sub));
+}
+
+// sequence_literal := { expr {, expr} }      (after the first item; iqc's value of a sequence x_i ∈ ℝ³)
+ExprPtr Parser::parse_sequence_literal(Span open, ExprPtr first) {
+    ctx_.back() = Ctx::Paren;
+    auto e = make(ExprKind::Sequence, open);
+    e->args.push_back(std::move(first));
+    while (accept(Tok::Comma)) e->args.push_back(parse_expr());
+    ctx_.pop_back();
+    if (!at(Tok::RBrace)) {
+        auto& d = diags_.error(cur().span, fmt::format("expected '}}' to close the sequence, found {}", describe(cur())));
+        Diagnostics::note(d, open, "opened here");
+        throw Bail{};
+    }
+    e->span = Span::join(open, advance().span);
+    return e;
+}
+
 // piecewise := { case {newline case}      case := expr [,] (if condition | otherwise)
 ExprPtr Parser::parse_piecewise(Span open) {
     ctx_.push_back(Ctx::Brace);
@@ -1106,6 +1740,10 @@ ExprPtr Parser::parse_piecewise(Span open) {
         while (at(Tok::Newline)) advance();
         if (at(Tok::RBrace)) { advance(); break; }
         ExprPtr value = parse_expr();
+        // {a, b, c}: a sequence literal (a comma not followed by `if`/`otherwise`, or a `}` after one item).
+        if (p->rows.empty() && (at(Tok::RBrace) || (at(Tok::Comma) && !is_kw(peek_raw(1), "if") &&
+                                                    !is_kw(peek_raw(1), "otherwise"))))
+            return parse_sequence_literal(open, std::move(value));
         accept(Tok::Comma);
         if (at_kw("otherwise")) {
             p->span = Span::join(p->span, advance().span);
@@ -1143,9 +1781,11 @@ ExprPtr Parser::parse_primary() {
     switch (t.kind) {
         case Tok::Number: {
             auto e = make(ExprKind::Number, t.span);
-            e->number = literal_value(t);
+            e->number = t.text == "𝟙" ? 1.0 : literal_value(t);
             e->text = t.text;
             advance();
+            if (e->text == "𝟙" && !((at(Tok::Sub) || at(Tok::Underscore)) && !cur().space_before))
+                fail(e->span, "𝟙 needs its size, as in 𝟙_3 (a vector of ones) or 𝟙_2,3 (a matrix of ones)");
             return e;
         }
         case Tok::Fraction: {
@@ -1158,9 +1798,16 @@ ExprPtr Parser::parse_primary() {
         }
         case Tok::Word:
         case Tok::Backtick: {
+            if (t.kind == Tok::Word && t.text == "sum") {  // I♥LA's ASCII ∑
+                Span s = advance().span;
+                if (!(at(Tok::Underscore) || at(Tok::Sub)) || cur().space_before)
+                    fail(s, "'sum' is I♥LA's ∑ and needs its index, as in sum_i x_i");
+                return parse_sum(s);
+            }
             if (t.kind == Tok::Word && is_keyword(t.text))
                 fail(t.span, fmt::format("unexpected keyword '{}' in an expression", t.text));
             auto e = make(ExprKind::Name, t.span);
+            e->word_span = t.word;
             auto [n, s] = parse_name();
             e->text = n;
             e->span = s;
@@ -1190,30 +1837,16 @@ ExprPtr Parser::parse_primary() {
         }
         case Tok::LBracket: return parse_matrix(advance().span);
         case Tok::LBrace: return parse_piecewise(advance().span);
+        case Tok::LAngle: return parse_inner(advance());
+        case Tok::Lt:
+            if (ascii_inner_ahead()) return parse_inner(advance());
+            fail(t.span, fmt::format("expected an expression, found {}", describe(t)));
         case Tok::Norm: return parse_delimited(ExprKind::Norm, Tok::Norm, advance().span, "the norm");
         case Tok::DoubleBar: return parse_delimited(ExprKind::Norm, Tok::DoubleBar, advance().span, "the norm");
         case Tok::Bar: return parse_delimited(ExprKind::Abs, Tok::Bar, advance().span, "the absolute value");
         case Tok::LFloor: return parse_delimited(ExprKind::Floor, Tok::RFloor, advance().span, "the floor");
         case Tok::LCeil: return parse_delimited(ExprKind::Ceil, Tok::RCeil, advance().span, "the ceiling");
-        case Tok::Sum: {
-            // ∑_i term: the summand is a multiplicative term, so ∑_i a_i b_i + c is (∑_i a_i b_i) + c.
-            Span s = advance().span;
-            std::string index;
-            if (at(Tok::Sub)) {
-                index = advance().text;
-            } else if (at(Tok::Underscore)) {
-                advance();
-                if (!is_name_token(cur())) fail(cur().span, fmt::format("expected the summation index after '∑_', found {}", describe(cur())));
-                index = advance().text;
-            } else {
-                fail(cur().span, "expected a summation index, as in ∑_i v_i");
-            }
-            ExprPtr body = parse_mult();
-            auto e = make(ExprKind::Sum, Span::join(s, body->span));
-            e->text = index;
-            e->args.push_back(std::move(body));
-            return e;
-        }
+        case Tok::Sum: return parse_sum(advance().span);
         case Tok::Sqrt: {
             Span s = advance().span;
             ExprPtr inner = parse_postfix();
@@ -1221,7 +1854,12 @@ ExprPtr Parser::parse_primary() {
             e->args.push_back(std::move(inner));
             return e;
         }
-        case Tok::Unknown: fail(t.span, fmt::format("unexpected character '{}'", t.text));
+        case Tok::Unknown:
+            if (t.text == "∂")
+                fail(t.span, "I♥LA's derivatives (∂) are not supported: write the derivative out (iqc differentiates "
+                             "shapes itself for their normals)");
+            if (t.text == "∫") fail(t.span, "I♥LA's integrals (∫) are not supported: iqc's math has closed forms only");
+            fail(t.span, fmt::format("unexpected character '{}'", t.text));
         case Tok::Newline:
         case Tok::End: fail(t.span, "expected an expression, found the end of the line");
         default: fail(t.span, fmt::format("expected an expression, found {}", describe(t)));

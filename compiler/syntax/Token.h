@@ -56,6 +56,12 @@ namespace iqc {
     X(Reals, "'ℝ'")                                                                                        \
     X(Integers, "'ℤ'")                                                                                     \
     X(Ellipsis, "'…'")                                                                                     \
+    X(Backslash, "'\\'")       /* A \ b: solve */                                                         \
+    X(Kronecker, "'⊗'")                                                                                    \
+    X(LAngle, "'⟨'")                                                                                       \
+    X(RAngle, "'⟩'")                                                                                       \
+    X(Infinity, "'∞'")                                                                                     \
+    X(PlusMinus, "'±'")                                                                                    \
     X(Unknown, "character")
 
 enum class Tok {
@@ -72,6 +78,9 @@ struct Token {
     std::string text;           // the name (without backticks), number, superscript or subscript text
     bool space_before = false;  // whitespace directly before this token
     bool line_start = false;    // first token on its line
+    // For a name split out of a longer letter run (`dot` -> d, o, t): the whole run, so an undefined
+    // letter is reported once, as the word the user wrote. Empty (file 0, 0..0) otherwise.
+    Span word;
 };
 
 }  // namespace iqc

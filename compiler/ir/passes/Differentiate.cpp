@@ -326,6 +326,9 @@ struct Differentiator {
                 return no_rule(fmt::format("the built-in '{}'", n));
             }
             case Op::Call: return no_rule("a call");  // inlined before
+            case Op::Element:
+            case Op::At:
+                return no_rule("an element of a sequence");
             case Op::Loop:
             case Op::Member:
                 return no_rule("a recurrence (its loop)");
