@@ -109,7 +109,7 @@ private:
     LowerContext lower_{ir_, {}};
 
     bool plan_instance(const InstanceDesc& inst, InstancePlan& plan, std::map<std::string, int>& counts,
-                       std::set<std::string>& names);
+                       std::set<std::string>& names, const std::set<std::string>& explicit_names);
     bool apply_overrides(const std::vector<ParamOverride>& ovs, const CheckedModule& m, const char* role,
                          const std::vector<int>& bound, std::vector<std::vector<double>>& values);
     bool plan_transform(const InstanceDesc& inst, InstancePlan& plan);
@@ -225,8 +225,10 @@ bool SceneCompiler::plan_transform(const InstanceDesc& inst, InstancePlan& plan)
     return true;
 }
 
+// `names`: the names of the instances planned so far; `explicit_names`: every name the scene gives, which
+// generated names avoid.
 bool SceneCompiler::plan_instance(const InstanceDesc& inst, InstancePlan& plan, std::map<std::string, int>& counts,
-                                  std::set<std::string>& names) {
+                                  std::set<std::string>& names, const std::set<std::string>& explicit_names) {
     plan.desc = &inst;
     bool ok = true;
     plan.name = inst.name.empty() ? fmt::format("{}_{}", inst.type, ++counts[inst.type]) : inst.name;
@@ -236,7 +238,8 @@ bool SceneCompiler::plan_instance(const InstanceDesc& inst, InstancePlan& plan, 
             ok = false;
         }
     } else {
-        while (names.count(plan.name)) plan.name = fmt::format("{}_{}", inst.type, ++counts[inst.type]);
+        while (names.count(plan.name) || explicit_names.count(plan.name))
+            plan.name = fmt::format("{}_{}", inst.type, ++counts[inst.type]);
     }
     names.insert(plan.name);
     plan.shape = lib_.get(inst.type, inst.type_span);
@@ -739,17 +742,9 @@ CompileResult SceneCompiler::run() {
     std::set<std::string> names;
     for (const auto& inst : s_.instances)
         if (!inst.name.empty()) names.insert(inst.name);
-    std::set<std::string> explicit_names = names;
+    std::set<std::string> explicit_names = names;  // reserved first so generated names avoid them
     names.clear();
-    for (size_t i = 0; i < s_.instances.size(); ++i) {
-        const auto& inst = s_.instances[i];
-        // Explicit names are reserved first so generated ones avoid them.
-        std::set<std::string> taken = names;
-        for (auto& n : explicit_names)
-            if (inst.name != n) taken.insert(n);
-        plan_instance(inst, plans[i], counts, taken);
-        names.insert(plans[i].name);
-    }
+    for (size_t i = 0; i < s_.instances.size(); ++i) plan_instance(s_.instances[i], plans[i], counts, names, explicit_names);
     lap("parse + check + transforms");
     if (d_.error_count() != before) return res;
     for (auto& p : plans) {
