@@ -52,27 +52,29 @@ const vec3 IQC_FOG_COLOR = {{FOG_COLOR}};
 {{#if BOUNCES}}
 const int IQC_BOUNCES = {{BOUNCES}};
 {{/if}}
+{{#if SHADE_LIGHT}}
+const int IQC_LIGHTS = {{LIGHTS}};
+{{/if}}
 {{#if AA}}
 const int IQC_AA = {{AA}};  // samples per pixel side
 {{/if}}
 
-{{PARAMETERS}}{{LIGHTS}}{{FUNCTIONS}}
-// ---- scene ----
-{{TRANSFORMS}}
+{{DECLARATIONS}}// ---- the scene (compiled from its IR: modules, then iqc_scene and the functions the runtime calls) ----
+{{FUNCTIONS}}
+// ---- runtime ----
 {{#if INSTRUMENT}}
 int iqc_evals = 0;           // scene evaluations in this pixel (instrumented build)
 int iqc_shape_evals = 0;     // instance shape evaluations (those skipped by `bound` are not counted)
 int iqc_primary_steps = -1;  // march steps of the first ray from the camera
-{{/if}}
-// Distance to the nearest surface (x) and that instance's id (y).
+
+// Instrumented build: the scene, counting its evaluations and the shapes they evaluated.
 vec2 iqc_scene(vec3 p) {
-{{#if INSTRUMENT}}
     iqc_evals++;
-{{/if}}
-    vec2 res = vec2(IQC_MAX_DIST * 2.0, -1.0);
-    float d;
-{{SCENE_BODY}}    return res;
+    vec3 h = iqc_scene_counted(p);
+    iqc_shape_evals += int(h.z);
+    return h.xy;
 }
+{{/if}}
 
 // The hit tolerance at distance t along a ray.
 float iqc_eps(float t) {
@@ -199,19 +201,13 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{/if}}
 {{#if PER_INSTANCE}}
 // I♥IQ's architecture (the baseline `iqc bench` compares with): every instance is sphere-traced on its own,
-// its transform inverted for each instance at each pixel; the nearest hit wins.
-mat4 iqc_instance_to_object(int i) {
-{{PER_INSTANCE_INVERSE}}    return mat4(1.0);
-}
-float iqc_instance_distance(int i, vec3 q) {
-{{PER_INSTANCE_DISTANCE}}    return IQC_MAX_DIST * 2.0;
-}
+// its transform inverted for each instance at each pixel (iqc_instance_inverse); the nearest hit wins.
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float best = -1.0;
     id = -1;
     steps = 0;
     for (int i = 0; i < {{INSTANCES}}; i++) {
-        mat4 inv = iqc_instance_to_object(i);
+        mat4 inv = iqc_instance_inverse(i);
         vec3 o = (inv * vec4(ro, 1.0)).xyz;
         vec3 dir = mat3(inv) * rd;
         float scale = 1.0 / iqc_max_singular(mat3(inv));
@@ -325,8 +321,8 @@ vec3 iqc_tetrahedron_gradient(vec3 p, float t) {
 // Normal from the gradient the compiler derived from the hit instance's distance (forward-mode
 // differentiation of the IR): exact up to rounding, one gradient evaluation.
 vec3 iqc_normal(vec3 p, float t, int id) {
-    vec3 g = vec3(0.0, 1.0, 0.0);
-{{GRADIENT_BODY}}    if (dot(g, g) < 1.0e-24) g = iqc_tetrahedron_gradient(p, t);
+    vec3 g = iqc_gradient(p, id);
+    if (dot(g, g) < 1.0e-24) g = iqc_tetrahedron_gradient(p, t);
     return dot(g, g) > 0.0 ? normalize(g) : vec3(0.0, 1.0, 0.0);
 }
 {{/if}}
@@ -386,31 +382,22 @@ float iqc_ao(vec3 p, vec3 N) {
 }
 {{/if}}
 
-// Colour of instance `id` at surface point p with unit normal N, seen from eye.
-vec3 iqc_shade(int id, vec3 p, vec3 N, vec3 eye) {
-{{SHADE_BODY}}    return 0.5 + 0.5 * N;  // default material: the normal as a colour
-}
-{{#if REFLECTIONS}}
-
-// Reflectivity of instance `id` (its material's `k_r`; 0 when it has none).
-vec3 iqc_reflectivity(int id) {
-{{REFLECT_BODY}}    return vec3(0.0);
-}
+// The colour of instance `id` at p: its material once, plus each light's term times that light's shadow.
+vec3 iqc_colour(int id, vec3 p, vec3 N, vec3 eye) {
+    vec3 c = iqc_shade(id, p, N, eye);
+{{#if SHADE_LIGHT}}
+    for (int l = 0; l < IQC_LIGHTS; l++) {
+        vec3 P_L = iqc_light_position(l);
+        vec3 c_l = iqc_shade_light(id, p, N, eye, P_L, iqc_light_color(l));
+{{#if SHADOWS}}
+        if (dot(c_l, c_l) > 0.0) c_l *= iqc_shadow(p, N, P_L);  // no shadow ray where the light adds nothing
 {{/if}}
-{{#if REFRACTION}}
-
-// Transmission (`k_t`) and index of refraction (`η`) of instance `id`'s material.
-vec4 iqc_transmission(int id) {
-{{TRANSMIT_BODY}}    return vec4(0.0, 0.0, 0.0, 1.0);
+        c += c_l;
+    }
+{{/if}}
+    return c;
 }
-{{/if}}
 
-{{#if PREPARE}}
-// Transforms that change with sliders or time: inverted once per pixel, before any marching.
-void iqc_prepare() {
-{{PREPARE_BODY}}}
-
-{{/if}}
 // The colour seen along a ray{{#if BOUNCES}}, following reflections and refractions{{/if}}.
 vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#if BOUNCES}}
@@ -443,7 +430,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#if DEBUG_DEPTH}}
         return vec3(1.0 - t / IQC_MAX_DIST);
 {{/if}}
-        vec3 c = iqc_shade(id, p, N, ro);
+        vec3 c = iqc_colour(id, p, N, ro);
 {{#if AO}}
         c *= iqc_ao(p, N);
 {{/if}}

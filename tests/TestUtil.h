@@ -102,7 +102,7 @@ inline Evaluated eval_module(const std::string& source, const std::map<std::stri
         return e;
     }
     ir::Module irm;
-    LowerContext ctx{irm, {}};
+    LowerContext ctx{irm, {}, {}};
     int fn = lower_module(*cm, "test", "test", ctx);
     std::string fault = ir::verify(irm.functions[size_t(fn)], irm);
     if (!fault.empty()) {

@@ -136,7 +136,7 @@ TEST_CASE("a shader glslang rejects is an internal error: exit 3 and nothing wri
     auto in = write_temp("fault.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\n```\n");
     auto out = temp_dir() / "fault.frag";
     std::filesystem::remove(out);
-    RunResult r = run_iqc_env("IQC_INJECT_GLSL_FAULT=1", in.string() + " -o " + out.string());
+    RunResult r = run_iqc(in.string() + " --inject-fault glslang -o " + out.string());
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.err, Catch::Contains("internal compiler error: glslang rejected the generated shader (this is a bug in iqc"));
     CHECK_THAT(r.err, Catch::Contains("ERROR"));

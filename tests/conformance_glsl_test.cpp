@@ -53,7 +53,7 @@ TEST_CASE("conformance suite through emitted GLSL agrees with the evaluator", "[
             auto vm = lib.parse_check(vs, "value", false);
             if (!vm->ok || !vm->ret) { ok = false; break; }
             ir::Module vir;
-            LowerContext vctx{vir, {}};
+            LowerContext vctx{vir, {}, {}};
             ir::Value v = ir::evaluate(vir, lower_module(*vm, "value", "value", vctx), {});
             given[n] = v;
             given_types[n] = v.type;
@@ -63,7 +63,7 @@ TEST_CASE("conformance suite through emitted GLSL agrees with the evaluator", "[
         INFO(c.name << "\n" << d.render());
         REQUIRE(m->ok);
         ir::Module irm;
-        LowerContext ctx{irm, {}};
+        LowerContext ctx{irm, {}, {}};
         int fn = lower_module(*m, "m", "m", ctx);
         std::vector<ir::Value> args;
         for (const auto& p : m->params) {

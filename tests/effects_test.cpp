@@ -13,7 +13,7 @@ namespace {
 
 // Code that exists only when the effect is on.
 const std::vector<std::pair<std::string, std::vector<std::string>>> kEffects = {
-    {"shadows_hard", {"float iqc_shadow(", "iqc_shadow(p, N, light_1_position)"}},
+    {"shadows_hard", {"float iqc_shadow(", "c_l *= iqc_shadow(p, N, P_L);"}},
     {"shadows_soft", {"float iqc_shadow(", "IQC_SHADOW_K", "sqrt(max(h * h - y * y, 0.0))"}},
     {"ao", {"float iqc_ao(", "c *= iqc_ao(p, N);"}},
     {"fog", {"IQC_FOG", "exp(-IQC_FOG * t)"}},
@@ -29,7 +29,8 @@ const std::vector<std::pair<std::string, std::vector<std::string>>> kEffects = {
     {"march_auto", {"Bálint & Valasek", "2.0 * d / (1.0 - m)"}},
     {"normals_central", {"Normal by central differences"}},
     {"normals_forward", {"Normal by forward differences"}},
-    {"normals_analytic", {"gradient of shape ball (derived by iqc)", "ball_gradient(", "iqc_tetrahedron_gradient"}},
+    {"normals_analytic", {"derived by iqc (forward-mode differentiation)", "vec3 iqc_gradient(vec3 p, int id) {",
+                          "if (id == 1) g = p / max(length(p), 1.0e-30);", "iqc_tetrahedron_gradient"}},
     {"hit_relative", {"IQC_HIT * max(t, 1.0e-3)"}},
 };
 

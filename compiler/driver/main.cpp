@@ -25,6 +25,8 @@
 #include "scene/Page.h"
 #include "scene/Compile.h"
 #include "scene/Evaluate.h"
+#include "ir/Pipeline.h"
+#include "source/Internal.h"
 
 namespace {
 
@@ -64,8 +66,7 @@ double percentile(std::vector<float> v, double q) {
     return v[size_t(q * double(v.size() - 1) + 0.5)];
 }
 
-int render_command(const std::string& code, const std::vector<std::pair<std::string, std::vector<double>>>& uniforms,
-                   const std::string& output, const std::string& size, float time, int frames, float fps, bool stats,
+int render_command(const std::string& code, const iqc::ShaderInputs& inputs, bool webgl2, const std::string& output, const std::string& size, float time, int frames, float fps, bool stats,
                    const std::function<iqc::CompileResult()>& instrumented) {
     iqc::render::RenderOptions ro;
     if (std::sscanf(size.c_str(), "%dx%d", &ro.width, &ro.height) != 2 || ro.width < 1 || ro.height < 1 ||
@@ -73,8 +74,12 @@ int render_command(const std::string& code, const std::vector<std::pair<std::str
         std::fprintf(stderr, "iqc: error: --size must look like 640x360\n");
         return 2;
     }
-    for (const auto& [n, v] : uniforms) ro.uniforms.push_back({n, std::vector<float>(v.begin(), v.end())});
-    bool webgl2 = !uniforms.empty() || code.rfind("#version", 0) == 0;
+    for (const auto& u : inputs.uniforms) {
+        if (u.integer) ro.int_uniforms.push_back({u.name, int(u.value[0])});
+        else ro.uniforms.push_back({u.name, std::vector<float>(u.value.begin(), u.value.end())});
+    }
+    for (const auto& b : inputs.blocks) ro.uniform_blocks.push_back({b.name, b.binding, b.bytes});
+    ro.data_texture = {inputs.texture.name, inputs.texture.width, inputs.texture.height, inputs.texture.rgba};
     std::string source = webgl2 ? code : iqc::glsl::wrap_shadertoy(code);
     std::string err;
     auto renderer = iqc::render::Renderer::create(&err);
@@ -206,8 +211,8 @@ static int run(int argc, char** argv) {
         "iqc"};
     app.set_version_flag("--version", std::string("iqc ") + IQC_VERSION);
     app.require_subcommand(0, 1);
-    std::string input, output, target = "shadertoy";
-    bool dump_ir = false, time = false;
+    std::string input, output, target = "shadertoy", dump_ir_spec, inject_fault;
+    bool time = false;
     app.add_option("input", input, "scene (.iq), document (.md) or shape module (.iql)");
     app.add_option("-o,--output", output, "where to write the shader (default: standard output)");
     app.add_option("--target", target,
@@ -218,7 +223,17 @@ static int run(int argc, char** argv) {
     std::string meta;
     app.add_option("--meta", meta, "also write a JSON description of every parameter (instance, module, role, "
                                    "uniform or constant name, type, bounds, default, description)");
-    app.add_flag("--dump-ir", dump_ir, "print the typed IR of every function to standard error");
+    std::string passes_list;
+    for (const auto& p : iqc::ir::pipeline_passes()) passes_list += fmt::format("{}{} ({})", passes_list.empty() ? "" : ", ", p.name, p.summary);
+    CLI::Option* dump_ir_opt =
+        app.add_option("--dump-ir", dump_ir_spec,
+                       "print the IR to standard error: after the last pass, or with =after-PASS after that pass (=after-lower: "
+                       "before the first). Passes, in order: " + passes_list)
+            ->expected(0, 1);
+    app.add_option("--inject-fault", inject_fault, "testing the internal-error path: fail in this pass, or 'glslang'")
+        ->group("");
+    bool verify_ir = false;
+    app.add_flag("--verify-ir", verify_ir, "verify the IR before and after every pass (a fault is an internal error naming the pass)");
     app.add_flag("--time", time, "print the compile time to standard error");
     bool time_passes = false;
     bool strict_ranges = false;
@@ -279,6 +294,7 @@ static int run(int argc, char** argv) {
     bool e_time_passes = false;
     eval->add_flag("--time-passes", e_time_passes, "print the time of each phase to standard error");
     eval->add_option("--mouse", e_mouse, "the value of `mouse` (two numbers in [0,1], default 0 0)")->expected(2);
+    eval->add_option("--inject-fault", inject_fault, "testing the internal-error path: fail in this pass")->group("");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -289,6 +305,7 @@ static int run(int argc, char** argv) {
         iqc::SourceManager sm;
         iqc::Diagnostics diags(sm);
         iqc::EvalRequest req;
+        req.inject_fault = inject_fault;
         req.path = e_input;
         req.module = e_module;
         req.inputs.time = e_time;
@@ -309,7 +326,14 @@ static int run(int argc, char** argv) {
         std::vector<iqc::EvalOutput> outs;
         std::vector<std::pair<std::string, double>> timings;
         if (e_time_passes) req.timings = &timings;
-        bool ok = iqc::evaluate_module_file(req, sm, diags, outs);
+        bool ok = false;
+        try {
+            ok = iqc::evaluate_module_file(req, sm, diags, outs);
+        } catch (const iqc::InternalError& e) {
+            std::fputs(diags.render().c_str(), stderr);
+            std::fprintf(stderr, "iqc: %s\n", iqc::internal_error_message(e.what()).c_str());
+            return 3;
+        }
         for (auto& [name, ms] : timings) std::fprintf(stderr, "iqc: %-28s %8.3f ms\n", name.c_str(), ms);
         std::string text = diags.render();
         put(stderr, text);
@@ -353,8 +377,21 @@ static int run(int argc, char** argv) {
     auto t0 = std::chrono::steady_clock::now();
     iqc::SourceManager sm;
     iqc::Diagnostics diags(sm);
+    bool dump_ir = dump_ir_opt->count() > 0;
     iqc::CompileOptions opts;
     opts.dump_ir = dump_ir;
+    if (!dump_ir_spec.empty()) {
+        std::string pass = dump_ir_spec.rfind("after-", 0) == 0 ? dump_ir_spec.substr(6) : "";
+        if (!iqc::ir::is_pass_name(pass)) {
+            std::fprintf(stderr, "iqc: error: --dump-ir takes after-PASS with PASS one of lower, %s (not '%s')\n",
+                         [] { std::string n; for (const auto& p : iqc::ir::pipeline_passes()) n += std::string(n.empty() ? "" : ", ") + p.name; return n; }().c_str(),
+                         dump_ir_spec.c_str());
+            return 2;
+        }
+        opts.dump_after = pass;
+    }
+    opts.inject_fault = inject_fault;
+    if (verify_ir) opts.verify_each = true;
     opts.strict_ranges = strict_ranges;
     opts.target = target == "webgl2" || target == "html" ? iqc::Target::WebGL2 : target == "glsl330" ? iqc::Target::GLSL330 : iqc::Target::Shadertoy;
     if (render->parsed()) opts.target = r_target == "webgl2" ? iqc::Target::WebGL2 : iqc::Target::Shadertoy;
@@ -372,7 +409,7 @@ static int run(int argc, char** argv) {
         if (diags.error_count() > 1) std::fprintf(stderr, "%zu errors\n", diags.error_count());
         return 1;
     }
-    if (render->parsed()) return render_command(r.code, r.uniform_defaults, r_output, r_size, r_time, r_frames, r_fps, r_stats,
+    if (render->parsed()) return render_command(r.code, r.inputs, opts.target != iqc::Target::Shadertoy, r_output, r_size, r_time, r_frames, r_fps, r_stats,
                                                 [&]() {
                                                     iqc::SourceManager sm2;
                                                     iqc::Diagnostics d2(sm2);

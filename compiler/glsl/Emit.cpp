@@ -5,6 +5,7 @@
 #include <functional>
 #include <set>
 
+#include "ir/Schedule.h"
 #include "sema/Builtins.h"
 
 namespace iqc::glsl {
@@ -19,8 +20,8 @@ std::string type_name(const Type& t, std::string* why) {
         return std::string();
     };
     switch (t.kind) {
-        case Type::Scalar:
-        case Type::Integer: return "float";
+        case Type::Scalar: return "float";
+        case Type::Integer: return "int";
         case Type::Bool: return "bool";
         case Type::Vector:
             if (t.rows > 4) return fail(fmt::format("{} is larger than GLSL's largest vector (vec4)", t.str()));
@@ -35,6 +36,7 @@ std::string type_name(const Type& t, std::string* why) {
                 return fail(fmt::format("{} is larger than GLSL's largest matrix (mat4)", t.str()));
             if (t.rows == t.cols) return fmt::format("mat{}", t.rows);
             return fmt::format("mat{}x{}", t.cols, t.rows);  // GLSL: columns x rows
+        case Type::Array: return type_name(t.element(), why);
         default: return fail("invalid type");
     }
 }
@@ -53,27 +55,75 @@ std::string float_literal(double v) {
     return mant + exp;
 }
 
-std::string constant(const Type& t, const std::vector<double>& v) {
-    if (t.is_scalar()) return float_literal(v[0]);
-    std::string tn = type_name(t);
+namespace {
+
+// The components of a value of type t (not an array) as GLSL constructor arguments, column-major.
+std::vector<std::string> constructor_args(const Type& t, const std::vector<double>& v, size_t base,
+                                          const std::function<std::string(double)>& lit) {
     std::vector<std::string> parts;
+    if (t.is_matrix() && t.rows > 1) {
+        for (int c = 0; c < t.cols; ++c)
+            for (int r = 0; r < t.rows; ++r) parts.push_back(lit(v[base + size_t(r * t.cols + c)]));
+    } else {
+        for (int k = 0; k < std::max(1, t.components()); ++k) parts.push_back(lit(v[base + size_t(k)]));
+    }
+    return parts;
+}
+
+std::string single(const Type& t, const std::vector<double>& v, size_t base, bool compact) {
+    if (t.kind == Type::Integer) return fmt::format("{}", static_cast<long long>(std::llround(v[base])));
+    if (t.kind == Type::Bool) return v[base] != 0 ? "true" : "false";
+    if (t.is_scalar()) return float_literal(v[base]);
+    std::string tn = type_name(t);
+    if (t.is_matrix() && t.rows == t.cols && !compact) {  // x·I: matN(x)
+        bool diagonal = true;
+        for (int r = 0; r < t.rows; ++r)
+            for (int c = 0; c < t.cols; ++c)
+                diagonal &= r == c ? v[base + size_t(r * t.cols + c)] == v[base] : v[base + size_t(r * t.cols + c)] == 0;
+        if (diagonal) return fmt::format("{}({})", tn, float_literal(v[base]));
+    }
+    auto lit = [&](double x) {
+        if (!compact) return float_literal(x);
+        float f = static_cast<float>(x);
+        if (f == std::floor(f) && std::fabs(f) < 1e7f) return fmt::format("{}", static_cast<long long>(f));
+        std::string s = float_literal(x);
+        if (s.rfind("0.", 0) == 0) s = s.substr(1);
+        else if (s.rfind("-0.", 0) == 0) s = "-" + s.substr(2);
+        return s;
+    };
+    std::vector<std::string> parts = constructor_args(t, v, base, lit);
     if (t.is_vector()) {
         bool same = true;
-        for (double x : v) same &= (x == v[0]);
-        if (same) return fmt::format("{}({})", tn, float_literal(v[0]));
-        for (double x : v) parts.push_back(float_literal(x));
-    } else {
-        for (int c = 0; c < t.cols; ++c)
-            for (int r = 0; r < t.rows; ++r) parts.push_back(float_literal(v[size_t(r * t.cols + c)]));
+        for (auto& p : parts) same &= p == parts[0];
+        if (same) return fmt::format("{}({})", tn, parts[0]);
     }
-    return fmt::format("{}({})", tn, fmt::join(parts, ", "));
+    return fmt::format("{}({})", tn, fmt::join(parts, compact ? "," : ", "));
 }
+
+std::string any_constant(const Type& t, const std::vector<double>& v, bool compact) {
+    if (!t.is_array()) return single(t, v, 0, compact);
+    Type e = t.element();
+    size_t n = size_t(std::max(1, e.components()));
+    std::vector<std::string> items;
+    for (int k = 0; k < t.count; ++k) items.push_back(single(e, v, size_t(k) * n, compact));
+    return fmt::format("{}[{}]({})", type_name(e), t.count, fmt::join(items, compact ? "," : ", "));
+}
+
+}  // namespace
+
+std::string constant(const Type& t, const std::vector<double>& v) { return any_constant(t, v, false); }
+std::string compact_constant(const Type& t, const std::vector<double>& v) { return any_constant(t, v, true); }
 
 const std::string& Emitter::function_name(int fn) {
     auto it = names_.find(fn);
     if (it != names_.end()) return it->second;
     const ir::Function& f = m_.functions[size_t(fn)];
     return names_[fn] = globals_.unique(f.glsl_name.empty() ? f.name : f.glsl_name);
+}
+
+void Emitter::set_function_name(int fn, const std::string& name) {
+    globals_.reserve(name);
+    names_[fn] = name;
 }
 
 std::vector<int> Emitter::closure(const std::vector<int>& roots) const {
@@ -109,8 +159,8 @@ struct FunctionEmitter {
     Emitter& em;
     Diagnostics& diags;
     Namer locals;
+    ir::Schedule sched;
     std::vector<int> uses;
-    std::vector<bool> live;
     std::vector<std::string> var;  // GLSL variable holding the value, if materialised
     std::map<ValueId, std::vector<std::string>> loop_states;  // a Loop's state variables
     bool failed = false;
@@ -128,11 +178,28 @@ struct FunctionEmitter {
         return n.empty() ? "float" : n;
     }
 
+    const ir::Function& callee(const Instr& in) const { return m.functions[size_t(in.aux)]; }
+
+    // Whether operand k of `in` is read as a GLSL int (else a ℤ operand is converted with float()).
+    bool wants_int(const Instr& in, size_t k) const {
+        bool int_result = in.type.kind == Type::Integer;
+        switch (in.op) {
+            case Op::Index: return k == 1;
+            case Op::Switch: return k == 0 || int_result;
+            case Op::Compare: return f.body[in.args[0]].type.kind == Type::Integer && f.body[in.args[1]].type.kind == Type::Integer;
+            case Op::Add: case Op::Sub: case Op::Mul: case Op::Neg: case Op::Copy: return int_result;
+            case Op::Select: case Op::If: return k >= 1 && int_result;
+            case Op::Call: return callee(in).params[k].type.kind == Type::Integer;
+            case Op::Loop: return k == 0 || callee(in).params[k].type.kind == Type::Integer;
+            default: return false;
+        }
+    }
+
     // Whether the value is simple enough to repeat rather than give a variable.
     bool trivial(ValueId v) const {
         const Instr& in = f.body[v];
-        return in.op == Op::Param || in.op == Op::Input || in.op == Op::Member ||
-               (in.op == Op::Const && in.type.is_scalar());
+        return in.op == Op::Param || in.op == Op::Input || in.op == Op::Member || in.op == Op::Global ||
+               (in.op == Op::Const && (in.type.is_scalar() || in.type.kind == Type::Bool));
     }
 
     // A value used more than once gets a variable when recomputing it would cost real work (a call, a
@@ -153,19 +220,27 @@ struct FunctionEmitter {
         return expr(v).size() > 40;
     }
 
-    std::string operand(ValueId v) {  // an operand inside a larger expression: parenthesised if compound
-        std::string s = expr(v);
+    bool compound(ValueId v) const {
+        if (!var[v].empty()) return false;
         const Instr& in = f.body[v];
-        if (!var[v].empty()) return s;
         switch (in.op) {
             case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Hadamard: case Op::Compare:
             case Op::And: case Op::Or: case Op::Select: case Op::Neg:
-                return "(" + s + ")";
-            case Op::Const:
-                if (in.type.is_scalar() && in.data[0] < 0) return "(" + s + ")";
-                return s;
-            default: return s;
+                return true;
+            case Op::Const: return in.type.is_scalar() && in.data[0] < 0;
+            default: return false;
         }
+    }
+
+    // Operand k of `in` as its consumer reads it: `paren` puts a compound expression in parentheses.
+    std::string arg(const Instr& in, size_t k, bool paren) {
+        ValueId v = in.args[k];
+        const Type& t = f.body[v].type;
+        bool want = wants_int(in, k);
+        if (t.kind == Type::Integer && !want) return "float(" + expr(v) + ")";
+        if (want && t.kind == Type::Scalar) return "int(" + expr(v) + ")";
+        std::string s = expr(v);
+        return paren && compound(v) ? "(" + s + ")" : s;
     }
 
     // Component k of a vector: `.x` … `.w`, or `[k]` past GLSL's four (only reached after a type error).
@@ -178,22 +253,131 @@ struct FunctionEmitter {
         std::string s = expr(v);
         const Instr& in = f.body[v];
         if (!var[v].empty() || in.op == Op::Param || in.op == Op::Builtin || in.op == Op::Call || in.op == Op::Construct ||
-            in.op == Op::Dot || in.op == Op::Cross || in.op == Op::Transpose || in.op == Op::Inverse)
+            in.op == Op::Dot || in.op == Op::Cross || in.op == Op::Transpose || in.op == Op::Inverse || in.op == Op::Global ||
+            in.op == Op::Index)
             return s;
         return "(" + s + ")";
+    }
+
+    const GlobalStorage* storage(int g) const {
+        const auto* s = em.storage();
+        return s && size_t(g) < s->size() ? &(*s)[size_t(g)] : nullptr;
+    }
+
+    std::string global(const Instr& in) {
+        const GlobalStorage* s = storage(in.aux);
+        return s ? s->name : identifier(m.globals[size_t(in.aux)].name);
+    }
+
+    // array[k]: an array's element, or from the data texture (one texel per vector, per matrix column).
+    std::string index(const Instr& in) {
+        const Instr& a = f.body[in.args[0]];
+        const GlobalStorage* s = a.op == Op::Global ? storage(a.aux) : nullptr;
+        std::string k = arg(in, 1, false);
+        if (!s || s->kind != GlobalStorage::Kind::Texture) return postfix_base(in.args[0]) + "[" + k + "]";
+        auto texel = [&](int col) {
+            std::string i = s->texels == 1 ? k : fmt::format("{} * {}", s->texels, f.body[in.args[1]].op == Op::Const ? k : "(" + k + ")");
+            if (s->texel + col != 0) i = fmt::format("{} + {}", s->texel + col, i);
+            return fmt::format("iqc_fetch({})", i);
+        };
+        const Type& t = in.type;
+        if (t.is_scalar()) return texel(0) + ".x";
+        if (t.is_vector()) return texel(0) + "." + std::string(kSwizzle, size_t(t.rows));
+        std::vector<std::string> cols;
+        for (int c = 0; c < t.cols; ++c) cols.push_back(texel(c) + "." + std::string(kSwizzle, size_t(t.rows)));
+        return fmt::format("{}({})", type_of(t, in.span), fmt::join(cols, ", "));
+    }
+
+    std::string construct(const Instr& in, ValueId v) {
+        auto plain = [&](size_t i) { return arg(in, i, false); };
+        std::string tn = type_of(in.type, in.span);
+        // vec3(x, x, x) -> vec3(x)
+        bool same = in.args.size() > 1;
+        for (ValueId x : in.args) same &= (x == in.args[0]);
+        if (same && f.body[in.args[0]].type.is_scalar() && in.type.is_vector()) return fmt::format("{}({})", tn, plain(0));
+        // (p_1, p_3) -> p.xz
+        if (in.type.is_vector()) {
+            bool swz = true;
+            ValueId src = 0;
+            std::string sel;
+            for (size_t i = 0; i < in.args.size() && swz; ++i) {
+                const Instr& x = f.body[in.args[i]];
+                if (x.op != Op::Extract || !f.body[x.args[0]].type.is_vector() || !var[in.args[i]].empty() ||
+                    x.aux >= kSwizzleSize) {
+                    swz = false;
+                    break;
+                }
+                if (i == 0) src = x.args[0];
+                else if (x.args[0] != src) swz = false;
+                sel += kSwizzle[x.aux];
+            }
+            if (swz) return postfix_base(src) + "." + sel;
+        }
+        (void)v;
+        // Components of one matrix operand: its upper-left block (mat3(M)) or a column's first rows (M[c].xyz).
+        if (in.args.size() == size_t(in.type.components()) && !in.args.empty()) {
+            const Instr& e0 = f.body[in.args[0]];
+            ValueId src = e0.op == Op::Extract ? e0.args[0] : ValueId(-1);
+            const Type* st = src != ValueId(-1) ? &f.body[src].type : nullptr;
+            bool ok = st && st->is_matrix() && st->rows == st->cols && st->rows > 1;
+            std::vector<int> at;
+            for (size_t i = 0; ok && i < in.args.size(); ++i) {
+                const Instr& x = f.body[in.args[i]];
+                ok = x.op == Op::Extract && x.args[0] == src && var[in.args[i]].empty();
+                if (ok) at.push_back(x.aux);
+            }
+            if (ok && in.type.is_matrix() && in.type.rows == in.type.cols && in.type.rows < st->rows) {
+                bool block = true;
+                for (int r = 0; r < in.type.rows; ++r)
+                    for (int c = 0; c < in.type.cols; ++c) block &= at[size_t(r * in.type.cols + c)] == r * st->cols + c;
+                if (block) return fmt::format("{}({})", tn, expr(src));
+            }
+            if (ok && in.type.is_vector() && in.type.rows < st->rows) {
+                int col = at[0] % st->cols;
+                bool column = true;
+                for (int r = 0; r < in.type.rows; ++r) column &= at[size_t(r)] == r * st->cols + col;
+                if (column) return fmt::format("{}[{}].{}", postfix_base(src), col, std::string(kSwizzle, size_t(in.type.rows)));
+            }
+        }
+        std::vector<std::string> args;
+        if (in.type.is_matrix() && in.type.rows > 1) {
+            bool rows = true;
+            for (ValueId a : in.args) rows &= f.body[a].type == Type::vector(in.type.cols);
+            if (rows && int(in.args.size()) == in.type.rows && in.type.cols > 1) {
+                // Whole rows: a matrix with them as columns, transposed.
+                for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
+                Type cols_as_rows = Type::matrix(in.type.cols, in.type.rows);
+                return fmt::format("transpose({}({}))", type_of(cols_as_rows, in.span), fmt::join(args, ", "));
+            }
+            // Row-major components (scalars, or vectors' components) -> GLSL's column-major constructor.
+            std::vector<std::string> comps;
+            for (size_t i = 0; i < in.args.size(); ++i) {
+                const Type& t = f.body[in.args[i]].type;
+                if (t.is_scalar()) comps.push_back(plain(i));
+                else
+                    for (int k = 0; k < t.components(); ++k) comps.push_back(component(in.args[i], k));
+            }
+            for (int c = 0; c < in.type.cols; ++c)
+                for (int r = 0; r < in.type.rows; ++r) args.push_back(comps[size_t(r * in.type.cols + c)]);
+        } else {
+            for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
+        }
+        return fmt::format("{}({})", tn, fmt::join(args, ", "));
     }
 
     std::string expr(ValueId v) {
         if (!var[v].empty()) return var[v];
         const Instr& in = f.body[v];
-        auto a = [&](size_t i) { return operand(in.args[i]); };
-        auto plain = [&](size_t i) { return expr(in.args[i]); };
+        auto a = [&](size_t i) { return arg(in, i, true); };
+        auto plain = [&](size_t i) { return arg(in, i, false); };
         switch (in.op) {
             case Op::Const: return constant(in.type, in.data);
             case Op::Param: return var[v];
             case Op::Input: return in.aux == 0 ? "iTime" : "(iMouse.xy / iResolution.xy)";
             case Op::Member: return loop_states.at(in.args[0]).at(size_t(in.aux));
-            case Op::Loop: return "/* loop */";
+            case Op::Loop: case Op::If: case Op::Switch: return "/* statement */";
+            case Op::Global: return global(in);
+            case Op::Index: return index(in);
             case Op::Copy: return plain(0);
             case Op::Add: return a(0) + " + " + a(1);
             case Op::Sub: return a(0) + " - " + a(1);
@@ -219,10 +403,10 @@ struct FunctionEmitter {
                 const Instr& src = f.body[in.args[0]];
                 if (var[in.args[0]].empty() && src.op == Op::Construct && at.is_matrix() && int(src.args.size()) == at.rows) {
                     bool rows = true;
-                    for (ValueId a : src.args) rows &= f.body[a].type == Type::vector(at.cols);
+                    for (ValueId x : src.args) rows &= f.body[x].type == Type::vector(at.cols);
                     if (rows) {
                         std::vector<std::string> cols;
-                        for (ValueId a : src.args) cols.push_back(expr(a));
+                        for (size_t k = 0; k < src.args.size(); ++k) cols.push_back(arg(src, k, false));
                         return fmt::format("{}({})", type_of(in.type, in.span), fmt::join(cols, ", "));
                     }
                 }
@@ -237,56 +421,7 @@ struct FunctionEmitter {
                 if (std::string(builtin(in.aux).name) == "round") return fmt::format("floor({} + 0.5)", a(0));
                 return fmt::format("{}({})", builtin(in.aux).glsl, fmt::join(args, ", "));
             }
-            case Op::Construct: {
-                std::string tn = type_of(in.type, in.span);
-                // vec3(x, x, x) -> vec3(x)
-                bool same = in.args.size() > 1;
-                for (ValueId x : in.args) same &= (x == in.args[0]);
-                if (same && f.body[in.args[0]].type.is_scalar() && in.type.is_vector())
-                    return fmt::format("{}({})", tn, plain(0));
-                // (p_1, p_3) -> p.xz
-                if (in.type.is_vector()) {
-                    bool swz = true;
-                    ValueId src = 0;
-                    std::string sel;
-                    for (size_t i = 0; i < in.args.size() && swz; ++i) {
-                        const Instr& x = f.body[in.args[i]];
-                        if (x.op != Op::Extract || !f.body[x.args[0]].type.is_vector() || !var[in.args[i]].empty() ||
-                            x.aux >= kSwizzleSize) {
-                            swz = false;
-                            break;
-                        }
-                        if (i == 0) src = x.args[0];
-                        else if (x.args[0] != src) swz = false;
-                        sel += kSwizzle[x.aux];
-                    }
-                    if (swz) return postfix_base(src) + "." + sel;
-                }
-                std::vector<std::string> args;
-                if (in.type.is_matrix() && in.type.rows > 1) {
-                    bool rows = true;
-                    for (ValueId a : in.args) rows &= f.body[a].type == Type::vector(in.type.cols);
-                    if (rows && int(in.args.size()) == in.type.rows && in.type.cols > 1) {
-                        // Whole rows: a matrix with them as columns, transposed.
-                        for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
-                        Type cols_as_rows = Type::matrix(in.type.cols, in.type.rows);
-                        return fmt::format("transpose({}({}))", type_of(cols_as_rows, in.span), fmt::join(args, ", "));
-                    }
-                    // Row-major components (scalars, or vectors' components) -> GLSL's column-major constructor.
-                    std::vector<std::string> comps;
-                    for (size_t i = 0; i < in.args.size(); ++i) {
-                        const Type& t = f.body[in.args[i]].type;
-                        if (t.is_scalar()) comps.push_back(plain(i));
-                        else
-                            for (int k = 0; k < t.components(); ++k) comps.push_back(component(in.args[i], k));
-                    }
-                    for (int c = 0; c < in.type.cols; ++c)
-                        for (int r = 0; r < in.type.rows; ++r) args.push_back(comps[size_t(r * in.type.cols + c)]);
-                } else {
-                    for (size_t i = 0; i < in.args.size(); ++i) args.push_back(plain(i));
-                }
-                return fmt::format("{}({})", tn, fmt::join(args, ", "));
-            }
+            case Op::Construct: return construct(in, v);
             case Op::Extract: {
                 const Type& st = f.body[in.args[0]].type;
                 if (st.is_vector() || (st.is_matrix() && st.rows == 1)) return component(in.args[0], in.aux);
@@ -317,37 +452,35 @@ struct FunctionEmitter {
         return "0.0";
     }
 
-    // Marks what `roots` need (liveness) and counts uses.
+    // Schedules what `roots` need and counts uses.
     void analyze(const std::vector<ValueId>& roots) {
         size_t n = f.body.size();
+        sched = ir::schedule(f, roots);
         uses.assign(n, 0);
-        live.assign(n, false);
         var.assign(n, "");
-        for (ValueId r : roots) {
-            live[r] = true;
-            uses[r]++;
-        }
-        for (size_t i = n; i-- > 0;) {
-            if (!live[i]) continue;
-            for (ValueId a : f.body[i].args) {
-                live[a] = true;
-                uses[a]++;
-            }
-        }
+        for (ValueId r : roots) uses[r]++;
+        for (size_t i = 0; i < n; ++i)
+            if (sched.live(ValueId(i)))
+                for (ValueId a : f.body[i].args) uses[a]++;
     }
 
-    // One statement per live named value, shared costly value and loop; `skip` is left as an expression.
-    std::string statements(const std::string& indent, ValueId skip) {
+    // One statement per named value, shared costly value, loop and lazy choice of region `r`; `skip` is left
+    // as an expression.
+    std::string region(int r, const std::string& indent, ValueId skip) {
         std::string out;
-        for (size_t i = 0; i < f.body.size(); ++i) {
+        for (ValueId i : sched.regions[size_t(r)].instrs) {
             const Instr& in = f.body[i];
-            if (!live[i] || in.op == Op::Param || in.op == Op::Member) continue;
+            if (in.op == Op::Param || in.op == Op::Member) continue;
             if (in.op == Op::Loop) {
-                out += loop(ValueId(i), indent);
+                out += loop(i, indent);
+                continue;
+            }
+            if (in.op == Op::If || in.op == Op::Switch) {
+                out += lazy(i, indent);
                 continue;
             }
             bool named = !in.name.empty();
-            bool shared = uses[i] > 1 && !trivial(ValueId(i)) && worth_a_variable(ValueId(i));
+            bool shared = uses[i] > 1 && !trivial(i) && worth_a_variable(i);
             if (i == skip && !named) continue;
             if (!named && !shared) continue;
             if (in.op == Op::Construct && !named && in.type.is_vector()) {
@@ -356,7 +489,7 @@ struct FunctionEmitter {
                 for (ValueId x : in.args) same &= x == in.args[0];
                 if (same) continue;
             }
-            out += materialize(ValueId(i), named ? in.name : "tmp", indent, named ? in.source : "");
+            out += materialize(i, named ? in.name : "tmp", indent, named ? in.source : "");
         }
         return out;
     }
@@ -369,6 +502,55 @@ struct FunctionEmitter {
         if (!source.empty()) out += " // " + one_line(source);
         var[v] = vn;
         return out + "\n";
+    }
+
+    // One arm: what it needs, then the assignment of its value.
+    std::string arm(ValueId v, size_t k, const std::string& vn, const std::string& indent) {
+        const Instr& in = f.body[v];
+        std::string out = region(sched.arms[v][k], indent, in.args[k]);
+        return out + fmt::format("{}{} = {};\n", indent, vn, arg(in, k, false));
+    }
+
+    // A lazy choice: If as if/else, Switch as flat ifs (one per case, no nesting).
+    std::string lazy(ValueId v, const std::string& indent) {
+        const Instr& in = f.body[v];
+        std::string vn = locals.unique(in.name.empty() ? "tmp" : in.name);
+        std::string tn = type_of(in.type, in.span);
+        std::string inner = indent + "    ";
+        std::string out;
+        std::string comment = in.source.empty() ? "" : " // " + one_line(in.source);
+        if (in.op == Op::If) {
+            out += fmt::format("{}{} {};{}\n{}if ({}) {{\n", indent, tn, vn, comment, indent, arg(in, 0, false));
+            out += arm(v, 1, vn, inner);
+            out += indent + "} else {\n" + arm(v, 2, vn, inner) + indent + "}\n";
+            var[v] = vn;
+            return out;
+        }
+        std::string sel = arg(in, 0, true);
+        auto cond = [&](int k) {
+            long long lo = std::llround(in.data[size_t(2 * k)]), hi = std::llround(in.data[size_t(2 * k + 1)]);
+            if (hi == lo + 1) return fmt::format("{} == {}", sel, lo);
+            return fmt::format("{} >= {} && {} < {}", sel, lo, sel, hi);
+        };
+        int cases = ir::switch_cases(in);
+        std::string fallback = region(sched.arms[v][1], inner, in.args[1]);
+        if (fallback.empty()) {  // nothing to compute first: the default is the initial value
+            out += fmt::format("{}{} {} = {};{}\n", indent, tn, vn, arg(in, 1, false), comment);
+        } else {
+            std::vector<std::string> any;
+            for (int k = 0; k < cases; ++k) any.push_back("(" + cond(k) + ")");
+            out += fmt::format("{}{} {};{}\n{}if (!({})) {{\n{}{}{} = {};\n{}}}\n", indent, tn, vn, comment, indent,
+                               fmt::join(any, " || "), fallback, inner, vn, arg(in, 1, false), indent);
+        }
+        for (int k = 0; k < cases; ++k) {
+            std::string body = arm(v, size_t(2 + k), vn, inner);
+            if (body.find('\n') == body.size() - 1)  // one line: `if (c) x = y;`
+                out += fmt::format("{}if ({}) {}", indent, cond(k), body.substr(inner.size()));
+            else
+                out += fmt::format("{}if ({}) {{\n{}{}}}\n", indent, cond(k), body, indent);
+        }
+        var[v] = vn;
+        return out;
     }
 
     // A recurrence: its states as variables, then a for loop computing the next states.
@@ -386,15 +568,15 @@ struct FunctionEmitter {
         for (size_t j = 0; j < states; ++j) {
             const Type& t = body.params[j + 1].type;
             std::string n = locals.unique(body.outputs[j].first);
-            out += fmt::format("{}{} {} = {};\n", indent, type_of(t, in.span), n, expr(in.args[j + 1]));
+            out += fmt::format("{}{} {} = {};\n", indent, type_of(t, in.span), n, arg(in, j + 1, false));
             names.push_back(n);
         }
         loop_states[v] = names;
         std::string k = locals.unique(body.params[0].name);
         const Instr& hi = f.body[in.args[0]];
-        std::string hi_text = hi.op == Op::Const ? std::to_string(int(hi.data[0])) : "int(" + expr(in.args[0]) + ")";
-        out += fmt::format("{}for (int {} = {}; {} <= {}; {}++) {{  // {}\n", indent, k, int(in.data[0]), k, hi_text, k,
-                           one_line(in.source));
+        std::string hi_text = hi.op == Op::Const ? std::to_string(std::llround(hi.data[0])) : arg(in, 0, false);
+        out += fmt::format("{}for (int {} = {}; {} <= {}; {}++) {{{}\n", indent, k, int(in.data[0]), k, hi_text, k,
+                           in.source.empty() ? "" : "  // " + one_line(in.source));
         FunctionEmitter be(m, body, em, diags, locals);
         std::vector<ValueId> roots;
         for (auto& o : body.outputs) roots.push_back(o.second);
@@ -402,48 +584,75 @@ struct FunctionEmitter {
         for (size_t p = 0; p < body.body.size(); ++p) {
             const Instr& pi = body.body[p];
             if (pi.op != Op::Param) continue;
-            if (pi.aux == 0) be.var[p] = "float(" + k + ")";
+            if (pi.aux == 0) be.var[p] = k;
             else if (size_t(pi.aux) <= states) be.var[p] = names[size_t(pi.aux) - 1];
-            else be.var[p] = operand(in.args[size_t(pi.aux)]);
+            else be.var[p] = arg(in, size_t(pi.aux), true);
         }
         std::string inner = indent + "    ";
-        out += be.statements(inner, ValueId(-1));
+        out += be.region(0, inner, ValueId(-1));
         if (states == 1) {
             out += fmt::format("{}{} = {};\n", inner, names[0], be.expr(body.outputs[0].second));
         } else {
             std::vector<std::string> next;
             for (size_t j = 0; j < states; ++j) {
                 ValueId o = body.outputs[j].second;
+                if (be.var[o] == names[j]) {  // unchanged this iteration
+                    next.push_back(names[j]);
+                    continue;
+                }
                 next.push_back(be.locals.unique(names[j] + "_next"));
-                out += fmt::format("{}{} {} = {}; // {}\n", inner, type_of(body.body[o].type, in.span), next[j], be.expr(o),
-                                   one_line(body.body[o].source));
+                std::string src = one_line(body.body[o].source);
+                out += fmt::format("{}{} {} = {};{}\n", inner, type_of(body.body[o].type, in.span), next[j], be.expr(o),
+                                   src.empty() ? "" : " // " + src);
             }
-            for (size_t j = 0; j < states; ++j) out += fmt::format("{}{} = {};\n", inner, names[j], next[j]);
+            for (size_t j = 0; j < states; ++j)
+                if (next[j] != names[j]) out += fmt::format("{}{} = {};\n", inner, names[j], next[j]);
         }
         out += indent + "}\n";
+        failed |= be.failed;
         return out;
     }
 
-    std::string run(const std::string& name, const std::string& comment) {
-        size_t n = f.body.size();
-        analyze({f.result});
-        std::string out;
-        if (!comment.empty()) out += "// " + comment_text(comment) + "\n";
+    std::vector<std::string> declare_params() {
         std::vector<std::string> params;
         for (size_t i = 0; i < f.params.size(); ++i) {
             std::string pn = locals.unique(f.params[i].name);
             params.push_back(fmt::format("{} {}", type_of(f.params[i].type, {}), pn));
-            for (size_t k = 0; k < n; ++k)
+            for (size_t k = 0; k < f.body.size(); ++k)
                 if (f.body[k].op == Op::Param && f.body[k].aux == int(i)) var[k] = pn;
         }
+        return params;
+    }
+
+    std::string run(const std::string& name, const std::string& comment) {
+        analyze({f.result});
+        std::string out;
+        if (!comment.empty()) out += "// " + comment_text(comment) + "\n";
+        std::vector<std::string> params = declare_params();
         out += fmt::format("{} {}({}) {{\n", type_of(f.result_type(), {}), name, fmt::join(params, ", "));
-        out += statements("    ", f.result);
+        out += region(0, "    ", f.result);
         const Instr& r = f.body[f.result];
         std::string rv = expr(f.result);
         out += fmt::format("    return {};", rv);
         if (r.name.empty() && !r.source.empty()) out += " // " + one_line(r.source);
         out += "\n}\n";
         return out;
+    }
+
+    std::string run_procedure(const std::string& name, const std::string& comment) {
+        std::vector<ValueId> roots;
+        for (const auto& o : f.outputs) roots.push_back(o.second);
+        analyze(roots);
+        std::string out;
+        if (!comment.empty()) out += "// " + comment_text(comment) + "\n";
+        out += fmt::format("void {}() {{\n", name);
+        out += region(0, "    ", ValueId(-1));
+        for (const auto& [gname, v] : f.outputs) {
+            int g = m.find_global(gname);
+            const GlobalStorage* s = g >= 0 ? storage(g) : nullptr;
+            out += fmt::format("    {} = {};\n", s ? s->name : identifier(gname), expr(v));
+        }
+        return out + "}\n";
     }
 };
 
@@ -453,6 +662,12 @@ std::string Emitter::function(int fn, const std::string& comment) {
     const std::string& name = function_name(fn);
     FunctionEmitter fe(m_, m_.functions[size_t(fn)], *this, diags_, globals_);
     return fe.run(name, comment);
+}
+
+std::string Emitter::procedure(int fn, const std::string& comment) {
+    const std::string& name = function_name(fn);
+    FunctionEmitter fe(m_, m_.functions[size_t(fn)], *this, diags_, globals_);
+    return fe.run_procedure(name, comment);
 }
 
 }  // namespace iqc::glsl

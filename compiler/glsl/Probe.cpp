@@ -36,7 +36,10 @@ Probe make_probe(const ir::Module& m, int fn, const std::vector<ir::Value>& args
     std::string code = "// iqc probe: each output's components in consecutive pixels (red channel)\n";
     for (int g : fns) code += em.function(g) + "\n";
     std::vector<std::string> arg_text;
-    for (const auto& a : args) arg_text.push_back(constant(a.type.is_scalar() ? Type::scalar() : a.type, a.v));
+    for (size_t k = 0; k < args.size(); ++k) {
+        const Type& pt = f.params[k].type;  // a ℤ parameter takes an int
+        arg_text.push_back(constant(pt.kind == Type::Integer ? pt : args[k].type.is_scalar() ? Type::scalar() : args[k].type, args[k].v));
+    }
     code += "void mainImage(out vec4 fragColor, in vec2 fragCoord) {\n    int i = int(fragCoord.x);\n    float v = 0.0;\n";
     for (auto [idx, j] : probes) {
         const ProbeOutput& po = probe.outputs[j];

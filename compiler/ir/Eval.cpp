@@ -2,9 +2,10 @@
 
 #include <cmath>
 #include <fmt/format.h>
-#include <stdexcept>
 
+#include "ir/Schedule.h"
 #include "sema/Builtins.h"
+#include "source/Internal.h"
 
 namespace iqc::ir {
 
@@ -69,150 +70,149 @@ double mat_det(const std::vector<double>& a, int n) {
 
 namespace {
 
-Value scalar(double x) { return {Type::scalar(), {x}}; }
+// An operand: its components and type.
+struct Arg {
+    const double* p;
+    const Type* t;
+    size_t n;  // components
+    double at(size_t i) const { return n == 1 ? p[0] : p[i]; }
+};
 
-Value elementwise(const Type& t, const Value& a, const Value& b, double (*f)(double, double)) {
-    Value r{t, std::vector<double>(size_t(t.components()))};
-    for (size_t i = 0; i < r.v.size(); ++i)
-        r.v[i] = f(a.v.size() == 1 ? a.v[0] : a.v[i], b.v.size() == 1 ? b.v[0] : b.v[i]);
-    return r;
-}
+// Components a value of type t occupies (a Bool is one; tuples are laid out by their loop).
+size_t slots(const Type& t) { return size_t(std::max(1, t.components())); }
 
-Value multiply(const Type& t, const Value& a, const Value& b) {
-    if (a.v.size() == 1 || b.v.size() == 1) {
-        const Value& s = a.v.size() == 1 ? a : b;
-        const Value& x = a.v.size() == 1 ? b : a;
-        Value r{t, x.v};
-        for (auto& c : r.v) c *= s.v[0];
-        return r;
-    }
-    // General (rows×inner)·(inner×cols); vectors are columns, row vectors are 1×n.
-    int ar = a.type.is_matrix() ? a.type.rows : a.type.rows;
-    int ac = a.type.is_matrix() ? a.type.cols : 1;
-    int bc = b.type.is_matrix() ? b.type.cols : 1;
-    int br = b.type.is_matrix() ? b.type.rows : b.type.rows;
-    if (ac != br) throw std::logic_error("evaluator: multiply sizes");
-    Value r{t, std::vector<double>(size_t(ar * bc), 0.0)};
-    for (int i = 0; i < ar; ++i)
-        for (int j = 0; j < bc; ++j) {
-            double s = 0;
-            for (int k = 0; k < ac; ++k) s += a.v[size_t(i * ac + k)] * b.v[size_t(k * bc + j)];
-            r.v[size_t(i * bc + j)] = s;
-        }
-    return r;
-}
-
-Value run_builtin(const Instr& in, const std::vector<const Value*>& a) {
+void run_builtin(const Instr& in, const Arg* a, double* r) {
     const BuiltinInfo& b = builtin(in.aux);
-    const Type& t = in.type;
-    Value r{t, std::vector<double>(size_t(t.components()))};
-    auto at = [](const Value* v, size_t i) { return v->v.size() == 1 ? v->v[0] : v->v[i]; };
+    size_t n = slots(in.type);
     switch (b.sig) {
         case Sig::Elementwise1:
-            for (size_t i = 0; i < r.v.size(); ++i) r.v[i] = b.eval1(a[0]->v[i]);
-            return r;
+            for (size_t i = 0; i < n; ++i) r[i] = b.eval1(a[0].at(i));
+            return;
         case Sig::Elementwise2:
-        case Sig::Nary: {
-            for (size_t i = 0; i < r.v.size(); ++i) {
-                double acc = at(a[0], i);
-                for (size_t k = 1; k < a.size(); ++k) acc = b.eval2(acc, at(a[k], i));
-                r.v[i] = acc;
+        case Sig::Nary:
+            for (size_t i = 0; i < n; ++i) {
+                double acc = a[0].at(i);
+                for (size_t k = 1; k < in.args.size(); ++k) acc = b.eval2(acc, a[k].at(i));
+                r[i] = acc;
             }
-            return r;
-        }
+            return;
         case Sig::Clamp:
-            if (std::string(b.name) == "smoothstep") {
-                for (size_t i = 0; i < r.v.size(); ++i) {
-                    double e0 = at(a[0], i), e1 = at(a[1], i), x = at(a[2], i);
+            if (std::string_view(b.name) == "smoothstep") {
+                for (size_t i = 0; i < n; ++i) {
+                    double e0 = a[0].at(i), e1 = a[1].at(i), x = a[2].at(i);
                     double t = std::fmin(std::fmax((x - e0) / (e1 - e0), 0.0), 1.0);
-                    r.v[i] = t * t * (3 - 2 * t);
+                    r[i] = t * t * (3 - 2 * t);
                 }
-                return r;
+                return;
             }
-            for (size_t i = 0; i < r.v.size(); ++i) r.v[i] = std::fmin(std::fmax(at(a[0], i), at(a[1], i)), at(a[2], i));
-            return r;
+            for (size_t i = 0; i < n; ++i) r[i] = std::fmin(std::fmax(a[0].at(i), a[1].at(i)), a[2].at(i));
+            return;
         case Sig::Mix:
-            for (size_t i = 0; i < r.v.size(); ++i) r.v[i] = at(a[0], i) * (1 - at(a[2], i)) + at(a[1], i) * at(a[2], i);
-            return r;
+            for (size_t i = 0; i < n; ++i) r[i] = a[0].at(i) * (1 - a[2].at(i)) + a[1].at(i) * a[2].at(i);
+            return;
         case Sig::Length: {
             double s = 0;
-            for (double x : a[0]->v) s += x * x;
-            r.v[0] = std::sqrt(s);
-            return r;
+            for (size_t i = 0; i < a[0].n; ++i) s += a[0].p[i] * a[0].p[i];
+            r[0] = std::sqrt(s);
+            return;
         }
         case Sig::Normalize: {
             double s = 0;
-            for (double x : a[0]->v) s += x * x;
+            for (size_t i = 0; i < a[0].n; ++i) s += a[0].p[i] * a[0].p[i];
             s = std::sqrt(s);
-            for (size_t i = 0; i < r.v.size(); ++i) r.v[i] = a[0]->v[i] / s;
-            return r;
+            for (size_t i = 0; i < n; ++i) r[i] = a[0].p[i] / s;
+            return;
         }
     }
-    return r;
 }
 
-}  // namespace
+void multiply(const Type& t, const Arg& a, const Arg& b, double* r) {
+    if (a.n == 1 || b.n == 1) {
+        const Arg& s = a.n == 1 ? a : b;
+        const Arg& x = a.n == 1 ? b : a;
+        for (size_t i = 0; i < slots(t); ++i) r[i] = x.p[i] * s.p[0];
+        return;
+    }
+    // General (rows×inner)·(inner×cols); vectors are columns, row vectors are 1×n.
+    int ar = a.t->rows, ac = a.t->is_matrix() ? a.t->cols : 1;
+    int br = b.t->rows, bc = b.t->is_matrix() ? b.t->cols : 1;
+    if (ac != br) internal_error("evaluator: multiply sizes");
+    for (int i = 0; i < ar; ++i)
+        for (int j = 0; j < bc; ++j) {
+            double s = 0;
+            for (int k = 0; k < ac; ++k) s += a.p[size_t(i * ac + k)] * b.p[size_t(k * bc + j)];
+            r[size_t(i * bc + j)] = s;
+        }
+}
 
-Value eval_instr(const Module& m, const Function& f, const Instr& in, const std::vector<const Value*>& a,
-                 const std::vector<Value>& args, const EvalInputs& inputs) {
-    Value r;
-    r.type = in.type;
+// A pure operation on operand values (no frames: everything but Param, Global, Input, Call, Loop, Member,
+// Index, If, Switch, Copy).
+void run_op(const Instr& in, const Arg* a, double* r) {
+    size_t n = slots(in.type);
+    auto each2 = [&](auto f) {
+        for (size_t i = 0; i < n; ++i) r[i] = f(a[0].at(i), a[1].at(i));
+    };
     switch (in.op) {
-        case Op::Const: r.v = in.data; break;
-        case Op::Param: r.v = args.at(size_t(in.aux)).v; break;
-        case Op::Input:
-            if (in.aux == 0) r.v = {inputs.time};
-            else r.v = {inputs.mouse[0], inputs.mouse[1]};
-            break;
-        case Op::Copy: r.v = a[0]->v; break;
-        case Op::Add: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x + y; }); break;
-        case Op::Sub: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x - y; }); break;
-        case Op::Hadamard: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x * y; }); break;
-        case Op::Div: r = elementwise(in.type, *a[0], *a[1], [](double x, double y) { return x / y; }); break;
+        case Op::Const:
+            for (size_t i = 0; i < n; ++i) r[i] = in.data[i];
+            return;
+        case Op::Add: return each2([](double x, double y) { return x + y; });
+        case Op::Sub: return each2([](double x, double y) { return x - y; });
+        case Op::Hadamard: return each2([](double x, double y) { return x * y; });
+        case Op::Div: return each2([](double x, double y) { return x / y; });
         case Op::Neg:
-            r.v = a[0]->v;
-            for (auto& x : r.v) x = -x;
-            break;
-        case Op::Mul: r = multiply(in.type, *a[0], *a[1]); break;
+            for (size_t i = 0; i < n; ++i) r[i] = -a[0].p[i];
+            return;
+        case Op::Mul: return multiply(in.type, a[0], a[1], r);
         case Op::Dot: {
             double s = 0;
-            for (size_t k = 0; k < a[0]->v.size(); ++k) s += a[0]->v[k] * a[1]->v[k];
-            r.v = {s};
-            break;
+            for (size_t k = 0; k < a[0].n; ++k) s += a[0].p[k] * a[1].p[k];
+            r[0] = s;
+            return;
         }
         case Op::Cross: {
-            const auto& x = a[0]->v;
-            const auto& y = a[1]->v;
-            r.v = {x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
-            break;
+            const double *x = a[0].p, *y = a[1].p;
+            r[0] = x[1] * y[2] - x[2] * y[1];
+            r[1] = x[2] * y[0] - x[0] * y[2];
+            r[2] = x[0] * y[1] - x[1] * y[0];
+            return;
         }
         case Op::Transpose: {
-            const Type& at = a[0]->type;
-            if (at.is_vector()) { r.v = a[0]->v; break; }
-            r.v.resize(a[0]->v.size());
-            for (int i2 = 0; i2 < at.rows; ++i2)
-                for (int j = 0; j < at.cols; ++j) r.v[size_t(j * at.rows + i2)] = a[0]->v[size_t(i2 * at.cols + j)];
-            break;
+            const Type& at = *a[0].t;
+            if (!at.is_matrix()) {
+                for (size_t i = 0; i < n; ++i) r[i] = a[0].p[i];
+                return;
+            }
+            for (int i = 0; i < at.rows; ++i)
+                for (int j = 0; j < at.cols; ++j) r[size_t(j * at.rows + i)] = a[0].p[size_t(i * at.cols + j)];
+            return;
         }
-        case Op::Inverse: r.v = mat_inverse(a[0]->v, a[0]->type.rows, nullptr); break;
-        case Op::Det: r.v = {mat_det(a[0]->v, a[0]->type.rows)}; break;
-        case Op::Builtin: r = run_builtin(in, a); break;
-        case Op::Construct:
-            for (auto* x : a) r.v.insert(r.v.end(), x->v.begin(), x->v.end());
-            break;
-        case Op::Extract: r.v = {a[0]->v[size_t(in.aux)]}; break;
+        case Op::Inverse: {
+            std::vector<double> inv = mat_inverse(std::vector<double>(a[0].p, a[0].p + a[0].n), a[0].t->rows, nullptr);
+            for (size_t i = 0; i < n; ++i) r[i] = inv[i];
+            return;
+        }
+        case Op::Det: r[0] = mat_det(std::vector<double>(a[0].p, a[0].p + a[0].n), a[0].t->rows); return;
+        case Op::Builtin: return run_builtin(in, a, r);
+        case Op::Construct: {
+            size_t k = 0;
+            for (size_t j = 0; j < in.args.size(); ++j)
+                for (size_t c = 0; c < a[j].n; ++c) r[k++] = a[j].p[c];
+            return;
+        }
+        case Op::Extract: r[0] = a[0].p[in.aux]; return;
         case Op::Row: {
-            int c = a[0]->type.cols;
-            r.v.assign(a[0]->v.begin() + in.aux * c, a[0]->v.begin() + (in.aux + 1) * c);
-            break;
+            int c = a[0].t->cols;
+            for (int k = 0; k < c; ++k) r[k] = a[0].p[in.aux * c + k];
+            return;
         }
         case Op::Column: {
-            int rows = a[0]->type.rows, c = a[0]->type.cols;
-            for (int k = 0; k < rows; ++k) r.v.push_back(a[0]->v[size_t(k * c + in.aux)]);
-            break;
+            int rows = a[0].t->rows, c = a[0].t->cols;
+            for (int k = 0; k < rows; ++k) r[k] = a[0].p[k * c + in.aux];
+            return;
         }
         case Op::Compare: {
-            double x = a[0]->v[0], y = a[1]->v[0];
+            double x = a[0].p[0], y = a[1].p[0];
             bool b = false;
             switch (CompareKind(in.aux)) {
                 case CompareKind::Eq: b = x == y; break;
@@ -222,68 +222,276 @@ Value eval_instr(const Module& m, const Function& f, const Instr& in, const std:
                 case CompareKind::Gt: b = x > y; break;
                 case CompareKind::Ge: b = x >= y; break;
             }
-            r.v = {b ? 1.0 : 0.0};
-            break;
+            r[0] = b ? 1.0 : 0.0;
+            return;
         }
-        case Op::And: r.v = {(a[0]->v[0] != 0 && a[1]->v[0] != 0) ? 1.0 : 0.0}; break;
-        case Op::Or: r.v = {(a[0]->v[0] != 0 || a[1]->v[0] != 0) ? 1.0 : 0.0}; break;
-        case Op::Select: r.v = a[0]->v[0] != 0 ? a[1]->v : a[2]->v; break;
-        case Op::Loop: {
-            const Function& body = m.functions[size_t(in.aux)];
-            size_t states = body.outputs.size();
-            std::vector<Value> bargs(a.size());
-            for (size_t k = 1; k < a.size(); ++k) bargs[k] = *a[k];
-            double hi = std::floor(a[0]->v[0] + 0.5);
-            // Refused before it starts when its iterations alone exceed what is left of the budget (so a
-            // huge range never starts, and k += 1 never has to count past 2^53).
-            double trips = hi - in.data[0] + 1;
-            double left = double(inputs.max_steps - std::min(inputs.max_steps, inputs.steps));
-            if (trips > 0 && trips * double(body.body.size() + 1) > left) throw EvalLimit{in.span};
-            for (double k = in.data[0]; k <= hi; k += 1) {
-                bargs[0] = {Type::integer(), {k}};
-                auto res = evaluate_all(m, in.aux, bargs, inputs);
-                for (size_t j = 0; j < states; ++j) bargs[j + 1] = res[body.outputs[j].second];
+        case Op::And: r[0] = (a[0].p[0] != 0 && a[1].p[0] != 0) ? 1.0 : 0.0; return;
+        case Op::Or: r[0] = (a[0].p[0] != 0 || a[1].p[0] != 0) ? 1.0 : 0.0; return;
+        case Op::Select: {
+            const Arg& x = a[0].p[0] != 0 ? a[1] : a[2];
+            for (size_t i = 0; i < n; ++i) r[i] = x.at(i);
+            return;
+        }
+        default: internal_error(fmt::format("evaluator: {} is not a pure operation", op_name(in.op)));
+    }
+}
+
+// The components of a Loop's tuple: each state's size, from the body's outputs.
+size_t loop_slots(const Module& m, const Instr& in) {
+    const Function& body = m.functions[size_t(in.aux)];
+    size_t n = 0;
+    for (const auto& [name, v] : body.outputs) n += slots(body.body[v].type);
+    return n;
+}
+
+int switch_arm(const Instr& in, double selector) {
+    for (int k = 0; k < switch_cases(in); ++k)
+        if (selector >= in.data[size_t(2 * k)] && selector < in.data[size_t(2 * k + 1)]) return 2 + k;
+    return 1;
+}
+
+}  // namespace
+
+struct Evaluator::Plan {
+    Schedule sched;
+    std::vector<size_t> offset;  // per instruction, into the frame
+    std::vector<size_t> size;
+    size_t frame = 0;
+};
+
+// One activation of a function: where each value's components are.
+struct Frame {
+    Evaluator& ev;
+    const Module& m;
+    const Function& f;
+    const Evaluator::Plan& plan;
+    const double* const* args;
+    std::vector<double> data;
+    std::vector<const double*> at;
+
+    Frame(Evaluator& e, int fn, const double* const* a)
+        : ev(e), m(e.m_), f(e.m_.functions[size_t(fn)]), plan(e.plan(fn)), args(a), data(plan.frame),
+          at(f.body.size(), nullptr) {}
+
+    Arg arg(ValueId v) const { return {at[v], &f.body[v].type, plan.size[v]}; }
+    double* slot(ValueId v) { return data.data() + plan.offset[v]; }
+
+    void run_region(int r) {
+        for (ValueId i : plan.sched.regions[size_t(r)].instrs) run(i);
+    }
+
+    void run(ValueId i) {
+        const Instr& in = f.body[i];
+        ev.steps_ += 1 + plan.size[i];
+        if (ev.steps_ > ev.inputs_.max_steps) throw EvalLimit{in.span};
+        switch (in.op) {
+            case Op::Param: at[i] = args[in.aux]; return;
+            case Op::Global: at[i] = ev.globals_[size_t(in.aux)].data(); return;
+            case Op::Copy: at[i] = at[in.args[0]]; return;
+            case Op::Index: {
+                double k = at[in.args[1]][0];
+                int count = f.body[in.args[0]].type.count;
+                if (!(k >= 0 && k < count)) internal_error(fmt::format("evaluator: index {} outside an array of {}", k, count));
+                at[i] = at[in.args[0]] + size_t(k) * plan.size[i];
+                return;
             }
-            r.v.clear();
-            for (size_t j = 0; j < states; ++j) r.v.insert(r.v.end(), bargs[j + 1].v.begin(), bargs[j + 1].v.end());
-            break;
-        }
-        case Op::Member: {
-            const Instr& loop = f.body[in.args[0]];
-            const Function& body = m.functions[size_t(loop.aux)];
-            size_t off = 0;
-            for (int j = 0; j < in.aux; ++j) off += size_t(body.body[body.outputs[size_t(j)].second].type.components());
-            r.v.assign(a[0]->v.begin() + long(off), a[0]->v.begin() + long(off) + in.type.components());
-            break;
-        }
-        case Op::Call: {
-            std::vector<Value> cargs;
-            for (auto* x : a) cargs.push_back(*x);
-            r = evaluate(m, in.aux, cargs, inputs);
-            break;
+            case Op::Input: {
+                double* r = slot(i);
+                if (in.aux == 0) r[0] = ev.inputs_.time;
+                else r[0] = ev.inputs_.mouse[0], r[1] = ev.inputs_.mouse[1];
+                at[i] = r;
+                return;
+            }
+            case Op::If:
+            case Op::Switch: {
+                int arm = in.op == Op::If ? (at[in.args[0]][0] != 0 ? 1 : 2) : switch_arm(in, at[in.args[0]][0]);
+                run_region(plan.sched.arms[i][size_t(arm)]);
+                at[i] = at[in.args[size_t(arm)]];
+                return;
+            }
+            case Op::Call: {
+                std::vector<const double*> a;
+                for (ValueId x : in.args) a.push_back(at[x]);
+                double* r = slot(i);
+                ev.call(in.aux, a.data(), r);
+                at[i] = r;
+                return;
+            }
+            case Op::Loop: run_loop(i); return;
+            case Op::Member: {
+                const Instr& loop = f.body[in.args[0]];
+                const Function& body = m.functions[size_t(loop.aux)];
+                size_t off = 0;
+                for (int j = 0; j < in.aux; ++j) off += slots(body.body[body.outputs[size_t(j)].second].type);
+                at[i] = at[in.args[0]] + off;
+                return;
+            }
+            default: {
+                Arg a[8];
+                std::vector<Arg> many;
+                Arg* ap = a;
+                if (in.args.size() > 8) {
+                    many.resize(in.args.size());
+                    ap = many.data();
+                }
+                for (size_t k = 0; k < in.args.size(); ++k) ap[k] = arg(in.args[k]);
+                double* r = slot(i);
+                run_op(in, ap, r);
+                at[i] = r;
+            }
         }
     }
-    r.type = in.type;
+
+    // k = lo..hi: the body's parameters are (k, the states, the captures), its outputs the next states.
+    void run_loop(ValueId i) {
+        const Instr& in = f.body[i];
+        const Function& body = m.functions[size_t(in.aux)];
+        size_t states = body.outputs.size();
+        double* r = slot(i);
+        std::vector<size_t> off(states + 1, 0);
+        for (size_t j = 0; j < states; ++j) {
+            size_t n = slots(body.body[body.outputs[j].second].type);
+            off[j + 1] = off[j] + n;
+            const double* init = at[in.args[j + 1]];
+            std::copy(init, init + n, r + off[j]);
+        }
+        std::vector<double> next(off[states]);
+        double k = 0;
+        std::vector<const double*> a(in.args.size());
+        a[0] = &k;
+        for (size_t j = 0; j < states; ++j) a[j + 1] = r + off[j];
+        for (size_t c = states + 1; c < in.args.size(); ++c) a[c] = at[in.args[c]];
+        double hi = std::floor(at[in.args[0]][0] + 0.5);
+        // Refused before it starts when its iterations alone exceed what is left of the budget (so a huge
+        // range never starts, and k += 1 never has to count past 2^53).
+        double trips = hi - in.data[0] + 1;
+        double left = double(ev.inputs_.max_steps - std::min(ev.inputs_.max_steps, ev.steps_));
+        if (trips > 0 && trips * double(body.body.size() + 1) > left) throw EvalLimit{in.span};
+        Frame bf(ev, in.aux, a.data());  // one frame for every iteration: each run overwrites its values
+        for (k = in.data[0]; k <= hi; k += 1) {
+            bf.run_region(0);
+            for (size_t j = 0; j < states; ++j) {
+                const double* v = bf.at[body.outputs[j].second];
+                std::copy(v, v + (off[j + 1] - off[j]), next.data() + off[j]);
+            }
+            std::copy(next.begin(), next.end(), r);
+        }
+        at[i] = r;
+    }
+};
+
+Evaluator::Evaluator(const Module& m, const EvalInputs& inputs) : m_(m), inputs_(inputs) {
+    for (const auto& g : m.globals) globals_.push_back(g.kind == Global::Kind::Prepared ? std::vector<double>(slots(g.type), 0.0) : g.value);
+    plans_.resize(m.functions.size());
+    prepare();
+}
+
+Evaluator::~Evaluator() = default;
+
+const Evaluator::Plan& Evaluator::plan(int fn) const {
+    if (fn < 0 || size_t(fn) >= m_.functions.size()) internal_error(fmt::format("evaluator: no function #{}", fn));
+    auto& p = plans_[size_t(fn)];
+    if (p) return *p;
+    const Function& f = m_.functions[size_t(fn)];
+    p = std::make_unique<Plan>();
+    p->sched = schedule(f);
+    p->offset.resize(f.body.size());
+    p->size.resize(f.body.size());
+    for (size_t i = 0; i < f.body.size(); ++i) {
+        const Instr& in = f.body[i];
+        p->size[i] = in.op == Op::Loop ? loop_slots(m_, in) : slots(in.type);
+        p->offset[i] = p->frame;
+        p->frame += p->size[i];
+    }
+    return *p;
+}
+
+void Evaluator::prepare() {
+    int fn = m_.find(names::kPrepare);
+    if (fn < 0) return;
+    const Function& f = m_.functions[size_t(fn)];
+    steps_ = 0;
+    Frame fr(*this, fn, nullptr);
+    fr.run_region(0);
+    for (const auto& [name, v] : f.outputs) {
+        int g = m_.find_global(name);
+        if (g < 0) internal_error("evaluator: iqc_prepare computes '" + name + "', which is no global");
+        globals_[size_t(g)].assign(fr.at[v], fr.at[v] + fr.plan.size[v]);
+    }
+}
+
+void Evaluator::set_global(int g, std::vector<double> value) {
+    if (g < 0 || size_t(g) >= globals_.size() || value.size() != globals_[size_t(g)].size())
+        internal_error(fmt::format("evaluator: bad value for global #{}", g));
+    globals_[size_t(g)] = std::move(value);
+    prepare();
+}
+
+void Evaluator::call(int fn, const double* const* args, double* out) {
+    steps_ = 0;
+    Frame fr(*this, fn, args);
+    fr.run_region(0);
+    const Function& f = m_.functions[size_t(fn)];
+    if (f.body.empty()) return;
+    const double* r = fr.at[f.result];
+    std::copy(r, r + fr.plan.size[f.result], out);
+}
+
+namespace {
+std::vector<const double*> arg_pointers(const Function& f, const std::vector<Value>& args) {
+    if (args.size() != f.params.size())
+        internal_error(fmt::format("evaluator: {} takes {} arguments, not {}", f.name, f.params.size(), args.size()));
+    std::vector<const double*> a;
+    for (size_t k = 0; k < args.size(); ++k) {
+        if (int(args[k].v.size()) != std::max(1, f.params[k].type.components()))
+            internal_error(fmt::format("evaluator: argument {} of {} has the wrong size", f.params[k].name, f.name));
+        a.push_back(args[k].v.data());
+    }
+    return a;
+}
+}  // namespace
+
+Value Evaluator::call(int fn, const std::vector<Value>& args) {
+    const Function& f = m_.functions[size_t(fn)];
+    auto a = arg_pointers(f, args);
+    Value r{f.result_type(), std::vector<double>(slots(f.result_type()))};
+    call(fn, a.data(), r.v.data());
     return r;
 }
 
-std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& inputs) {
-    const Function& f = m.functions[size_t(fn)];
-    std::vector<Value> vals(f.body.size());
+std::vector<Value> Evaluator::call_all(int fn, const std::vector<Value>& args) {
+    const Function& f = m_.functions[size_t(fn)];
+    auto a = arg_pointers(f, args);
+    steps_ = 0;
+    Frame fr(*this, fn, a.data());
+    fr.run_region(0);
+    std::vector<Value> out(f.body.size());
     for (size_t i = 0; i < f.body.size(); ++i) {
-        const Instr& in = f.body[i];
-        inputs.steps += 1 + uint64_t(std::max(0, in.type.components()));
-        if (inputs.steps > inputs.max_steps) throw EvalLimit{in.span};
-        std::vector<const Value*> a;
-        for (ValueId id : in.args) a.push_back(&vals[id]);
-        vals[i] = eval_instr(m, f, in, a, args, inputs);
+        if (!fr.at[i] || f.body[i].op == Op::Loop) continue;
+        out[i].type = f.body[i].type;
+        out[i].v.assign(fr.at[i], fr.at[i] + fr.plan.size[i]);
     }
-    return vals;
+    return out;
 }
 
-Value evaluate(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& inputs) {
-    auto all = evaluate_all(m, fn, args, inputs);
-    return all[m.functions[size_t(fn)].result];
+std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& in) {
+    Evaluator ev(m, in);
+    return ev.call_all(fn, args);
+}
+
+Value evaluate(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& in) {
+    Evaluator ev(m, in);
+    return ev.call(fn, args);
+}
+
+Value eval_instr(const Module& m, const Function& f, const Instr& in, const std::vector<const Value*>& a) {
+    (void)m;
+    (void)f;
+    std::vector<Arg> args;
+    for (const Value* v : a) args.push_back({v->v.data(), &v->type, v->v.size()});
+    Value r{in.type, std::vector<double>(slots(in.type))};
+    run_op(in, args.data(), r.v.data());
+    return r;
 }
 
 std::string format_value(const Value& v) {

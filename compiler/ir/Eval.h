@@ -1,10 +1,17 @@
-// The double-precision evaluator: runs an IR function on values.
+// The double-precision evaluator: runs IR functions on values.
 //
-// It is the reference for `iqc eval`, for compile-time folding (constant transforms are evaluated and
-// inverted here, once) and, later, for the numerical tests. Built-ins use the evaluation rules of the
-// built-in table (sema/Builtins.h), so they mean the same as in the folder and the GLSL backend.
+// It is the one meaning of the IR: `iqc eval`, compile-time folding (constant transforms are evaluated and
+// inverted here, once), SceneModel (the scene as a double-precision reference) and every numerical test
+// run it. Built-ins use the evaluation rules of the built-in table (sema/Builtins.h), so they mean the same
+// as in the folder and the GLSL backend. `If` and `Switch` run only the chosen arm (ir/Schedule.h).
+//
+// Globals: parameters start at their default values (Evaluator::set_global overrides them), constants are
+// what the module says, and prepared globals are computed by the module's `iqc_prepare` function (when it
+// has one) before anything else runs.
 #pragma once
 
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,7 +22,7 @@ namespace iqc::ir {
 
 struct Value {
     Type type;
-    std::vector<double> v;  // components; matrices row-major
+    std::vector<double> v;  // components; matrices row-major; arrays element after element
     double operator[](size_t i) const { return v[i]; }
 };
 
@@ -23,10 +30,10 @@ struct Value {
 struct EvalInputs {
     double time = 0;
     double mouse[2] = {0, 0};
-    // One step per instruction plus one per component it produces; a recurrence whose iterations alone
-    // exceed what is left is refused before it starts. Past the budget the evaluator throws EvalLimit.
+    // One step per instruction plus one per component it produces, counted afresh for every call; a
+    // recurrence whose iterations alone exceed what is left is refused before it starts. Past the budget
+    // the evaluator throws EvalLimit.
     uint64_t max_steps = limits::kMaxEvalSteps;
-    mutable uint64_t steps = 0;
 };
 
 // Thrown when an evaluation would exceed EvalInputs::max_steps; `span`: the recurrence or the
@@ -35,16 +42,48 @@ struct EvalLimit {
     Span span;
 };
 
-// Evaluates function `fn` of `m` with the given arguments; returns every value of its body (index = ValueId).
+class Evaluator {
+public:
+    // Computes the prepared globals (iqc_prepare) at once; `m` must outlive the evaluator.
+    explicit Evaluator(const Module& m, const EvalInputs& inputs = {});
+    ~Evaluator();
+    Evaluator(const Evaluator&) = delete;
+    Evaluator& operator=(const Evaluator&) = delete;
+
+    // Overrides a parameter global (components row-major), then recomputes the prepared globals.
+    void set_global(int global, std::vector<double> value);
+    const std::vector<double>& global(int g) const { return globals_[size_t(g)]; }
+
+    // The function's result.
+    Value call(int fn, const std::vector<Value>& args);
+    // Every value of the function's body (index = ValueId; values in arms not taken, and dead ones, are
+    // empty).
+    std::vector<Value> call_all(int fn, const std::vector<Value>& args);
+    // Fast path: arguments as component arrays; the result's components are written to `out`.
+    void call(int fn, const double* const* args, double* out);
+
+    struct Plan;  // per function: schedule and value layout (Eval.cpp)
+
+private:
+    const Module& m_;
+    EvalInputs inputs_;
+    std::vector<std::vector<double>> globals_;
+    uint64_t steps_ = 0;  // work of the current call (EvalInputs::max_steps)
+    mutable std::vector<std::unique_ptr<Plan>> plans_;
+    const Plan& plan(int fn) const;
+    void prepare();
+    friend struct Frame;
+};
+
+// Evaluates function `fn` of `m` with the given arguments (a fresh Evaluator: globals at their defaults).
 std::vector<Value> evaluate_all(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& in = {});
-// Evaluates and returns the function's result.
 Value evaluate(const Module& m, int fn, const std::vector<Value>& args, const EvalInputs& in = {});
 
-// One instruction applied to its operands' values (args: the function's arguments, for Param).
-Value eval_instr(const Module& m, const Function& f, const Instr& in, const std::vector<const Value*>& operands,
-                 const std::vector<Value>& args, const EvalInputs& inputs);
+// One instruction applied to constant operands (the folder's rule; not for Param, Global, Call, Loop,
+// Member, Input). Throws InternalError for those.
+Value eval_instr(const Module& m, const Function& f, const Instr& in, const std::vector<const Value*>& operands);
 
-// Math helpers shared with scene assembly.
+// Math helpers shared with scene lowering.
 std::vector<double> mat_inverse(const std::vector<double>& a, int n, bool* singular);
 double mat_det(const std::vector<double>& a, int n);
 

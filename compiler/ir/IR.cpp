@@ -63,6 +63,12 @@ int Module::find(const std::string& name) const {
     return -1;
 }
 
+int Module::find_global(const std::string& name) const {
+    for (size_t i = 0; i < globals.size(); ++i)
+        if (globals[i].name == name) return int(i);
+    return -1;
+}
+
 Type result_type(Op op, const std::vector<Type>& a, int aux) {
     auto is_num = [](const Type& t) { return t.is_numeric(); };
     switch (op) {
@@ -75,16 +81,22 @@ Type result_type(Op op, const std::vector<Type>& a, int aux) {
             return aux == 0 ? Type::scalar() : aux == 1 ? Type::vector(2) : Type{};
         case Op::Loop:
         case Op::Member:
-            return {};  // checked against the body function by the verifier
+        case Op::Global:
+        case Op::Switch:
+            return {};  // checked against the body function, the global or the cases by the verifier
         case Op::Copy:
             return a[0];
+        case Op::Index:
+            return a[0].is_array() && a[1].kind == Type::Integer ? a[0].element() : Type{};
         case Op::Add:
         case Op::Sub:
+            if (a[0].kind == Type::Integer && a[1].kind == Type::Integer) return Type::integer();
             if (a[0].is_scalar() && a[1].is_scalar()) return Type::scalar();
             return (a[0] == a[1] && is_num(a[0])) ? a[0] : Type{};
         case Op::Neg:
-            return is_num(a[0]) ? (a[0].is_scalar() ? Type::scalar() : a[0]) : Type{};
+            return is_num(a[0]) ? (a[0].is_scalar() && a[0].kind != Type::Integer ? Type::scalar() : a[0]) : Type{};
         case Op::Mul:
+            if (a[0].kind == Type::Integer && a[1].kind == Type::Integer) return Type::integer();
             if (a[0].is_scalar() && is_num(a[1])) return a[1].is_scalar() ? Type::scalar() : a[1];
             if (a[1].is_scalar() && is_num(a[0])) return a[0];
             if (a[0].is_matrix() && a[1].is_vector() && a[0].cols == a[1].rows) return Type::vector(a[0].rows);
@@ -135,14 +147,31 @@ Type result_type(Op op, const std::vector<Type>& a, int aux) {
         case Op::Or:
             return (a[0].kind == Type::Bool && a[1].kind == Type::Bool) ? Type::boolean() : Type{};
         case Op::Select:
+        case Op::If:
             if (a[0].kind != Type::Bool) return {};
+            if (a[1].kind == Type::Integer && a[2].kind == Type::Integer) return Type::integer();
             if (a[1].is_scalar() && a[2].is_scalar()) return Type::scalar();
-            return a[1] == a[2] ? a[1] : Type{};
+            return a[1] == a[2] && a[1].valid() ? a[1] : Type{};
     }
     return {};
 }
 
 static std::string format_number(double v) { return fmt::format("{}", v); }
+
+static std::string format_list(const std::vector<double>& v) {
+    std::string s;
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + format_number(v[i]);
+    return s;
+}
+
+// `∈ [0, 2]×[0, 1]` for bounded values; "" for inputs and unbounded ones.
+static std::string format_bounds(const ValueBounds& b) {
+    if (b.input || b.lo.empty()) return "";
+    std::string s = " ∈ ";
+    for (size_t i = 0; i < b.lo.size(); ++i)
+        s += fmt::format("{}[{}, {}]", i ? "×" : "", format_number(b.lo[i]), format_number(b.hi[i]));
+    return s;
+}
 
 static std::string instr_text(const Function& f, const Instr& in, const Module* m) {
     std::string s = fmt::format("{} {}", in.type.str(), op_name(in.op));
@@ -159,6 +188,14 @@ static std::string instr_text(const Function& f, const Instr& in, const Module* 
                  (m && in.aux < int(m->functions.size()) ? m->functions[size_t(in.aux)].name : fmt::format("@{}", in.aux));
             break;
         case Op::Member: s += fmt::format(" .{}", in.aux); break;
+        case Op::Global:
+            s += fmt::format(" @{}", in.aux);
+            if (m && in.aux >= 0 && size_t(in.aux) < m->globals.size()) s += " " + m->globals[size_t(in.aux)].name;
+            break;
+        case Op::Switch:
+            for (int k = 0; k < switch_cases(in); ++k)
+                s += fmt::format(" [{}, {})", format_number(in.data[size_t(2 * k)]), format_number(in.data[size_t(2 * k + 1)]));
+            break;
         case Op::Builtin: s += fmt::format(" {}", builtin(in.aux).name); break;
         case Op::Call:
             s += " " + (m && in.aux < int(m->functions.size()) ? m->functions[size_t(in.aux)].name
@@ -180,9 +217,10 @@ static std::string instr_text(const Function& f, const Instr& in, const Module* 
 }
 
 std::string print(const Function& f, const Module* m) {
-    std::string out = fmt::format("function {}(", f.name);
+    std::string out = fmt::format("{}{}function {}(", f.entry ? "entry " : "", f.inline_hint ? "inline " : "", f.name);
     for (size_t i = 0; i < f.params.size(); ++i)
-        out += fmt::format("{}{}: {}", i ? ", " : "", f.params[i].name, f.params[i].type.str());
+        out += fmt::format("{}{}: {}{}", i ? ", " : "", f.params[i].name, f.params[i].type.str(),
+                           i < f.param_bounds.size() ? format_bounds(f.param_bounds[i]) : "");
     out += fmt::format(") -> {} {{\n", f.result_type().str());
     for (size_t i = 0; i < f.body.size(); ++i) out += fmt::format("  %{} = {}\n", i, instr_text(f, f.body[i], m));
     out += fmt::format("  return %{}\n", f.result);
@@ -191,8 +229,18 @@ std::string print(const Function& f, const Module* m) {
     return out;
 }
 
+std::string print(const Global& g, size_t index) {
+    static const char* kinds[] = {"parameter", "constant", "prepared"};
+    std::string out = fmt::format("global @{} {}: {} {}", index, g.name, g.type.str(), kinds[int(g.kind)]);
+    if (g.kind != Global::Kind::Prepared) out += " = " + format_list(g.value);
+    out += format_bounds(g.bounds);
+    if (!g.comment.empty()) out += "  ; " + g.comment;
+    return out + "\n";
+}
+
 std::string print(const Module& m) {
     std::string out;
+    for (size_t i = 0; i < m.globals.size(); ++i) out += print(m.globals[i], i);
     for (const auto& f : m.functions) out += print(f, &m);
     return out;
 }
@@ -247,6 +295,23 @@ std::string verify(const Function& f, const Module& m) {
                 if (t != in.type && !(t.is_scalar() && in.type.is_scalar())) return fault("member type mismatch");
                 break;
             }
+            case Op::Global: {
+                if (in.aux < 0 || size_t(in.aux) >= m.globals.size()) return fault("no such global");
+                const Global& g = m.globals[size_t(in.aux)];
+                if (g.type != in.type) return fault("global type mismatch");
+                if (g.kind != Global::Kind::Prepared && int(g.value.size()) != g.type.components())
+                    return fault("global value size does not match its type");
+                break;
+            }
+            case Op::Switch: {
+                if (in.args.size() < 2 || in.data.size() != 2 * (in.args.size() - 2)) return fault("switch cases mismatch");
+                if (types[0].kind != Type::Integer) return fault("switch selector is not ℤ");
+                for (size_t k = 1; k < types.size(); ++k)
+                    if (types[k] != in.type && !(types[k].is_scalar() && in.type.is_scalar())) return fault("switch case type mismatch");
+                for (int k = 0; k < switch_cases(in); ++k)
+                    if (!(in.data[size_t(2 * k)] < in.data[size_t(2 * k + 1)])) return fault("empty switch case");
+                break;
+            }
             case Op::Call: {
                 if (in.aux < 0 || size_t(in.aux) >= m.functions.size()) return fault("bad callee");
                 const Function& callee = m.functions[size_t(in.aux)];
@@ -265,6 +330,16 @@ std::string verify(const Function& f, const Module& m) {
         }
     }
     if (!f.body.empty() && f.result >= f.body.size()) return fmt::format("{}: result out of range", f.name);
+    for (const auto& [name, v] : f.outputs)
+        if (v >= f.body.size()) return fmt::format("{}: output {} out of range", f.name, name);
+    if (!f.param_bounds.empty() && f.param_bounds.size() != f.params.size())
+        return fmt::format("{}: parameter bounds do not match the parameters", f.name);
+    return "";
+}
+
+std::string verify(const Module& m) {
+    for (const auto& f : m.functions)
+        if (std::string fault = verify(f, m); !fault.empty()) return fault;
     return "";
 }
 

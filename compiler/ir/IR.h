@@ -1,13 +1,17 @@
 // The typed IR: what folding, dead-code removal, differentiation, range analysis, the double-precision
 // evaluator and the GLSL backend all work on.
 //
-// A Module holds Functions. A Function's body is a list of instructions in SSA form: each instruction
-// defines one value (its index in the body) from earlier values. Instructions keep the source name and
-// span of the statement that defined them, so the backend can emit readable code (`float D = ...; // D = ‖q‖
-// - t_2`) and diagnostics can point at the math. `print()` gives a stable text form for tests and
-// `--dump-ir`; `verify()` checks types and SSA order.
+// A Module holds Functions and module-level values (Globals: the scene's parameters and the facts it
+// computes once, such as inverted transforms). A Function's body is a list of instructions in SSA form:
+// each instruction defines one value (its index in the body) from earlier values. Every operation is pure;
+// `If` and `Switch` are lazy: only the chosen operand's computation runs (ir/Schedule.h says which
+// instructions belong to which arm). Instructions keep the source name and span of the statement that
+// defined them, so the backend can emit readable code (`float D = ...; // D = ‖q‖ - t_2`) and diagnostics can
+// point at the math. `print()` gives a stable text form for tests and `--dump-ir` (ir/Parse.h reads it back);
+// `verify()` checks types and SSA order.
 //
-// Matrices are stored row-major in constants and evaluator values (as they are written in math).
+// Matrices are stored row-major in constants and evaluator values (as they are written in math). ℤ values
+// are exact integers (stored as doubles); arithmetic on two ℤ operands stays ℤ (array indices, instance ids).
 #pragma once
 
 #include <cstdint>
@@ -47,7 +51,11 @@ namespace iqc::ir {
     X(Call, -1)       /* aux: callee function index */                                  \
     X(Input, 0)       /* aux: 0 time (ℝ, seconds), 1 mouse (ℝ², [0,1]² of the view) */  \
     X(Loop, -1)       /* aux: body function; data: {lo}; args: hi, initial states, captures */    \
-    X(Member, 1)      /* aux: which result of a Loop */
+    X(Member, 1)      /* aux: which result of a Loop */                                  \
+    X(Global, 0)      /* aux: index in Module::globals */                                \
+    X(Index, 2)       /* array[i]: element i (ℤ, 0-based) of an array value */           \
+    X(If, 3)          /* cond ? a : b, lazy: only the chosen operand is computed */      \
+    X(Switch, -1)     /* args: selector (ℤ), default, cases; data: each case's [lo, hi) */
 
 enum class Op : uint8_t {
 #define X(name, n) name,
@@ -78,10 +86,20 @@ struct FunctionParam {
     Type type;
 };
 
+// What range analysis may assume about a parameter or a global: slider bounds per component (lo/hi
+// empty: any value), or, for an input the renderer supplies (a query point, a normal), nothing.
+struct ValueBounds {
+    bool input = true;
+    std::vector<double> lo, hi;
+};
+
 struct Function {
     std::string name;                  // qualified: "torus", "transformations.T", "scene.box_frame_1.transform"
     std::string glsl_name;             // preferred GLSL spelling (the backend still makes it unique)
     std::vector<FunctionParam> params;
+    std::vector<ValueBounds> param_bounds;  // per parameter (empty: every parameter is an input)
+    bool inline_hint = false;          // a building block of the scene functions: the inline pass inlines it
+    bool entry = false;                // called from outside the IR (the runtime, the evaluator's user)
     std::vector<Instr> body;
     ValueId result = 0;                // the primary output (D, C, or the bare expression)
     std::vector<std::pair<std::string, ValueId>> outputs;  // every assigned name, in source order
@@ -95,17 +113,65 @@ struct Function {
     ValueId scalar(double v) { return constant(Type::scalar(), {v}); }
 };
 
-struct Module {
-    std::vector<Function> functions;
-    int find(const std::string& name) const;
+// Which instance parameter a global (or one element of an array global) is, for `--meta` and sliders.
+struct GlobalParam {
+    std::string instance;     // "ring_7", or the light's name
+    std::string module;       // "torus" ("" for lights, "transform" for a transform's parameters)
+    std::string role;         // "shape", "material", "transform", "light"
+    std::string name;         // the parameter as written: "t", "k_d", "position"
+    std::string description;
 };
 
-// Stable text form, e.g. `%3: ℝ = sub %1, %2  ; D`.
+struct Global {
+    // Parameter: a value the user may change (a slider; its storage is the target's choice: constants on
+    // Shadertoy, uniforms elsewhere). Constant: a fact the compiler computed (always a constant).
+    // Prepared: computed once per pixel by the function `iqc_prepare` (its output of the same name), before
+    // any marching — a transform that depends on sliders or time.
+    enum class Kind : uint8_t { Parameter, Constant, Prepared };
+    std::string name;          // unique in the module, also the preferred GLSL spelling
+    Type type;                 // may be an array: per-instance data of a group of instances
+    Kind kind = Kind::Constant;
+    std::vector<double> value; // row-major components, arrays element after element (Prepared: unused)
+    ValueBounds bounds;        // per element component; `input` is false for parameters and constants
+    std::vector<GlobalParam> params;  // Parameter: one per element (one for a non-array)
+    std::string comment;       // what the value is (the declaration's comment)
+    std::string owner;         // whose value it is, for grouping declarations: "floor_1: floor with lit"
+};
+
+struct Module {
+    std::vector<Function> functions;
+    std::vector<Global> globals;
+    int find(const std::string& name) const;
+    int find_global(const std::string& name) const;
+};
+
+// The scene's fixed function names: the runtime (runtime_templates/scene.glsl) calls these.
+namespace names {
+inline constexpr const char* kScene = "iqc_scene";              // (p: ℝ³) -> (distance, instance id as ℝ)
+inline constexpr const char* kDistanceOf = "iqc_distance_of";   // (p: ℝ³, id: ℤ) -> that instance's distance
+inline constexpr const char* kGradient = "iqc_gradient";        // (p: ℝ³, id: ℤ) -> ∇ of it (analytic normals)
+inline constexpr const char* kShade = "iqc_shade";              // (id, p, N, eye) -> colour without lights
+inline constexpr const char* kShadeLight = "iqc_shade_light";   // (id, p, N, eye, P_L, C_L) -> one light's term
+inline constexpr const char* kLightPosition = "iqc_light_position";  // (l: ℤ) -> ℝ³
+inline constexpr const char* kLightColor = "iqc_light_color";        // (l: ℤ) -> ℝ³
+inline constexpr const char* kReflectivity = "iqc_reflectivity";    // (id) -> k_r as ℝ³
+inline constexpr const char* kTransmission = "iqc_transmission";    // (id) -> (k_t, η)
+inline constexpr const char* kPrepare = "iqc_prepare";         // () -> outputs named like Prepared globals
+inline constexpr const char* kInstanceInverse = "iqc_instance_inverse";    // (i: ℤ) -> world→object ℝ^(4×4)
+inline constexpr const char* kInstanceDistance = "iqc_instance_distance";  // (i: ℤ, q: ℝ³) -> object-space distance
+}  // namespace names
+
+// The element-count of a Switch's cases and the range of case k: [lo, hi).
+inline int switch_cases(const Instr& in) { return int(in.data.size() / 2); }
+
+// Stable text form, e.g. `%3 = ℝ Sub %1, %2  ; D`.
 std::string print(const Function& f, const Module* m = nullptr);
 std::string print(const Module& m);
+std::string print(const Global& g, size_t index);
 
 // Checks operand counts, SSA order and types; returns "" when valid, else a description of the first fault.
 std::string verify(const Function& f, const Module& m);
+std::string verify(const Module& m);
 
 // A Loop runs its body function for k = lo..hi (lo in data; operands: hi, the initial states, the captured
 // outer values): the body's parameters are (k, the states, the captured outer values) and its outputs

@@ -3,9 +3,9 @@
 #include <cmath>
 #include <functional>
 #include <fmt/format.h>
-#include <stdexcept>
 
 #include "sema/Builtins.h"
+#include "source/Internal.h"
 
 namespace iqc {
 
@@ -72,7 +72,7 @@ struct Env {
     // lowered once per use with other sizes, and the checker's annotations are those of its last use.
     ValueId op2(Op op, ValueId a, ValueId b, Span span) {
         Type t = ir::result_type(op, {type_of(a), type_of(b)}, 0);
-        if (!t.valid()) throw std::logic_error(std::string("lowering: operand types do not fit ") + ir::op_name(op));
+        if (!t.valid()) internal_error(std::string("lowering: operand types do not fit ") + ir::op_name(op));
         return emit(op, t, {a, b}, 0, span);
     }
     static Type scalar_or(const Type& t) { return t.is_scalar() ? Type::scalar() : t; }
@@ -91,7 +91,7 @@ struct Env {
                 if (fn->captures[i].first == name) return captures[i];
         if (int pi = m.find_param(name); pi >= 0) return params[size_t(pi)];
         auto it = values.find(name);
-        if (it == values.end()) throw std::logic_error("lowering: captured name '" + name + "' has no value");
+        if (it == values.end()) internal_error("lowering: captured name '" + name + "' has no value");
         return it->second;
     }
 
@@ -177,7 +177,7 @@ struct Env {
                     case R_Pi: return f.scalar(M_PI);
                     case R_Input: return emit(Op::Input, e.aux == 0 ? Type::scalar() : Type::vector(2), {}, e.aux, e.span);
                     case R_SumIndex: return f.scalar(double(sum_index.at(e.text) + 1));
-                    default: throw std::logic_error("lowering: unresolved name " + e.text);
+                    default: internal_error("lowering: unresolved name " + e.text);
                 }
             case ExprKind::Call: {
                 if (e.resolved == R_Scale) return mul(lower(*e.args[0]), lower(*e.args[1]), e.span);
@@ -200,10 +200,11 @@ struct Env {
                 for (auto& cap : callee.captures) {
                     if (owner == &m) {
                         args.push_back(lookup_capture(cap.first));
-                    } else {  // a library module's own parameter: its default value
-                        int pi = owner->find_param(cap.first);
-                        if (pi < 0) throw std::logic_error("lowering: imported function captures a value");
+                    } else if (int pi = owner->find_param(cap.first); pi >= 0) {
+                        // a library module's own parameter: its default value
                         args.push_back(f.constant(cap.second, owner->params[size_t(pi)].value));
+                    } else {  // a library module's own value, computed from its defaults
+                        args.push_back(library_value(*owner, cap.first));
                     }
                 }
                 std::vector<Type> arg_types;
@@ -361,7 +362,25 @@ struct Env {
                 return acc;
             }
         }
-        throw std::logic_error("lowering: unknown expression");
+        internal_error("lowering: unknown expression");
+    }
+
+    // A value assigned in another (imported) module, computed here from that module's default parameters.
+    ValueId library_value(const CheckedModule& owner, const std::string& name) {
+        Env oe{owner, ctx, f};
+        for (const auto& p : owner.params) oe.params.push_back(f.constant(p.type, p.value));
+        for (const Stmt* s : owner.order) {
+            if (s->kind == StmtKind::Recurrence) {
+                for (const auto& g : owner.groups)
+                    if (g.leader == s) oe.lower_group(g);
+                continue;
+            }
+            if (s->kind != StmtKind::Assign) continue;
+            ValueId v = oe.lower(*s->value);
+            oe.values[s->name] = v;
+            if (s->name == name) return v;
+        }
+        internal_error("lowering: imported function captures '" + name + "', which its module does not assign");
     }
 
     // Gives `v` the statement's name (or a named copy, when v is a parameter or already named).
@@ -472,6 +491,27 @@ int lower_local_function(const CheckedModule& m, int fi, const std::vector<Type>
 
 }  // namespace
 
+std::vector<ir::ValueBounds> parameter_bounds(const CheckedModule& m) {
+    std::vector<ir::ValueBounds> b;
+    for (const auto& p : m.params) {
+        ir::ValueBounds v;
+        v.input = false;
+        if (p.bounded) {
+            v.lo = p.lo;
+            v.hi = p.hi;
+        }
+        b.push_back(std::move(v));
+    }
+    // What the renderer binds is an input: the shape's query point, the material's point, normal and eye, and
+    // the light a material is lit by.
+    for (int r : m.roles)
+        if (r >= 0) b[size_t(r)].input = true;
+    if (m.ast.kind == ast::ModuleKind::Material)
+        for (const char* n : {"P_L", "C_L"})
+            if (int k = m.find_param(n); k >= 0) b[size_t(k)].input = true;
+    return b;
+}
+
 int lower_module_cached(const CheckedModule& m, LowerContext& ctx) {
     if (auto it = ctx.modules.find(&m); it != ctx.modules.end()) return it->second;
     int idx = lower_module(m, m.ast.name, m.ast.name, ctx);
@@ -487,6 +527,7 @@ int lower_module(const CheckedModule& m, const std::string& name, const std::str
     ctx.module.functions.emplace_back();
     Env env{m, ctx, fn};
     for (auto& p : m.params) env.params.push_back(add_param(fn, p.name, p.type));
+    fn.param_bounds = parameter_bounds(m);
     ValueId result = 0;
     bool have_result = false;
     for (const Stmt* s : m.order) {

@@ -31,4 +31,8 @@ int lower_module(const CheckedModule& m, const std::string& name, const std::str
 // The module's function under its own name, lowered once per context (instances and imports share it).
 int lower_module_cached(const CheckedModule& m, LowerContext& ctx);
 
+// What range analysis may assume about the module's parameters: their slider bounds, except for what the
+// renderer binds (the roles, a material's `P_L` and `C_L`), which are inputs.
+std::vector<ir::ValueBounds> parameter_bounds(const CheckedModule& m);
+
 }  // namespace iqc

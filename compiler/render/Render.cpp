@@ -414,7 +414,8 @@ constexpr const char* kVertexShader =
 // GL object names created by one render; deleted on scope exit (deleting name 0 is a no-op).
 // Must be destroyed while the context is current.
 struct GlObjects {
-    GLuint vs = 0, fs = 0, program = 0, texture = 0, fbo = 0, vao = 0;
+    GLuint vs = 0, fs = 0, program = 0, texture = 0, fbo = 0, vao = 0, data_texture = 0;
+    std::vector<GLuint> buffers;  // uniform blocks
     GlObjects() = default;
     GlObjects(const GlObjects&) = delete;
     GlObjects& operator=(const GlObjects&) = delete;
@@ -424,6 +425,8 @@ struct GlObjects {
         glUseProgram(0);
         glDeleteFramebuffers(1, &fbo);
         glDeleteTextures(1, &texture);
+        glDeleteTextures(1, &data_texture);
+        if (!buffers.empty()) glDeleteBuffers(GLsizei(buffers.size()), buffers.data());
         glDeleteVertexArrays(1, &vao);
         glDeleteProgram(program);
         glDeleteShader(vs);
@@ -465,6 +468,9 @@ bool compile_shader(GLenum stage, const std::string& source, GLuint& out, std::s
     *why = fmt::format("{} shader compile failed:\n{}", what, shader_log(out));
     return false;
 }
+
+// The texture unit of a shader's data texture (Shadertoy's channels use 0-3).
+constexpr int kDataTextureUnit = 4;
 
 // Sets every Shadertoy uniform the program declares (and did not optimise away).
 void set_shadertoy_uniforms(GLuint program, const RenderOptions& o) {
@@ -565,6 +571,29 @@ RenderResult render_current(Renderer::State& st, const std::string& fs_source, c
             case 16: glUniformMatrix4fv(l, 1, GL_FALSE, v.data()); break;
             default: break;
         }
+    }
+    // Uniform blocks (std140 bytes) and the data texture (RGBA32F, read with texelFetch) of per-instance data.
+    for (const auto& b : o.uniform_blocks) {
+        GLuint index = glGetUniformBlockIndex(program, b.name.c_str());
+        if (index == GL_INVALID_INDEX) continue;
+        glUniformBlockBinding(program, index, GLuint(b.binding));
+        GLuint buf = 0;
+        glGenBuffers(1, &buf);
+        gl.buffers.push_back(buf);
+        glBindBuffer(GL_UNIFORM_BUFFER, buf);
+        glBufferData(GL_UNIFORM_BUFFER, GLsizeiptr(b.bytes.size()), b.bytes.data(), GL_STATIC_DRAW);
+        glBindBufferBase(GL_UNIFORM_BUFFER, GLuint(b.binding), buf);
+    }
+    if (!o.data_texture.name.empty()) {
+        const auto& t = o.data_texture;
+        glActiveTexture(GL_TEXTURE0 + kDataTextureUnit);
+        glGenTextures(1, &gl.data_texture);
+        glBindTexture(GL_TEXTURE_2D, gl.data_texture);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, t.width, t.height, 0, GL_RGBA, GL_FLOAT, t.rgba.data());
+        glActiveTexture(GL_TEXTURE0);
+        if (GLint l = glGetUniformLocation(program, t.name.c_str()); l != -1) glUniform1i(l, kDataTextureUnit);
     }
     drain_gl_errors();
 

@@ -45,6 +45,19 @@ struct RenderOptions {
     // are mat3 and mat4). Unknown names are ignored.
     std::vector<std::pair<std::string, std::vector<float>>> uniforms;
     std::vector<std::pair<std::string, int>> int_uniforms;
+    // Uniform blocks: name, binding point and std140 contents (per-instance data of a webgl2 shader).
+    struct UniformBlock {
+        std::string name;
+        int binding = 0;
+        std::vector<unsigned char> bytes;
+    };
+    std::vector<UniformBlock> uniform_blocks;
+    // A data texture read with texelFetch (RGBA32F, width·height texels); bound to unit 4. Empty name: none.
+    struct DataTexture {
+        std::string name;
+        int width = 0, height = 0;
+        std::vector<float> rgba;
+    } data_texture;
     // Draw in horizontal bands of this many rows (0: one draw), reporting progress after each band —
     // long renders then show progress, and drivers with watchdogs get short draws.
     int band_rows = 0;

@@ -1,11 +1,14 @@
-// Scene compilation: modules -> checked modules -> one IR module -> scene assembly from
-// runtime_templates/ -> GLSL -> glslang validation.
+// Scene compilation, one way through:
+//   scene -> instance plans (scene/Plan.h: modules checked, overrides applied, transforms evaluated)
+//   -> the scene's IR (scene/SceneLower.h: modules and the scene itself as functions and globals)
+//   -> the pass pipeline (ir/Pipeline.h) -> the scene backend (scene/Backend.h: storage per target, GLSL)
+//   -> the runtime template (runtime_templates/scene.glsl) -> glslang validation.
+// The optimized IR is also the double-precision reference (SceneModel).
 //
 // Module lookup for `type = "torus"`: modules of the scene or its document, then included files, then the
 // standard library (stdlib/, embedded in the binary); the same name in the scene and an include is an
-// error naming both. Transforms are evaluated in double precision and inverted once, at compile time (on
-// Shadertoy every parameter is a constant); a transform that scales divides the distance by its Lipschitz
-// factor so sphere tracing stays conservative.
+// error naming both. Transforms known at compile time are evaluated in double precision and inverted once;
+// a transform that scales divides the distance by its Lipschitz factor so sphere tracing stays conservative.
 #pragma once
 
 #include <memory>
@@ -14,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "scene/Backend.h"
 #include "scene/Reference.h"
 #include "scene/Scene.h"
 
@@ -26,6 +30,13 @@ const char* target_name(Target t);
 struct CompileOptions {
     Target target = Target::Shadertoy;
     bool dump_ir = false;
+    std::string dump_after;    // a pass name: the IR after that pass (--dump-ir=after-NAME); "" is after the last
+    std::string inject_fault;  // tests of the internal-error path: a pass name, or "glslang" (an invalid shader)
+#ifdef NDEBUG
+    bool verify_each = false;  // verify the IR before and after every pass (tests, debug builds)
+#else
+    bool verify_each = true;
+#endif
     // Instrumented build: each pixel is (march steps of the camera ray, scene evaluations, NaN flag, 1)
     // instead of a colour (for `iqc render --stats` and `iqc bench`).
     bool instrument = false;
@@ -49,12 +60,12 @@ struct CompileResult {
     int exit_code = 1;     // 0 ok, 1 diagnostics about the input, 3 internal error (glslang rejected our output)
     std::string code;      // the shader (only when exit_code == 0)
     std::string ir;        // the IR, when dump_ir
-    std::string internal;  // the internal error's text
+    std::string internal;  // the internal error's text (exit code 3)
     std::string meta;      // JSON describing every parameter (instance, module, role, uniform, bounds, ...)
     std::vector<std::pair<std::string, double>> pass_ms;  // wall time per phase, for --time-passes
     std::shared_ptr<const SceneModel> model;  // the scene in double precision (when the compile succeeded)
-    // webgl2/glsl330: every uniform parameter with its default value (what a host sets first).
-    std::vector<std::pair<std::string, std::vector<double>>> uniform_defaults;
+    // webgl2/glsl330: what a host sets before drawing (every uniform's default, uniform blocks, data texture).
+    ShaderInputs inputs;
 };
 
 CompileResult compile_scene(const SceneDesc& scene, SourceManager& sm, Diagnostics& diags, const CompileOptions& opts);

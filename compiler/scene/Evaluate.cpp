@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "ir/Lower.h"
+#include "ir/Pipeline.h"
 #include "scene/Modules.h"
 #include "scene/Scene.h"
 
@@ -39,7 +40,7 @@ bool parse_value(const std::string& name, const std::string& text, SourceManager
         return false;
     }
     ir::Module irm;
-    LowerContext ctx{irm, {}};
+    LowerContext ctx{irm, {}, {}};
     int fn = lower_module(*m, "value", "value", ctx);
     try {
         out = ir::evaluate(irm, fn, {});
@@ -142,9 +143,16 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
     }
     if (d.error_count() != before) return false;
     ir::Module irm;
-    LowerContext ctx{irm, {}};
+    LowerContext ctx{irm, {}, {}};
     int fn = lower_module(*m, name, name, ctx);
+    irm.functions[size_t(fn)].entry = true;
     lap("lower to IR");
+    ir::PipelineOptions po;
+    po.inject_fault = req.inject_fault;
+    ir::PipelineResult pr = ir::run_pipeline(irm, po);
+    for (const auto& w : pr.range_issues) d.warning(w.span, w.message);
+    fn = irm.find(name);
+    lap("pass pipeline");
     std::vector<ir::Value> all;
     try {
         all = ir::evaluate_all(irm, fn, args, req.inputs);

@@ -17,6 +17,7 @@ struct EvalRequest {
     std::vector<std::pair<std::string, std::string>> sets;  // NAME=VALUE, VALUE in the language's own literals
     ir::EvalInputs inputs;                                  // the reserved `time` and `mouse`
     std::vector<std::pair<std::string, double>>* timings = nullptr;  // filled with ms per phase when set
+    std::string inject_fault;  // tests of the internal-error path: a pass name
 };
 
 struct EvalOutput {
@@ -24,7 +25,9 @@ struct EvalOutput {
     ir::Value value;
 };
 
-// Returns false (with diagnostics) when the module or a value is invalid.
+// The module runs through the same pass pipeline as a scene (ir/Pipeline.h: range guards included), so it
+// means what the shader computes. Returns false (with diagnostics) when the module or a value is invalid;
+// throws InternalError for a bug in iqc.
 bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics& d, std::vector<EvalOutput>& out);
 
 }  // namespace iqc

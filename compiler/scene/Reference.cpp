@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "ir/Eval.h"
+
 namespace iqc {
 
 namespace {
@@ -14,30 +16,19 @@ V3 normalize(const V3& a) {
 }
 }  // namespace
 
+void SceneModel::init() {
+    scene_fn_ = ir.find(ir::names::kScene);
+    eval_ = std::make_shared<ir::Evaluator>(ir);
+}
+
 double SceneModel::distance(const V3& p, int* id) const {
-    double best = render.max_dist * 2;
-    int best_id = -1;
-    for (size_t i = 0; i < instances.size(); ++i) {
-        const Instance& in = instances[i];
-        const auto& L = in.linear;
-        V3 q = {L[0] * p[0] + L[1] * p[1] + L[2] * p[2] + in.offset[0], L[3] * p[0] + L[4] * p[1] + L[5] * p[2] + in.offset[1],
-                L[6] * p[0] + L[7] * p[1] + L[8] * p[2] + in.offset[2]};
-        double d;
-        double b = in.bound > 0 ? (std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]) - in.bound) * in.scale : 0;
-        if (in.bound > 0 && b > in.bound_margin) {
-            d = b;  // as the shader: outside the bounding sphere, its distance (a lower bound)
-        } else {
-            std::vector<ir::Value> args = in.args;
-            args[size_t(in.query)] = {Type::vector(3), {q[0], q[1], q[2]}};
-            d = ir::evaluate(ir, in.shape_fn, args).v[0] * in.scale;
-        }
-        if (d < best) {
-            best = d;
-            best_id = int(i);
-        }
+    double res[3] = {render.max_dist * 2, -1, 0};
+    if (scene_fn_ >= 0) {
+        const double* args[] = {p.data()};
+        eval_->call(scene_fn_, args, res);
     }
-    if (id) *id = best_id;
-    return best;
+    if (id) *id = int(res[1]);
+    return res[0];
 }
 
 void SceneModel::ray(int x, int y, int width, int height, V3& ro, V3& rd) const {

@@ -1,5 +1,6 @@
-// The scene in double precision: the same IR the shader is generated from, evaluated by the evaluator.
-// It is the reference that tests compare rendered depth and normals against (a CPU ray caster), and that
+// The scene in double precision: the same optimized IR the shader is generated from (its iqc_scene
+// function, with iqc_prepare's per-pixel values at the parameters' defaults), run by the evaluator. It is
+// the reference that tests compare rendered depth and normals against (a CPU ray caster), and that
 // `iqc bench` measures errors with.
 #pragma once
 
@@ -13,21 +14,12 @@
 namespace iqc {
 
 struct SceneModel {
-    struct Instance {
-        int shape_fn = -1;
-        int query = 0;                  // which argument is the query point
-        std::vector<ir::Value> args;    // shape arguments (the query point's slot is overwritten)
-        std::array<double, 9> linear{1, 0, 0, 0, 1, 0, 0, 0, 1};  // world -> object, row-major
-        std::array<double, 3> offset{0, 0, 0};
-        double scale = 1;               // 1 / Lipschitz factor
-        double bound = 0;               // `bound = R`: object-space bounding sphere radius (0: none)
-        double bound_margin = 0.1;      // the shader's IQC_BOUND_MARGIN
-    };
     ir::Module ir;
-    std::vector<Instance> instances;
     CameraDesc camera;
     RenderDesc render;
 
+    // Prepares the evaluator (after `ir` is set; the model must not move afterwards).
+    void init();
     // Distance to the scene at p and the nearest instance (-1 for none).
     double distance(const std::array<double, 3>& p, int* id = nullptr) const;
     // The camera ray through the centre of pixel (x, y) of a width×height image (y = 0 is the top row),
@@ -37,6 +29,10 @@ struct SceneModel {
     double trace(const std::array<double, 3>& ro, const std::array<double, 3>& rd, int* id = nullptr) const;
     // Unit normal by central differences in double precision.
     std::array<double, 3> normal(const std::array<double, 3>& p) const;
+
+private:
+    std::shared_ptr<ir::Evaluator> eval_;
+    int scene_fn_ = -1;
 };
 
 }  // namespace iqc

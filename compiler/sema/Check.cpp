@@ -1461,27 +1461,37 @@ void Checker::run() {
     if (m_.ast.kind == ModuleKind::Shape || m_.ast.kind == ModuleKind::Material) {
         const char* out = m_.ast.kind == ModuleKind::Shape ? "D" : "C";
         m_.primary = out;
-        // The renderer binds a shape's query point and a material's surface point, normal and eye: they
-        // must be ℝ³ (by name p, N̂, I, or else the first parameters in order).
-        auto require_vec3 = [&](std::vector<std::string> names, size_t position, const char* what) {
-            int pi = -1;
-            for (const auto& n : names)
-                if (pi < 0) pi = m_.find_param(n);
-            if (pi < 0 && position < m_.params.size()) pi = int(position);
+        // The renderer binds a shape's query point and a material's surface point, normal and eye: by their
+        // conventional names where the module uses them, otherwise the first parameters not yet bound, in
+        // order. They must be ℝ³. These are the only rules (CheckedModule::roles; the scene compiler uses them).
+        bool shape = m_.ast.kind == ModuleKind::Shape;
+        std::vector<std::vector<std::string>> names = {{"p"}};
+        std::vector<const char*> what = {shape ? "the query point" : "the surface point"};
+        if (!shape) {
+            names.push_back({"N̂", "N", "n̂", "n"});
+            names.push_back({"I", "eye", "E"});
+            what.push_back("the unit normal");
+            what.push_back("the eye position");
+        }
+        m_.roles.assign(names.size(), -1);
+        for (size_t r = 0; r < names.size(); ++r)
+            for (const auto& n : names[r])
+                if (m_.roles[r] < 0) m_.roles[r] = m_.find_param(n);
+        for (size_t r = 0, next = 0; r < names.size(); ++r) {
+            if (m_.roles[r] >= 0) continue;
+            auto taken = [&](size_t k) { return std::find(m_.roles.begin(), m_.roles.end(), int(k)) != m_.roles.end(); };
+            while (next < m_.params.size() && taken(next)) ++next;
+            if (next < m_.params.size()) m_.roles[r] = int(next++);
+        }
+        for (size_t r = 0; r < names.size(); ++r) {
+            int pi = m_.roles[r];
             if (pi < 0) {
-                d_.error(m_.ast.span, fmt::format("{} '{}' needs {} as a parameter", m_.ast.kind == ModuleKind::Shape ? "shape" : "material",
-                                                  m_.ast.name, what));
+                d_.error(m_.ast.span, fmt::format("{} '{}' needs {} as a parameter", shape ? "shape" : "material", m_.ast.name,
+                                                  what[r]));
             } else if (m_.params[size_t(pi)].type != Type::vector(3)) {
-                d_.error(m_.params[size_t(pi)].span, fmt::format("'{}' is {} ({}) and must be ℝ³", m_.params[size_t(pi)].name, what,
-                                                                  m_.params[size_t(pi)].type.str()));
+                d_.error(m_.params[size_t(pi)].span, fmt::format("'{}' is {} ({}) and must be ℝ³", m_.params[size_t(pi)].name,
+                                                                  what[r], m_.params[size_t(pi)].type.str()));
             }
-        };
-        if (m_.ast.kind == ModuleKind::Shape) {
-            require_vec3({"p"}, 0, "the query point");
-        } else {
-            require_vec3({"p"}, 0, "the surface point");
-            require_vec3({"N̂", "N", "n̂", "n"}, 1, "the unit normal");
-            require_vec3({"I", "eye", "E"}, 2, "the eye position");
         }
         if (!assigns_.count(out)) {
             d_.error(m_.ast.span, fmt::format("{} '{}' does not assign '{}' ({})", m_.ast.kind == ModuleKind::Shape ? "shape" : "material",

@@ -124,6 +124,9 @@ struct CheckedModule {
     double lipschitz = 1;
     std::string exactness;
     Type primary_type;
+    // The parameters the renderer binds (the only rules for them: the scene compiler uses these): a shape's
+    // query point; a material's surface point, unit normal and eye position, in that order. -1 where missing.
+    std::vector<int> roles;
     bool ok = false;
 
     int find_param(const std::string& n) const;

@@ -6,7 +6,7 @@
 namespace iqc::ir {
 
 int eliminate_common_subexpressions(Function& f) {
-    using Key = std::tuple<int, int, int, int, int, std::vector<ValueId>, std::vector<double>>;
+    using Key = std::tuple<int, Type, int, std::vector<ValueId>, std::vector<double>>;
     std::map<Key, ValueId> seen;
     std::vector<ValueId> remap(f.body.size());
     int redirected = 0;
@@ -15,7 +15,7 @@ int eliminate_common_subexpressions(Function& f) {
         remap[i] = ValueId(i);
         for (ValueId& a : in.args) a = remap[a];
         if (in.op == Op::Param || in.op == Op::Copy) continue;
-        Key k{int(in.op), int(in.type.kind), in.type.rows, in.type.cols, in.aux, in.args, in.data};
+        Key k{int(in.op), in.type, in.aux, in.args, in.data};
         auto it = seen.find(k);
         if (it == seen.end()) {
             seen.emplace(std::move(k), ValueId(i));

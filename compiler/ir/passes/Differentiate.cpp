@@ -1,76 +1,21 @@
 #include "ir/passes/Differentiate.h"
 
 #include <fmt/format.h>
-#include <stdexcept>
 
 #include "ir/passes/Fold.h"
+#include "ir/passes/Inline.h"
+#include "source/Internal.h"
 #include "sema/Builtins.h"
 
 namespace iqc::ir {
 
 namespace {
 
-// Appends callee's body to `out` with its parameters bound to `args`; returns the result's new id.
-ValueId inline_into(const Module& m, const Function& callee, const std::vector<ValueId>& args, Function& out) {
-    std::vector<ValueId> map(callee.body.size());
-    for (size_t i = 0; i < callee.body.size(); ++i) {
-        const Instr& in = callee.body[i];
-        if (in.op == Op::Param) {
-            map[i] = args[size_t(in.aux)];
-            continue;
-        }
-        std::vector<ValueId> a;
-        for (ValueId x : in.args) a.push_back(map[x]);
-        if (in.op == Op::Call) {
-            map[i] = inline_into(m, m.functions[size_t(in.aux)], a, out);
-            continue;
-        }
-        Instr c = in;
-        c.args = std::move(a);
-        c.name.clear();  // inlined values keep no names (the caller's names stay readable)
-        map[i] = out.add(std::move(c));
-    }
-    return map[callee.result];
-}
-
-}  // namespace
-
-Function inline_calls(const Module& m, const Function& f) {
-    Function out;
-    out.name = f.name;
-    out.glsl_name = f.glsl_name;
-    out.params = f.params;
-    std::vector<ValueId> map(f.body.size());
-    for (size_t i = 0; i < f.body.size(); ++i) {
-        const Instr& in = f.body[i];
-        std::vector<ValueId> a;
-        for (ValueId x : in.args) a.push_back(map[x]);
-        if (in.op == Op::Call) {
-            map[i] = inline_into(m, m.functions[size_t(in.aux)], a, out);
-            if (!in.name.empty()) {  // keep the caller's named statement
-                Instr cp;
-                cp.op = Op::Copy;
-                cp.type = in.type;
-                cp.args = {map[i]};
-                cp.name = in.name;
-                cp.source = in.source;
-                cp.span = in.span;
-                map[i] = out.add(std::move(cp));
-            }
-            continue;
-        }
-        Instr c = in;
-        c.args = std::move(a);
-        map[i] = out.add(std::move(c));
-    }
-    out.result = map[f.result];
-    for (const auto& [n, v] : f.outputs) out.outputs.push_back({n, map[v]});
-    return out;
-}
-
-namespace {
-
 constexpr ValueId kZero = ValueId(-1);
+// The tangent of a value without a derivative rule here. It spreads to whatever uses the value, except
+// the arms of a lazy If/Switch, where it becomes a zero gradient (the runtime then falls back to
+// differences for that arm only).
+constexpr ValueId kPoison = ValueId(-2);
 
 struct Unsupported {
     std::string why;
@@ -87,7 +32,7 @@ struct Differentiator {
         in.type = t;
         in.args = std::move(args);
         in.aux = aux;
-        if (!t.valid()) throw std::logic_error(fmt::format("differentiate: invalid type for {}", op_name(op)));
+        if (!t.valid()) internal_error(fmt::format("differentiate: invalid type for {}", op_name(op)));
         return g.add(std::move(in));
     }
     const Type& type(ValueId v) const { return g.body[v].type; }
@@ -173,9 +118,15 @@ struct Differentiator {
         auto P = [&](size_t k) { return primal[in.args[k]]; };
         auto T = [&](size_t k) { return tangent[in.args[k]]; };
         auto PT = [&](size_t k) { return f.body[in.args[k]].type; };
-        bool all_zero = true;
-        for (size_t k = 0; k < in.args.size(); ++k) all_zero &= T(k) == kZero;
+        bool all_zero = true, poisoned = false;
+        for (size_t k = 0; k < in.args.size(); ++k) {
+            all_zero &= T(k) == kZero;
+            poisoned |= T(k) == kPoison;
+        }
+        auto arm = [&](size_t k) { return T(k) == kPoison ? kZero : T(k); };
+        if (poisoned && in.op != Op::If && in.op != Op::Switch) return kPoison;
         if (in.op != Op::Param && all_zero) return kZero;
+        if (in.type.kind == Type::Integer) return kZero;  // integer values have no derivative
         auto no_rule = [&](const std::string& what) -> ValueId {
             throw Unsupported{fmt::format("{} depends on the query point", what)};
         };
@@ -185,7 +136,26 @@ struct Differentiator {
             case Op::Compare:
             case Op::And:
             case Op::Or:
+            case Op::Global:  // globals (sliders, per-instance data) do not depend on the query point
+            case Op::Index:
                 return kZero;
+            case Op::If: {
+                // The derivative of the arm taken, as lazy as the choice itself.
+                Type pt = in.type;
+                if (arm(1) == kZero && arm(2) == kZero) return kZero;
+                return emit(Op::If, tangent_type(pt), {P(0), dense(arm(1), pt), dense(arm(2), pt)});
+            }
+            case Op::Switch: {
+                Type pt = in.type;
+                bool none = true;
+                for (size_t k = 1; k < in.args.size(); ++k) none &= arm(k) == kZero;
+                if (none) return kZero;
+                std::vector<ValueId> a = {P(0)};
+                for (size_t k = 1; k < in.args.size(); ++k) a.push_back(dense(arm(k), pt));
+                ValueId v = emit(Op::Switch, tangent_type(pt), std::move(a));
+                g.body[v].data = in.data;
+                return v;
+            }
             case Op::Param: return kZero;  // the query point is seeded by the caller
             case Op::Copy: return T(0);
             case Op::Add: return add(T(0), T(1));
@@ -364,30 +334,38 @@ struct Differentiator {
 
 }  // namespace
 
-int differentiate(Module& m, int fn, int wrt_param, const std::string& name, std::string* why) {
+int differentiate(Module& m, int fn, int wrt_param, const std::string& name, std::string* why,
+                  std::vector<std::pair<Span, std::string>>* fallbacks) {
     Function f = inline_calls(m, m.functions[size_t(fn)]);
     Function g;
     g.name = name;
     g.glsl_name = name;
     g.params = f.params;
+    g.param_bounds = f.param_bounds;
     Differentiator d{g, std::vector<ValueId>(f.body.size()), std::vector<ValueId>(f.body.size(), kZero)};
-    try {
-        for (size_t i = 0; i < f.body.size(); ++i) {
-            const Instr& in = f.body[i];
-            Instr c = in;
-            for (ValueId& a : c.args) a = d.primal[a];
-            d.primal[i] = g.add(std::move(c));
-            if (in.op == Op::Param && in.aux == wrt_param) {
-                d.tangent[i] = g.constant(Type::matrix(3, 3), {1, 0, 0, 0, 1, 0, 0, 0, 1});
-                continue;
-            }
-            d.tangent[i] = d.rule(m, f, i);
+    std::vector<std::pair<Span, std::string>> missing;
+    for (size_t i = 0; i < f.body.size(); ++i) {
+        const Instr& in = f.body[i];
+        Instr c = in;
+        for (ValueId& a : c.args) a = d.primal[a];
+        d.primal[i] = g.add(std::move(c));
+        if (in.op == Op::Param && in.aux == wrt_param) {
+            d.tangent[i] = g.constant(Type::matrix(3, 3), {1, 0, 0, 0, 1, 0, 0, 0, 1});
+            continue;
         }
-    } catch (const Unsupported& u) {
-        if (why) *why = u.why;
-        return -1;
+        try {
+            d.tangent[i] = d.rule(m, f, i);
+        } catch (const Unsupported& u) {
+            d.tangent[i] = kPoison;
+            missing.push_back({in.span, u.why});
+        }
     }
     ValueId r = d.tangent[f.result];
+    if (r == kPoison) {
+        if (why) *why = missing.empty() ? "no derivative rule" : missing.front().second;
+        return -1;
+    }
+    if (fallbacks) *fallbacks = std::move(missing);
     if (r == kZero) r = g.constant(Type::vector(3), {0, 0, 0});
     g.result = r;
     // The seed is the identity: fold it away (and what it makes constant).

@@ -10,16 +10,19 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "ir/IR.h"
 
 namespace iqc::ir {
 
-// Returns the index of the new function in m, or -1 with `why` set when F uses something without a
-// derivative rule here (a recurrence's loop, a matrix that depends on p).
-int differentiate(Module& m, int fn, int wrt_param, const std::string& name, std::string* why);
+// Returns the index of the new function in m, or -1 with `why` set when F's result needs something without
+// a derivative rule here (a recurrence's loop, a matrix that depends on p). Where such a value is used
+// only in arms of lazy If/Switch operations, those arms get a zero gradient instead (the renderer falls
+// back to finite differences there), and `fallbacks` lists each such value's span and reason.
+int differentiate(Module& m, int fn, int wrt_param, const std::string& name, std::string* why,
+                  std::vector<std::pair<Span, std::string>>* fallbacks = nullptr);
 
-// A copy of F with every call replaced by the callee's body (recursively).
-Function inline_calls(const Module& m, const Function& f);
 
 }  // namespace iqc::ir

@@ -26,9 +26,24 @@ bool is_identity(const Function& f, ValueId v) {
 
 bool foldable(Op op) {
     switch (op) {
-        case Op::Const: case Op::Param: case Op::Input: case Op::Call: case Op::Loop: case Op::Member: return false;
+        case Op::Const: case Op::Param: case Op::Input: case Op::Call: case Op::Loop: case Op::Member:
+        case Op::Global: case Op::Index: case Op::If: case Op::Switch: case Op::Copy:
+            return false;
         default: return true;
     }
+}
+
+// Replaces `in` by a constant of its type, keeping its name, source and span.
+void make_constant(Instr& in, Type t, std::vector<double> data) {
+    std::string name = std::move(in.name), source = std::move(in.source);
+    Span span = in.span;
+    in = Instr{};
+    in.op = Op::Const;
+    in.type = t;
+    in.data = std::move(data);
+    in.name = std::move(name);
+    in.source = std::move(source);
+    in.span = span;
 }
 
 }  // namespace
@@ -40,24 +55,41 @@ int fold_constants(const Module& m, Function& f) {
         remap[i] = ValueId(i);
         Instr& in = f.body[i];
         for (ValueId& a : in.args) a = remap[a];
-        if (!foldable(in.op) || in.type.kind == Type::Tuple) continue;
+        // A constant element of a constant global (a fact of the scene, not a slider) is its value. Whole
+        // constant globals stay: they are named in the output.
+        if (in.op == Op::Index && f.body[in.args[0]].op == Op::Global && is_const(f, in.args[1])) {
+            const Global& g = m.globals[size_t(f.body[in.args[0]].aux)];
+            size_t n = size_t(std::max(1, in.type.components())), k = size_t(f.body[in.args[1]].data[0]);
+            if (g.kind == Global::Kind::Constant && (k + 1) * n <= g.value.size()) {
+                make_constant(in, in.type, std::vector<double>(g.value.begin() + long(k * n), g.value.begin() + long((k + 1) * n)));
+                ++changed;
+            }
+            continue;
+        }
+        if (!foldable(in.op) || in.type.kind == Type::Tuple) {
+            // A lazy choice with a constant condition or selector is the chosen operand.
+            if (in.name.empty() && in.op == Op::If && is_const(f, in.args[0])) {
+                remap[i] = in.args[f.body[in.args[0]].data[0] != 0 ? 1 : 2];
+                ++changed;
+            } else if (in.name.empty() && in.op == Op::Switch && is_const(f, in.args[0])) {
+                double sel = f.body[in.args[0]].data[0];
+                size_t arm = 1;
+                for (int k = 0; k < switch_cases(in); ++k)
+                    if (sel >= in.data[size_t(2 * k)] && sel < in.data[size_t(2 * k + 1)]) arm = size_t(2 + k);
+                remap[i] = in.args[arm];
+                ++changed;
+            }
+            continue;
+        }
         bool consts = !in.args.empty();
         for (ValueId a : in.args) consts &= is_const(f, a);
-        if (consts && in.type.kind != Type::Bool) {
+        if (consts) {
             std::vector<Value> vals;
             for (ValueId a : in.args) vals.push_back({f.body[a].type, f.body[a].data});
             std::vector<const Value*> ptrs;
             for (auto& v : vals) ptrs.push_back(&v);
-            Value r = eval_instr(m, f, in, ptrs, {}, {});
-            std::string name = in.name, source = in.source;
-            Span span = in.span;
-            in = Instr{};
-            in.op = Op::Const;
-            in.type = r.type;
-            in.data = r.v;
-            in.name = name;
-            in.source = source;
-            in.span = span;
+            Value r = eval_instr(m, f, in, ptrs);
+            make_constant(in, in.type, r.v);
             ++changed;
             continue;
         }

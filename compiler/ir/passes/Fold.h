@@ -1,9 +1,11 @@
 // Constant folding and algebraic simplification.
 //
 // Requires verified IR. An instruction whose operands are all constants becomes a constant (evaluated by
-// the evaluator's own rule, so folding cannot disagree with `iqc eval`); products with 0, 1 or the
-// identity matrix and sums with 0 are replaced by their value. Used on functions the compiler derives
-// (gradients), whose seeds are identity matrices; redirected instructions are left dead.
+// the evaluator's own rule, so folding cannot disagree with `iqc eval`), and so does a constant-index read
+// of a constant global (not a parameter: sliders stay sliders); products with 1 or the
+// identity matrix and sums with 0 are replaced by their other operand; If and Switch with a constant
+// condition or selector are the chosen operand. Redirected instructions are left dead (the dce pass removes
+// them).
 #pragma once
 
 #include "ir/IR.h"

@@ -142,7 +142,22 @@ struct Analyzer {
         return x;
     }
 
-    Range eval(size_t i, const std::vector<ParamRange>& params) {
+    // The interval of each component of a value with these bounds (an array: the hull over its elements).
+    Range from_bounds(const Type& t, const ValueBounds& b, const std::vector<double>* value) {
+        Range x = all_unknown(t.is_array() ? t.element() : t);
+        if (b.input) return x;
+        x.known = true;
+        size_t n = x.c.size();
+        if (!b.lo.empty() && b.lo.size() == n) {
+            for (size_t k = 0; k < n; ++k) x.c[k] = {b.lo[k], b.hi[k]};
+        } else if (value && !value->empty()) {
+            for (size_t k = 0; k < n; ++k) x.c[k] = {kInf, -kInf};
+            for (size_t j = 0; j < value->size(); ++j) x.c[j % n] = hull(x.c[j % n], {(*value)[j], (*value)[j]});
+        }
+        return x;
+    }
+
+    Range eval(size_t i) {
         const Instr& in = f.body[i];
         Range x = all_unknown(in.type);
         x.known = known(in);
@@ -154,14 +169,28 @@ struct Analyzer {
                 for (double v : in.data) x.c.push_back({v, v});
                 if (x.c.empty()) x.c.push_back({0, 0});
                 return x;
-            case Op::Param: {
-                const ParamRange& pr = params[size_t(in.aux)];
-                if (!pr) return all_unknown(in.type);  // the renderer's input: not a slider
-                x.known = true;
-                x.c = *pr;
-                if (x.c.size() != comps) x.c.assign(comps, unknown());
-                return x;
+            case Op::Param:
+                if (size_t(in.aux) >= f.param_bounds.size()) return all_unknown(in.type);  // the renderer's input
+                return from_bounds(in.type, f.param_bounds[size_t(in.aux)], nullptr);
+            case Op::Global: {
+                const Global& g = m.globals[size_t(in.aux)];
+                if (g.kind == Global::Kind::Prepared) return all_unknown(in.type);
+                ValueBounds b = g.bounds;
+                b.input = false;
+                return from_bounds(in.type, b, g.kind == Global::Kind::Constant ? &g.value : nullptr);
             }
+            case Op::Index: return r[in.args[0]];  // the array's range is the hull of its elements
+            case Op::If:
+                for (size_t k = 0; k < comps; ++k) x.c[k] = hull(comp(in.args[1], k), comp(in.args[2], k));
+                x.known = r[in.args[1]].known && r[in.args[2]].known;
+                return x;
+            case Op::Switch:
+                for (size_t k = 0; k < comps; ++k) {
+                    x.c[k] = comp(in.args[1], k);
+                    for (size_t a = 2; a < in.args.size(); ++a) x.c[k] = hull(x.c[k], comp(in.args[a], k));
+                }
+                x.known = false;
+                return x;
             case Op::Copy: return r[in.args[0]];
             case Op::Input:
             case Op::Loop:
@@ -252,7 +281,7 @@ struct Analyzer {
 
 }  // namespace
 
-std::vector<RangeIssue> analyze_ranges(Module& m, int fn, const std::vector<ParamRange>& params, bool guard) {
+std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
     Function& f = m.functions[size_t(fn)];
     Analyzer a{m, f, {}, {}};
     a.r.resize(f.body.size());
@@ -315,7 +344,7 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, const std::vector<Para
                 contains_zero(a.r[in.args[1]].c[0]))
                 needs[i] = kDivLength;
         }
-        a.r[i] = a.eval(i, params);
+        a.r[i] = a.eval(i);
         // A guarded operation's result is in range.
         if (needs[i] == kNonNegative)
             for (auto& c : a.r[i].c) c.lo = std::max(c.lo, 0.0);
@@ -385,6 +414,21 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, const std::vector<Para
     for (auto& [n, v] : g.outputs) v = map[v];
     f = std::move(g);
     return a.issues;
+}
+
+std::vector<RangeIssue> analyze_ranges(Module& m, bool guard) {
+    std::vector<RangeIssue> all;
+    for (size_t fi = 0; fi < m.functions.size(); ++fi)
+        for (auto& issue : analyze_ranges(m, int(fi), guard)) {
+            bool seen = false;
+            for (const auto& o : all) seen |= o.span.file == issue.span.file && o.span.begin == issue.span.begin &&
+                                               o.span.end == issue.span.end && o.message == issue.message;
+            if (!seen) all.push_back(std::move(issue));
+        }
+    std::stable_sort(all.begin(), all.end(), [](const RangeIssue& a, const RangeIssue& b) {
+        return a.span.file != b.span.file ? a.span.file < b.span.file : a.span.begin < b.span.begin;
+    });
+    return all;
 }
 
 }  // namespace iqc::ir

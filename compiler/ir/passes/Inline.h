@@ -1,0 +1,21 @@
+// Inlining: a call replaced by the callee's body, its parameters bound to the arguments.
+//
+// Requires verified IR. The scene's building blocks (one instance's distance, its gradient) are small
+// functions marked `inline_hint`; the inline pass puts them into the scene functions that call them, so the
+// emitted scene reads as one function and later passes (fold, CSE) see across the boundary. Inlined
+// values keep no names (the caller's names stay readable), except that a named call keeps its name on a
+// copy. Loops are copied as they are (their bodies stay functions of their own).
+#pragma once
+
+#include "ir/IR.h"
+
+namespace iqc::ir {
+
+// A copy of `f` with every call (only_marked: every call of an `inline_hint` function) replaced by the
+// callee's body, recursively.
+Function inline_calls(const Module& m, const Function& f, bool only_marked = false);
+
+// Inlines the `inline_hint` functions into their callers, in every function; returns the calls inlined.
+int inline_marked(Module& m);
+
+}  // namespace iqc::ir

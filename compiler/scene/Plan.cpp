@@ -1,0 +1,264 @@
+#include "scene/Plan.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <map>
+#include <set>
+
+#include "ir/Eval.h"
+#include "ir/Lower.h"
+
+namespace iqc {
+
+using namespace conventions;
+
+bool InstancePlan::lit_by(int param, bool scene_has_lights) const {
+    if (!material || !scene_has_lights || param < 0) return false;
+    const ParamInfo& p = material->params[size_t(param)];
+    return (p.name == kLightPosition || p.name == kLightColor) && p.type == Type::vector(3);
+}
+
+bool InstancePlan::per_light(bool scene_has_lights) const {
+    return material && lit_by(material->find_param(kLightPosition), scene_has_lights);
+}
+
+namespace {
+
+std::string join_values(const std::vector<double>& v) {
+    if (v.size() == 1) return fmt::format("{}", v[0]);
+    return fmt::format("({})", fmt::join(v, ", "));
+}
+
+// Largest singular value of a 3×3 matrix (row-major): sqrt of the largest eigenvalue of LᵀL (Jacobi).
+double spectral_norm3(const std::vector<double>& L) {
+    double a[3][3];
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double s = 0;
+            for (int k = 0; k < 3; ++k) s += L[size_t(k * 3 + i)] * L[size_t(k * 3 + j)];
+            a[i][j] = s;
+        }
+    for (int sweep = 0; sweep < 64; ++sweep) {
+        double off = std::fabs(a[0][1]) + std::fabs(a[0][2]) + std::fabs(a[1][2]);
+        if (off < 1e-300) break;
+        for (int p = 0; p < 2; ++p)
+            for (int q = p + 1; q < 3; ++q) {
+                if (std::fabs(a[p][q]) < 1e-300) continue;
+                double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
+                double t = (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1));
+                double c = 1 / std::sqrt(t * t + 1), s = t * c;
+                // a = Jᵀ a J with the rotation J in the (p, q) plane.
+                for (int k = 0; k < 3; ++k) {
+                    double akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    double apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+            }
+    }
+    return std::sqrt(std::max({a[0][0], a[1][1], a[2][2], 0.0}));
+}
+
+bool uses_inputs(const ir::Module& m, int fn) {
+    for (const ir::Instr& in : m.functions[size_t(fn)].body) {
+        if (in.op == ir::Op::Input) return true;
+        if ((in.op == ir::Op::Call || in.op == ir::Op::Loop) && uses_inputs(m, in.aux)) return true;
+    }
+    return false;
+}
+
+struct Planner {
+    const SceneDesc& s;
+    ModuleLibrary& lib;
+    SourceManager& sm;
+    Diagnostics& d;
+
+    bool apply_overrides(const std::vector<ParamOverride>& ovs, const CheckedModule& m, const char* role,
+                         const std::vector<int>& bound, std::vector<std::vector<double>>& values) {
+        bool ok = true;
+        for (const auto& ov : ovs) {
+            int pi = m.find_param(ov.name);
+            if (pi < 0) {
+                std::vector<std::string> cands;
+                for (size_t i = 0; i < m.params.size(); ++i)
+                    if (std::find(bound.begin(), bound.end(), int(i)) == bound.end()) cands.push_back(m.params[i].name);
+                auto& e = d.error(ov.span, fmt::format("{} '{}' has no parameter '{}'", role, m.ast.name, ov.name));
+                if (auto sug = did_you_mean(ov.name, cands)) Diagnostics::note(e, ov.span, fmt::format("did you mean '{}'?", *sug));
+                else if (!cands.empty()) Diagnostics::note(e, ov.span, fmt::format("its parameters are: {}", fmt::join(cands, ", ")));
+                ok = false;
+                continue;
+            }
+            if (std::find(bound.begin(), bound.end(), pi) != bound.end()) {
+                d.error(ov.span, fmt::format("'{}' is bound by the renderer and cannot be set", ov.name));
+                ok = false;
+                continue;
+            }
+            const ParamInfo& p = m.params[size_t(pi)];
+            if (int(ov.value.size()) != p.type.components()) {
+                d.error(ov.span, fmt::format("'{}' is {} but the value has {} component{}", ov.name, p.type.str(),
+                                             ov.value.size(), ov.value.size() == 1 ? "" : "s"));
+                ok = false;
+                continue;
+            }
+            if (p.type.kind == Type::Integer && ov.value[0] != std::floor(ov.value[0])) {
+                d.error(ov.span, fmt::format("'{}' is ℤ, but the value {} is not a whole number", ov.name, ov.value[0]));
+                ok = false;
+                continue;
+            }
+            if (p.bounded)
+                for (size_t i = 0; i < ov.value.size(); ++i)
+                    if (ov.value[i] < p.lo[i] || ov.value[i] > p.hi[i]) {
+                        d.warning(ov.span, fmt::format("the value {} of '{}' is outside its slider bounds [{}, {}]", ov.value[i],
+                                                       ov.name, p.lo[i], p.hi[i]));
+                        break;
+                    }
+            values[size_t(pi)] = ov.value;
+        }
+        return ok;
+    }
+
+    bool plan_transform(const InstanceDesc& inst, InstancePlan& plan) {
+        if (!inst.transform) return true;
+        const ModuleSource& src = *inst.transform;
+        bool blank = true;
+        for (auto& r : src.ranges)
+            for (char c : sm.text(src.file).substr(r.begin, r.end - r.begin)) blank &= (c == ' ' || c == '\n' || c == '\t' || c == '\r');
+        if (blank) return true;  // "" is the identity
+        std::shared_ptr<CheckedModule> m = lib.parse_check(src, plan.name + ".transform", true);
+        if (!m->ok) return false;
+        if (!m->ret) {
+            d.error(src.where, "a transform must end with a matrix expression such as T(X)⋅`R_x`(r)");
+            return false;
+        }
+        if (m->primary_type != Type::matrix(4, 4)) {
+            d.error(m->ret->value->span, fmt::format("a transform must be a 4×4 matrix, but this is {}", m->primary_type.str()));
+            return false;
+        }
+        // Evaluated once here, at the parameters' values (the default the sliders start at).
+        ir::Module scratch;
+        LowerContext ctx{scratch, {}, {}};
+        int fn = lower_module(*m, plan.name + ".transform", plan.name + "_transform", ctx);
+        plan.transform_uses_inputs = uses_inputs(scratch, fn);
+        std::vector<ir::Value> args;
+        std::vector<std::string> settings;
+        for (const auto& p : m->params) {
+            args.push_back({p.type, p.value});
+            settings.push_back(fmt::format("{} = {}", p.name, join_values(p.value)));
+        }
+        std::vector<double> v;
+        try {
+            v = ir::evaluate(scratch, fn, args).v;
+        } catch (const ir::EvalLimit& limit) {
+            d.error(limit.span, fmt::format("evaluating the transform would take more than {} steps", limits::kMaxEvalSteps));
+            return false;
+        }
+        plan.transform_comment = std::string(sm.slice(m->ret->span));
+        for (char& c : plan.transform_comment)
+            if (c == '\n' || c == '\r') c = ' ';
+        if (!settings.empty()) plan.transform_comment += fmt::format(" with {}", fmt::join(settings, ", "));
+        for (double x : v)
+            if (!std::isfinite(x)) {
+                d.error(m->ret->value->span, "the transform evaluates to a matrix with non-finite entries");
+                return false;
+            }
+        if (std::fabs(v[12]) > 1e-9 || std::fabs(v[13]) > 1e-9 || std::fabs(v[14]) > 1e-9 || std::fabs(v[15] - 1) > 1e-9) {
+            d.error(m->ret->value->span,
+                    fmt::format("the transform's last row is ({}, {}, {}, {}), not (0, 0, 0, 1): only affine transforms are "
+                                "supported", v[12], v[13], v[14], v[15]));
+            return false;
+        }
+        bool singular = false;
+        std::vector<double> inv = ir::mat_inverse(v, 4, &singular);
+        if (singular) {
+            d.error(m->ret->value->span, "the transform is singular (it flattens space and has no inverse)");
+            return false;
+        }
+        plan.has_transform = true;
+        plan.inv_linear = {inv[0], inv[1], inv[2], inv[4], inv[5], inv[6], inv[8], inv[9], inv[10]};
+        plan.inv_offset = {inv[3], inv[7], inv[11]};
+        double norm = spectral_norm3(plan.inv_linear);
+        plan.scale = std::fabs(norm - 1) < 1e-9 ? 1.0 : 1.0 / norm;
+        plan.transform = std::move(m);
+        return true;
+    }
+
+    const CheckedModule* module(const std::string& name, Span span, ast::ModuleKind kind) {
+        const char* what = kind == ast::ModuleKind::Shape ? "shape" : "material";
+        const CheckedModule* m = lib.get(name, span);
+        if (!m) {
+            auto& e = d.error(span, fmt::format("unknown {} '{}'", what, name));
+            if (auto sug = did_you_mean(name, lib.names())) Diagnostics::note(e, span, fmt::format("did you mean '{}'?", *sug));
+            return nullptr;
+        }
+        if (m->ast.kind != kind) {
+            d.error(span, fmt::format("'{}' is not a {} (its module does not start with '{}')", name, what, what));
+            return nullptr;
+        }
+        return m->ok ? m : nullptr;
+    }
+
+    bool plan(const InstanceDesc& inst, InstancePlan& plan) {
+        plan.desc = &inst;
+        plan.shape = module(inst.type, inst.type_span, ast::ModuleKind::Shape);
+        if (!plan.shape) return false;
+        plan.query = plan.shape->roles.empty() ? -1 : plan.shape->roles[0];
+        if (plan.query < 0) return false;  // the checker reported it
+        bool ok = true;
+        for (auto& p : plan.shape->params) plan.shape_values.push_back(p.value);
+        ok &= apply_overrides(inst.shape_params, *plan.shape, "shape", {plan.query}, plan.shape_values);
+        if (!inst.material.empty()) {
+            plan.material = module(inst.material, inst.material_span, ast::ModuleKind::Material);
+            if (!plan.material) return false;
+            for (auto& p : plan.material->params) plan.material_values.push_back(p.value);
+            ok &= apply_overrides(inst.material_params, *plan.material, "material", plan.material->roles, plan.material_values);
+        } else if (!inst.material_params.empty()) {
+            d.error(inst.material_params.front().span, "'material_params' needs a 'material'");
+            ok = false;
+        }
+        ok &= plan_transform(inst, plan);
+        return ok;
+    }
+};
+
+}  // namespace
+
+bool plan_instances(const SceneDesc& scene, ModuleLibrary& lib, SourceManager& sm, Diagnostics& d,
+                    std::vector<InstancePlan>& plans) {
+    size_t before = d.error_count();
+    Planner planner{scene, lib, sm, d};
+    plans.assign(scene.instances.size(), {});
+    // Explicit names first, so that generated ones (`<type>_<n>`) avoid them.
+    std::map<std::string, Span> explicit_names;
+    for (const auto& inst : scene.instances) {
+        if (inst.name.empty()) continue;
+        auto [it, fresh] = explicit_names.emplace(inst.name, inst.name_span);
+        if (!fresh) {
+            auto& e = d.error(inst.name_span, fmt::format("two instances are named '{}'", inst.name));
+            Diagnostics::note(e, it->second, "the other one");
+        }
+    }
+    std::set<std::string> taken;
+    for (const auto& [n, span] : explicit_names) taken.insert(n);
+    std::map<std::string, int> counts;
+    for (size_t i = 0; i < scene.instances.size(); ++i) {
+        const InstanceDesc& inst = scene.instances[i];
+        InstancePlan& p = plans[i];
+        if (!inst.name.empty()) {
+            p.name = inst.name;
+        } else {
+            do p.name = fmt::format("{}_{}", inst.type, ++counts[inst.type]);
+            while (taken.count(p.name));
+            taken.insert(p.name);
+        }
+        planner.plan(inst, p);
+    }
+    return d.error_count() == before;
+}
+
+}  // namespace iqc

@@ -1,0 +1,704 @@
+#include "scene/SceneLower.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <tuple>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <set>
+
+#include "glsl/Names.h"
+#include "ir/Builder.h"
+#include "ir/Lower.h"
+
+namespace iqc {
+
+using namespace conventions;
+using ir::Builder;
+using ir::CompareKind;
+using ir::Global;
+using ir::Op;
+using ir::ValueId;
+
+namespace {
+
+std::string param_comment(const ParamInfo& p) {
+    std::string s = fmt::format("{} ∈ ", p.name);
+    if (p.bounded) {
+        std::vector<std::string> iv;
+        for (size_t i = 0; i < p.lo.size(); ++i) iv.push_back(fmt::format("[{}, {}]", p.lo[i], p.hi[i]));
+        s += fmt::format("{}", fmt::join(iv, "×"));
+    } else {
+        s += p.type.str();
+    }
+    if (!p.description.empty()) s += ": " + p.description;
+    return s;
+}
+
+bool is_identity3(const std::vector<double>& L) {
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            if (std::fabs(L[size_t(r * 3 + c)] - (r == c ? 1.0 : 0.0)) > 1e-12) return false;
+    return true;
+}
+
+bool is_zero(const std::vector<double>& v) {
+    for (double x : v)
+        if (std::fabs(x) > 1e-12) return false;
+    return true;
+}
+
+// A per-instance quantity of an item: one value (a global), or one per member (an array global read at k).
+struct Field {
+    int global = -1;
+    bool array = false;
+};
+
+// A run of instances lowered together: one instance, or a group (a loop over per-instance data).
+struct Item {
+    std::vector<size_t> members;  // plan indices
+    bool group = false;
+    int id = 0;                   // the first member's instance id
+    std::string name;             // the instance's name, or the group's
+    Field to_object, offset, scale, bound;
+    std::vector<Field> shape_params, material_params;  // per module parameter (-1 global: bound by the renderer)
+    std::vector<Field> transform_params;               // runtime transforms: their parameters
+    int transform_fn = -1;
+    int distance_fn = -1;
+};
+
+class SceneLowering {
+public:
+    SceneLowering(const SceneDesc& s, const std::vector<InstancePlan>& p, const SceneLowerOptions& o) : s_(s), plans_(p), o_(o) {}
+
+    SceneIR run() {
+        lights_ = !s_.lights.empty();
+        make_items();
+        declare_lights();
+        for (Item& it : items_) declare_item(it);
+        for (Item& it : items_) it.distance_fn = item_distance(it);
+        scene_function();
+        if (o_.analytic_normals) gradient_functions();
+        shade_functions();
+        if (o_.reflections) out_.has_reflectivity = material_property(ir::names::kReflectivity);
+        if (o_.refraction) out_.has_transmission = material_property(ir::names::kTransmission);
+        prepare_function();
+        if (o_.per_instance) per_instance_functions();
+        out_.instances = int(plans_.size());
+        out_.lights = int(s_.lights.size());
+        return std::move(out_);
+    }
+
+private:
+    const SceneDesc& s_;
+    const std::vector<InstancePlan>& plans_;
+    const SceneLowerOptions& o_;
+    SceneIR out_;
+    ir::Module& m_ = out_.module;
+    LowerContext ctx_{out_.module, {}};
+    std::vector<Item> items_;
+    bool lights_ = false;
+    std::set<std::string> global_names_;
+    std::vector<int> light_pos_, light_col_;
+    std::string owner_;  // the item being declared (Global::owner)
+
+    const InstancePlan& plan(size_t i) const { return plans_[i]; }
+    bool runtime_transform(const InstancePlan& p) const {
+        return p.has_transform && (p.transform_uses_inputs || (!o_.params_constant && !p.transform->params.empty()));
+    }
+
+    // ---- items ----
+
+    void make_items() {
+        // Instances that can share code: one shape, one material, a transform known at compile time, `bound`
+        // or not. In order of first appearance; members keep their order.
+        std::map<std::tuple<const CheckedModule*, const CheckedModule*, bool>, std::vector<size_t>> kinds;
+        std::vector<std::tuple<const CheckedModule*, const CheckedModule*, bool>> order;
+        for (size_t i = 0; i < plans_.size(); ++i) {
+            const InstancePlan& p = plan(i);
+            out_.headers[p.name] = p.desc->type + (p.material ? " with " + p.desc->material : std::string());
+            if (o_.per_instance || runtime_transform(p)) {
+                items_.push_back({{i}});
+                continue;
+            }
+            auto key = std::make_tuple(p.shape, p.material, p.desc->bound > 0);
+            if (!kinds.count(key)) order.push_back(key);
+            kinds[key].push_back(i);
+        }
+        for (const auto& key : order) {
+            const auto& members = kinds[key];
+            if (int(members.size()) < o_.min_group) {
+                for (size_t i : members) items_.push_back({{i}});
+                continue;
+            }
+            Item g;
+            g.members = members;
+            g.group = true;
+            std::string shape = plan(members[0]).desc->type, material = plan(members[0]).desc->material;
+            g.name = unique_name(material.empty() ? shape : shape + "_" + material);
+            out_.group_notes.push_back(fmt::format("{}{}: {} instances in one loop", shape, material.empty() ? "" : " with " + material,
+                                                   members.size()));
+            items_.push_back(std::move(g));
+        }
+        // Ids: items in the order made (groups after the single instances of their kind would break the
+        // user's order for ties only; the ids are the renderer's business).
+        int id = 0;
+        for (Item& it : items_) {
+            it.id = id;
+            id += int(it.members.size());
+            if (!it.group) it.name = plan(it.members[0]).name;
+        }
+    }
+
+    std::string unique_name(const std::string& base) {
+        std::string n = glsl::identifier(base);
+        for (int k = 2; global_names_.count(n); ++k) n = fmt::format("{}_{}", glsl::identifier(base), k);
+        global_names_.insert(n);
+        return n;
+    }
+
+    int add_global(const std::string& name, const Type& t, Global::Kind kind, std::vector<double> value, std::string comment) {
+        Global g;
+        g.owner = owner_;
+        g.name = unique_name(name);
+        g.type = t;
+        g.kind = kind;
+        g.value = std::move(value);
+        g.bounds.input = false;
+        g.comment = std::move(comment);
+        m_.globals.push_back(std::move(g));
+        return int(m_.globals.size() - 1);
+    }
+
+    // A compile-time fact per member: one constant when every member has the same value.
+    Field constant_field(const Item& it, const std::string& what, const Type& t, const std::vector<std::vector<double>>& values,
+                         const std::string& comment) {
+        bool same = true;
+        for (const auto& v : values) same &= v == values[0];
+        if (same || !it.group)
+            return {add_global(it.name + "_" + what, t, Global::Kind::Constant, values[0], comment), false};
+        std::vector<double> all;
+        for (const auto& v : values) all.insert(all.end(), v.begin(), v.end());
+        return {add_global(it.name + "_" + what, Type::array(t, int(values.size())), Global::Kind::Constant, std::move(all), comment),
+                true};
+    }
+
+    // A module parameter of every member: a slider per instance, shared (one constant) when parameters are
+    // constants and every member has the same value.
+    Field parameter_field(const Item& it, const CheckedModule& mod, const char* role, size_t k,
+                          const std::vector<std::vector<double>>& values) {
+        const ParamInfo& pi = mod.params[k];
+        bool same = true;
+        for (const auto& v : values) same &= v == values[0];
+        bool shared = it.group && same && o_.params_constant;
+        Global g;
+        std::string base = it.group ? fmt::format("{}_{}_{}", mod.ast.name, role, pi.name) : fmt::format("{}_{}_{}", it.name, role, pi.name);
+        g.name = unique_name(base);
+        g.kind = Global::Kind::Parameter;
+        g.type = (it.group && !shared) ? Type::array(pi.type, int(values.size())) : pi.type;
+        for (const auto& v : (it.group && !shared) ? values : std::vector<std::vector<double>>{values[0]})
+            g.value.insert(g.value.end(), v.begin(), v.end());
+        g.bounds.input = false;
+        if (pi.bounded) {
+            g.bounds.lo = pi.lo;
+            g.bounds.hi = pi.hi;
+        }
+        g.comment = param_comment(pi);
+        g.owner = owner_;
+        for (size_t mi : it.members) g.params.push_back({plan(mi).name, mod.ast.name, role, pi.name, pi.description});
+        m_.globals.push_back(std::move(g));
+        return {int(m_.globals.size() - 1), it.group && !shared};
+    }
+
+    void declare_lights() {
+        for (const auto& l : s_.lights) {
+            for (int which = 0; which < 2; ++which) {
+                const auto& v = which == 0 ? l.position : l.color;
+                Global g;
+                g.name = unique_name(l.name + (which == 0 ? "_position" : "_color"));
+                g.kind = Global::Kind::Parameter;
+                g.type = Type::vector(3);
+                g.value = {v[0], v[1], v[2]};
+                g.bounds.input = false;
+                g.comment = l.name + (which == 0 ? " position" : " colour");
+                g.owner = l.name;
+                g.params.push_back({l.name, "", "light", which == 0 ? "position" : "color", which == 0 ? "light position" : "light colour"});
+                m_.globals.push_back(std::move(g));
+                (which == 0 ? light_pos_ : light_col_).push_back(int(m_.globals.size() - 1));
+            }
+        }
+    }
+
+    void declare_item(Item& it) {
+        const InstancePlan& first = plan(it.members[0]);
+        owner_ = it.group ? fmt::format("{}: {} instances of {}", it.name, it.members.size(), out_.headers[first.name])
+                          : fmt::format("{}: {}", it.name, out_.headers[first.name]);
+        std::vector<std::vector<double>> L, off, sc, R;
+        for (size_t mi : it.members) {
+            L.push_back(plan(mi).inv_linear);
+            off.push_back(plan(mi).inv_offset);
+            sc.push_back({plan(mi).scale});
+            R.push_back({plan(mi).desc->bound});
+        }
+        if (runtime_transform(first)) {
+            declare_runtime_transform(it);
+        } else {
+            bool identity = true, no_offset = true, unit = true;
+            for (size_t k = 0; k < L.size(); ++k) {
+                identity &= is_identity3(L[k]);
+                no_offset &= is_zero(off[k]);
+                unit &= sc[k][0] == 1.0;
+            }
+            std::string what = it.group ? "world → object, per instance" : first.transform_comment;
+            if (!identity) it.to_object = constant_field(it, "to_object", Type::matrix(3, 3), L, what);
+            if (!no_offset) it.offset = constant_field(it, "offset", Type::vector(3), off, identity ? what : "");
+            if (!unit) it.scale = constant_field(it, "scale", Type::scalar(), sc, "1 / Lipschitz factor: keeps distances conservative");
+        }
+        if (first.desc->bound > 0) {
+            it.bound = constant_field(it, "bound", Type::scalar(), R, "`bound`: radius of the bounding sphere");
+            out_.any_bound = true;
+        }
+        auto params = [&](const CheckedModule& mod, const char* role, const std::vector<int>& skip,
+                          const std::vector<std::vector<double>> InstancePlan::*values, std::vector<Field>& fields) {
+            fields.assign(mod.params.size(), {});
+            for (size_t k = 0; k < mod.params.size(); ++k) {
+                if (std::find(skip.begin(), skip.end(), int(k)) != skip.end()) continue;
+                if (&mod == first.material && first.lit_by(int(k), lights_)) continue;
+                std::vector<std::vector<double>> vals;
+                for (size_t mi : it.members) vals.push_back((plan(mi).*values)[k]);
+                fields[k] = parameter_field(it, mod, role, k, vals);
+            }
+        };
+        params(*first.shape, "shape", {first.query}, &InstancePlan::shape_values, it.shape_params);
+        if (first.material) params(*first.material, "material", first.material->roles, &InstancePlan::material_values, it.material_params);
+    }
+
+    // A transform with sliders (uniform targets) or time: its parameters are globals, and iqc_prepare
+    // inverts it once per pixel into prepared globals.
+    void declare_runtime_transform(Item& it) {
+        const InstancePlan& p = plan(it.members[0]);
+        const CheckedModule& t = *p.transform;
+        it.transform_fn = lower_module(t, p.name + ".transform", p.name + "_transform", ctx_);
+        m_.functions[size_t(it.transform_fn)].param_bounds = parameter_bounds(t);
+        for (size_t k = 0; k < t.params.size(); ++k) {
+            std::vector<std::vector<double>> vals = {t.params[k].value};
+            it.transform_params.push_back(parameter_field(it, t, "transform", k, vals));
+            m_.globals.back().params.back().module = "transform";
+        }
+        it.to_object = {add_prepared(it.name + "_to_object", Type::matrix(3, 3), p.transform_comment + " (per pixel)"), false};
+        it.offset = {add_prepared(it.name + "_offset", Type::vector(3), ""), false};
+        it.scale = {add_prepared(it.name + "_scale", Type::scalar(), "1 / Lipschitz factor"), false};
+        out_.has_prepare = true;
+    }
+
+    int add_prepared(const std::string& name, const Type& t, std::string comment) {
+        int g = add_global(name, t, Global::Kind::Prepared, {}, std::move(comment));
+        m_.globals[size_t(g)].bounds.input = true;
+        return g;
+    }
+
+    // ---- reading per-instance data ----
+
+    static ValueId read(Builder& b, const Field& f, ValueId k) {
+        ValueId g = b.global(f.global);
+        return f.array ? b.op(Op::Index, {g, k}) : g;
+    }
+
+    // The arguments of a module call: renderer-bound parameters from `bound`, the rest from the fields.
+    std::vector<ValueId> module_args(Builder& b, const CheckedModule& mod, const std::vector<Field>& fields,
+                                     const std::map<int, ValueId>& bound, ValueId k) {
+        std::vector<ValueId> args;
+        for (size_t i = 0; i < mod.params.size(); ++i) {
+            if (auto it = bound.find(int(i)); it != bound.end()) args.push_back(it->second);
+            else args.push_back(read(b, fields[i], k));
+        }
+        return args;
+    }
+
+    // ---- the scene distance ----
+
+    // One item's distance at world point p: (p [, k]) -> ℝ, marked for inlining.
+    int item_distance(const Item& it) {
+        const InstancePlan& first = plan(it.members[0]);
+        ir::Function f;
+        f.name = "iqc_distance." + it.name;
+        f.glsl_name = it.name + "_distance";
+        f.inline_hint = true;
+        int fn = int(m_.functions.size());
+        m_.functions.push_back({});
+        Builder b(m_, f);
+        ValueId p = b.param("p", Type::vector(3));
+        ValueId k = it.group ? b.param("k", Type::integer()) : ValueId(-1);
+        ValueId q = p;
+        if (it.to_object.global >= 0) q = b.op(Op::Mul, {read(b, it.to_object, k), q});
+        if (it.offset.global >= 0) q = b.op(Op::Add, {q, read(b, it.offset, k)});
+        if (q != p) f.body[q].name = "q";
+        auto conservative = [&](ValueId d) {  // scaled like the shape: the transform's and the shape's Lipschitz factors
+            if (it.scale.global >= 0) d = b.op(Op::Mul, {d, read(b, it.scale, k)});
+            if (first.shape->lipschitz != 1) d = b.op(Op::Div, {d, b.scalar(first.shape->lipschitz)});
+            return d;
+        };
+        int shape_fn = lower_module_cached(*first.shape, ctx_);
+        std::vector<ValueId> args = module_args(b, *first.shape, it.shape_params, {{first.query, q}}, k);
+        ValueId bound_d = 0, far = 0;
+        if (it.bound.global >= 0) {
+            // `bound = R`: outside the sphere ‖q‖ = R by more than the margin, its distance (a lower bound) stands
+            // for the shape's, which is not evaluated.
+            bound_d = conservative(b.op(Op::Sub, {b.builtin("length", {q}), read(b, it.bound, k)}));
+            f.body[bound_d].name = "bound";
+            far = b.compare(CompareKind::Gt, bound_d, b.scalar(o_.bound_margin));
+        }
+        ValueId d = conservative(b.call(shape_fn, std::move(args)));
+        if (it.bound.global >= 0) d = b.if_(far, bound_d, d);
+        f.result = d;
+        if (o_.instrument) {  // shapes evaluated: 0 where the bound stood in
+            ValueId one = b.scalar(1);
+            ValueId count = it.bound.global >= 0 ? b.op(Op::Select, {far, b.scalar(0), one}) : one;
+            f.result = b.construct(Type::vector(2), {d, count});
+        }
+        m_.functions[size_t(fn)] = std::move(f);
+        return fn;
+    }
+
+    // iqc_scene(p) -> (distance, id[, shapes evaluated]): the union of every item, the nearest one's id.
+    void scene_function() {
+        ir::Function f;
+        f.name = ir::names::kScene;
+        f.glsl_name = ir::names::kScene;
+        f.entry = true;
+        Builder b(m_, f);
+        ValueId p = b.param("p", Type::vector(3));
+        int width = o_.instrument ? 3 : 2;
+        Type res_t = Type::vector(width);
+        std::vector<double> empty = {2 * o_.max_dist, -1, 0};
+        empty.resize(size_t(width));
+        ValueId res = ValueId(-1);
+        for (const Item& it : items_) {
+            if (it.group) {
+                res = group_loop(b, it, p, res == ValueId(-1) ? b.constant(res_t, empty) : res);
+                continue;
+            }
+            ValueId call = b.call(it.distance_fn, {p});
+            ValueId d = o_.instrument ? b.op(Op::Extract, {call}, 0) : call;
+            std::string source = plan(it.members[0]).has_transform ? plan(it.members[0]).transform_comment : "";
+            d = b.named(d, it.name, source);
+            std::vector<ValueId> parts = {d, b.scalar(it.id)};
+            if (o_.instrument) {
+                ValueId count = b.op(Op::Extract, {call}, 1);
+                parts.push_back(res == ValueId(-1) ? count : b.op(Op::Add, {b.op(Op::Extract, {res}, 2), count}));
+            }
+            ValueId here = b.construct(res_t, parts);
+            if (res == ValueId(-1)) {
+                res = b.named(here, "res");
+                continue;
+            }
+            ValueId nearer = b.compare(CompareKind::Lt, d, b.op(Op::Extract, {res}, 0));
+            if (o_.instrument) {  // the count adds up whichever is nearer
+                ValueId kept = b.construct(res_t, {b.op(Op::Extract, {res}, 0), b.op(Op::Extract, {res}, 1), parts[2]});
+                res = b.named(b.op(Op::Select, {nearer, here, kept}), "res");
+            } else {
+                res = b.named(b.op(Op::Select, {nearer, here, res}), "res");
+            }
+        }
+        f.result = res == ValueId(-1) ? b.constant(res_t, empty) : res;
+        m_.functions.push_back(std::move(f));
+    }
+
+    // A group in iqc_scene: k = 0..N-1 over its per-instance data, the nearest member kept.
+    ValueId group_loop(Builder& outer, const Item& it, ValueId p, ValueId res) {
+        bool counted = o_.instrument;
+        ir::Function body;
+        body.name = fmt::format("iqc_scene.{}", it.name);
+        body.glsl_name = body.name;
+        Builder b(m_, body);
+        ValueId k = b.param("k", Type::integer());
+        ValueId best = b.param("d", Type::scalar());
+        ValueId id = b.param("id", Type::scalar());
+        ValueId count = counted ? b.param("shapes", Type::scalar()) : ValueId(-1);
+        ValueId q = b.param("p", Type::vector(3));
+        ValueId call = b.call(it.distance_fn, {q, k});
+        ValueId d = counted ? b.op(Op::Extract, {call}, 0) : call;
+        d = b.named(d, it.name, fmt::format("instance {} + k of {}", it.id, it.members.size()));
+        ValueId nearer = b.compare(CompareKind::Lt, d, best);
+        body.outputs.push_back({"d", b.op(Op::Select, {nearer, d, best})});
+        ValueId kid = b.op(Op::Add, {b.integer(it.id), k});
+        body.outputs.push_back({"id", b.op(Op::Select, {nearer, kid, id})});
+        if (counted) body.outputs.push_back({"shapes", b.op(Op::Add, {count, b.op(Op::Extract, {call}, 1)})});
+        body.result = body.outputs[0].second;
+        int fn = int(m_.functions.size());
+        m_.functions.push_back(std::move(body));
+        std::vector<ValueId> args = {outer.integer(int(it.members.size()) - 1)};
+        for (int c = 0; c < (counted ? 3 : 2); ++c) args.push_back(outer.op(Op::Extract, {res}, c));
+        args.push_back(p);
+        ir::Instr loop;
+        loop.op = Op::Loop;
+        loop.type = Type::tuple(counted ? 3 : 2);
+        loop.args = std::move(args);
+        loop.aux = fn;
+        loop.data = {0};
+        loop.source = fmt::format("{}: {} instances", it.name, it.members.size());
+        ValueId lv = outer.function().add(std::move(loop));
+        std::vector<ValueId> parts;
+        for (int c = 0; c < (counted ? 3 : 2); ++c) {
+            ir::Instr mem;
+            mem.op = Op::Member;
+            mem.type = Type::scalar();
+            mem.args = {lv};
+            mem.aux = c;
+            parts.push_back(outer.function().add(std::move(mem)));
+        }
+        return outer.named(outer.construct(Type::vector(counted ? 3 : 2), parts), "res");
+    }
+
+    // iqc_distance_of(p, id): the instance's own distance (what the analytic normal differentiates), and the
+    // placeholder iqc_gradient that the gradient pass replaces.
+    void gradient_functions() {
+        ir::Function f;
+        f.name = ir::names::kDistanceOf;
+        f.glsl_name = f.name;
+        Builder b(m_, f);
+        ValueId p = b.param("p", Type::vector(3));
+        ValueId id = b.param("id", Type::integer());
+        std::vector<std::tuple<long long, long long, ValueId>> cases;
+        for (const Item& it : items_) {
+            std::vector<ValueId> args = {p};
+            if (it.group) args.push_back(b.op(Op::Sub, {id, b.integer(it.id)}));
+            ValueId d = b.call(it.distance_fn, args);
+            if (o_.instrument) d = b.op(Op::Extract, {d}, 0);
+            cases.push_back({it.id, it.id + (long long)it.members.size(), d});
+        }
+        f.result = b.switch_(id, b.scalar(2 * o_.max_dist), std::move(cases));
+        m_.functions.push_back(std::move(f));
+        ir::Function g;
+        g.name = ir::names::kGradient;
+        g.glsl_name = g.name;
+        g.entry = true;
+        Builder gb(m_, g);
+        gb.param("p", Type::vector(3));
+        gb.param("id", Type::integer());
+        g.result = gb.constant(Type::vector(3), {0, 0, 0});
+        m_.functions.push_back(std::move(g));
+    }
+
+    // ---- materials ----
+
+    // The cases of a dispatch on the instance id: per item, the value `of` gives (or none).
+    template <class F>
+    std::vector<std::tuple<long long, long long, ValueId>> cases(Builder& b, ValueId id, F of) {
+        std::vector<std::tuple<long long, long long, ValueId>> out;
+        for (const Item& it : items_) {
+            ValueId k = it.group ? b.op(Op::Sub, {id, b.integer(it.id)}) : ValueId(-1);
+            ValueId v = of(it, k);
+            if (v != ValueId(-1)) out.push_back({it.id, it.id + (long long)it.members.size(), v});
+        }
+        return out;
+    }
+
+    void shade_functions() {
+        // iqc_shade(id, p, N, eye): materials without lights; the default material shows the normal.
+        {
+            ir::Function f;
+            f.name = ir::names::kShade;
+            f.glsl_name = f.name;
+            f.entry = true;
+            Builder b(m_, f);
+            ValueId id = b.param("id", Type::integer());
+            ValueId p = b.param("p", Type::vector(3)), N = b.param("N", Type::vector(3)), eye = b.param("eye", Type::vector(3));
+            ValueId zero = b.constant(Type::vector(3), {0, 0, 0});
+            auto cs = cases(b, id, [&](const Item& it, ValueId k) -> ValueId {
+                const InstancePlan& first = plan(it.members[0]);
+                if (!first.material) return ValueId(-1);
+                if (first.per_light(lights_)) return zero;  // lit once per light: iqc_shade_light
+                return material_call(b, it, k, p, N, eye, ValueId(-1), ValueId(-1));
+            });
+            ValueId normal_colour = b.op(Op::Add, {b.constant(Type::vector(3), {0.5, 0.5, 0.5}), b.op(Op::Mul, {b.scalar(0.5), N})});
+            f.result = b.named(b.switch_(id, normal_colour, std::move(cs)), "c");
+            m_.functions.push_back(std::move(f));
+        }
+        bool any = false;
+        for (const Item& it : items_) any |= plan(it.members[0]).per_light(lights_);
+        if (!any) return;
+        out_.has_shade_light = true;
+        {
+            ir::Function f;
+            f.name = ir::names::kShadeLight;
+            f.glsl_name = f.name;
+            f.entry = true;
+            Builder b(m_, f);
+            ValueId id = b.param("id", Type::integer());
+            ValueId p = b.param("p", Type::vector(3)), N = b.param("N", Type::vector(3)), eye = b.param("eye", Type::vector(3));
+            ValueId PL = b.param("P_L", Type::vector(3)), CL = b.param("C_L", Type::vector(3));
+            auto cs = cases(b, id, [&](const Item& it, ValueId k) -> ValueId {
+                if (!plan(it.members[0]).per_light(lights_)) return ValueId(-1);
+                return material_call(b, it, k, p, N, eye, PL, CL);
+            });
+            f.result = b.named(b.switch_(id, b.constant(Type::vector(3), {0, 0, 0}), std::move(cs)), "c");
+            m_.functions.push_back(std::move(f));
+        }
+        for (int which = 0; which < 2; ++which) {
+            ir::Function f;
+            f.name = which == 0 ? ir::names::kLightPosition : ir::names::kLightColor;
+            f.glsl_name = f.name;
+            f.entry = true;
+            Builder b(m_, f);
+            ValueId l = b.param("l", Type::integer());
+            std::vector<std::tuple<long long, long long, ValueId>> cs;
+            const auto& gl = which == 0 ? light_pos_ : light_col_;
+            for (size_t i = 0; i < gl.size(); ++i) cs.push_back({(long long)i, (long long)i + 1, b.global(gl[i])});
+            f.result = b.named(b.switch_(l, b.constant(Type::vector(3), {0, 0, 0}), std::move(cs)), which == 0 ? "position" : "colour");
+            m_.functions.push_back(std::move(f));
+        }
+    }
+
+    ValueId material_call(Builder& b, const Item& it, ValueId k, ValueId p, ValueId N, ValueId eye, ValueId PL, ValueId CL) {
+        const InstancePlan& first = plan(it.members[0]);
+        const CheckedModule& mat = *first.material;
+        std::map<int, ValueId> bound = {{mat.roles[0], p}, {mat.roles[1], N}, {mat.roles[2], eye}};
+        if (PL != ValueId(-1)) {
+            bound[mat.find_param(kLightPosition)] = PL;
+            if (int c = mat.find_param(kLightColor); first.lit_by(c, lights_)) bound[c] = CL;
+        }
+        return b.call(lower_module_cached(mat, ctx_), module_args(b, mat, it.material_params, bound, k));
+    }
+
+    // iqc_reflectivity(id) -> k_r as ℝ³, or iqc_transmission(id) -> (k_t, η); false when no material has it.
+    bool material_property(const char* name) {
+        bool reflect = std::string(name) == ir::names::kReflectivity;
+        ir::Function f;
+        f.name = name;
+        f.glsl_name = name;
+        f.entry = true;
+        Builder b(m_, f);
+        ValueId id = b.param("id", Type::integer());
+        auto as_vec3 = [&](const Item& it, ValueId k, int param) -> ValueId {
+            const CheckedModule& mat = *plan(it.members[0]).material;
+            const Type& t = mat.params[size_t(param)].type;
+            if (t != Type::vector(3) && !t.is_scalar()) return ValueId(-1);
+            ValueId v = read(b, it.material_params[size_t(param)], k);
+            return t.is_scalar() ? b.construct(Type::vector(3), {v, v, v}) : v;
+        };
+        auto cs = cases(b, id, [&](const Item& it, ValueId k) -> ValueId {
+            const CheckedModule* mat = plan(it.members[0]).material;
+            if (!mat) return ValueId(-1);
+            int param = mat->find_param(reflect ? kReflectivity : kTransmission);
+            if (param < 0 || it.material_params[size_t(param)].global < 0) return ValueId(-1);
+            ValueId v = as_vec3(it, k, param);
+            if (v == ValueId(-1) || reflect) return v;
+            int eta = mat->find_param(kRefractiveIndex);
+            if (eta < 0) eta = mat->find_param(kRefractiveIndexAscii);
+            ValueId e = eta >= 0 && mat->params[size_t(eta)].type.is_scalar() ? read(b, it.material_params[size_t(eta)], k)
+                                                                               : b.scalar(1.5);
+            return b.construct(Type::vector(4), {v, e});
+        });
+        if (cs.empty()) return false;
+        f.result = b.switch_(id, reflect ? b.constant(Type::vector(3), {0, 0, 0}) : b.constant(Type::vector(4), {0, 0, 0, 1}),
+                             std::move(cs));
+        m_.functions.push_back(std::move(f));
+        return true;
+    }
+
+    // ---- per pixel ----
+
+    // iqc_max_singular(L) -> the largest singular value of L, in closed form (the largest eigenvalue of the
+    // symmetric LᵀL by the trigonometric method): dividing a distance by it keeps it conservative under any
+    // linear map.
+    int max_singular_function() {
+        if (int f = m_.find("iqc_max_singular"); f >= 0) return f;
+        ir::Function f;
+        f.name = "iqc_max_singular";
+        f.glsl_name = "max_singular";
+        Builder b(m_, f);
+        ValueId L = b.param("L", Type::matrix(3, 3));
+        ValueId A = b.named(b.op(Op::Mul, {b.op(Op::Transpose, {L}), L}), "A", "A = LᵀL");
+        auto a = [&](int r, int c) { return b.op(Op::Extract, {A}, r * 3 + c); };
+        auto sq = [&](ValueId x) { return b.op(Op::Mul, {x, x}); };
+        ValueId p1 = b.named(b.op(Op::Add, {b.op(Op::Add, {sq(a(0, 1)), sq(a(0, 2))}), sq(a(1, 2))}), "off", "off-diagonal squares");
+        ValueId q = b.named(b.op(Op::Div, {b.op(Op::Add, {b.op(Op::Add, {a(0, 0), a(1, 1)}), a(2, 2)}), b.scalar(3)}), "q", "q = tr(A)/3");
+        ValueId d0 = b.op(Op::Sub, {a(0, 0), q}), d1 = b.op(Op::Sub, {a(1, 1), q}), d2 = b.op(Op::Sub, {a(2, 2), q});
+        ValueId p2 = b.op(Op::Add, {b.op(Op::Add, {b.op(Op::Add, {sq(d0), sq(d1)}), sq(d2)}), b.op(Op::Mul, {b.scalar(2), p1})});
+        ValueId p = b.named(b.builtin("sqrt", {b.builtin("max", {b.op(Op::Div, {p2, b.scalar(6)}), b.scalar(0)})}), "p", "p = ‖A - qI‖_F/√6");
+        ValueId I = b.constant(Type::matrix(3, 3), {1, 0, 0, 0, 1, 0, 0, 0, 1});
+        ValueId B = b.op(Op::Div, {b.op(Op::Sub, {A, b.op(Op::Mul, {q, I})}), b.builtin("max", {p, b.scalar(1e-30)})});
+        ValueId r = b.builtin("clamp", {b.op(Op::Div, {b.op(Op::Det, {B}), b.scalar(2)}), b.scalar(-1), b.scalar(1)});
+        ValueId phi = b.named(b.op(Op::Div, {b.builtin("acos", {r}), b.scalar(3)}), "phi", "φ = acos(det((A - qI)/p)/2)/3");
+        ValueId top = b.op(Op::Add, {q, b.op(Op::Mul, {b.op(Op::Mul, {b.scalar(2), p}), b.builtin("cos", {phi})})});
+        ValueId general = b.builtin("sqrt", {b.builtin("max", {top, b.scalar(0)})});
+        ValueId round = b.builtin("sqrt", {b.builtin("max", {q, b.scalar(0)})});  // LᵀL = qI: every direction alike
+        f.result = b.op(Op::Select, {b.compare(CompareKind::Lt, p, b.scalar(1e-12)), round, general});
+        m_.functions.push_back(std::move(f));
+        return int(m_.functions.size() - 1);
+    }
+
+    void prepare_function() {
+        if (!out_.has_prepare) return;
+        ir::Function f;
+        f.name = ir::names::kPrepare;
+        f.glsl_name = f.name;
+        Builder b(m_, f);
+        for (const Item& it : items_) {
+            if (it.transform_fn < 0) continue;
+            std::vector<ValueId> args;
+            for (const Field& fld : it.transform_params) args.push_back(read(b, fld, ValueId(-1)));
+            ValueId M = b.named(b.call(it.transform_fn, std::move(args)), "M", it.name + ": " + plan(it.members[0]).transform_comment);
+            ValueId inv = b.named(b.op(Op::Inverse, {M}), "inv");
+            std::vector<ValueId> lin, off;
+            for (int r = 0; r < 3; ++r) {
+                for (int c = 0; c < 3; ++c) lin.push_back(b.op(Op::Extract, {inv}, r * 4 + c));
+                off.push_back(b.op(Op::Extract, {inv}, r * 4 + 3));
+            }
+            ValueId L = b.construct(Type::matrix(3, 3), lin);
+            f.outputs.push_back({m_.globals[size_t(it.to_object.global)].name, L});
+            f.outputs.push_back({m_.globals[size_t(it.offset.global)].name, b.construct(Type::vector(3), off)});
+            ValueId norm = b.call(max_singular_function(), {L});
+            f.outputs.push_back({m_.globals[size_t(it.scale.global)].name, b.op(Op::Div, {b.scalar(1), norm})});
+        }
+        f.result = f.outputs[0].second;
+        m_.functions.push_back(std::move(f));
+    }
+
+    // I♥IQ's architecture, for `iqc bench`: per instance (in the scene's order), its transform inverted at
+    // each pixel, and its own object-space distance.
+    void per_instance_functions() {
+        for (int which = 0; which < 2; ++which) {
+            ir::Function f;
+            f.name = which == 0 ? ir::names::kInstanceInverse : ir::names::kInstanceDistance;
+            f.glsl_name = f.name;
+            f.entry = true;
+            Builder b(m_, f);
+            ValueId i = b.param("i", Type::integer());
+            ValueId q = which == 1 ? b.param("q", Type::vector(3)) : ValueId(-1);
+            std::vector<std::tuple<long long, long long, ValueId>> cs;
+            for (const Item& it : items_) {
+                const InstancePlan& p = plan(it.members[0]);
+                ValueId v;
+                if (which == 0) {
+                    if (!p.has_transform) continue;
+                    int tf = it.transform_fn >= 0 ? it.transform_fn : lower_module(*p.transform, p.name + ".transform", p.name + "_transform", ctx_);
+                    std::vector<ValueId> args;
+                    for (size_t k = 0; k < p.transform->params.size(); ++k)
+                        args.push_back(it.transform_fn >= 0 ? read(b, it.transform_params[k], ValueId(-1))
+                                                            : b.constant(p.transform->params[k].type, p.transform->params[k].value));
+                    v = b.op(Op::Inverse, {b.call(tf, std::move(args))});
+                } else {
+                    v = b.call(lower_module_cached(*p.shape, ctx_), module_args(b, *p.shape, it.shape_params, {{p.query, q}}, ValueId(-1)));
+                    if (p.shape->lipschitz != 1) v = b.op(Op::Div, {v, b.scalar(p.shape->lipschitz)});
+                }
+                cs.push_back({it.id, it.id + 1, v});
+            }
+            ValueId fallback = which == 0 ? b.constant(Type::matrix(4, 4), {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1})
+                                          : b.scalar(2 * o_.max_dist);
+            f.result = b.switch_(i, fallback, std::move(cs));
+            m_.functions.push_back(std::move(f));
+        }
+    }
+};
+
+}  // namespace
+
+SceneIR lower_scene(const SceneDesc& scene, const std::vector<InstancePlan>& plans, const SceneLowerOptions& o) {
+    SceneLowering l(scene, plans, o);
+    return l.run();
+}
+
+}  // namespace iqc

@@ -1,0 +1,53 @@
+// Scene lowering: the scene itself becomes IR — the functions with fixed names that the runtime template
+// calls (ir::names: iqc_scene, iqc_distance_of/iqc_gradient, iqc_shade, iqc_shade_light, iqc_light_*,
+// iqc_reflectivity, iqc_transmission, iqc_prepare, and the per-instance baseline's functions), and the
+// scene's values as module globals: every instance parameter (a Parameter: the target decides whether it is
+// a constant or a uniform), every compile-time fact (a Constant: inverted transforms, Lipschitz scales,
+// bounding radii) and every value computed once per pixel (Prepared: a transform that depends on a slider
+// or on time).
+//
+// Instancing: instances of one shape with one material and a transform known at compile time form a group
+// (kMinGroup or more): its per-instance data (transforms, parameters, bounds) are arrays indexed by the
+// instance's position in the group, the group is one loop in iqc_scene, one case of each dispatch, and a
+// parameter whose value every member shares is one value (on targets where parameters are constants).
+// Instance ids are numbered so that each group's ids are contiguous.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "ir/IR.h"
+#include "scene/Plan.h"
+
+namespace iqc {
+
+struct SceneLowerOptions {
+    bool params_constant = true;     // parameters are constants (Shadertoy); else uniforms (sliders)
+    bool analytic_normals = false;   // iqc_distance_of + a placeholder iqc_gradient (the gradient pass fills it)
+    bool instrument = false;         // iqc_scene returns a third component: shapes evaluated in this call
+    bool per_instance = false;       // I♥IQ's architecture for the benchmark: no groups, per-instance functions
+    bool reflections = false;        // the scene reads k_r
+    bool refraction = false;         // the scene reads k_t, η
+    double max_dist = 100;           // the scene distance with nothing in it is twice this
+    double bound_margin = 0.1;       // `bound`: the shape is evaluated within this distance of its sphere
+    int min_group = 4;               // instances of one kind that become a loop
+};
+
+struct SceneIR {
+    ir::Module module;
+    std::map<std::string, std::string> headers;  // instance -> "torus with phong" (declaration comments)
+    int instances = 0;
+    int lights = 0;
+    bool any_bound = false;
+    bool has_prepare = false;
+    bool has_shade_light = false;   // some material is evaluated once per light
+    bool has_reflectivity = false;
+    bool has_transmission = false;
+    std::vector<std::string> group_notes;  // "torus with lambert: 1000 instances in one loop"
+};
+
+// Lowers the planned instances (plans[i] is scene.instances[i]) with their modules.
+SceneIR lower_scene(const SceneDesc& scene, const std::vector<InstancePlan>& plans, const SceneLowerOptions& o);
+
+}  // namespace iqc
