@@ -12,24 +12,13 @@
 #include "TestUtil.h"
 #include "glsl/Names.h"
 #include "source/Limits.h"
+#include "source/Sanitizer.h"
 
 using namespace iqc;
 using namespace iqc::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
 
 std::string hostile(const std::string& name) { return std::string(IQC_SOURCE_DIR) + "/tests/hostile/" + name; }
 
@@ -42,7 +31,7 @@ struct Bounded {
 // terabytes of address space for their shadow memory and run several times slower, so there only a time
 // bound applies, of 120 s.
 Bounded run_bounded(const std::string& args) {
-    std::string limit = kAddressSanitizer ? "timeout 120" : "ulimit -v 2097152; timeout 10";
+    std::string limit = kAddressSanitizerBuild ? "timeout 120" : "ulimit -v 2097152; timeout 10";
     auto t0 = std::chrono::steady_clock::now();
     Bounded b;
     b.run = run_iqc_env(limit, args);
