@@ -13,6 +13,7 @@ PKGS=(
   libpng-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
   nlohmann-json3-dev libcpp-httplib-dev
   nodejs chromium
+  clang libclang-rt-14-dev   # the sanitizer build and libFuzzer (scripts/sanitize.sh, scripts/fuzz.sh)
 )
 # npm: Debian's package, unless a node distribution that bundles npm is already installed.
 if ! command -v npm >/dev/null 2>&1; then PKGS+=(npm); fi

@@ -331,7 +331,9 @@ std::string svg(const Report& r, const std::string& title) {
                          x.evals_mean);
     }
     double ly = T + 10;
-    for (const auto& [m, c] : colours) {
+    for (const auto& entry : colours) {
+        const std::string& m = entry.first;  // (clang 14 cannot capture a structured binding in a lambda)
+        const std::string& c = entry.second;
         bool present = std::any_of(r.rows.begin(), r.rows.end(), [&](const Row& x) { return x.method == m; });
         if (!present) continue;
         s += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"5\" fill=\"{}\"/><text x=\"{}\" y=\"{}\">{}</text>\n", W - R + 20, ly, c,

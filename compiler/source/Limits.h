@@ -18,8 +18,9 @@ namespace iqc::limits {
 constexpr int kMaxComponents = 4096;
 // Grammar nesting: parentheses, signs, and the operands of one chain such as a + b + … count one level
 // each (syntax/Parser.cpp); the checker counts expression depth plus nested local-function calls
-// (sema/Check.cpp). Every later pass recurses at most this deep.
-constexpr int kMaxNesting = 1000;
+// (sema/Check.cpp). Every later pass recurses at most this deep, which fits the default 8 MiB stack
+// with room to spare even in sanitizer builds (whose frames are several times larger).
+constexpr int kMaxNesting = 256;
 // Modules importing modules importing … (scene/Modules.cpp).
 constexpr int kMaxImportDepth = 64;
 // TOML: parts of one dotted key plus nested tables and arrays (scene/Scene.cpp; toml++ itself stops

@@ -145,10 +145,12 @@ std::set<std::string> prescan(const std::vector<Token>& toks) {
 }
 
 // Replaces each Word token by the names it spells (see the header comment).
-std::vector<Token> split_words(const std::vector<Token>& toks, const std::set<std::string>& known) {
+// `known`: every name the module may use; `splitters`: the same names as automata (the module's own names,
+// and the names known from outside, whose automaton is shared between modules).
+std::vector<Token> split_words(const std::vector<Token>& toks, const std::set<std::string>& known,
+                               const std::vector<const WordSplitter*>& splitters) {
     std::vector<Token> out;
     out.reserve(toks.size() + toks.size() / 4);
-    WordSplitter splitter(known);
     for (size_t i = 0; i < toks.size(); ++i) {
         const Token& t = toks[i];
         bool after_from = i > 0 && is_kw(toks[i - 1], "from");
@@ -157,7 +159,7 @@ std::vector<Token> split_words(const std::vector<Token>& toks, const std::set<st
             continue;
         }
         bool first = true;
-        for (auto [b, len] : splitter.split(t.text)) {
+        for (auto [b, len] : split_word(t.text, splitters)) {
             Token piece;  // not a copy of `t`: its text may be a 100,000-letter run
             piece.kind = t.kind;
             piece.text = t.text.substr(b, len);
@@ -1872,6 +1874,7 @@ ast::Module parse_module(const SourceManager& sm, FileId file, const std::vector
                          std::string name, const ParseOptions& opts, Diagnostics& diags) {
     std::vector<Token> raw = lex(sm, file, ranges);
     std::set<std::string> known = prescan(raw);
+    WordSplitter own(known);
     std::vector<std::string> raw_functions;
     for (size_t i = 0; i + 1 < raw.size(); ++i) {
         if (raw[i].line_start && is_name_token(raw[i]) && raw[i + 1].kind == Tok::LParen && !raw[i + 1].space_before)
@@ -1886,7 +1889,8 @@ ast::Module parse_module(const SourceManager& sm, FileId file, const std::vector
     }
     for (const auto& n : opts.known_names) raw_functions.push_back(n);  // built-ins and implicit imports
     known.insert(opts.known_names.begin(), opts.known_names.end());
-    std::vector<Token> toks = split_words(raw, known);
+    auto outside = WordSplitter::shared(opts.known_names);
+    std::vector<Token> toks = split_words(raw, known, {&own, outside.get()});
     std::vector<Token>().swap(raw);  // free the unsplit tokens before the AST is built
     Parser p(sm, std::move(toks), std::move(known), diags);
     // Functions: `NAME(params) =` at a line start, and imported names.

@@ -1,6 +1,8 @@
 #include "syntax/WordSplit.h"
 
 #include <algorithm>
+#include <map>
+#include <mutex>
 
 #include "source/Source.h"
 
@@ -73,19 +75,35 @@ WordSplitter::WordSplitter(const std::set<std::string>& known) {
     }
 }
 
-std::vector<std::pair<size_t, size_t>> WordSplitter::split(const std::string& word) const {
-    auto units = letter_units(word);
-    // longest[u]: units of the longest known name starting at unit u (the automaton reads backwards).
-    std::vector<int> longest(units.size(), 0);
+void WordSplitter::longest(const std::string& word, const std::vector<std::pair<size_t, size_t>>& units,
+                           std::vector<int>& best) const {
     int state = 0;
-    for (size_t u = units.size(); u-- > 0;) {
+    for (size_t u = units.size(); u-- > 0;) {  // the automaton reads backwards
         auto it = symbols_.find(word.substr(units[u].first, units[u].second));
         state = step(state, it == symbols_.end() ? -1 : it->second);
-        longest[u] = nodes_[size_t(state)].longest;
+        best[u] = std::max(best[u], nodes_[size_t(state)].longest);
     }
+}
+
+std::shared_ptr<const WordSplitter> WordSplitter::shared(const std::set<std::string>& known) {
+    static std::mutex mu;
+    static std::map<std::set<std::string>, std::shared_ptr<const WordSplitter>> cache;
+    std::lock_guard<std::mutex> lock(mu);
+    auto it = cache.find(known);
+    if (it != cache.end()) return it->second;
+    if (cache.size() >= 8) cache.clear();  // a few distinct sets exist per process; never grow without bound
+    auto splitter = std::make_shared<const WordSplitter>(known);
+    cache.emplace(known, splitter);
+    return splitter;
+}
+
+std::vector<std::pair<size_t, size_t>> split_word(const std::string& word, const std::vector<const WordSplitter*>& splitters) {
+    auto units = letter_units(word);
+    std::vector<int> best(units.size(), 0);
+    for (const WordSplitter* s : splitters) s->longest(word, units, best);
     std::vector<std::pair<size_t, size_t>> pieces;
     for (size_t u = 0; u < units.size();) {
-        size_t n = std::max<size_t>(1, size_t(longest[u]));
+        size_t n = std::max<size_t>(1, size_t(best[u]));
         size_t b = units[u].first;
         size_t e = units[u + n - 1].first + units[u + n - 1].second;
         pieces.push_back({b, e - b});

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <set>
 #include <string>
 #include <unordered_map>
@@ -24,8 +25,12 @@ class WordSplitter {
 public:
     // `known`: the names a run may contain (names of one letter need not be listed).
     explicit WordSplitter(const std::set<std::string>& known);
-    // The names `word` spells, as {byte offset, byte length} in `word`, in order.
-    std::vector<std::pair<size_t, size_t>> split(const std::string& word) const;
+    // For each letter unit of `word` (`units`: letter_units(word)), raises best[u] to the number of units
+    // of the longest known name starting at unit u.
+    void longest(const std::string& word, const std::vector<std::pair<size_t, size_t>>& units, std::vector<int>& best) const;
+    // The automaton for a set of names used by many modules (the built-ins, a transform's imports), built once
+    // per process and shared; thread-safe.
+    static std::shared_ptr<const WordSplitter> shared(const std::set<std::string>& known);
 
 private:
     struct Node {
@@ -42,5 +47,9 @@ private:
     int child(int node, int symbol) const;
     int step(int node, int symbol) const;  // follows failure links; -1 symbols lead to the root
 };
+
+// The names `word` spells, as {byte offset, byte length} in `word`, in order: at each unit the longest
+// name any of the splitters knows, else one letter.
+std::vector<std::pair<size_t, size_t>> split_word(const std::string& word, const std::vector<const WordSplitter*>& splitters);
 
 }  // namespace iqc

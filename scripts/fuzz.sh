@@ -1,0 +1,94 @@
+#!/usr/bin/env bash
+# scripts/fuzz.sh [SECONDS] [HARNESS...]
+#
+# Runs the libFuzzer harnesses of fuzz/: `frontend` (lex, split names, parse and check one module),
+# `ir` (lowering, every IR pass with the IR verified after each, evaluation, GLSL printing) and `scene`
+# (the whole compiler on a scene, document or module file, through glslang; exit 3 counts as a crash).
+# Each runs SECONDS (default 60) with one job on its corpus in build-asan/fuzz/corpus/HARNESS, seeded from
+# examples/, stdlib/ and tests/ (every regression input in tests/fuzz/HARNESS/ included), with the token
+# dictionary fuzz/iqc.dict, 10 s and 2 GB per input. The harnesses live in the sanitizer build
+# (scripts/sanitize.sh; built here if missing), so every ASan/UBSan report is a finding too.
+#
+# A finding stops that harness with the input in build-asan/fuzz/artifacts/. Minimise it with
+#   build-asan/fuzz/fuzz_HARNESS -minimize_crash=1 -runs=100000 ARTIFACT
+# fix the bug, and add the input under tests/fuzz/HARNESS/ (the property test in tests/hostile_test.cpp
+# runs it from then on). Prints the executions of each harness; exit status 1 when any found something.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SECONDS_EACH="${1:-60}"
+shift || true
+HARNESSES=("$@")
+[ ${#HARNESSES[@]} -eq 0 ] && HARNESSES=(frontend ir scene)
+
+if [ ! -f build-asan/CMakeCache.txt ]; then
+  bash scripts/install-deps.sh
+  CC=clang CXX=clang++ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIQC_SANITIZE=ON >/dev/null
+fi
+targets=()
+for h in "${HARNESSES[@]}"; do targets+=("fuzz_$h"); done
+cmake --build build-asan -j "$(nproc)" --target "${targets[@]}"
+source scripts/sanitizer-env.sh
+# Fuzzing trades the costly stack-use-after-return check for executions (the test suite keeps it).
+export ASAN_OPTIONS="$ASAN_OPTIONS:detect_stack_use_after_return=0"
+
+# Seeds: the modules and scenes the project ships and tests, one file per distinct content.
+seed() {  # seed DIR FILE...
+  local dir="$1"; shift
+  for f in "$@"; do
+    [ -f "$f" ] || continue
+    cp "$f" "$dir/$(sha1sum "$f" | cut -c1-40)"
+  done
+}
+seed_modules() {  # the module texts of documents and conformance tests, one file each
+  local dir="$1"
+  python3 - "$dir" examples/*.md tests/conformance/*.iqtest <<'PY'
+import hashlib, os, re, sys
+out = sys.argv[1]
+for path in sys.argv[2:]:
+    text = open(path, encoding="utf-8").read()
+    blocks = re.findall(r"```iheartla\n(.*?)```", text, re.S)
+    blocks += re.findall(r"^--- module\n(.*?)(?=^---|^###|\Z)", text, re.S | re.M)
+    for b in blocks:
+        name = hashlib.sha1(b.encode()).hexdigest()
+        with open(os.path.join(out, name), "w", encoding="utf-8") as f:
+            f.write(b)
+PY
+}
+for h in "${HARNESSES[@]}"; do
+  corpus="build-asan/fuzz/corpus/$h"
+  mkdir -p "$corpus" build-asan/fuzz/artifacts
+  if [ "$h" = scene ]; then
+    seed "$corpus" examples/* tests/hardcases/*.iq tests/hostile/*.iq tests/hostile/*.iql stdlib/*.iql golden/*/*.md
+  else
+    seed "$corpus" stdlib/*.iql tests/hostile/*.iql
+    seed_modules "$corpus"
+  fi
+  seed "$corpus" tests/fuzz/"$h"/*
+done
+
+status=0
+total=0
+for h in "${HARNESSES[@]}"; do
+  log="build-asan/fuzz/$h.log"
+  set +e
+  max_len=8192
+  [ "$h" = scene ] && max_len=32768
+  # One process (no -jobs): the machine is shared, and the log stays in $log.
+  "build-asan/fuzz/fuzz_$h" "build-asan/fuzz/corpus/$h" -dict=fuzz/iqc.dict \
+    -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 \
+    -artifact_prefix="build-asan/fuzz/artifacts/$h-" >"$log" 2>&1
+  rc=$?
+  set -e
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
+  runs="${runs:-0}"
+  total=$((total + runs))
+  if [ $rc -ne 0 ]; then
+    status=1
+    echo "fuzz $h: FOUND A PROBLEM after $runs executions (exit $rc); see $log and build-asan/fuzz/artifacts/"
+    grep -m1 -E 'ERROR|SUMMARY|==[0-9]+==|runtime error|abort|Test unit written' "$log" || true
+  else
+    echo "fuzz $h: $runs executions in ${SECONDS_EACH} s, nothing found"
+  fi
+done
+echo "fuzz: $total executions in all"
+exit $status
