@@ -374,7 +374,7 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
     for (size_t i = 0; i < f.body.size(); ++i) {
         Instr in = f.body[i];
         for (ValueId& x : in.args) x = map[x];
-        const Type& at = in.args.empty() ? in.type : g.body[in.args[0]].type;
+        const Type at = in.args.empty() ? in.type : g.body[in.args[0]].type;  // a copy: g.body grows below
         switch (needs[i]) {
             case kClampUnit: in.args[0] = call("clamp", {in.args[0], konst(at, -1), konst(at, 1)}, at, in.span); break;
             case kNonNegative:
