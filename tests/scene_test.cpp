@@ -292,3 +292,35 @@ TEST_CASE("overrides may be numbers or vectors or a matrix's rows or constant ex
     CHECK_THAT(text.diagnostics, Catch::Contains("override_text.iq:12:22: error: 'r' must be a number, an array, or a constant "
                                                  "expression such as \"√2\"; this string is not one"));
 }
+
+TEST_CASE("a ℤ parameter stays an integer: an int uniform, int in --meta, the same picture", "[scene][render]") {
+    const std::string scene =
+        "[modules]\nfolded = \"\"\"\nshape\nq_1 = p\nq_(k+1) = (|q_k_1|, |q_k_2|, |q_k_3|) - 0.3(1, 1, 1) for k ∈ 1..n\n"
+        "D = ‖q_(n+1)‖ - 0.3\nwhere\np ∈ ℝ³\nn ∈ ℤ default = 3: folds\n\"\"\"\n[[shapes]]\ntype = \"folded\"\n";
+    auto path = write_temp("int_param.iq", scene);
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled w = compile_path(path, o);
+    INFO(w.diagnostics);
+    REQUIRE(w.result.exit_code == 0);
+    CHECK_THAT(w.result.code, Catch::Contains("uniform int folded_1_shape_n;  // n ∈ ℤ: folds (default 3)"));
+    CHECK_THAT(w.result.code, Catch::Contains("float folded(vec3 p, int n) {"));
+    auto meta = nlohmann::json::parse(w.result.meta);
+    bool found = false;
+    for (const auto& p : meta["parameters"])
+        if (p["name"] == "n") {
+            found = true;
+            CHECK(p["type"] == "int");
+            CHECK(p["default"][0] == 3);
+        }
+    CHECK(found);
+    REQUIRE(w.result.inputs.uniforms.size() == 1);
+    CHECK(w.result.inputs.uniforms[0].integer);
+    Compiled s = compile_path(path);
+    REQUIRE(s.result.exit_code == 0);
+    CHECK_THAT(s.result.code, Catch::Contains("const int folded_1_shape_n = 3;"));
+    auto a = render_compiled(s.result, 96, 54), b = render_compiled(w.result, 96, 54);
+    REQUIRE(a.ok);
+    REQUIRE(b.ok);
+    CHECK(mean_abs_diff(a.image, b.image) < 1e-4);
+}

@@ -110,6 +110,15 @@ public:
         : sm_(sm), d_(d), s_(s), file_(file), base_(base), positions_(sm, file, base) {}
 
     void read(std::string_view toml_text);
+    // The parts of a scene, each from its top-level key (errors are located diagnostics).
+    void read_includes(const toml::table& root);
+    void read_modules(const toml::table& root);
+    void read_camera(const toml::table& root);
+    void read_render(const toml::table& root);
+    void read_effects(const toml::table& root);
+    void read_lights(const toml::table& root);
+    void read_shapes(const toml::table& root);
+    std::optional<InstanceDesc> read_shape(const toml::node& item);
 
 private:
     SourceManager& sm_;
@@ -331,6 +340,16 @@ void SceneReader::read(std::string_view text) {
     check_keys(root, kTopKeys, " in the scene");
     if (auto* n = root.get("title"))
         if (auto v = get_string(*n, "title")) s_.title = *v;
+    read_includes(root);
+    read_modules(root);
+    read_camera(root);
+    read_render(root);
+    read_effects(root);
+    read_lights(root);
+    read_shapes(root);
+}
+
+void SceneReader::read_includes(const toml::table& root) {
     fs::path dir = fs::path(s_.path).parent_path();
     if (auto* n = root.get("include")) {
         if (!n->is_array()) {
@@ -356,6 +375,9 @@ void SceneReader::read(std::string_view text) {
             }
         }
     }
+}
+
+void SceneReader::read_modules(const toml::table& root) {
     if (auto* n = root.get("modules")) {
         if (!n->is_table()) {
             wrong_type(*n, "modules", "a table of name = \"\"\"source\"\"\"");
@@ -367,6 +389,9 @@ void SceneReader::read(std::string_view text) {
             }
         }
     }
+}
+
+void SceneReader::read_camera(const toml::table& root) {
     if (auto* n = root.get("camera")) {
         if (!n->is_table()) {
             wrong_type(*n, "camera", "a table");
@@ -387,6 +412,9 @@ void SceneReader::read(std::string_view text) {
                 d_.error(span_of(*n), "the camera's position and target are the same point");
         }
     }
+}
+
+void SceneReader::read_render(const toml::table& root) {
     if (auto* n = root.get("render")) {
         if (!n->is_table()) {
             wrong_type(*n, "render", "a table");
@@ -427,6 +455,9 @@ void SceneReader::read(std::string_view text) {
                 if (auto v = get_choice(*x, "debug view", {"none", "normals", "steps", "depth"})) s_.render.debug = DebugView(*v);
         }
     }
+}
+
+void SceneReader::read_effects(const toml::table& root) {
     if (auto* n = root.get("effects")) {
         if (!n->is_table()) {
             wrong_type(*n, "effects", "a table");
@@ -469,6 +500,9 @@ void SceneReader::read(std::string_view text) {
             }
         }
     }
+}
+
+void SceneReader::read_lights(const toml::table& root) {
     if (auto* n = root.get("lights")) {
         if (!n->is_array_of_tables()) {
             wrong_type(*n, "lights", "an array of tables ([[lights]])");
@@ -488,6 +522,9 @@ void SceneReader::read(std::string_view text) {
             }
         }
     }
+}
+
+void SceneReader::read_shapes(const toml::table& root) {
     auto* shapes = root.get("shapes");
     if (!shapes) {
         d_.error({file_, base_, base_ + 1}, "the scene has no [[shapes]]: add at least one, e.g. [[shapes]] type = \"sphere\"");
@@ -498,52 +535,58 @@ void SceneReader::read(std::string_view text) {
         return;
     }
     for (auto& item : *shapes->as_array()) {
-        auto& t = *item.as_table();
-        InstanceDesc inst;
-        inst.span = span_of(item);
-        check_keys(t, kShapeKeys, " in [[shapes]]");
-        if (auto* x = t.get("name"))
-            if (auto v = get_string(*x, "name")) {
-                inst.name = *v;
-                inst.name_span = span_of(*x);
-                if (v->empty()) d_.error(inst.name_span, "an instance name cannot be empty");
-            }
-        if (auto* x = t.get("type")) {
-            if (auto v = get_string(*x, "type")) {
-                inst.type = *v;
-                inst.type_span = span_of(*x);
-                if (v->empty()) {
-                    d_.error(inst.type_span, "'type' cannot be empty: name a shape module, e.g. type = \"sphere\"");
-                    continue;
-                }
-            }
-        } else {
-            d_.error(inst.span, "this [[shapes]] entry has no 'type' (the shape module to use)");
-            continue;
-        }
-        if (auto* x = t.get("material"))
-            if (auto v = get_string(*x, "material")) {
-                inst.material = *v;
-                inst.material_span = span_of(*x);
-                if (v->empty())
-                    d_.error(inst.material_span, "'material' cannot be empty: name a material module, or leave "
-                                                 "'material' out for the default (the normal as a colour)");
-            }
-        if (auto* x = t.get("transform"))
-            if (auto v = get_string(*x, "transform")) inst.transform = string_source(*x, *v, "transform", "scene");
-        if (auto* x = t.get("shape_params")) read_params(*x, "shape_params", inst.shape_params);
-        if (auto* x = t.get("material_params")) read_params(*x, "material_params", inst.material_params);
-        if (auto* x = t.get("bound"))
-            if (auto v = get_number(*x, "bound")) {
-                if (!(*v > 0) || !std::isfinite(*v))
-                    d_.error(span_of(*x), fmt::format("'bound' (a bounding sphere radius) must be positive, not {}", *v));
-                else {
-                    inst.bound = *v;
-                    inst.bound_span = span_of(*x);
-                }
-            }
-        if (!inst.type.empty()) s_.instances.push_back(std::move(inst));
+        if (auto inst = read_shape(item)) s_.instances.push_back(std::move(*inst));
     }
+}
+
+// One [[shapes]] entry; nothing when it names no shape (reported).
+std::optional<InstanceDesc> SceneReader::read_shape(const toml::node& item) {
+    auto& t = *item.as_table();
+    InstanceDesc inst;
+    inst.span = span_of(item);
+    check_keys(t, kShapeKeys, " in [[shapes]]");
+    if (auto* x = t.get("name"))
+        if (auto v = get_string(*x, "name")) {
+            inst.name = *v;
+            inst.name_span = span_of(*x);
+            if (v->empty()) d_.error(inst.name_span, "an instance name cannot be empty");
+        }
+    if (auto* x = t.get("type")) {
+        if (auto v = get_string(*x, "type")) {
+            inst.type = *v;
+            inst.type_span = span_of(*x);
+            if (v->empty()) {
+                d_.error(inst.type_span, "'type' cannot be empty: name a shape module, e.g. type = \"sphere\"");
+                return std::nullopt;
+            }
+        }
+    } else {
+        d_.error(inst.span, "this [[shapes]] entry has no 'type' (the shape module to use)");
+        return std::nullopt;
+    }
+    if (auto* x = t.get("material"))
+        if (auto v = get_string(*x, "material")) {
+            inst.material = *v;
+            inst.material_span = span_of(*x);
+            if (v->empty())
+                d_.error(inst.material_span, "'material' cannot be empty: name a material module, or leave "
+                                             "'material' out for the default (the normal as a colour)");
+        }
+    if (auto* x = t.get("transform"))
+        if (auto v = get_string(*x, "transform")) inst.transform = string_source(*x, *v, "transform", "scene");
+    if (auto* x = t.get("shape_params")) read_params(*x, "shape_params", inst.shape_params);
+    if (auto* x = t.get("material_params")) read_params(*x, "material_params", inst.material_params);
+    if (auto* x = t.get("bound"))
+        if (auto v = get_number(*x, "bound")) {
+            if (!(*v > 0) || !std::isfinite(*v))
+                d_.error(span_of(*x), fmt::format("'bound' (a bounding sphere radius) must be positive, not {}", *v));
+            else {
+                inst.bound = *v;
+                inst.bound_span = span_of(*x);
+            }
+        }
+    if (inst.type.empty()) return std::nullopt;
+    return inst;
 }
 
 bool is_fence(std::string_view line, std::string_view& info) {
