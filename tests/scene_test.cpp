@@ -293,7 +293,7 @@ TEST_CASE("overrides may be numbers or vectors or a matrix's rows or constant ex
                                                  "expression such as \"√2\"; this string is not one"));
 }
 
-TEST_CASE("a ℤ parameter stays an integer: an int uniform, int in --meta, the same picture", "[scene][render]") {
+TEST_CASE("a ℤ parameter stays an integer: an int uniform and int in --meta and the same picture", "[scene][render]") {
     const std::string scene =
         "[modules]\nfolded = \"\"\"\nshape\nq_1 = p\nq_(k+1) = (|q_k_1|, |q_k_2|, |q_k_3|) - 0.3(1, 1, 1) for k ∈ 1..n\n"
         "D = ‖q_(n+1)‖ - 0.3\nwhere\np ∈ ℝ³\nn ∈ ℤ default = 3: folds\n\"\"\"\n[[shapes]]\ntype = \"folded\"\n";
