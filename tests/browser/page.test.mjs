@@ -3,7 +3,9 @@
 //  1. every example's --target html page loads offline with no console error and draws a non-blank
 //     picture; moving a slider changes the picture;
 //  2. a hostile title is shown as text (no dialog opens, the heading reads the title);
-//  3. three.js, given the webgl2 shader and --meta JSON, draws the same picture as the html page;
+//  3. three.js, given the webgl2 shader and --meta JSON, draws the same picture as the html page, with plain
+//     uniforms, uniform blocks (many instances) and the data texture (more);
+//  3b. pages of 100 and 400 rings fill their uniform blocks and data texture, and those sliders work;
 //  4. under `iqc serve`, editing an included module updates the page, sliders keep their values.
 import { chromium } from "playwright-core";
 import { execFileSync, spawn } from "node:child_process";
@@ -133,25 +135,24 @@ for (const [n, storage] of [[100, "iqc_block_"], [400, "texture:"]]) {
   await page.close();
 }
 
-// three.js: the webgl2 shader and --meta JSON on a RawShaderMaterial give the html page's picture.
-{
-  const name = "two_tori.md";
-  const dir = path.join(tmp, "three");
-  fs.mkdirSync(dir);
-  execFileSync(iqc, [path.join(src, "examples", name), "--target", "webgl2", "-o", path.join(dir, "shader.frag"),
-                     "--meta", path.join(dir, "meta.json")], { stdio: "pipe" });
+// three.js: the webgl2 shader and --meta JSON on a RawShaderMaterial give the html page's picture — with
+// plain uniforms (two_tori), uniform blocks (100 tilted rings) and the data texture (400).
+async function threeMatchesPage(label, input, viewport) {
+  const dir = fs.mkdtempSync(path.join(tmp, "three-"));
+  execFileSync(iqc, [input, "--target", "webgl2", "-o", path.join(dir, "shader.frag"), "--meta", path.join(dir, "meta.json")],
+               { stdio: "pipe" });
   const files = {
     "three.html": path.join(src, "tests/browser/three.html"),
     "three.module.js": path.join(src, "tests/browser/node_modules/three/build/three.module.js"),
     "shader.frag": path.join(dir, "shader.frag"), "meta.json": path.join(dir, "meta.json"),
   };
-  const out = path.join(tmp, "three_ref.html");
-  execFileSync(iqc, [path.join(src, "examples", name), "--target", "html", "-o", out], { stdio: "pipe" });
-  const ref = await open("file://" + out);
+  const out = path.join(dir, "ref.html");
+  execFileSync(iqc, [input, "--target", "html", "-o", out], { stdio: "pipe" });
+  const ref = await open("file://" + out, viewport);
   await ref.page.evaluate(() => document.getElementById("play").click());
   const size = await ref.page.evaluate(() => [document.getElementById("canvas").width, document.getElementById("canvas").height]);
   const expected = await picture(ref.page);
-  const page = await browser.newPage({ viewport: { width: 480, height: 270 } });
+  const page = await browser.newPage({ viewport });
   const errors = [];
   page.on("console", m => { if (m.type() === "error") errors.push(m.text()); });
   page.on("pageerror", e => errors.push(String(e)));
@@ -165,12 +166,15 @@ for (const [n, storage] of [[100, "iqc_block_"], [400, "texture:"]]) {
   await waitFor(page, () => window.iqcFrames > 0);
   const got = await picture(page);
   const diff = got.data.reduce((s, v, i) => s + Math.abs(v - expected.data[i]), 0) / got.data.length;
-  check(errors.length === 0, `three.js: no console errors ${errors.join(" | ")}`);
+  check(errors.length === 0, `three.js, ${label}: no console errors ${errors.join(" | ")}`);
   check(got.data.length === expected.data.length && diff < 2 && got.colours > 10,
-        `three.js: the same picture as the html page (mean difference ${diff.toFixed(2)} of 255, ${size[0]}×${size[1]})`);
+        `three.js, ${label}: the same picture as the html page (mean difference ${diff.toFixed(2)} of 255, ${size[0]}×${size[1]})`);
   await page.close();
   await ref.page.close();
 }
+await threeMatchesPage("two_tori (uniforms)", path.join(src, "examples", "two_tori.md"), { width: 480, height: 270 });
+await threeMatchesPage("100 rings (uniform blocks)", path.join(tmp, "rings_100.iq"), { width: 440, height: 200 });
+await threeMatchesPage("400 rings (data texture)", path.join(tmp, "rings_400.iq"), { width: 440, height: 200 });
 
 {
   const hostile = "</script><script>alert(1)</script>";
