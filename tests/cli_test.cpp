@@ -176,7 +176,7 @@ TEST_CASE("the IR after a named pass (--dump-ir=after-PASS), and an unknown pass
     CHECK_THAT(last.err, Catch::Contains("entry function iqc_scene(p: ℝ³) -> ℝ² {"));
     RunResult bad = run_iqc(in.string() + " --dump-ir=after-frobnicate");
     CHECK(bad.exit_code == 2);
-    CHECK_THAT(bad.err, Catch::Contains("--dump-ir takes after-PASS with PASS one of lower, inline, tables, fold"));
+    CHECK_THAT(bad.err, Catch::Contains("--dump-ir takes after-PASS with PASS one of lower, lipschitz, inline, tables, fold"));
 }
 
 TEST_CASE("scene keys: a Greek letter by its ASCII name, a name without its underscore, an unquoted θ", "[cli]") {

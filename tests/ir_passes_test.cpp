@@ -67,6 +67,7 @@ TEST_CASE("passes on IR text: input, one pass, expected output", "[passes]") {
         std::string actual = ir::print(m);
         for (const auto& w : r.range_issues) actual += "; warning: " + w.message + "\n";
         for (const auto& w : r.warnings) actual += "; warning: " + w.message + "\n";
+        for (const auto& l : r.lipschitz) actual += "; lipschitz: " + l + "\n";
         if (update) {
             std::ofstream(path, std::ios::binary) << input << kExpect << actual;
             continue;

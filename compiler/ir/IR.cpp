@@ -236,6 +236,13 @@ std::string print(const Function& f, const Module* m) {
         out += fmt::format("{}{}: {}{}", i ? ", " : "", f.params[i].name, f.params[i].type.str(),
                            i < f.param_bounds.size() ? format_bounds(f.param_bounds[i]) : "");
     out += fmt::format(") -> {} {{\n", f.result_type().str());
+    if (f.lipschitz.object_fn >= 0) {
+        const LipschitzSpec& l = f.lipschitz;
+        std::string fn = m && size_t(l.object_fn) < m->functions.size() ? m->functions[size_t(l.object_fn)].name
+                                                                          : fmt::format("@{}", l.object_fn);
+        out += fmt::format("  lipschitz {}{} group {} declared {} {} shape {}\n", fn, format_bounds(l.region), l.group,
+                           format_number(l.declared), l.trusted ? "trusted" : "untrusted", l.shape);
+    }
     for (size_t i = 0; i < f.body.size(); ++i) out += fmt::format("  %{} = {}\n", i, instr_text(f, f.body[i], m));
     out += fmt::format("  return %{}\n", f.result);
     for (const auto& [name, v] : f.outputs) out += fmt::format("  output {} = %{}\n", name, v);
@@ -253,7 +260,7 @@ std::string print(const Global& g, size_t index) {
 }
 
 std::string print(const Module& m) {
-    std::string out;
+    std::string out = m.constant_parameters ? "constant parameters\n" : "";
     for (size_t i = 0; i < m.globals.size(); ++i) out += print(m.globals[i], i);
     for (const auto& f : m.functions) out += print(f, &m);
     return out;

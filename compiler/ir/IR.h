@@ -98,6 +98,18 @@ struct ValueBounds {
     std::vector<double> lo, hi;
 };
 
+// A scene item's Lipschitz analysis (ir/passes/Lipschitz.h): the shape's object-space distance function to
+// bound, where, and the item distance function whose result is divided by the bound.
+struct LipschitzSpec {
+    int object_fn = -1;          // (q ∈ ℝ³[, k ∈ ℤ]) -> the shape's distance, not yet divided by any factor
+    ValueBounds region;          // q's box (3 components)
+    int group = 0;               // a group's size: k ∈ [0, group - 1] (0: no k)
+    double declared = 0;         // `# lipschitz: K` of the shape (0: none)
+    bool trusted = false;        // the shape says `# exact` or `# bound`: 1-Lipschitz by construction
+    Span where;                  // the instance, for diagnostics
+    std::string shape;           // the shape module's name
+};
+
 struct Function {
     std::string name;                  // qualified: "torus", "transformations.T", "scene.box_frame_1.transform"
     std::string glsl_name;             // preferred GLSL spelling (the backend still makes it unique)
@@ -105,6 +117,7 @@ struct Function {
     std::vector<ValueBounds> param_bounds;  // per parameter (empty: every parameter is an input)
     bool inline_hint = false;          // a building block of the scene functions: the inline pass inlines it
     bool entry = false;                // called from outside the IR (the runtime, the evaluator's user)
+    LipschitzSpec lipschitz;           // an item distance function: divide its result by the shape's bound
     std::vector<Instr> body;
     ValueId result = 0;                // the primary output (D, C, or the bare expression)
     std::vector<std::pair<std::string, ValueId>> outputs;  // every assigned name, in source order
@@ -146,6 +159,9 @@ struct Global {
 struct Module {
     std::vector<Function> functions;
     std::vector<Global> globals;
+    // The target makes parameters constants (Shadertoy): analyses may use their values, not their sliders'
+    // ranges.
+    bool constant_parameters = false;
     int find(const std::string& name) const;
     int find_global(const std::string& name) const;
 };

@@ -292,7 +292,18 @@ struct Parser {
                 ++at;
                 return;
             }
-            if (l.eat("return")) {
+            if (l.eat("lipschitz ")) {
+                LipschitzSpec& s = f.lipschitz;
+                s.object_fn = function_index(l.word());
+                s.region = parse_bounds(l);
+                l.expect("group");
+                s.group = int(l.integer());
+                l.expect("declared");
+                s.declared = l.number();
+                s.trusted = l.word() == "trusted";
+                l.expect("shape");
+                s.shape = l.word();
+            } else if (l.eat("return")) {
                 l.expect("%");
                 f.result = ValueId(l.integer());
             } else if (l.eat("output")) {
@@ -319,6 +330,11 @@ struct Parser {
         while (at < lines.size()) {
             Line l{lines[at]};
             if (l.at_end()) {
+                ++at;
+                continue;
+            }
+            if (l.eat("constant parameters")) {
+                m.constant_parameters = true;
                 ++at;
                 continue;
             }

@@ -9,6 +9,7 @@
 #include "ir/passes/Differentiate.h"
 #include "ir/passes/Fold.h"
 #include "ir/passes/Inline.h"
+#include "ir/passes/Lipschitz.h"
 #include "ir/passes/Tables.h"
 #include "source/Internal.h"
 
@@ -50,6 +51,10 @@ struct Pass {
 
 const std::vector<Pass>& passes() {
     static const std::vector<Pass> list = {
+        {{"lipschitz", "each shape's Lipschitz bound, derived from its gradient; distances divided by it"},
+         [](Module& m, const PipelineOptions&, PipelineResult& r) {
+             for (auto& w : apply_lipschitz_bounds(m, &r.lipschitz)) r.warnings.push_back(std::move(w));
+         }},
         {{"inline", "inline the scene's building blocks into the scene functions"},
          [](Module& m, const PipelineOptions&, PipelineResult&) { inline_marked(m); }},
         {{"tables", "compile-time tables on a lattice become arithmetic on the index"},

@@ -1,5 +1,7 @@
 // The pass pipeline: the one place that says which passes run on a compile's IR, and in which order.
 //
+//   lipschitz each shape's Lipschitz bound over where it is marched, derived from its gradient's IR by
+//             interval arithmetic; the item's distance divided by it (ir/passes/Lipschitz.h)
 //   inline    the scene's building blocks (marked inline_hint) into the scene functions
 //   tables    compile-time tables on a lattice (grid offsets) become arithmetic on the index
 //   fold      constants, constant globals, identities, lazy choices with constant conditions
@@ -38,7 +40,8 @@ struct PipelineOptions {
 
 struct PipelineResult {
     std::vector<RangeIssue> range_issues;                 // from the ranges pass
-    std::vector<RangeIssue> warnings;                     // what else a pass wants the user to know (gradient)
+    std::vector<RangeIssue> warnings;                     // what else a pass wants the user to know (gradient, lipschitz)
+    std::vector<std::string> lipschitz;                   // per scene item: derived, sampled and applied bounds
     std::string dump;                                     // the module after `dump_after`
     std::vector<std::pair<std::string, double>> pass_ms;  // wall time per pass
 };

@@ -74,6 +74,7 @@ public:
 
     SceneIR run() {
         lights_ = !s_.lights.empty();
+        m_.constant_parameters = o_.params_constant;
         make_items();
         declare_lights();
         for (Item& it : items_) declare_item(it);
@@ -340,9 +341,10 @@ private:
         if (it.to_object.global >= 0) q = b.op(Op::Mul, {read(b, it.to_object, k), q});
         if (it.offset.global >= 0) q = b.op(Op::Add, {q, read(b, it.offset, k)});
         if (q != p) f.body[q].name = "q";
-        auto conservative = [&](ValueId d) {  // scaled like the shape: the transform's and the shape's Lipschitz factors
+        // Scaled like the shape by the transform's Lipschitz factor; the shape's own (declared, or derived by
+        // the compiler) divides the result in the lipschitz pass (f.lipschitz).
+        auto conservative = [&](ValueId d) {
             if (it.scale.global >= 0) d = b.op(Op::Mul, {d, read(b, it.scale, k)});
-            if (first.shape->lipschitz != 1) d = b.op(Op::Div, {d, b.scalar(first.shape->lipschitz)});
             return d;
         };
         int shape_fn = lower_module_cached(*first.shape, ctx_);
@@ -363,8 +365,57 @@ private:
             ValueId count = it.bound.global >= 0 ? b.op(Op::Select, {far, b.scalar(0), one}) : one;
             f.result = b.construct(Type::vector(2), {d, count});
         }
+        f.lipschitz = lipschitz_spec(it, shape_fn);
         m_.functions[size_t(fn)] = std::move(f);
         return fn;
+    }
+
+    // What the lipschitz pass needs: the shape's object-space distance as a function of q (and k), and the
+    // box of q where it is evaluated: its bounding sphere, else the camera's reach (max_dist around it)
+    // seen from the shape (for a group, the hull over its members).
+    ir::LipschitzSpec lipschitz_spec(const Item& it, int shape_fn) {
+        const InstancePlan& first = plan(it.members[0]);
+        ir::LipschitzSpec spec;
+        spec.declared = first.shape->lipschitz != 1 ? first.shape->lipschitz : 0;
+        spec.trusted = first.shape->exactness == "exact" || first.shape->exactness == "bound";
+        spec.where = first.desc->type_span;
+        spec.shape = first.shape->ast.name;
+        spec.group = it.group ? int(it.members.size()) : 0;
+        spec.region.input = false;
+        spec.region.lo.assign(3, std::numeric_limits<double>::infinity());
+        spec.region.hi.assign(3, -std::numeric_limits<double>::infinity());
+        const auto& cam = s_.camera;
+        double reach = s_.render.max_dist;
+        for (int c = 0; c < 3; ++c) reach += std::fabs(cam.position[size_t(c)] - cam.target[size_t(c)]);  // an orbiting camera
+        for (size_t mi : it.members) {
+            const InstancePlan& p = plan(mi);
+            for (int r = 0; r < 3; ++r) {
+                double lo, hi;
+                if (p.desc->bound > 0) {
+                    double R = p.desc->bound + 2 * o_.bound_margin / std::max(p.scale, 1e-9);
+                    lo = -R, hi = R;
+                } else {  // q = L p + o for p within `reach` of the camera's target
+                    lo = hi = p.inv_offset[size_t(r)];
+                    for (int c = 0; c < 3; ++c) {
+                        double l = p.inv_linear[size_t(r * 3 + c)], mid = cam.target[size_t(c)];
+                        lo += std::min(l * (mid - reach), l * (mid + reach));
+                        hi += std::max(l * (mid - reach), l * (mid + reach));
+                    }
+                }
+                spec.region.lo[size_t(r)] = std::min(spec.region.lo[size_t(r)], lo);
+                spec.region.hi[size_t(r)] = std::max(spec.region.hi[size_t(r)], hi);
+            }
+        }
+        ir::Function o;
+        o.name = "iqc_object." + it.name;
+        o.glsl_name = it.name + "_object";
+        Builder b(m_, o);
+        ValueId q = b.param("q", Type::vector(3));
+        ValueId k = it.group ? b.param("k", Type::integer()) : ValueId(-1);
+        o.result = b.call(shape_fn, module_args(b, *first.shape, it.shape_params, {{first.query, q}}, k));
+        m_.functions.push_back(std::move(o));
+        spec.object_fn = int(m_.functions.size() - 1);
+        return spec;
     }
 
     // iqc_scene(p) -> (distance, id[, shapes evaluated]): the union of every item, the nearest one's id.

@@ -311,10 +311,10 @@ struct Differentiator {
                     return add(r1, t.is_scalar() ? mul(diff, T(2)) : outer(diff, T(2)));
                 }
                 if (n == "length") {
-                    // Jᵀ v / ‖v‖ (0 at v = 0)
+                    // Jᵀ (v / ‖v‖) (0 at v = 0): the unit vector first, so that bounds of the result see it
                     ValueId Jt = emit(Op::Transpose, Type::matrix(3, PT(0).rows), {T(0)});
                     ValueId safe = builtin("max", {r, scalar(1e-30)});
-                    return op2(Op::Div, op2(Op::Mul, Jt, x), safe);
+                    return op2(Op::Mul, Jt, op2(Op::Div, x, safe));
                 }
                 if (n == "normalize") {
                     // (J - n ⊗ (Jᵀ n)) / ‖v‖

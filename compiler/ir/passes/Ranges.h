@@ -20,13 +20,10 @@
 #include <vector>
 
 #include "ir/IR.h"
+#include "ir/Intervals.h"
 
 namespace iqc::ir {
 
-struct Interval {
-    double lo = -std::numeric_limits<double>::infinity();
-    double hi = std::numeric_limits<double>::infinity();
-};
 
 struct RangeIssue {
     Span span;

@@ -1,0 +1,425 @@
+#include "ir/Intervals.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+
+#include "sema/Builtins.h"
+
+namespace iqc::ir {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}
+
+namespace iv {
+
+Interval hull(Interval a, Interval b) { return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)}; }
+Interval add(Interval a, Interval b) {
+    Interval r{a.lo + b.lo, a.hi + b.hi};
+    if (std::isnan(r.lo)) r.lo = -kInf;
+    if (std::isnan(r.hi)) r.hi = kInf;
+    return r;
+}
+Interval neg(Interval a) { return {-a.hi, -a.lo}; }
+Interval mul(Interval a, Interval b) {
+    double p[4] = {a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi};
+    Interval r{kInf, -kInf};
+    for (double x : p) {
+        if (std::isnan(x)) x = 0;  // 0·∞: the product of a zero bound with an infinite one
+        r.lo = std::min(r.lo, x);
+        r.hi = std::max(r.hi, x);
+    }
+    return r;
+}
+Interval sqr(Interval a) {
+    double lo = contains_zero(a) ? 0 : std::min(a.lo * a.lo, a.hi * a.hi);
+    return {lo, std::max(a.lo * a.lo, a.hi * a.hi)};
+}
+Interval div(Interval a, Interval b) {
+    if (contains_zero(b)) return {};
+    return mul(a, {1 / b.hi, 1 / b.lo});
+}
+bool contains_zero(Interval a) { return a.lo <= 0 && a.hi >= 0; }
+double magnitude(Interval a) { return std::max(std::fabs(a.lo), std::fabs(a.hi)); }
+std::string text(Interval a) {
+    auto n = [](double x) { return std::isinf(x) ? std::string(x > 0 ? "∞" : "-∞") : fmt::format("{:.4g}", x); };
+    return fmt::format("[{}, {}]", n(a.lo), n(a.hi));
+}
+
+}  // namespace iv
+
+double Bounds::norm_from_components() const {
+    double s = 0;
+    for (const auto& x : c) s += iv::magnitude(x) * iv::magnitude(x);
+    double frobenius = std::sqrt(s);
+    if (rows < 2 || cols < 2 || c.size() != size_t(rows * cols)) return frobenius;
+    // ‖A‖₂ ≤ √(‖A‖₁ ‖A‖∞): the largest column sum times the largest row sum of |entries|.
+    double col = 0, row = 0;
+    for (int j = 0; j < cols; ++j) {
+        double t = 0;
+        for (int i = 0; i < rows; ++i) t += iv::magnitude(c[size_t(i * cols + j)]);
+        col = std::max(col, t);
+    }
+    for (int i = 0; i < rows; ++i) {
+        double t = 0;
+        for (int j = 0; j < cols; ++j) t += iv::magnitude(c[size_t(i * cols + j)]);
+        row = std::max(row, t);
+    }
+    return std::min(frobenius, std::sqrt(col * row));
+}
+
+namespace {
+
+using namespace iv;
+
+Bounds unknown(const Type& t) {
+    Bounds b;
+    b.c.assign(size_t(std::max(1, t.components())), Interval{});
+    if (t.is_matrix() && t.rows > 1 && t.cols > 1) b.rows = t.rows, b.cols = t.cols;
+    return b;
+}
+
+// Finishes a value: its norm is at most what its components allow.
+Bounds finish(Bounds b) {
+    b.norm = std::min(b.norm, b.norm_from_components());
+    if (b.unit) b.norm = std::min(b.norm, 1.0);
+    return b;
+}
+
+Interval comp(const Bounds& b, size_t k) { return b.c.size() == 1 ? b.c[0] : b.c[k]; }
+
+Interval periodic(Interval a, bool is_sin) {
+    if (!(a.hi - a.lo < 2 * M_PI) || std::isinf(a.lo) || std::isinf(a.hi)) return {-1, 1};
+    auto fn = [&](double v) { return is_sin ? std::sin(v) : std::cos(v); };
+    Interval out{std::min(fn(a.lo), fn(a.hi)), std::max(fn(a.lo), fn(a.hi))};
+    double shift = is_sin ? M_PI / 2 : 0;  // sin peaks at π/2 + kπ, cos at kπ
+    for (double c = std::ceil((a.lo - shift) / M_PI) * M_PI + shift; c <= a.hi; c += M_PI) {
+        out.lo = std::min(out.lo, fn(c));
+        out.hi = std::max(out.hi, fn(c));
+    }
+    return out;
+}
+
+Interval monotone(Interval a, double (*f)(double)) { return {f(a.lo), f(a.hi)}; }
+
+Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
+    std::string n = builtin(in.aux).name;
+    Bounds x = unknown(in.type);
+    size_t comps = x.c.size();
+    auto each = [&](auto fn) {
+        for (size_t k = 0; k < comps; ++k) x.c[k] = fn(k);
+    };
+    auto arg = [&](size_t i, size_t k) { return comp(*a[i], k); };
+    if (n == "sin" || n == "cos") each([&](size_t k) { return periodic(arg(0, k), n == "sin"); });
+    else if (n == "tan")
+        each([&](size_t k) {
+            Interval v = arg(0, k);
+            return v.lo > -M_PI / 2 && v.hi < M_PI / 2 ? Interval{std::tan(v.lo), std::tan(v.hi)} : Interval{};
+        });
+    else if (n == "tanh") each([&](size_t k) { return monotone(arg(0, k), [](double v) { return std::tanh(v); }); });
+    else if (n == "sinh") each([&](size_t k) { return monotone(arg(0, k), [](double v) { return std::sinh(v); }); });
+    else if (n == "cosh")
+        each([&](size_t k) {
+            Interval v = arg(0, k);
+            double hi = std::max(std::cosh(v.lo), std::cosh(v.hi));
+            return Interval{contains_zero(v) ? 1.0 : std::min(std::cosh(v.lo), std::cosh(v.hi)), hi};
+        });
+    else if (n == "smoothstep") each([&](size_t) { return Interval{0, 1}; });
+    else if (n == "exp") each([&](size_t k) { return monotone(arg(0, k), [](double v) { return std::exp(v); }); });
+    else if (n == "log" || n == "ln")
+        each([&](size_t k) {
+            Interval v = arg(0, k);
+            if (v.lo <= 0) return Interval{-kInf, v.hi > 0 ? std::log(v.hi) : kInf};
+            return monotone(v, [](double t) { return std::log(t); });
+        });
+    else if (n == "abs")
+        each([&](size_t k) {
+            Interval v = arg(0, k);
+            if (v.lo >= 0) return v;
+            if (v.hi <= 0) return neg(v);
+            return Interval{0, std::max(-v.lo, v.hi)};
+        });
+    else if (n == "sqrt")
+        each([&](size_t k) {
+            Interval v = arg(0, k);
+            return Interval{std::sqrt(std::max(v.lo, 0.0)), std::sqrt(std::max(v.hi, 0.0))};
+        });
+    else if (n == "floor" || n == "ceil" || n == "round")
+        each([&](size_t k) { return Interval{std::floor(arg(0, k).lo), std::ceil(arg(0, k).hi)}; });
+    else if (n == "fract") each([&](size_t) { return Interval{0, 1}; });
+    else if (n == "sign" || n == "step")
+        each([&](size_t) { return n == "sign" ? Interval{-1, 1} : Interval{0, 1}; });
+    else if (n == "min" || n == "max")
+        each([&](size_t k) {
+            Interval u = arg(0, k), v = arg(1, k);
+            return n == "min" ? Interval{std::min(u.lo, v.lo), std::min(u.hi, v.hi)} : Interval{std::max(u.lo, v.lo), std::max(u.hi, v.hi)};
+        });
+    else if (n == "clamp")
+        each([&](size_t k) {
+            Interval v = arg(0, k), lo = arg(1, k), hi = arg(2, k);
+            return Interval{std::max(std::min(v.lo, hi.lo), lo.lo), std::min(std::max(v.hi, lo.hi), hi.hi)};
+        });
+    else if (n == "mix")
+        each([&](size_t k) {
+            Interval u = arg(0, k), v = arg(1, k), t = arg(2, k);  // u + t(v - u)
+            return add(u, mul(t, add(v, neg(u))));
+        });
+    else if (n == "mod")
+        each([&](size_t k) {
+            Interval m = arg(1, k);
+            return m.lo > 0 ? Interval{0, m.hi} : m.hi < 0 ? Interval{m.lo, 0} : Interval{};
+        });
+    else if (n == "pow")
+        each([&](size_t k) {
+            Interval b = arg(0, k), e = arg(1, k);
+            if (b.lo < 0) return Interval{};
+            double c[4] = {std::pow(b.lo, e.lo), std::pow(b.lo, e.hi), std::pow(b.hi, e.lo), std::pow(b.hi, e.hi)};
+            Interval r{kInf, -kInf};
+            for (double v : c) {
+                if (std::isnan(v)) return Interval{};
+                r.lo = std::min(r.lo, v);
+                r.hi = std::max(r.hi, v);
+            }
+            if (contains_zero(b) && e.lo < 0) r.hi = kInf;
+            return r;
+        });
+    else if (n == "length") {
+        double lo2 = 0, hi2 = 0;
+        for (size_t k = 0; k < a[0]->c.size(); ++k) {
+            Interval v = arg(0, k);
+            Interval s = sqr(v);
+            lo2 += s.lo;
+            hi2 += s.hi;
+        }
+        x.c = {{std::sqrt(lo2), std::min(std::sqrt(hi2), a[0]->norm)}};
+    } else if (n == "normalize") {
+        each([&](size_t) { return Interval{-1, 1}; });
+        x.unit = true;
+    } else if (n == "atan" || n == "atan2") each([&](size_t) { return Interval{-M_PI, M_PI}; });
+    else if (n == "asin") each([&](size_t) { return Interval{-M_PI / 2, M_PI / 2}; });
+    else if (n == "acos") each([&](size_t) { return Interval{0, M_PI}; });
+    return x;
+}
+
+// Matrix products on intervals: (rows×inner)·(inner×cols), vectors as columns.
+Bounds product(const Type& t, const Type& ta, const Type& tb, const Bounds& a, const Bounds& b) {
+    Bounds x = unknown(t);
+    if (ta.is_scalar() || tb.is_scalar()) {
+        const Bounds& s = ta.is_scalar() ? a : b;
+        const Bounds& v = ta.is_scalar() ? b : a;
+        for (size_t k = 0; k < x.c.size(); ++k) x.c[k] = mul(comp(s, 0), comp(v, k));
+        x.norm = magnitude(comp(s, 0)) * v.norm;
+        return x;
+    }
+    int ar = ta.rows, ac = ta.is_matrix() ? ta.cols : 1, br = tb.rows, bc = tb.is_matrix() ? tb.cols : 1;
+    if (ta.is_vector() && tb.is_matrix() && tb.rows == 1) ac = 1, br = 1;  // outer product a·bᵀ
+    if (ac != br) return x;
+    for (int i = 0; i < ar; ++i)
+        for (int j = 0; j < bc; ++j) {
+            Interval s{0, 0};
+            for (int k = 0; k < ac; ++k) s = add(s, mul(a.c[size_t(i * ac + k)], b.c[size_t(k * bc + j)]));
+            if (size_t(i * bc + j) < x.c.size()) x.c[size_t(i * bc + j)] = s;
+        }
+    x.norm = a.norm * b.norm;  // ‖AB‖_F ≤ ‖A‖_F ‖B‖_F
+    return x;
+}
+
+}  // namespace
+
+Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std::vector<const Bounds*>& a) {
+    (void)m;
+    Bounds x = unknown(in.type);
+    size_t comps = x.c.size();
+    auto type = [&](size_t k) -> const Type& { return f.body[in.args[k]].type; };
+    switch (in.op) {
+        case Op::Const:
+            x.c.clear();
+            for (double v : in.data) x.c.push_back({v, v});
+            if (x.c.empty()) x.c.push_back({0, 0});
+            break;
+        case Op::Copy: return *a[0];
+        case Op::Add:
+        case Op::Sub:
+            for (size_t k = 0; k < comps; ++k) x.c[k] = add(comp(*a[0], k), in.op == Op::Add ? comp(*a[1], k) : neg(comp(*a[1], k)));
+            x.norm = a[0]->norm + a[1]->norm;
+            break;
+        case Op::Neg:
+            for (size_t k = 0; k < comps; ++k) x.c[k] = neg(comp(*a[0], k));
+            x.norm = a[0]->norm;
+            x.unit = a[0]->unit;
+            break;
+        case Op::Mul:
+            if (in.args[0] == in.args[1] && !in.type.is_matrix()) {  // a square is never negative
+                for (size_t k = 0; k < comps; ++k) x.c[k] = sqr(comp(*a[0], k));
+                break;
+            }
+            x = product(in.type, type(0), type(1), *a[0], *a[1]);
+            break;
+        case Op::Hadamard:
+            for (size_t k = 0; k < comps; ++k) x.c[k] = in.args[0] == in.args[1] ? sqr(comp(*a[0], k)) : mul(comp(*a[0], k), comp(*a[1], k));
+            break;
+        case Op::Div: {
+            Interval d = comp(*a[1], 0);
+            for (size_t k = 0; k < comps; ++k) x.c[k] = div(comp(*a[0], k), d);
+            if (!contains_zero(d)) x.norm = a[0]->norm / std::min(std::fabs(d.lo), std::fabs(d.hi));
+            // v / max(‖v‖, ε) and v / ‖v‖: at most a unit vector.
+            const Instr& den = f.body[in.args[1]];
+            auto is_length_of = [&](const Instr& l) {
+                return l.op == Op::Builtin && std::string(builtin(l.aux).name) == "length" && l.args[0] == in.args[0];
+            };
+            bool guarded = den.op == Op::Builtin && std::string(builtin(den.aux).name) == "max" &&
+                           (is_length_of(f.body[den.args[0]]) || is_length_of(f.body[den.args[1]]));
+            if (in.type.is_vector() && (is_length_of(den) || guarded)) {
+                x.unit = true;
+                for (auto& c : x.c) c = {std::max(c.lo, -1.0), std::min(c.hi, 1.0)};
+            }
+            break;
+        }
+        case Op::Dot: {
+            Interval s{0, 0};
+            if (in.args[0] == in.args[1]) {
+                for (size_t k = 0; k < a[0]->c.size(); ++k) s = add(s, sqr(comp(*a[0], k)));
+            } else {
+                for (size_t k = 0; k < a[0]->c.size(); ++k) s = add(s, mul(comp(*a[0], k), comp(*a[1], k)));
+            }
+            double cs = a[0]->norm * a[1]->norm;  // Cauchy–Schwarz
+            x.c = {{std::max(s.lo, -cs), std::min(s.hi, cs)}};
+            break;
+        }
+        case Op::Cross: {
+            auto c = [&](size_t i, size_t j) { return add(mul(comp(*a[0], i), comp(*a[1], j)), neg(mul(comp(*a[0], j), comp(*a[1], i)))); };
+            x.c = {c(1, 2), c(2, 0), c(0, 1)};
+            x.norm = a[0]->norm * a[1]->norm;
+            break;
+        }
+        case Op::Transpose: {
+            const Type& t = type(0);
+            if (t.is_matrix() && t.rows > 1 && t.cols > 1)
+                    for (int i = 0; i < t.rows; ++i)
+                    for (int j = 0; j < t.cols; ++j) x.c[size_t(j * t.rows + i)] = a[0]->c[size_t(i * t.cols + j)];
+            else
+                x.c = a[0]->c;
+            x.norm = a[0]->norm;
+            break;
+        }
+        case Op::Builtin: x = builtin_bounds(in, a); break;
+        case Op::Construct: {
+            // A vector of parts: the root of their squared norms; a matrix of rows: that bounds its Frobenius
+            // norm, hence its operator norm.
+            double sq = 0;
+            std::vector<Interval> c;
+            for (const Bounds* b : a) {
+                c.insert(c.end(), b->c.begin(), b->c.end());
+                sq += b->norm * b->norm;
+            }
+            if (c.size() == comps) {
+                x.c = std::move(c);
+                x.norm = std::sqrt(sq);
+            }
+            break;
+        }
+        case Op::Extract: x.c = {comp(*a[0], size_t(in.aux))}; break;
+        case Op::Row: {
+            int c = type(0).cols;
+            x.c.assign(a[0]->c.begin() + in.aux * c, a[0]->c.begin() + (in.aux + 1) * c);
+            x.norm = a[0]->norm;
+            break;
+        }
+        case Op::Column: {
+            int rows = type(0).rows, c = type(0).cols;
+            x.c.clear();
+            for (int k = 0; k < rows; ++k) x.c.push_back(a[0]->c[size_t(k * c + in.aux)]);
+            x.norm = a[0]->norm;
+            break;
+        }
+        case Op::Select:
+        case Op::If:
+        case Op::Switch: {
+            size_t first = in.op == Op::Switch ? 1 : 1;
+            x = *a[first];
+            for (size_t k = first + 1; k < a.size(); ++k) {
+                for (size_t c = 0; c < comps; ++c) x.c[c] = hull(comp(x, c), comp(*a[k], c));
+                x.norm = std::max(x.norm, a[k]->norm);
+                x.unit = x.unit && a[k]->unit;
+            }
+            break;
+        }
+        case Op::Index:  // any element: the array's bounds are per element component already
+            if (a[0]->c.size() == comps) return *a[0];
+            break;
+        case Op::IntDiv:
+            if (comp(*a[0], 0).lo >= 0 && comp(*a[1], 0).lo > 0)
+                x.c = {{std::floor(comp(*a[0], 0).lo / comp(*a[1], 0).hi), std::floor(comp(*a[0], 0).hi / comp(*a[1], 0).lo)}};
+            break;
+        case Op::IntMod:
+            if (comp(*a[1], 0).lo > 0) x.c = {{0, comp(*a[1], 0).hi - 1}};
+            break;
+        case Op::Compare:
+        case Op::And:
+        case Op::Or:
+            x.c = {{0, 1}};
+            break;
+        default: break;  // Param, Global, Input, Call, Loop, Member: the caller's business
+    }
+    return finish(std::move(x));
+}
+
+std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params) {
+    const Function& f = m.functions[size_t(fn)];
+    std::vector<Bounds> r(f.body.size());
+    for (size_t i = 0; i < f.body.size(); ++i) {
+        const Instr& in = f.body[i];
+        if (in.op == Op::Param) {
+            r[i] = unknown(in.type);
+            if (size_t(in.aux) < params.size() && params[size_t(in.aux)].size() == r[i].c.size()) r[i].c = params[size_t(in.aux)];
+            r[i] = finish(std::move(r[i]));
+            continue;
+        }
+        if (in.op == Op::Global) {
+            const Global& g = m.globals[size_t(in.aux)];
+            Type e = g.type.is_array() ? g.type.element() : g.type;
+            Bounds b = unknown(e);
+            size_t n = b.c.size();
+            if (g.kind != Global::Kind::Prepared) {
+                bool slider = g.kind == Global::Kind::Parameter && !m.constant_parameters;
+                if (slider && g.bounds.lo.size() == n) {
+                    for (size_t k = 0; k < n; ++k) b.c[k] = {g.bounds.lo[k], g.bounds.hi[k]};
+                } else if (g.kind == Global::Kind::Constant && !g.value.empty()) {
+                    for (size_t k = 0; k < n; ++k) b.c[k] = {kInf, -kInf};
+                    for (size_t j = 0; j < g.value.size(); ++j) b.c[j % n] = hull(b.c[j % n], {g.value[j], g.value[j]});
+                } else if (!g.value.empty() && !g.type.is_array()) {  // a parameter without bounds: its value
+                    for (size_t k = 0; k < n; ++k) b.c[k] = {g.value[k], g.value[k]};
+                }
+            }
+            if (!g.type.is_array()) b = finish(std::move(b));
+            else {
+                // An element's norm: the largest over the elements (constants), else from the components.
+                double worst = 0;
+                if (g.kind == Global::Kind::Constant)
+                    for (size_t e0 = 0; e0 + n <= g.value.size(); e0 += n) {
+                        double s = 0;
+                        for (size_t k = 0; k < n; ++k) s += g.value[e0 + k] * g.value[e0 + k];
+                        worst = std::max(worst, std::sqrt(s));
+                    }
+                b = finish(std::move(b));
+                if (g.kind == Global::Kind::Constant) b.norm = std::min(b.norm, worst);
+            }
+            r[i] = std::move(b);
+            continue;
+        }
+        if (in.op == Op::Call) {
+            std::vector<std::vector<Interval>> args;
+            for (ValueId a : in.args) args.push_back(r[a].c);
+            auto callee = interval_analysis(m, in.aux, args);
+            r[i] = callee[m.functions[size_t(in.aux)].result];
+            continue;
+        }
+        std::vector<const Bounds*> a;
+        for (ValueId x : in.args) a.push_back(&r[x]);
+        r[i] = bounds_of(m, f, in, a);
+    }
+    return r;
+}
+
+}  // namespace iqc::ir

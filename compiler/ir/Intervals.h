@@ -1,0 +1,58 @@
+// Interval arithmetic on the IR: for every value of a function, an interval per component that contains
+// every value it can take when the parameters lie in given intervals, and an upper bound of its Euclidean
+// norm (a vector's length, a matrix's Frobenius norm, a scalar's magnitude) — tracked apart from the
+// components because it survives where components do not: a unit vector such as v/‖v‖ has components in
+// [-1, 1] but norm 1, and a sum of two unit vectors has norm at most 2, however its components vary.
+//
+// Used by range analysis (guards and warnings from slider bounds, ir/passes/Ranges.h) and by the Lipschitz
+// analysis (a bound of ‖∇D‖ from the gradient's IR, ir/passes/Lipschitz.h). Rules are the textbook ones
+// (Moore, "Interval Analysis", 1966): sums and products of bounds, monotone functions at the ends,
+// periodic functions exactly on intervals shorter than a period.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "ir/IR.h"
+
+namespace iqc::ir {
+
+struct Interval {
+    double lo = -std::numeric_limits<double>::infinity();
+    double hi = std::numeric_limits<double>::infinity();
+};
+
+namespace iv {
+Interval hull(Interval a, Interval b);
+Interval add(Interval a, Interval b);
+Interval neg(Interval a);
+Interval mul(Interval a, Interval b);
+Interval sqr(Interval a);                // x², never negative
+Interval div(Interval a, Interval b);    // unbounded when b holds 0
+bool contains_zero(Interval a);
+double magnitude(Interval a);            // max |x|
+std::string text(Interval a);            // "[0, 2]", "[-∞, 1]"
+}  // namespace iv
+
+// What is known of one value: its components' intervals and a bound of its norm (a vector's length, a
+// matrix's operator norm ‖A‖₂ — so that ‖Av‖ ≤ ‖A‖‖v‖ and a diagonal Jacobian's bound is its largest
+// entry, not the root of their squares).
+struct Bounds {
+    std::vector<Interval> c;  // per component (matrices row-major)
+    double norm = std::numeric_limits<double>::infinity();
+    bool unit = false;        // exactly a unit vector (or zero): normalize, v/‖v‖
+    int rows = 0, cols = 0;   // a matrix's shape (0: not a matrix)
+    double norm_from_components() const;
+};
+
+// The bounds of every value of function `fn` when its parameters lie in `params` (one entry per
+// parameter: its components' intervals) and globals are their values (constants, and parameters where
+// Module::constant_parameters) or their slider bounds (parameters). Calls are analysed through the callee;
+// loops and inputs are unbounded.
+std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params);
+
+// The bounds of one instruction from its operands' (the rule interval_analysis applies).
+Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std::vector<const Bounds*>& args);
+
+}  // namespace iqc::ir

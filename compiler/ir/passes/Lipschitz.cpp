@@ -1,0 +1,178 @@
+#include "ir/passes/Lipschitz.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <queue>
+
+#include "ir/Builder.h"
+#include "ir/Eval.h"
+#include "ir/passes/Differentiate.h"
+
+namespace iqc::ir {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kUnbounded = 64;  // a derived K above this over the region is useless for marching
+
+// The norm bound of the gradient over one box of p.
+double box_bound(const Module& m, int grad, const std::vector<Interval>& box, const std::vector<std::vector<Interval>>& others) {
+    std::vector<std::vector<Interval>> params = {box};
+    params.insert(params.end(), others.begin(), others.end());
+    auto b = interval_analysis(m, grad, params);
+    const Bounds& g = b[m.functions[size_t(grad)].result];
+    double n = g.norm;
+    return std::isnan(n) ? kInf : n;
+}
+
+struct Box {
+    std::vector<Interval> c;
+    double bound;
+    bool operator<(const Box& o) const { return bound < o.bound; }
+};
+
+// Branch and bound: split the worst box along its longest side until the budget is spent; the worst box's
+// bound then bounds the whole region.
+double derive(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+              int budget) {
+    std::priority_queue<Box> q;
+    q.push({region, box_bound(m, grad, region, others)});
+    for (int used = 1; used + 2 <= budget && !q.empty();) {
+        Box worst = q.top();
+        if (!std::isfinite(worst.bound) && used > budget / 2) break;
+        q.pop();
+        size_t axis = 0;
+        for (size_t k = 1; k < worst.c.size(); ++k)
+            if (worst.c[k].hi - worst.c[k].lo > worst.c[axis].hi - worst.c[axis].lo) axis = k;
+        double mid = 0.5 * (worst.c[axis].lo + worst.c[axis].hi);
+        if (!(mid > worst.c[axis].lo && mid < worst.c[axis].hi)) {  // nothing left to split
+            q.push(worst);
+            break;
+        }
+        for (int half = 0; half < 2; ++half) {
+            Box b = worst;
+            (half ? b.c[axis].lo : b.c[axis].hi) = mid;
+            b.bound = box_bound(m, grad, b.c, others);
+            q.push(std::move(b));
+            ++used;
+        }
+    }
+    return q.empty() ? kInf : q.top().bound;
+}
+
+double sample(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+              int samples) {
+    Evaluator ev(m);
+    const Function& g = m.functions[size_t(grad)];
+    uint64_t state = 0x9E3779B97F4A7C15ull;
+    auto next = [&] {  // splitmix64: deterministic
+        state += 0x9E3779B97F4A7C15ull;
+        uint64_t z = state;
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return double((z ^ (z >> 31)) >> 11) / double(1ull << 53);
+    };
+    auto pick = [&](Interval i) {
+        double lo = std::isfinite(i.lo) ? i.lo : -1e3, hi = std::isfinite(i.hi) ? i.hi : 1e3;
+        return lo + (hi - lo) * next();
+    };
+    double worst = 0;
+    std::vector<Value> args(g.params.size());
+    for (int s = 0; s < samples; ++s) {
+        args[0] = {Type::vector(3), {pick(region[0]), pick(region[1]), pick(region[2])}};
+        for (size_t k = 1; k < g.params.size(); ++k) {
+            const Type& t = g.params[k].type;
+            std::vector<double> v;
+            for (const Interval& i : others[k - 1]) v.push_back(t.kind == Type::Integer ? std::floor(pick({i.lo, i.hi + 0.999})) : pick(i));
+            args[k] = {t, v};
+        }
+        Value r = ev.call(grad, args);
+        double n = 0;
+        for (double x : r.v) n += x * x;
+        n = std::sqrt(n);
+        if (std::isfinite(n)) worst = std::max(worst, n);
+    }
+    return worst;
+}
+
+// Divides function `fn`'s result (its first component, for an instrumented (distance, count)) by K.
+void divide_result(Module& m, int fn, double K) {
+    Function& f = m.functions[size_t(fn)];
+    Builder b(m, f);
+    ValueId r = f.result;
+    if (f.body[r].type.is_scalar()) {
+        f.result = b.op(Op::Div, {r, b.scalar(K)});
+        return;
+    }
+    ValueId d = b.op(Op::Div, {b.op(Op::Extract, {r}, 0), b.scalar(K)});
+    f.result = b.construct(f.body[r].type, {d, b.op(Op::Extract, {r}, 1)});
+}
+
+}  // namespace
+
+LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<Interval>& box,
+                                     const std::vector<std::vector<Interval>>& others, int samples, int boxes) {
+    LipschitzEstimate e;
+    Module work = m;  // the gradient is a function of its own, here only
+    std::string why;
+    int grad = differentiate(work, fn, 0, "lipschitz_gradient", &why);
+    if (grad < 0) {
+        e.derived = kInf;
+        e.why = why;
+        return e;
+    }
+    e.derived = derive(work, grad, box, others, boxes);
+    e.sampled = sample(work, grad, box, others, samples);
+    e.derived = std::max(e.derived, e.sampled);  // rounding in the intervals' ends never claims less than seen
+    return e;
+}
+
+std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::string>* report) {
+    std::vector<RangeIssue> warnings;
+    for (size_t fi = 0; fi < m.functions.size(); ++fi) {
+        LipschitzSpec spec = m.functions[fi].lipschitz;
+        if (spec.object_fn < 0) continue;
+        std::vector<Interval> region;
+        for (size_t k = 0; k < 3; ++k) region.push_back({spec.region.lo[k], spec.region.hi[k]});
+        std::vector<std::vector<Interval>> others;
+        if (spec.group > 0) others.push_back({{0, double(spec.group - 1)}});
+        LipschitzEstimate e;
+        if (!spec.trusted || spec.declared > 0) e = estimate_lipschitz(m, spec.object_fn, region, others);
+        double applied = 1;
+        std::string how;
+        if (spec.declared > 0) {
+            applied = spec.declared;
+            how = "declared";
+            if (e.sampled > spec.declared * (1 + 1e-3))
+                warnings.push_back({spec.where, fmt::format("shape '{}' declares '# lipschitz: {}', but its gradient reaches {:.3g} "
+                                                            "here (iqc derives K ≤ {:.3g}): marching may step through its surface; "
+                                                            "remove the pragma and iqc uses its own bound",
+                                                            spec.shape, spec.declared, e.sampled, e.derived)});
+        } else if (spec.trusted) {
+            how = "exact or bound by its pragma";
+        } else if (e.sampled <= 1 + 1e-3 && e.derived <= 2 * (1 + 1e-9)) {
+            how = "1-Lipschitz at every sample";
+        } else if (!std::isfinite(e.derived) || e.derived > kUnbounded) {
+            how = "no useful bound";
+            std::string reason = e.why.empty() ? fmt::format("its gradient reaches {:.3g} and iqc cannot bound it where the "
+                                                             "instance is marched", e.sampled)
+                                               : "iqc cannot differentiate it (" + e.why + ")";
+            warnings.push_back({spec.where, fmt::format("shape '{}' is not 1-Lipschitz ({}): marching may step through its "
+                                                        "surface; give the instance `bound = R` (a sphere around the shape) so "
+                                                        "iqc can bound its gradient there, or declare `# lipschitz: K`",
+                                                        spec.shape, reason)});
+        } else {
+            applied = e.derived;
+            how = "derived";
+        }
+        if (applied > 1 + 1e-9) divide_result(m, int(fi), applied);
+        if (report)
+            report->push_back(fmt::format("{} ({}): K ≤ {:.4g} derived, {:.4g} sampled, {:.4g} applied ({})", spec.shape,
+                                          m.functions[fi].glsl_name, e.derived, e.sampled, applied, how));
+        m.functions[fi].lipschitz.object_fn = -1;  // done
+    }
+    return warnings;
+}
+
+}  // namespace iqc::ir
