@@ -33,6 +33,13 @@ struct Server {
     }
 };
 
+// Saves a file the way editors do, whole: written beside it and renamed over it, so the server never
+// reads half a save (a half-read file would be a real build, with its own version number).
+void save(const std::string& name, const std::string& text) {
+    fs::path tmp = write_temp(name + ".saving", text);
+    fs::rename(tmp, temp_dir() / name);
+}
+
 std::string ring(const std::string& radius) {
     return "shape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ [0,3] default = " + radius + ": ring radius\n";
 }
@@ -116,13 +123,13 @@ TEST_CASE("iqc serve: loopback only, two paths, rebuilds on a module edit, shows
     }
     // Edit the included module: a new version whose page has the new default.
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    write_temp("serve/ring.iql", ring("2.25"));
+    save("serve/ring.iql", ring("2.25"));
     CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "2"; }));
     auto page2 = client.Get("/");
     REQUIRE(page2);
     CHECK_THAT(page2->body, Catch::Contains("2.25"));
     // Break it: the page shows the diagnostic with its location instead of a blank canvas.
-    write_temp("serve/ring.iql", "shape\nD = ‖p‖ - radius\nwhere\np ∈ ℝ³\n");
+    save("serve/ring.iql", "shape\nD = ‖p‖ - radius\nwhere\np ∈ ℝ³\n");
     CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "3"; }));
     auto broken = client.Get("/");
     REQUIRE(broken);
@@ -131,7 +138,7 @@ TEST_CASE("iqc serve: loopback only, two paths, rebuilds on a module edit, shows
     CHECK_THAT(broken->body, Catch::Contains("ring.iql:2:"));
     CHECK_THAT(broken->body, Catch::Contains("undefined name"));
     // Fix it: back to a working page.
-    write_temp("serve/ring.iql", ring("0.5"));
+    save("serve/ring.iql", ring("0.5"));
     CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "4"; }));
     auto fixed = client.Get("/");
     REQUIRE(fixed);
@@ -196,10 +203,10 @@ TEST_CASE("iqc serve: a save during a rebuild is picked up", "[serve]") {
     start_serve(s, dir);
     httplib::Client client("127.0.0.1", s.port);
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    write_temp("serve_race/ring.iql", ring("1.5"));
+    save("serve_race/ring.iql", ring("1.5"));
     // The poll (50 ms) starts a rebuild that reads ring.iql first and then compiles for a while.
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
-    write_temp("serve_race/ring.iql", ring("2.75"));
+    save("serve_race/ring.iql", ring("2.75"));
     CHECK(eventually([&] {
         auto r = client.Get("/");
         return r && r->body.find("2.75") != std::string::npos;
@@ -218,7 +225,7 @@ TEST_CASE("iqc serve: invalid UTF-8 in a description or an error keeps serving",
     auto page = client.Get("/");
     REQUIRE(page);
     CHECK_THAT(page->body, Catch::Contains("bad \xEF\xBF\xBD byte"));
-    write_temp("serve_utf8/ring.iql", "shape\nD = ‖p‖ - \xFF\xFE\nwhere\np ∈ ℝ³\n");
+    save("serve_utf8/ring.iql", "shape\nD = ‖p‖ - \xFF\xFE\nwhere\np ∈ ℝ³\n");
     CHECK(eventually([&] { auto r = client.Get("/version"); return r && r->body == "2"; }));
     auto broken = client.Get("/");
     REQUIRE(broken);

@@ -6,8 +6,11 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
+#include <sstream>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -26,14 +29,19 @@ constexpr size_t kServeThreads = 32;
 
 struct Build {
     std::string page;
-    std::map<std::string, fs::file_time_type> files;  // what the compile read, with its time
+    // What the compile read: each real file's text as the compile saw it (nullopt: it could not be read).
+    // The watcher compares contents, not modification times: times are coarse on some file systems and a
+    // save during a compile is then still seen (the disk differs from what was compiled).
+    std::map<std::string, std::optional<std::string>> files;
     bool ok = false;
 };
 
-fs::file_time_type mtime(const std::string& path) {
-    std::error_code ec;
-    auto t = fs::last_write_time(path, ec);
-    return ec ? fs::file_time_type::min() : t;
+std::optional<std::string> read_all(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return std::nullopt;
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
 }
 
 std::string live_reload_script(unsigned version, double poll_seconds) {
@@ -44,17 +52,13 @@ std::string live_reload_script(unsigned version, double poll_seconds) {
            std::to_string(static_cast<int>(poll_seconds * 1000)) + ");";
 }
 
-// Compiles the input to its page. `before`: the files the previous build read, with their times taken
-// now, before this compile reads them; a save during the compile then differs from what is recorded
-// and the next poll rebuilds (recording times after the compile missed such saves).
-Build build(const std::string& input, unsigned version, double poll_seconds,
-            const std::map<std::string, fs::file_time_type>& before) {
+// Compiles the input to its page and records the text of every file the compile read.
+Build build(const std::string& input, unsigned version, double poll_seconds) {
     Build b;
     SourceManager sm;
     Diagnostics diags(sm);
     CompileOptions opts;
     opts.target = Target::WebGL2;
-    auto start = fs::file_time_type::clock::now();
     CompileResult r;
     try {
         r = compile_file(input, sm, diags, opts);
@@ -62,21 +66,15 @@ Build build(const std::string& input, unsigned version, double poll_seconds,
         r.exit_code = 3;
         r.internal = std::string("internal compiler error: ") + e.what() + " (this is a bug in iqc)";
     }
-    // Watch every real file the compile read (modules beside the scene, includes), and the input itself.
-    // A file read for the first time has no earlier time: if it changed since shortly before this compile
-    // began (file systems stamp times coarsely), it is marked changed so the next poll rebuilds once.
-    std::vector<std::string> read = {input};
-    for (size_t f = 0; f < sm.size(); ++f) read.push_back(sm.name(static_cast<FileId>(f)));
-    for (const std::string& name : read) {
+    // Watch every real file the compile read (modules beside the scene, includes), and the input itself
+    // (also when it could not be read: its creation then rebuilds).
+    for (size_t f = 0; f < sm.size(); ++f) {
+        const std::string& name = sm.name(static_cast<FileId>(f));
         std::error_code ec;
-        if (!fs::is_regular_file(name, ec)) continue;
-        if (auto it = before.find(name); it != before.end()) {
-            b.files[name] = it->second;
-        } else {
-            fs::file_time_type t = mtime(name);
-            b.files[name] = t >= start - std::chrono::seconds(2) ? fs::file_time_type::min() : t;
-        }
+        if (b.files.count(name) || !fs::is_regular_file(name, ec)) continue;
+        b.files[name] = std::string(sm.text(static_cast<FileId>(f)));
     }
+    if (!b.files.count(input)) b.files[input] = read_all(input);
     std::string live = live_reload_script(version, poll_seconds);
     if (r.exit_code == 0) {
         b.page = html_page(r.code, r.meta, live);
@@ -100,7 +98,7 @@ int serve(const std::string& input, int port, double poll_seconds) {
     }
     std::mutex mu;
     std::atomic<unsigned> version{1};
-    Build current = build(input, version, poll_seconds, {{input, mtime(input)}});
+    Build current = build(input, version, poll_seconds);
     if (!current.ok) std::fprintf(stderr, "iqc: %s has errors (shown in the page)\n", input.c_str());
 
     httplib::Server server;
@@ -136,17 +134,14 @@ int serve(const std::string& input, int port, double poll_seconds) {
         while (running) {
             std::this_thread::sleep_for(std::chrono::duration<double>(poll_seconds));
             bool changed = false;
-            std::map<std::string, fs::file_time_type> now;  // taken before the rebuild reads the files
             {
                 std::lock_guard<std::mutex> lock(mu);
-                for (const auto& [path, t] : current.files) {
-                    now[path] = mtime(path);
-                    if (now[path] != t) changed = true;
-                }
+                for (const auto& [path, text] : current.files)
+                    if (read_all(path) != text) { changed = true; break; }
             }
             if (!changed) continue;
             auto t0 = std::chrono::steady_clock::now();
-            Build next = build(input, version + 1, poll_seconds, now);
+            Build next = build(input, version + 1, poll_seconds);
             {
                 std::lock_guard<std::mutex> lock(mu);
                 current = std::move(next);
