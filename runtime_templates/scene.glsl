@@ -85,6 +85,16 @@ float iqc_eps(float t) {
 {{/if}}
 }
 
+{{#if STEP_CAP_CONE}}
+// When the step cap is reached, how far from the surface the closest approach at t may be and still count
+// as a hit: 10 tolerances, or the radius of the pixel's cone there (Amanatides 1984, cone tracing: half a
+// pixel's angle at the image centre), whichever is larger. Grazing rays over a plane converge only
+// geometrically; without the cone the far ground would fall through to the background at the horizon.
+float iqc_accept(float t) {
+    return max(10.0 * iqc_eps(t), t / (iResolution.y * IQC_CAMERA_FOCAL));
+}
+
+{{/if}}
 {{#if LIPSCHITZ}}
 // Largest singular value of L (the square root of the largest eigenvalue of LᵀL, in closed form):
 // dividing a distance by it keeps it conservative under any linear map.
@@ -105,7 +115,7 @@ float iqc_max_singular(mat3 L) {
 {{#if MARCH_SPHERE}}
 // Sphere tracing (Hart 1996): step by the distance bound. Starting inside a shape (a negative distance)
 // it marches to that shape's inner wall. When the step cap is reached, the closest approach counts as a
-// hit if it came within 10 tolerances (no holes at grazing angles).
+// hit if it came within iqc_accept (no holes at grazing angles).
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, best_t = -1.0, best = 1.0e20;
     int best_id = -1;
@@ -118,11 +128,11 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float d = s * h.x;
         float e = iqc_eps(t);
         if (abs(d) < e) { id = int(h.y); return t; }
-        if (abs(d) / e < best) { best = abs(d) / e; best_t = t; best_id = int(h.y); }
+        if (abs(d) / iqc_accept(t) < best) { best = abs(d) / iqc_accept(t); best_t = t; best_id = int(h.y); }
         t += d;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    if (best < 10.0) { id = best_id; return best_t; }
+    if (best < 1.0) { id = best_id; return best_t; }
     return -1.0;
 }
 {{/if}}
@@ -149,14 +159,14 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         }
         float e = iqc_eps(t);
         if (abs(d) < e) { id = int(h.y); return t; }
-        if (abs(d) / e < best) { best = abs(d) / e; best_t = t; best_id = int(h.y); }
+        if (abs(d) / iqc_accept(t) < best) { best = abs(d) / iqc_accept(t); best_t = t; best_id = int(h.y); }
         t_prev = t;
         r_prev = abs(d);
         step_len = omega * d;
         t += step_len;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    if (best < 10.0) { id = best_id; return best_t; }
+    if (best < 1.0) { id = best_id; return best_t; }
     return -1.0;
 }
 {{/if}}
@@ -186,7 +196,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         }
         float e = iqc_eps(t);
         if (abs(d) < e) { id = int(h.y); return t; }
-        if (abs(d) / e < best) { best = abs(d) / e; best_t = t; best_id = int(h.y); }
+        if (abs(d) / iqc_accept(t) < best) { best = abs(d) / iqc_accept(t); best_t = t; best_id = int(h.y); }
         if (step_len > 0.0) m = mix(clamp((d - d_prev) / step_len, -1.0, 0.8), m, 0.3);
         t_prev = t;
         r_prev = abs(d);
@@ -195,7 +205,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         t += step_len;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    if (best < 10.0) { id = best_id; return best_t; }
+    if (best < 1.0) { id = best_id; return best_t; }
     return -1.0;
 }
 {{/if}}

@@ -296,6 +296,8 @@ struct Parser {
                 LipschitzSpec& s = f.lipschitz;
                 s.object_fn = function_index(l.word());
                 s.region = parse_bounds(l);
+                l.expect("ball");
+                s.ball = l.number();
                 l.expect("group");
                 s.group = int(l.integer());
                 l.expect("declared");

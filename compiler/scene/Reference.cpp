@@ -46,7 +46,7 @@ void SceneModel::ray(int x, int y, int width, int height, V3& ro, V3& rd) const 
     rd = normalize(d);
 }
 
-double SceneModel::trace(const V3& ro, const V3& rd, int* id) const {
+double SceneModel::trace(const V3& ro, const V3& rd, int* id, double step) const {
     double t = 0, s = 1;
     for (int i = 0; i < 200000; ++i) {
         V3 p = {ro[0] + t * rd[0], ro[1] + t * rd[1], ro[2] + t * rd[2]};
@@ -58,7 +58,7 @@ double SceneModel::trace(const V3& ro, const V3& rd, int* id) const {
             if (id) *id = hit_id;
             return t;
         }
-        t += d;
+        t += step * d;
         if (t > render.max_dist) break;
     }
     if (id) *id = -1;

@@ -26,7 +26,9 @@ struct SceneModel {
     // exactly as the shader builds it.
     void ray(int x, int y, int width, int height, std::array<double, 3>& ro, std::array<double, 3>& rd) const;
     // Sphere tracing in double precision to a tight tolerance; returns t, or -1 for no hit within max_dist.
-    double trace(const std::array<double, 3>& ro, const std::array<double, 3>& rd, int* id = nullptr) const;
+    // `step` < 1 takes that fraction of each distance: a reference that does not trust the scene's
+    // Lipschitz bounds (a field that is steeper than its bound is still found).
+    double trace(const std::array<double, 3>& ro, const std::array<double, 3>& rd, int* id = nullptr, double step = 1) const;
     // Unit normal by central differences in double precision.
     std::array<double, 3> normal(const std::array<double, 3>& p) const;
 

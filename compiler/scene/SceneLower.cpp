@@ -394,6 +394,7 @@ private:
                 if (p.desc->bound > 0) {
                     double R = p.desc->bound + 2 * o_.bound_margin / std::max(p.scale, 1e-9);
                     lo = -R, hi = R;
+                    spec.ball = std::max(spec.ball, R);
                 } else {  // q = L p + o for p within `reach` of the camera's target
                     lo = hi = p.inv_offset[size_t(r)];
                     for (int c = 0; c < 3; ++c) {

@@ -32,10 +32,21 @@ struct Box {
     bool operator<(const Box& o) const { return bound < o.bound; }
 };
 
-// Branch and bound: split the worst box along its longest side until the budget is spent; the worst box's
-// bound then bounds the whole region.
+// Whether a box has a point within `ball` of the origin (ball 0: every box counts).
+bool meets_ball(const std::vector<Interval>& box, double ball) {
+    if (ball <= 0) return true;
+    double s = 0;
+    for (const Interval& c : box) {
+        double near = c.lo > 0 ? c.lo : c.hi < 0 ? -c.hi : 0;
+        s += near * near;
+    }
+    return s <= ball * ball;
+}
+
+// Branch and bound: split the worst box along its longest side until the budget is spent (halves outside
+// the ball are dropped); the worst box's bound then bounds the whole region.
 double derive(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
-              int budget) {
+              double ball, int budget) {
     std::priority_queue<Box> q;
     q.push({region, box_bound(m, grad, region, others)});
     for (int used = 1; used + 2 <= budget && !q.empty();) {
@@ -53,6 +64,7 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
         for (int half = 0; half < 2; ++half) {
             Box b = worst;
             (half ? b.c[axis].lo : b.c[axis].hi) = mid;
+            if (!meets_ball(b.c, ball)) continue;
             b.bound = box_bound(m, grad, b.c, others);
             q.push(std::move(b));
             ++used;
@@ -62,7 +74,7 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
 }
 
 double sample(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
-              int samples) {
+              double ball, int samples) {
     Evaluator ev(m);
     const Function& g = m.functions[size_t(grad)];
     uint64_t state = 0x9E3779B97F4A7C15ull;
@@ -81,6 +93,7 @@ double sample(const Module& m, int grad, const std::vector<Interval>& region, co
     std::vector<Value> args(g.params.size());
     for (int s = 0; s < samples; ++s) {
         args[0] = {Type::vector(3), {pick(region[0]), pick(region[1]), pick(region[2])}};
+        if (ball > 0 && args[0].v[0] * args[0].v[0] + args[0].v[1] * args[0].v[1] + args[0].v[2] * args[0].v[2] > ball * ball) continue;
         for (size_t k = 1; k < g.params.size(); ++k) {
             const Type& t = g.params[k].type;
             std::vector<double> v;
@@ -112,7 +125,7 @@ void divide_result(Module& m, int fn, double K) {
 }  // namespace
 
 LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<Interval>& box,
-                                     const std::vector<std::vector<Interval>>& others, int samples, int boxes) {
+                                     const std::vector<std::vector<Interval>>& others, double ball, int samples, int boxes) {
     LipschitzEstimate e;
     Module work = m;  // the gradient is a function of its own, here only
     std::string why;
@@ -122,8 +135,8 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
         e.why = why;
         return e;
     }
-    e.derived = derive(work, grad, box, others, boxes);
-    e.sampled = sample(work, grad, box, others, samples);
+    e.derived = derive(work, grad, box, others, ball, boxes);
+    e.sampled = sample(work, grad, box, others, ball, samples);
     e.derived = std::max(e.derived, e.sampled);  // rounding in the intervals' ends never claims less than seen
     return e;
 }
@@ -138,7 +151,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         std::vector<std::vector<Interval>> others;
         if (spec.group > 0) others.push_back({{0, double(spec.group - 1)}});
         LipschitzEstimate e;
-        if (!spec.trusted || spec.declared > 0) e = estimate_lipschitz(m, spec.object_fn, region, others);
+        if (!spec.trusted || spec.declared > 0) e = estimate_lipschitz(m, spec.object_fn, region, others, spec.ball);
         double applied = 1;
         std::string how;
         if (spec.declared > 0) {
