@@ -94,6 +94,18 @@ float iqc_accept(float t) {
     return max(10.0 * iqc_eps(t), t / (iResolution.y * IQC_CAMERA_FOCAL));
 }
 
+// How near the surface a sample (distance, id) is, for the hit test and the step cap. Where the compiler
+// divided an instance's distance by its Lipschitz factor K (a safe step), the factor is multiplied back:
+// the divided value is K times too small to say how near the surface is (the surface would thicken by K
+// tolerances, and at the step cap every pixel within K cones of it would count).
+float iqc_nearness(vec2 h) {
+{{#if HIT_SCALE}}
+    return abs(h.x) * iqc_lipschitz(int(h.y));
+{{#else}}
+    return abs(h.x);
+{{/if}}
+}
+
 {{/if}}
 {{#if LIPSCHITZ}}
 // Largest singular value of L (the square root of the largest eigenvalue of LᵀL, in closed form):
@@ -127,8 +139,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         if (i == 0 && h.x < 0.0) s = -1.0;
         float d = s * h.x;
         float e = iqc_eps(t);
-        if (abs(d) < e) { id = int(h.y); return t; }
-        if (abs(d) / iqc_accept(t) < best) { best = abs(d) / iqc_accept(t); best_t = t; best_id = int(h.y); }
+        float dn = iqc_nearness(h);
+        if (dn < e) { id = int(h.y); return t; }
+        if (dn / iqc_accept(t) < best) { best = dn / iqc_accept(t); best_t = t; best_id = int(h.y); }
         t += d;
         if (t > IQC_MAX_DIST) return -1.0;
     }
@@ -158,8 +171,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
             continue;
         }
         float e = iqc_eps(t);
-        if (abs(d) < e) { id = int(h.y); return t; }
-        if (abs(d) / iqc_accept(t) < best) { best = abs(d) / iqc_accept(t); best_t = t; best_id = int(h.y); }
+        float dn = iqc_nearness(h);
+        if (dn < e) { id = int(h.y); return t; }
+        if (dn / iqc_accept(t) < best) { best = dn / iqc_accept(t); best_t = t; best_id = int(h.y); }
         t_prev = t;
         r_prev = abs(d);
         step_len = omega * d;
@@ -195,8 +209,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
             continue;
         }
         float e = iqc_eps(t);
-        if (abs(d) < e) { id = int(h.y); return t; }
-        if (abs(d) / iqc_accept(t) < best) { best = abs(d) / iqc_accept(t); best_t = t; best_id = int(h.y); }
+        float dn = iqc_nearness(h);
+        if (dn < e) { id = int(h.y); return t; }
+        if (dn / iqc_accept(t) < best) { best = dn / iqc_accept(t); best_t = t; best_id = int(h.y); }
         if (step_len > 0.0) m = mix(clamp((d - d_prev) / step_len, -1.0, 0.8), m, 0.3);
         t_prev = t;
         r_prev = abs(d);

@@ -240,8 +240,9 @@ std::string print(const Function& f, const Module* m) {
         const LipschitzSpec& l = f.lipschitz;
         std::string fn = m && size_t(l.object_fn) < m->functions.size() ? m->functions[size_t(l.object_fn)].name
                                                                           : fmt::format("@{}", l.object_fn);
-        out += fmt::format("  lipschitz {}{} ball {} group {} declared {} {} shape {}\n", fn, format_bounds(l.region),
-                           format_number(l.ball), l.group, format_number(l.declared), l.trusted ? "trusted" : "untrusted", l.shape);
+        out += fmt::format("  lipschitz {}{} ball {} group {} declared {} {} shape {}{}\n", fn, format_bounds(l.region),
+                           format_number(l.ball), l.group, format_number(l.declared), l.trusted ? "trusted" : "untrusted", l.shape,
+                           l.factor_global >= 0 ? fmt::format(" factor @{}", l.factor_global) : "");
     }
     for (size_t i = 0; i < f.body.size(); ++i) out += fmt::format("  %{} = {}\n", i, instr_text(f, f.body[i], m));
     out += fmt::format("  return %{}\n", f.result);

@@ -109,6 +109,7 @@ struct LipschitzSpec {
     bool trusted = false;        // the shape says `# exact` or `# bound`: 1-Lipschitz by construction
     Span where;                  // the instance, for diagnostics
     std::string shape;           // the shape module's name
+    int factor_global = -1;      // >= 0: the Constant global that receives the factor applied (iqc_lipschitz reads it)
 };
 
 struct Function {
@@ -178,6 +179,7 @@ inline constexpr const char* kLightPosition = "iqc_light_position";  // (l: ℤ)
 inline constexpr const char* kLightColor = "iqc_light_color";        // (l: ℤ) -> ℝ³
 inline constexpr const char* kReflectivity = "iqc_reflectivity";    // (id) -> k_r as ℝ³
 inline constexpr const char* kTransmission = "iqc_transmission";    // (id) -> (k_t, η)
+inline constexpr const char* kLipschitz = "iqc_lipschitz";  // (id: ℤ) -> the factor dividing that instance's distance
 inline constexpr const char* kPrepare = "iqc_prepare";         // () -> outputs named like Prepared globals
 inline constexpr const char* kInstanceInverse = "iqc_instance_inverse";    // (i: ℤ) -> world→object ℝ^(4×4)
 inline constexpr const char* kInstanceDistance = "iqc_instance_distance";  // (i: ℤ, q: ℝ³) -> object-space distance

@@ -305,6 +305,10 @@ struct Parser {
                 s.trusted = l.word() == "trusted";
                 l.expect("shape");
                 s.shape = l.word();
+                if (l.eat("factor")) {
+                    l.expect("@");
+                    s.factor_global = int(l.integer());
+                }
             } else if (l.eat("return")) {
                 l.expect("%");
                 f.result = ValueId(l.integer());

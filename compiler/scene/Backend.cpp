@@ -81,6 +81,7 @@ const char* entry_comment(const std::string& name) {
         {ir::names::kLightColor, "Colour of light l."},
         {ir::names::kReflectivity, "Reflectivity of instance `id` (its material's `k_r`)."},
         {ir::names::kTransmission, "Transmission (`k_t`) and index of refraction (`η`) of instance `id`'s material."},
+        {ir::names::kLipschitz, "The Lipschitz factor instance `id`'s distance was divided by (the hit test multiplies it back)."},
         {ir::names::kPrepare, "Transforms that change with sliders or time: inverted once per pixel, before any marching."},
         {ir::names::kInstanceInverse, "I♥IQ's architecture (benchmark baseline): instance i's world → object transform, inverted here."},
         {ir::names::kInstanceDistance, "Instance i's object-space distance."},

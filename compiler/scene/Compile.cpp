@@ -132,6 +132,9 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     static const char* normal_flags[] = {"NORMALS_CENTRAL", "NORMALS_FORWARD", "NORMALS_TETRAHEDRON", "NORMALS_ANALYTIC"};
     F.insert(normal_flags[int(opts_.per_instance && normals() == Normals::Analytic ? Normals::Tetrahedron : normals())]);
     if (render.hit_relative) F.insert("HIT_RELATIVE");
+    // Some instance's distance is divided by a Lipschitz factor: the hit test multiplies it back.
+    if (int lf = scene.module.find(ir::names::kLipschitz); !opts_.per_instance && lf >= 0 && scene.module.functions[size_t(lf)].entry)
+        F.insert("HIT_SCALE");
     if (scene.has_shade_light) F.insert("SHADE_LIGHT");
     if (fx.shadows != Shadows::None && lights && scene.has_shade_light) {
         F.insert("SHADOWS");

@@ -80,6 +80,7 @@ public:
         for (Item& it : items_) declare_item(it);
         for (Item& it : items_) it.distance_fn = item_distance(it);
         scene_function();
+        lipschitz_function();
         if (o_.analytic_normals) gradient_functions();
         shade_functions();
         if (o_.reflections) out_.has_reflectivity = material_property(ir::names::kReflectivity);
@@ -237,10 +238,15 @@ private:
         }
     }
 
+    std::string owner_of(const Item& it) {
+        const InstancePlan& first = plan(it.members[0]);
+        return it.group ? fmt::format("{}: {} instances of {}", it.name, it.members.size(), out_.headers[first.name])
+                        : fmt::format("{}: {}", it.name, out_.headers[first.name]);
+    }
+
     void declare_item(Item& it) {
         const InstancePlan& first = plan(it.members[0]);
-        owner_ = it.group ? fmt::format("{}: {} instances of {}", it.name, it.members.size(), out_.headers[first.name])
-                          : fmt::format("{}: {}", it.name, out_.headers[first.name]);
+        owner_ = owner_of(it);
         std::vector<std::vector<double>> L, off, sc, R;
         for (size_t mi : it.members) {
             L.push_back(plan(mi).inv_linear);
@@ -460,6 +466,28 @@ private:
             }
         }
         f.result = res == ValueId(-1) ? b.constant(res_t, empty) : res;
+        m_.functions.push_back(std::move(f));
+    }
+
+    // iqc_lipschitz(id): the factor the lipschitz pass divides instance id's distance by, one constant per
+    // item that the pass fills in. The march multiplies its distances back for the hit test (a distance
+    // divided by K bounds the step, it does not say how near the surface is). An entry point only where
+    // some factor exceeds 1 (the pass decides); else nothing calls it and it is not emitted.
+    void lipschitz_function() {
+        ir::Function f;
+        f.name = ir::names::kLipschitz;
+        f.glsl_name = f.name;
+        Builder b(m_, f);
+        ValueId id = b.param("id", Type::integer());
+        std::vector<std::tuple<long long, long long, ValueId>> cs;
+        for (const Item& it : items_) {
+            owner_ = owner_of(it);
+            int g = add_global(it.name + "_lipschitz", Type::scalar(), Global::Kind::Constant, {1},
+                               "the Lipschitz factor dividing its distance (the hit test multiplies it back)");
+            m_.functions[size_t(it.distance_fn)].lipschitz.factor_global = g;
+            cs.push_back({it.id, it.id + (long long)it.members.size(), b.global(g)});
+        }
+        f.result = b.switch_(id, b.scalar(1), std::move(cs));
         m_.functions.push_back(std::move(f));
     }
 

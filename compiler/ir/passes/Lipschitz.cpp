@@ -143,6 +143,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
 
 std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::string>* report) {
     std::vector<RangeIssue> warnings;
+    bool scaled = false;
     for (size_t fi = 0; fi < m.functions.size(); ++fi) {
         LipschitzSpec spec = m.functions[fi].lipschitz;
         if (spec.object_fn < 0) continue;
@@ -179,12 +180,21 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             applied = e.derived;
             how = "derived";
         }
-        if (applied > 1 + 1e-9) divide_result(m, int(fi), applied);
+        if (applied > 1 + 1e-9) {
+            divide_result(m, int(fi), applied);
+            if (spec.factor_global >= 0 && size_t(spec.factor_global) < m.globals.size()) {
+                m.globals[size_t(spec.factor_global)].value = {applied};
+                scaled = true;
+            }
+        }
         if (report)
             report->push_back(fmt::format("{} ({}): K ≤ {:.4g} derived, {:.4g} sampled, {:.4g} applied ({})", spec.shape,
                                           m.functions[fi].glsl_name, e.derived, e.sampled, applied, how));
         m.functions[fi].lipschitz.object_fn = -1;  // done
     }
+    // The runtime's hit test reads the factors back (a distance divided by K is a step, not a proximity):
+    // iqc_lipschitz becomes an entry point only where some instance is divided.
+    if (int f = m.find(names::kLipschitz); scaled && f >= 0) m.functions[size_t(f)].entry = true;
     return warnings;
 }
 

@@ -1,0 +1,100 @@
+// Numerics users hit (issue 12): fields that are not 1-Lipschitz keep their surface, effects invent no
+// darkness, far from the origin looks like the origin, and what goes wrong is counted or reported.
+// Scenes: tests/numerics/*.iq. The reference is the same IR in double precision (SceneModel), traced
+// with a quarter of each distance so that it does not depend on the bounds the compiler derived.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fmt/format.h>
+
+#include "TestUtil.h"
+
+using namespace iqc;
+using namespace iqc::test;
+
+namespace {
+
+std::filesystem::path scene(const std::string& name) { return std::filesystem::path(IQC_SOURCE_DIR) / "tests" / "numerics" / name; }
+
+struct Coverage {
+    int reference_hits = 0;
+    int holes = 0, extra = 0;                    // inside the surface's image or outside it: never
+    int silhouette = 0;                          // differences next to the silhouette (a sample away)
+    std::string map;                             // '#' both hit, 'O' hole, 'X' extra hit, '.' both miss
+};
+
+// Compares which pixels the shader hits with the double-precision reference, on a grid of samples (every
+// other pixel). A difference counts as a silhouette difference when a neighbouring sample's reference
+// disagrees with that pixel's (float against double, and the pixel's cone at the step cap, move edges by
+// a sample); elsewhere it is a hole in the surface, or a hit where there is nothing.
+Coverage coverage(const std::filesystem::path& path, int W = 96, int H = 54) {
+    CompileOptions o;
+    o.ids = true;
+    Compiled c = compile_path(path, o);
+    INFO(c.diagnostics);
+    REQUIRE(c.result.exit_code == 0);
+    render::RenderResult r = render_compiled(c.result, W, H);
+    INFO(r.error);
+    REQUIRE(r.ok);
+    const SceneModel& model = *c.result.model;
+    const int GW = W / 2, GH = H / 2;
+    std::vector<int> ref(size_t(GW * GH)), shader(size_t(GW * GH));
+    for (int gy = 0; gy < GH; ++gy)
+        for (int gx = 0; gx < GW; ++gx) {
+            int x = 2 * gx + 1, y = 2 * gy + 1;
+            std::array<double, 3> ro, rd;
+            model.ray(x, y, W, H, ro, rd);
+            ref[size_t(gy * GW + gx)] = model.trace(ro, rd, nullptr, 0.25) >= 0;
+            shader[size_t(gy * GW + gx)] = r.image.pixel(x, y)[1] >= 0;
+        }
+    Coverage cov;
+    for (int gy = 0; gy < GH; ++gy, cov.map += "\n")
+        for (int gx = 0; gx < GW; ++gx) {
+            int rh = ref[size_t(gy * GW + gx)], sh = shader[size_t(gy * GW + gx)];
+            cov.reference_hits += rh;
+            cov.map += rh ? (sh ? '#' : 'O') : (sh ? 'X' : '.');
+            if (rh == sh) continue;
+            bool edge = false;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    int nx = gx + dx, ny = gy + dy;
+                    if (nx >= 0 && ny >= 0 && nx < GW && ny < GH) edge |= ref[size_t(ny * GW + nx)] != rh;
+                }
+            if (edge) ++cov.silhouette;
+            else if (rh) ++cov.holes;
+            else ++cov.extra;
+        }
+    return cov;
+}
+
+}  // namespace
+
+TEST_CASE("fields that are not 1-Lipschitz keep their surface without a pragma", "[numerics][render]") {
+    for (const char* name : {"displaced_torus.iq", "twisted_bar.iq"}) {
+        Coverage cov = coverage(scene(name));
+        INFO(name << ": " << cov.holes << " holes, " << cov.extra << " extra hits and " << cov.silhouette
+                  << " silhouette differences in " << cov.reference_hits << " surface samples\n" << cov.map);
+        CHECK(cov.reference_hits > 60);
+        CHECK(cov.holes == 0);
+        CHECK(cov.extra == 0);
+        CHECK(cov.silhouette <= cov.reference_hits / 3);
+    }
+}
+
+TEST_CASE("a twist without a bound gets a located warning naming the fix", "[numerics]") {
+    Compiled c = compile_path(scene("twisted_bar_unbounded.iq"));
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("twisted_bar_unbounded.iq:16:8: warning: shape 'bar' is not 1-Lipschitz"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("give the instance `bound = R` (a sphere around the shape)"));
+    Compiled b = compile_path(scene("twisted_bar.iq"));
+    CHECK_THAT(b.diagnostics, !Catch::Contains("not 1-Lipschitz"));
+}
+
+TEST_CASE("a declared Lipschitz factor below what the gradient reaches is warned at the instance", "[numerics]") {
+    std::string text = test::read_text(scene("displaced_torus.iq"));
+    text.replace(text.find("shape\n"), 6, "shape\n# lipschitz: 2\n");
+    Compiled c = compile_text("declared_low.iq", text);
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("declared_low.iq:18:8: warning: shape 'dtorus' declares '# lipschitz: 2', but its "
+                                              "gradient reaches"));
+}
