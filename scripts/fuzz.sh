@@ -6,7 +6,8 @@
 # (the whole compiler on a scene, document or module file, through glslang; exit 3 counts as a crash).
 # Each runs SECONDS (default 60) with one job on its corpus in build-asan/fuzz/corpus/HARNESS, seeded from
 # examples/, stdlib/ and tests/ (every regression input in tests/fuzz/HARNESS/ included), with the token
-# dictionary fuzz/iqc.dict, 10 s and 2 GB per input. The harnesses live in the sanitizer build
+# dictionary fuzz/iqc.dict, 10 s and 2 GB per input, and a fixed seed (IQC_FUZZ_SEED, default 1: CI fuzzes
+# the same inputs on every run, so a red run is a reproducible one; set it to 0 for a random seed). The harnesses live in the sanitizer build
 # (scripts/sanitize.sh; built here if missing), so every ASan/UBSan report is a finding too.
 #
 # A finding stops that harness with the input in build-asan/fuzz/artifacts/. Minimise it with
@@ -70,12 +71,14 @@ status=0
 total=0
 for h in "${HARNESSES[@]}"; do
   log="build-asan/fuzz/$h.log"
+  stamp="build-asan/fuzz/$h.started"
+  touch "$stamp"
   set +e
   max_len=8192
   [ "$h" = scene ] && max_len=32768
   # One process (no -jobs): the machine is shared, and the log stays in $log.
   "build-asan/fuzz/fuzz_$h" "build-asan/fuzz/corpus/$h" -dict=fuzz/iqc.dict \
-    -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 \
+    -seed="${IQC_FUZZ_SEED:-1}" -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 \
     -artifact_prefix="build-asan/fuzz/artifacts/$h-" >"$log" 2>&1
   rc=$?
   set -e
@@ -85,7 +88,12 @@ for h in "${HARNESSES[@]}"; do
   if [ $rc -ne 0 ]; then
     status=1
     echo "fuzz $h: FOUND A PROBLEM after $runs executions (exit $rc); see $log and build-asan/fuzz/artifacts/"
-    grep -m1 -E 'ERROR|SUMMARY|==[0-9]+==|runtime error|abort|Test unit written' "$log" || true
+    # What the harness printed before it stopped (diagnostics, sanitizer report) and the input, in base64.
+    grep -v -E '^#[0-9]+|^INFO:|^\s*$' "$log" | tail -40 || true
+    for a in $(find build-asan/fuzz/artifacts -name "$h-*" -newer "$stamp"); do
+      echo "input $a (base64):"
+      head -c 4096 "$a" | base64 -w 100
+    done
   else
     echo "fuzz $h: $runs executions in ${SECONDS_EACH} s, nothing found"
   fi
