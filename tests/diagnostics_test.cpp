@@ -120,3 +120,17 @@ TEST_CASE("a multi-letter function definition without backticks says how to writ
     // A one-letter function followed by '=' elsewhere is not given the hint.
     CHECK_THAT(errors_of("y = 1 = 2\n"), !Catch::Contains("backticks"));
 }
+
+TEST_CASE("a literal outside the 32-bit float range is a located error", "[diag]") {
+    // 1e-50 is 0 in a shader: max(‖q‖, 1e-50) would guard nothing (issue 12).
+    CHECK(errors_of("D = ‖q‖/max(‖q‖, 1e-50)\nwhere\nq ∈ ℝ³\n") ==
+          "test.iql:1:18: error: the number 1e-50 is below the smallest normal 32-bit float (about 1.2e-38), which shaders "
+          "compute in: it would be 0 there (a guard such as max(x, 1e-30) works)\n"
+          "  D = ‖q‖/max(‖q‖, 1e-50)\n"
+          "                   ^~~~~\n");
+    CHECK_THAT(errors_of("y = 2x + 1e39\nwhere\nx ∈ ℝ\n"),
+               Catch::Contains("test.iql:1:10: error: the number 1e39 is outside the range of 32-bit floats (at most about 3.4e38)"));
+    // The ends of the range are fine.
+    Evaluated ok = eval_module("y = 1e-30 + 3e38 - 3e38\n");
+    CHECK(ok.ok);
+}

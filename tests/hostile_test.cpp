@@ -119,7 +119,7 @@ TEST_CASE("sizes are checked once: too large, wrapping, beyond int, products", "
                     "subscript 99999999999 is out of range");
 }
 
-TEST_CASE("deep nesting is a located error; long chains of statements are fine", "[hostile]") {
+TEST_CASE("deep nesting is a located error: long chains of statements are fine", "[hostile]") {
     std::string cap = std::to_string(limits::kMaxNesting);
     fs::path parens = generated("parens.iql", "y = " + repeat("(", 7000) + "1" + repeat(")", 7000) + "\n");
     Bounded p = run_bounded("eval " + parens.string());
@@ -296,7 +296,7 @@ TEST_CASE("comment_text: one line, no comment delimiters, no continuation, valid
     CHECK(glsl::comment_text("‖p‖ - r: keeps math") == "‖p‖ - r: keeps math");
 }
 
-TEST_CASE("literals outside float's range are located errors; folded overflow is not an internal error", "[hostile]") {
+TEST_CASE("literals outside float's range are located errors: folded overflow is not an internal error", "[hostile]") {
     require_located(run_bounded(hostile("float_range.iql") + " -o -"), hostile("float_range.iql") + ":2:11",
                     "the number 1e39 is outside the range of 32-bit floats");
     Bounded folded = run_bounded(hostile("float_folded.iql") + " -o -");
@@ -306,7 +306,7 @@ TEST_CASE("literals outside float's range are located errors; folded overflow is
                     "'position' must be a finite number within the range of 32-bit floats");
 }
 
-TEST_CASE("NUL bytes: in a description the compile succeeds; in source every diagnostic is printed", "[hostile]") {
+TEST_CASE("NUL bytes: in a description the compile succeeds: in source every diagnostic is printed", "[hostile]") {
     Bounded d = run_bounded(hostile("nul_description.iql") + " -o -");
     INFO(d.run.err);
     CHECK(d.run.exit_code == 0);
@@ -317,7 +317,7 @@ TEST_CASE("NUL bytes: in a description the compile succeeds; in source every dia
     CHECK_THAT(s.run.err, Catch::Contains(hostile("nul_source.iql") + ":2:5: error: undefined name 'q'"));
 }
 
-TEST_CASE("a 6-vector never reaches the emitter's swizzles; empty and path-like types are errors", "[hostile]") {
+TEST_CASE("a 6-vector never reaches the emitter's swizzles: empty and path-like types are errors", "[hostile]") {
     require_located(run_bounded(hostile("six_vector.iql") + " -o -"), hostile("six_vector.iql") + ":2:1",
                     "cannot generate GLSL: ℝ⁶ is larger than GLSL's largest vector (vec4)");
     require_located(run_bounded(hostile("empty_type.iq") + " -o -"), hostile("empty_type.iq") + ":2:8",

@@ -161,7 +161,7 @@ std::vector<ShapeSource> all_shapes(SourceManager& sm, Diagnostics& d) {
 
 }  // namespace
 
-TEST_CASE("every shape module is 1-Lipschitz; exact ones have a unit gradient", "[properties]") {
+TEST_CASE("every shape module is 1-Lipschitz: exact ones have a unit gradient", "[properties]") {
     SourceManager sm;
     Diagnostics d(sm);
     auto shapes = all_shapes(sm, d);

@@ -143,7 +143,7 @@ TEST_CASE("a transform that uses time is evaluated per pixel, even on Shadertoy"
     CHECK(at0.pixel(48, 27)[0] != at1.pixel(48, 27)[0]);
 }
 
-TEST_CASE("global lights bind to P_L and C_L; each light adds its term", "[scene][render]") {
+TEST_CASE("global lights bind to P_L and C_L: each light adds its term", "[scene][render]") {
     std::string mat =
         "❤: lambert\n```iheartla\nmaterial\nC = `C_L`max(0, L̂⋅N̂)\nL̂ = (`P_L` - p)/‖`P_L` - p‖\nwhere\np ∈ ℝ³\nN̂ ∈ ℝ³\nI ∈ ℝ³\n"
         "`P_L` ∈ ℝ³\n`C_L` ∈ ℝ³\n```\n";
@@ -154,7 +154,10 @@ TEST_CASE("global lights bind to P_L and C_L; each light adds its term", "[scene
                                                            "[[shapes]]\ntype = \"ball\"\nmaterial = \"lambert\"\ntransform = \"T((0,0,5))\"\n```\n");
     REQUIRE(one.result.exit_code == 0);
     REQUIRE(two.result.exit_code == 0);
-    CHECK_THAT(one.result.code, Catch::Contains("lambert(p, N, eye, light_1_position, light_1_color)"));
+    // The material is called once per light with that light's position and colour as P_L and C_L.
+    CHECK_THAT(one.result.code, Catch::Contains("lambert(p, N, eye, P_L, C_L)"));
+    CHECK_THAT(one.result.code, Catch::Contains("if (l == 0) position = light_1_position;"));
+    CHECK_THAT(one.result.code, Catch::Contains("if (l == 0) colour = light_1_color;"));
     render::Image ia = render_code(one.result.code), ib = render_code(two.result.code);
     const float* a = ia.pixel(48, 27);
     const float* b = ib.pixel(48, 27);
@@ -323,4 +326,23 @@ TEST_CASE("a ℤ parameter stays an integer: an int uniform and int in --meta an
     REQUIRE(a.ok);
     REQUIRE(b.ok);
     CHECK(mean_abs_diff(a.image, b.image) < 1e-4);
+}
+
+TEST_CASE("an effect nothing in the scene can show is a located warning", "[scene]") {
+    // Shadows without lights, reflections and refraction without a material that has k_r, k_t (issue 12).
+    Compiled c = compile_text("idle_effects.iq", "[effects]\nshadows = \"soft\"\nreflections = 2\nrefraction = true\n"
+                                                 "[[shapes]]\ntype = \"sphere\"\n");
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("idle_effects.iq:2:11: warning: shadows have no effect: the scene has no [[lights]]"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("idle_effects.iq:3:15: warning: reflections have no effect: no material has a reflectivity `k_r`"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("idle_effects.iq:4:14: warning: refraction has no effect"));
+    // Lights, but no material reads P_L: still nothing to shadow.
+    Compiled u = compile_text("unlit.iq", "[effects]\nshadows = \"hard\"\n[[lights]]\nposition = [1, 2, 3]\n[[shapes]]\ntype = \"sphere\"\n");
+    REQUIRE(u.result.exit_code == 0);
+    CHECK_THAT(u.diagnostics, Catch::Contains("unlit.iq:2:11: warning: shadows have no effect: no material is lit by the lights"));
+    // A lit scene with shadows: no such warning.
+    Compiled lit = compile_text("lit.iq", "[effects]\nshadows = \"hard\"\n[[lights]]\nposition = [1, 2, 3]\n[[shapes]]\ntype = \"sphere\"\n"
+                                          "material = \"lambert\"\n");
+    REQUIRE(lit.result.exit_code == 0);
+    CHECK_THAT(lit.diagnostics, !Catch::Contains("have no effect"));
 }

@@ -128,7 +128,7 @@ TEST_CASE("operators: smooth, chamfer and stairs reduce to the plain operation a
     }
 }
 
-TEST_CASE("operators: negative sizes behave as 0; smooth ops stay between min - k/4 and min", "[stdlib][operators]") {
+TEST_CASE("operators: negative sizes behave as 0: smooth ops stay between min - k/4 and min", "[stdlib][operators]") {
     auto m = eval_text("use_operators.iql", kOperators, {{"a", "0.1"}, {"b", "0.2"}, {"k", "-0.5"}});
     CHECK(num(m, "su") == 0.1);
     CHECK(num(m, "se") == 0.1);

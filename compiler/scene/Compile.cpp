@@ -52,6 +52,7 @@ private:
 
     SceneIR lower(const std::vector<InstancePlan>& plans);
     bool optimize(SceneIR& scene);
+    void warn_idle_effects(const SceneIR& scene);
     std::string assemble(const SceneIR& scene, const SceneCode& code);
     void set_model(const SceneIR& scene);
 };
@@ -67,6 +68,25 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     lo.max_dist = s_.render.max_dist;
     lo.bound_margin = bound_margin();
     return lower_scene(s_, plans, lo);
+}
+
+// An effect the scene asks for that nothing in it can show is a located warning, not silence: shadows are
+// cast toward lights and shade only materials a light reaches (those reading `P_L`); reflections and
+// refraction need a material with `k_r`, `k_t`.
+void SceneCompiler::warn_idle_effects(const SceneIR& scene) {
+    const EffectsDesc& fx = s_.effects;
+    if (fx.shadows != Shadows::None) {
+        if (s_.lights.empty())
+            d_.warning(fx.shadows_span, "shadows have no effect: the scene has no [[lights]] (shadows are cast toward each "
+                                        "light's position); add a [[lights]] table with a position");
+        else if (!scene.has_shade_light)
+            d_.warning(fx.shadows_span, "shadows have no effect: no material is lit by the lights (none has the light's "
+                                        "position `P_L` as a parameter)");
+    }
+    if (fx.reflections > 0 && !scene.has_reflectivity)
+        d_.warning(fx.reflections_span, "reflections have no effect: no material has a reflectivity `k_r`");
+    if (fx.refraction && !scene.has_transmission)
+        d_.warning(fx.refraction_span, "refraction has no effect: no material has a transmission `k_t` and an index `η`");
 }
 
 // The pass pipeline; range warnings become diagnostics (errors with --strict-ranges).
@@ -186,6 +206,7 @@ CompileResult SceneCompiler::run() {
     try {
         SceneIR scene = lower(plans);
         lap("lower to IR");
+        warn_idle_effects(scene);
         optimize(scene);
         lap("pass pipeline");
         if (d_.error_count() != before) return std::move(res_);

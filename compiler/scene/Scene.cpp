@@ -466,6 +466,7 @@ void SceneReader::read_effects(const toml::table& root) {
             check_keys(t, kEffectKeys, " in [effects]");
             auto& e = s_.effects;
             if (auto* x = t.get("shadows")) {
+                e.shadows_span = span_of(*x);
                 // shadows = "soft" (or true for soft, false for none)
                 if (x->is_boolean()) e.shadows = *x->value<bool>() ? Shadows::Soft : Shadows::None;
                 else if (auto v = get_choice(*x, "shadows", {"none", "hard", "soft"})) e.shadows = Shadows(*v);
@@ -489,11 +490,14 @@ void SceneReader::read_effects(const toml::table& root) {
                 if (get_vec3(*x, "fog_color", c)) e.fog_color = c;
             }
             if (auto* x = t.get("reflections")) {
+                e.reflections_span = span_of(*x);
                 if (x->is_boolean()) e.reflections = *x->value<bool>() ? 1 : 0;
                 else if (auto v = get_int(*x, "reflections", 0, 16)) e.reflections = *v;
             }
-            if (auto* x = t.get("refraction"))
+            if (auto* x = t.get("refraction")) {
+                e.refraction_span = span_of(*x);
                 if (auto v = get_bool(*x, "refraction")) e.refraction = *v;
+            }
             if (auto* x = t.get("antialias")) {
                 if (x->is_boolean()) e.antialias = *x->value<bool>() ? 2 : 1;
                 else if (auto v = get_int(*x, "antialias", 1, 8)) e.antialias = *v;

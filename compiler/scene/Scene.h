@@ -81,6 +81,7 @@ struct EffectsDesc {
     int reflections = 0;          // bounces
     bool refraction = false;
     int antialias = 1;            // samples per pixel side
+    Span shadows_span, reflections_span, refraction_span;  // the values as written (warnings)
 };
 
 struct LightDesc {

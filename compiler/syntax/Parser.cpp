@@ -266,6 +266,11 @@ private:
         if (!(std::fabs(v) <= double(std::numeric_limits<float>::max())))
             fail(t.span, fmt::format("the number {} is outside the range of 32-bit floats (at most about 3.4e38), "
                                      "which shaders compute in", t.text));
+        // Below the smallest normal float a shader computes 0 (or a denormal a GPU may flush to 0): 1e-50 as
+        // a guard, max(‖q‖, 1e-50), would guard nothing.
+        if (v != 0 && std::fabs(v) < double(std::numeric_limits<float>::min()))
+            fail(t.span, fmt::format("the number {} is below the smallest normal 32-bit float (about 1.2e-38), which "
+                                     "shaders compute in: it would be 0 there (a guard such as max(x, 1e-30) works)", t.text));
         return v;
     }
     const Token& expect(Tok k, const char* what) {
