@@ -61,3 +61,16 @@ TEST_CASE("atan2(0, 0) is 0 in the shader as in the evaluator", "[ranges]") {
     REQUIRE(a.result.exit_code == 0);
     CHECK_THAT(a.result.code, Catch::Contains("(p.y == 0.0) && (p.x == 0.0)"));
 }
+
+TEST_CASE("a constant power of a negative base is guarded and warned as a slider range is and never becomes another constant", "[ranges]") {
+    // Found by a new-user trial: fold made pow(-2, 0.5) a NaN constant, and CSE (keyed on doubles) merged
+    // it with the constant -2, so D lost its 0.001 factor in both the shader and iqc eval.
+    Compiled c = compile_text("nan.md", doc("D = ‖p‖ - 1 + 0.001⋅pow(-2, 0.5)", ""));
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("nan.md:4:21: warning: a power of a base that can be negative: it is -2"));
+    CHECK_THAT(c.result.code, !Catch::Contains("+ (-2.0)"));
+    auto path = write_temp("nan_pow.iql", "shape\nD = ‖p‖ - 1 + 0.001⋅pow(-2, 0.5)\nwhere\np ∈ ℝ³\n");
+    RunResult e = run_iqc("eval " + path.string() + " --set 'p=(2,0,0)'");
+    CHECK(e.exit_code == 0);
+    CHECK(e.out == "D = 1\n");  // the guard's meaning: pow(max(-2, 0), 0.5) = 0
+}

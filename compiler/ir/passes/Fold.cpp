@@ -1,5 +1,7 @@
 #include "ir/passes/Fold.h"
 
+#include <cmath>
+
 #include "ir/Eval.h"
 
 namespace iqc::ir {
@@ -89,6 +91,11 @@ int fold_constants(const Module& m, Function& f) {
             std::vector<const Value*> ptrs;
             for (auto& v : vals) ptrs.push_back(&v);
             Value r = eval_instr(m, f, in, ptrs);
+            // A NaN or ∞ stays an operation: the range pass guards it (pow(-2, 0.5), 1/0, ln 0) with the
+            // meaning the shader and the evaluator share, and says so; a constant NaN would reach the output.
+            bool finite = true;
+            for (double x : r.v) finite &= std::isfinite(x);
+            if (!finite) continue;
             make_constant(in, in.type, r.v);
             ++changed;
             continue;

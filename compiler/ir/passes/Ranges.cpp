@@ -39,6 +39,12 @@ std::string fmt_interval(Interval a) {
     return fmt::format("[{}, {}]", n(a.lo), n(a.hi));
 }
 
+// "it ranges over [a, b]", or "it is x" for a single value (a constant).
+std::string ranges_over(Interval a) {
+    if (a.lo == a.hi) return fmt::format("it is {:.4g}", a.lo);
+    return "it ranges over " + fmt_interval(a);
+}
+
 Interval monotone(Interval a, double (*f)(double)) { return {f(a.lo), f(a.hi)}; }
 
 struct Analyzer {
@@ -226,8 +232,8 @@ struct Analyzer {
                 Interval d = comp(in.args[1], 0);
                 if (contains_zero(d)) {
                     if (r[in.args[1]].known)
-                        warn(in, fmt::format("division by a value that can be 0: with the parameters' bounds it ranges over {}",
-                                             fmt_interval(d)));
+                        warn(in, fmt::format("division by a value that can be 0: with the parameters' bounds {}",
+                                             ranges_over(d)));
                     return all_unknown(in.type);
                 }
                 Interval inv = {1 / d.hi, 1 / d.lo};
@@ -304,23 +310,23 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
                 if (any(x, [](Interval c) { return c.lo < -1 || c.hi > 1; })) {
                     needs[i] = kClampUnit;
                     if (x.known)
-                        a.warn(in, fmt::format("{} of a value outside [-1, 1]: with the parameters' bounds it ranges over {}", n,
-                                               fmt_interval(x.c[0])));
+                        a.warn(in, fmt::format("{} of a value outside [-1, 1]: with the parameters' bounds {}", n,
+                                               ranges_over(x.c[0])));
                 }
             } else if (n == "sqrt") {
                 if (any(x, [](Interval c) { return c.lo < 0; })) {
                     needs[i] = kNonNegative;
                     if (x.known && any(x, [](Interval c) { return c.lo < 0; }))
-                        a.warn(in, fmt::format("square root of a value that can be negative: it ranges over {}", fmt_interval(x.c[0])));
+                        a.warn(in, fmt::format("square root of a value that can be negative: {}", ranges_over(x.c[0])));
                 }
             } else if (n == "log" || n == "ln") {
                 if (x.known && any(x, [](Interval c) { return c.lo <= 0; }))
-                    a.warn(in, fmt::format("logarithm of a value that can be 0 or negative: it ranges over {}", fmt_interval(x.c[0])));
+                    a.warn(in, fmt::format("logarithm of a value that can be 0 or negative: {}", ranges_over(x.c[0])));
             } else if (n == "pow") {
                 if (any(x, [](Interval c) { return c.lo < 0; })) {
                     needs[i] = kPowBase;
                     if (x.known)
-                        a.warn(in, fmt::format("a power of a base that can be negative: it ranges over {}", fmt_interval(x.c[0])));
+                        a.warn(in, fmt::format("a power of a base that can be negative: {}", ranges_over(x.c[0])));
                 }
             } else if (n == "normalize") {
                 bool zero = true;
@@ -330,7 +336,7 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
             } else if (n == "mod") {
                 Range y = arg(1);
                 if (y.known && any(y, [](Interval c) { return contains_zero(c); }))
-                    a.warn(in, fmt::format("mod by a value that can be 0: it ranges over {}", fmt_interval(y.c[0])));
+                    a.warn(in, fmt::format("mod by a value that can be 0: {}", ranges_over(y.c[0])));
             } else if (n == "atan2") {
                 Range y = arg(0), xx = arg(1);
                 if (any(y, [](Interval c) { return contains_zero(c); }) && any(xx, [](Interval c) { return contains_zero(c); }))
