@@ -86,12 +86,12 @@ float iqc_eps(float t) {
 }
 
 {{#if STEP_CAP_CONE}}
-// When the step cap is reached, how far from the surface the closest approach at t may be and still count
-// as a hit: 10 tolerances, or the radius of the pixel's cone there (Amanatides 1984, cone tracing: half a
-// pixel's angle at the image centre), whichever is larger. Grazing rays over a plane converge only
-// geometrically; without the cone the far ground would fall through to the background at the horizon.
-float iqc_accept(float t) {
-    return max(10.0 * iqc_eps(t), t / (iResolution.y * IQC_CAMERA_FOCAL));
+// The radius of a pixel's cone at distance t along a primary ray: half a pixel's angle at the image centre
+// (Amanatides 1984, cone tracing). When the step cap stops a ray that is still closing in on a surface
+// within that radius (a grazing ray over a plane converges only geometrically: the far ground at the
+// horizon), the pixel shows that surface, not the background behind it.
+float iqc_cone(float t) {
+    return t / (iResolution.y * IQC_CAMERA_FOCAL);
 }
 
 // How near the surface a sample (distance, id) is, for the hit test and the step cap. Where the compiler
@@ -127,10 +127,11 @@ float iqc_max_singular(mat3 L) {
 {{#if MARCH_SPHERE}}
 // Sphere tracing (Hart 1996): step by the distance bound. Starting inside a shape (a negative distance)
 // it marches to that shape's inner wall. When the step cap is reached, the closest approach counts as a
-// hit if it came within iqc_accept (no holes at grazing angles).
+// hit if it came within 10 tolerances, and else the last sample if it lies within the pixel's cone (no
+// holes at grazing angles; a ray that only passed near a surface on its way is not a hit).
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
-    float s = 1.0, t = 0.0, best_t = -1.0, best = 1.0e20;
-    int best_id = -1;
+    float s = 1.0, t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20;
+    int best_id = -1, last_id = -1;
     id = -1;
     steps = 0;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -141,11 +142,15 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float e = iqc_eps(t);
         float dn = iqc_nearness(h);
         if (dn < e) { id = int(h.y); return t; }
-        if (dn / iqc_accept(t) < best) { best = dn / iqc_accept(t); best_t = t; best_id = int(h.y); }
+        if (dn / e < best) { best = dn / e; best_t = t; best_id = int(h.y); }
+        last = dn;
+        last_t = t;
+        last_id = int(h.y);
         t += d;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    if (best < 1.0) { id = best_id; return best_t; }
+    if (best < 10.0) { id = best_id; return best_t; }
+    if (last < iqc_cone(last_t)) { id = last_id; return last_t; }
     return -1.0;
 }
 {{/if}}
@@ -155,8 +160,8 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 // and continues with plain steps.
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, omega = IQC_RELAXATION, t_prev = 0.0, r_prev = 0.0, step_len = 0.0;
-    float best = 1.0e20, best_t = -1.0;
-    int best_id = -1;
+    float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
+    int best_id = -1, last_id = -1;
     id = -1;
     steps = 0;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -173,14 +178,18 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float e = iqc_eps(t);
         float dn = iqc_nearness(h);
         if (dn < e) { id = int(h.y); return t; }
-        if (dn / iqc_accept(t) < best) { best = dn / iqc_accept(t); best_t = t; best_id = int(h.y); }
+        if (dn / e < best) { best = dn / e; best_t = t; best_id = int(h.y); }
+        last = dn;
+        last_t = t;
+        last_id = int(h.y);
         t_prev = t;
         r_prev = abs(d);
         step_len = omega * d;
         t += step_len;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    if (best < 1.0) { id = best_id; return best_t; }
+    if (best < 10.0) { id = best_id; return best_t; }
+    if (last < iqc_cone(last_t)) { id = last_id; return last_t; }
     return -1.0;
 }
 {{/if}}
@@ -191,8 +200,8 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 // spheres do not overlap, it goes back to the previous sample, takes a plain step and resets m.
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, m = -1.0, t_prev = 0.0, r_prev = 0.0, d_prev = 0.0, step_len = 0.0;
-    float best = 1.0e20, best_t = -1.0;
-    int best_id = -1;
+    float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
+    int best_id = -1, last_id = -1;
     id = -1;
     steps = 0;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -211,7 +220,10 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float e = iqc_eps(t);
         float dn = iqc_nearness(h);
         if (dn < e) { id = int(h.y); return t; }
-        if (dn / iqc_accept(t) < best) { best = dn / iqc_accept(t); best_t = t; best_id = int(h.y); }
+        if (dn / e < best) { best = dn / e; best_t = t; best_id = int(h.y); }
+        last = dn;
+        last_t = t;
+        last_id = int(h.y);
         if (step_len > 0.0) m = mix(clamp((d - d_prev) / step_len, -1.0, 0.8), m, 0.3);
         t_prev = t;
         r_prev = abs(d);
@@ -220,7 +232,8 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         t += step_len;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    if (best < 1.0) { id = best_id; return best_t; }
+    if (best < 10.0) { id = best_id; return best_t; }
+    if (last < iqc_cone(last_t)) { id = last_id; return last_t; }
     return -1.0;
 }
 {{/if}}

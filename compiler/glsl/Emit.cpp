@@ -148,6 +148,10 @@ std::vector<int> Emitter::closure(const std::vector<int>& roots) const {
 namespace {
 
 const char* kSwizzle = "xyzw";
+// A loop of more trips than kLoopTripsRolled runs ceil(trips / kLoopTripsRolled) iterations per trip, at
+// most kMaxUnroll (see FunctionEmitter::loop: llvmpipe's limit of 65,535 loop iterations per invocation).
+constexpr long long kLoopTripsRolled = 64;
+constexpr long long kMaxUnroll = 16;
 constexpr int kSwizzleSize = 4;  // GLSL's widest vector; a larger IR vector has no GLSL type (already reported)
 
 // Statement text (a formula as written) for a `//` comment: one line, nothing that could end the comment.
@@ -596,45 +600,71 @@ struct FunctionEmitter {
             names.push_back(n);
         }
         loop_states[v] = names;
-        std::string k = locals.unique(body.params[0].name);
         const Instr& hi = f.body[in.args[0]];
+        long long lo = std::llround(in.data[0]);
+        long long trips = hi.op == Op::Const ? std::llround(hi.data[0]) - lo + 1 : -1;
         std::string hi_text = hi.op == Op::Const ? std::to_string(std::llround(hi.data[0])) : arg(in, 0, false);
-        out += fmt::format("{}for (int {} = {}; {} <= {}; {}++) {{{}\n", indent, k, int(in.data[0]), k, hi_text, k,
-                           in.source.empty() ? "" : "  // " + one_line(in.source));
-        FunctionEmitter be(m, body, em, diags, locals);
-        std::vector<ValueId> roots;
-        for (auto& o : body.outputs) roots.push_back(o.second);
-        be.analyze(roots);
-        for (size_t p = 0; p < body.body.size(); ++p) {
-            const Instr& pi = body.body[p];
-            if (pi.op != Op::Param) continue;
-            if (pi.aux == 0) be.var[p] = k;
-            else if (size_t(pi.aux) <= states) be.var[p] = names[size_t(pi.aux) - 1];
-            else be.var[p] = arg(in, size_t(pi.aux), true);
-        }
-        std::string inner = indent + "    ";
-        out += be.region(0, inner, ValueId(-1));
-        if (states == 1) {
-            out += fmt::format("{}{} = {};\n", inner, names[0], be.expr(body.outputs[0].second));
-        } else {
-            std::vector<std::string> next;
-            for (size_t j = 0; j < states; ++j) {
-                ValueId o = body.outputs[j].second;
-                if (be.var[o] == names[j]) {  // unchanged this iteration
-                    next.push_back(names[j]);
-                    continue;
-                }
-                next.push_back(be.locals.unique(names[j] + "_next"));
-                std::string src = one_line(body.body[o].source);
-                out += fmt::format("{}{} {} = {};{}\n", inner, type_of(body.body[o].type, in.span), next[j], be.expr(o),
-                                   src.empty() ? "" : " // " + src);
+        // One iteration with index `kn`: the body's region, then the next states.
+        auto iteration = [&](const std::string& kn, const std::string& inner) {
+            FunctionEmitter be(m, body, em, diags, locals);
+            std::vector<ValueId> roots;
+            for (auto& o : body.outputs) roots.push_back(o.second);
+            be.analyze(roots);
+            for (size_t p = 0; p < body.body.size(); ++p) {
+                const Instr& pi = body.body[p];
+                if (pi.op != Op::Param) continue;
+                if (pi.aux == 0) be.var[p] = kn;
+                else if (size_t(pi.aux) <= states) be.var[p] = names[size_t(pi.aux) - 1];
+                else be.var[p] = arg(in, size_t(pi.aux), true);
             }
-            for (size_t j = 0; j < states; ++j)
-                if (next[j] != names[j]) out += fmt::format("{}{} = {};\n", inner, names[j], next[j]);
+            std::string text = be.region(0, inner, ValueId(-1));
+            if (states == 1) {
+                text += fmt::format("{}{} = {};\n", inner, names[0], be.expr(body.outputs[0].second));
+            } else {
+                std::vector<std::string> next;
+                for (size_t j = 0; j < states; ++j) {
+                    ValueId o = body.outputs[j].second;
+                    if (be.var[o] == names[j]) {  // unchanged this iteration
+                        next.push_back(names[j]);
+                        continue;
+                    }
+                    next.push_back(be.locals.unique(names[j] + "_next"));
+                    std::string src = one_line(body.body[o].source);
+                    text += fmt::format("{}{} {} = {};{}\n", inner, type_of(body.body[o].type, in.span), next[j], be.expr(o),
+                                        src.empty() ? "" : " // " + src);
+                }
+                for (size_t j = 0; j < states; ++j)
+                    if (next[j] != names[j]) text += fmt::format("{}{} = {};\n", inner, names[j], next[j]);
+            }
+            failed |= be.failed;
+            return text;
+        };
+        std::string comment = in.source.empty() ? "" : "  // " + one_line(in.source);
+        std::string inner = indent + "    ";
+        int unroll = trips > kLoopTripsRolled ? int(std::min<long long>(kMaxUnroll, (trips + kLoopTripsRolled - 1) / kLoopTripsRolled)) : 1;
+        if (unroll == 1) {
+            std::string k = locals.unique(body.params[0].name);
+            out += fmt::format("{}for (int {} = {}; {} <= {}; {}++) {{{}\n", indent, k, lo, k, hi_text, k, comment);
+            out += iteration(k, inner);
+            return out + indent + "}\n";
         }
-        out += indent + "}\n";
-        failed |= be.failed;
-        return out;
+        // A long loop runs `unroll` iterations per trip: llvmpipe ends a shader invocation after 65,535 loop
+        // iterations in all (LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop), and a march of 128 steps over
+        // 1,000 instances would pass it and draw garbage.
+        std::string k0 = locals.unique(body.params[0].name + "0");
+        out += fmt::format("{}for (int {} = {}; {} <= {}; {} += {}) {{{} (unrolled by {})\n", indent, k0, lo, k0, hi_text, k0,
+                           unroll, comment.empty() ? "  //" : comment, unroll);
+        std::string block = inner + "    ";
+        for (int j = 0; j < unroll; ++j) {
+            std::string k = locals.unique(body.params[0].name);
+            std::string at = j == 0 ? k0 : fmt::format("{} + {}", k0, j);
+            if (j == 0 || trips % unroll == 0) out += inner + "{\n";
+            else out += fmt::format("{}if ({} <= {}) {{\n", inner, at, hi_text);
+            out += fmt::format("{}int {} = {};\n", block, k, at);
+            out += iteration(k, block);
+            out += inner + "}\n";
+        }
+        return out + indent + "}\n";
     }
 
     std::vector<std::string> declare_params() {

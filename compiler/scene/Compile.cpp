@@ -147,7 +147,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO"};
     F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march())]);
     if (opts_.per_instance) F.insert("LIPSCHITZ");
-    // The step cap's closest-approach rule (iqc_accept): only the distance-bound marches keep one.
+    // The step cap's rules (iqc_cone, iqc_nearness): only the distance-bound marches use them.
     if (!opts_.per_instance && march() != March::Fixed) F.insert("STEP_CAP_CONE");
     static const char* normal_flags[] = {"NORMALS_CENTRAL", "NORMALS_FORWARD", "NORMALS_TETRAHEDRON", "NORMALS_ANALYTIC"};
     F.insert(normal_flags[int(opts_.per_instance && normals() == Normals::Analytic ? Normals::Tetrahedron : normals())]);
