@@ -346,3 +346,12 @@ TEST_CASE("an effect nothing in the scene can show is a located warning", "[scen
     REQUIRE(lit.result.exit_code == 0);
     CHECK_THAT(lit.diagnostics, !Catch::Contains("have no effect"));
 }
+
+TEST_CASE("an override whose constant expression leaves the 32-bit float range is a located error", "[scene]") {
+    // Found by a new-user trial: "(3e38, 3e38)*10" was accepted and clamped to 1e38 in the shader.
+    Compiled c = compile_text("override_range.iq", "[[shapes]]\ntype = \"torus\"\nshape_params = { t = \"(3e38, 3e38)*10\" }\n");
+    CHECK(c.result.exit_code == 1);
+    CHECK_THAT(c.diagnostics, Catch::Contains("override_range.iq:3:22: error: 't' must be a number, an array, or a constant "
+                                              "expression such as \"√2\"; this string is not one: the value of 't' is outside "
+                                              "the range of 32-bit floats"));
+}

@@ -1,6 +1,7 @@
 #include "scene/Modules.h"
 
 #include <cmath>
+#include <limits>
 #include <filesystem>
 #include <fmt/format.h>
 
@@ -138,12 +139,19 @@ std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& nam
     ir::run_pipeline(irm, {});
     try {
         ir::Value v = ir::evaluate(irm, irm.find("value"), {});
-        for (double x : v.v)
+        for (double x : v.v) {
             if (!std::isfinite(x)) {
                 d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
                         fmt::format("the value of '{}' is not a finite number ({})", name, ir::format_value(v)));
                 return std::nullopt;
             }
+            if (std::fabs(x) > double(std::numeric_limits<float>::max())) {  // like a literal: shaders compute in float
+                d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
+                        fmt::format("the value of '{}' is outside the range of 32-bit floats (at most about 3.4e38), which "
+                                    "shaders compute in ({})", name, ir::format_value(v)));
+                return std::nullopt;
+            }
+        }
         return v;
     } catch (const ir::EvalLimit& limit) {
         d.error(limit.span, fmt::format("evaluating this would take more than {} steps", limits::kMaxEvalSteps));
