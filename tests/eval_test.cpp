@@ -37,6 +37,14 @@ TEST_CASE("eval picks a module of a document and prints the bare expression as r
     RunResult many = run_iqc("eval " + doc.string());
     CHECK(many.exit_code == 1);
     CHECK_THAT(many.err, Catch::Contains("defines 3 modules: choose one with --module (toon, phong, torus)"));
+    // A scene of standard-library shapes defines none: located, naming them and --module.
+    auto scene = write_temp("stdlib_only.iq", "title = \"t\"\n[[shapes]]\ntype = \"torus\"\n[[shapes]]\ntype = \"box\"\n");
+    RunResult none = run_iqc("eval " + scene.string());
+    CHECK(none.exit_code == 1);
+    CHECK_THAT(none.err, Catch::Contains("stdlib_only.iq:1:1: error: '" + scene.string() + "' defines no modules: its shapes (box, "
+                                         "torus) come from the standard library; choose one with --module NAME"));
+    RunResult picked = run_iqc("eval " + scene.string() + " --module torus --set 'p=(1.2,0,0)'");
+    CHECK(picked.exit_code == 0);
 }
 
 TEST_CASE("eval errors: unknown parameter, wrong size, bad value, invalid module", "[eval]") {

@@ -4,7 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <set>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "ir/Lower.h"
 #include "ir/Pipeline.h"
@@ -50,6 +52,15 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
         // Problems in the scene part do not matter for evaluating a module: keep only module errors.
         for (const auto& m : scene.modules) lib.add(m);
         if (name.empty()) {
+            if (scene.modules.empty()) {
+                std::set<std::string> types;
+                for (const auto& inst : scene.instances) types.insert(inst.type);
+                d.error({scene.file, 0, 1},
+                        types.empty() ? fmt::format("'{}' defines no modules to evaluate", req.path)
+                                      : fmt::format("'{}' defines no modules: its shapes ({}) come from the standard library; "
+                                                    "choose one with --module NAME", req.path, fmt::join(types, ", ")));
+                return false;
+            }
             if (scene.modules.size() != 1) {
                 std::vector<std::string> names;
                 for (auto& m : scene.modules) names.push_back(m.name);
