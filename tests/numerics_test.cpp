@@ -88,6 +88,11 @@ TEST_CASE("a twist without a bound gets a located warning naming the fix", "[num
     CHECK_THAT(c.diagnostics, Catch::Contains("give the instance `bound = R` (a sphere around the shape)"));
     Compiled b = compile_path(scene("twisted_bar.iq"));
     CHECK_THAT(b.diagnostics, !Catch::Contains("not 1-Lipschitz"));
+    // Bounded, its derived factor (16) is far above what samples reach (1.3): the cost is said, located.
+    CHECK_THAT(b.diagnostics, Catch::Contains("twisted_bar.iq:16:8: warning: shape 'bar' is marched with steps divided by K = 16, "
+                                              "the bound iqc derives for its gradient, but samples of the gradient reach only 1.3"));
+    Compiled t = compile_path(scene("displaced_torus.iq"));  // 8.69 against 4.91: an honest bound, no word
+    CHECK_THAT(t.diagnostics, !Catch::Contains("is marched with steps divided by"));
 }
 
 TEST_CASE("a declared Lipschitz factor below what the gradient reaches is warned at the instance", "[numerics]") {

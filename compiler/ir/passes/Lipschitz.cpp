@@ -179,6 +179,15 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         } else {
             applied = e.derived;
             how = "derived";
+            // Interval bounds can be loose (a twist's rotation is bounded component by component): say what
+            // it costs, since steps shrink by the factor. 3×: beyond the slack of an honest bound.
+            if (e.derived > 3 * std::max(e.sampled, 1.0))
+                warnings.push_back({spec.where, fmt::format("shape '{}' is marched with steps divided by K = {:.3g}, the bound iqc "
+                                                            "derives for its gradient, but samples of the gradient reach only "
+                                                            "{:.3g}: marching is up to {:.0f}× slower than it may need to be; "
+                                                            "declare `# lipschitz: K` if you know a tighter bound (iqc warns "
+                                                            "where samples exceed it)",
+                                                            spec.shape, e.derived, e.sampled, e.derived / std::max(e.sampled, 1.0))});
         }
         if (applied > 1 + 1e-9) {
             divide_result(m, int(fi), applied);
