@@ -74,3 +74,21 @@ TEST_CASE("a constant power of a negative base is guarded and warned as a slider
     CHECK(e.exit_code == 0);
     CHECK(e.out == "D = 1\n");  // the guard's meaning: pow(max(-2, 0), 0.5) = 0
 }
+
+TEST_CASE("values past the largest float are warned where they start: a folded constant and exp of a slider range", "[ranges]") {
+    // iqc eval computes in double and prints 1e+40; a shader's 32-bit float is ∞ (issue 12, float range).
+    auto path = write_temp("overflow.iql", "y = 10^40 + exp(x)\nwhere\nx ∈ [0, 100] default = 1\n");
+    RunResult e = run_iqc("eval " + path.string());
+    CHECK(e.exit_code == 0);
+    CHECK_THAT(e.err, Catch::Contains("overflow.iql:1:5: warning: this value is beyond the largest 32-bit float (3.4e38): a "
+                                      "shader computes ∞; it is 1e+40"));
+    CHECK_THAT(e.err, Catch::Contains("overflow.iql:1:13: warning: exp of a value that can exceed 88.72: a shader's 32-bit "
+                                      "float overflows to ∞ there; it ranges over [0, 100]"));
+    // Once, where it starts: the sum is not warned again.
+    size_t n = 0;
+    for (size_t at = e.err.find("beyond the largest"); at != std::string::npos; at = e.err.find("beyond the largest", at + 1)) ++n;
+    CHECK(n == 1);
+    // Within range: no word.
+    RunResult ok = run_iqc("eval " + write_temp("in_range.iql", "y = 10^38 + exp(x)\nwhere\nx ∈ [0, 80] default = 1\n").string());
+    CHECK(ok.err.empty());
+}

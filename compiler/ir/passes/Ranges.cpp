@@ -12,6 +12,9 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+constexpr double kFloatMax = 3.4028234663852886e38;  // the largest 32-bit float
+constexpr double kExpOverflow = 88.72283905206835;   // ln(kFloatMax)
+
 struct Range {
     std::vector<Interval> c;  // per component
     bool known = false;       // derived from constants and parameters only
@@ -294,6 +297,7 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
     // Analysis and warnings.
     std::vector<int> needs;  // per instruction: 0 none, else the guard kind
     needs.assign(f.body.size(), 0);
+    std::vector<bool> beyond(f.body.size(), false);  // a value past the largest float wherever it is
     enum { kNone, kClampUnit, kNonNegative, kPowBase, kAtan2, kNormalize, kDivLength };
     for (size_t i = 0; i < f.body.size(); ++i) {
         const Instr& in = f.body[i];
@@ -333,6 +337,11 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
                 for (const auto& c : x.c) zero &= contains_zero(c);
                 if (zero) needs[i] = kNormalize;  // 0 / 0: the zero vector instead of NaN
                 if (x.known && zero) a.warn(in, "normalize of a vector that can be zero");
+            } else if (n == "exp") {
+                // e^x is ∞ in a 32-bit float past x = ln(3.4e38) ≈ 88.72 (iqc eval, in double, still has a number).
+                if (x.known && any(x, [](Interval c) { return c.hi > kExpOverflow; }))
+                    a.warn(in, fmt::format("exp of a value that can exceed {:.4g}: a shader's 32-bit float overflows to ∞ "
+                                           "there; {}", kExpOverflow, ranges_over(x.c[0])));
             } else if (n == "mod") {
                 Range y = arg(1);
                 if (y.known && any(y, [](Interval c) { return contains_zero(c); }))
@@ -351,6 +360,19 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
                 needs[i] = kDivLength;
         }
         a.r[i] = a.eval(i);
+        // A value of constants and parameters that is beyond the largest float wherever it is (10^40): the
+        // shader computes ∞ where iqc eval, in double, prints a number.
+        // Said once, where it starts (a folded constant keeps the span of what it was folded from).
+        if (a.r[i].known && in.type.kind != Type::Integer && !a.r[i].c.empty()) {
+            for (const auto& c : a.r[i].c)
+                beyond[i] = beyond[i] || (std::min(std::fabs(c.lo), std::fabs(c.hi)) > kFloatMax && c.lo * c.hi > 0 &&
+                                          std::isfinite(c.lo) && std::isfinite(c.hi));
+            bool inherited = false;
+            for (ValueId arg : in.args) inherited |= beyond[arg];
+            if (beyond[i] && !inherited && in.span.valid())
+                a.warn(in, fmt::format("this value is beyond the largest 32-bit float (3.4e38): a shader computes ∞; {}",
+                                       ranges_over(a.r[i].c[0])));
+        }
         // A guarded operation's result is in range.
         if (needs[i] == kNonNegative)
             for (auto& c : a.r[i].c) c.lo = std::max(c.lo, 0.0);
