@@ -385,8 +385,8 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
 {{#if SHADOWS_SOFT}}
 // Soft shadow with the improved penumbra estimate (Quilez): the closest approach to the surface is
 // estimated from the intersection of consecutive unbounding spheres, d = sqrt(h² - y²). Guarded:
-// h² - y² is clamped at 0 (rounding can make it negative: a NaN otherwise), and t - y at a small positive
-// value (a ray leaving the surface head-on makes it 0).
+// h² - y² is clamped at 0 (rounding can make it negative: a NaN otherwise), and where t - y is not past
+// the ray's start (a ray leaving the surface head-on) the plain estimate h / t stands in.
 float iqc_shadow(vec3 p, vec3 N, vec3 light) {
     vec3 ro = p + N * (4.0 * iqc_eps(0.0));
     vec3 to_light = light - ro;
@@ -398,7 +398,11 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
         if (h < iqc_eps(t)) return 0.0;
         float y = h * h / (2.0 * ph);
         float d = sqrt(max(h * h - y * y, 0.0));
-        res = min(res, IQC_SHADOW_K * d / max(t - y, 1.0e-4));
+        // The estimate's nearest point lies t - y along the ray. At or behind the ray's start it is the
+        // surface the ray leaves, not an occluder (a light straight above a plane: every step doubles h and
+        // d = 0, a black dot): then the plain estimate h / t.
+        float along = t - y;
+        res = min(res, IQC_SHADOW_K * (along > 1.0e-4 ? d / along : h / max(t, 1.0e-4)));
         ph = h;
         t += h;
         if (t > t_max) break;

@@ -150,3 +150,28 @@ TEST_CASE("hard cases render without NaN and agree with the double-precision ref
         }
     }
 }
+
+TEST_CASE("soft shadows leave no black dot where the light is straight above a surface", "[hardcases][render]") {
+    // Issue 12: the improved penumbra estimate's d = sqrt(h² - y²) is 0 at every step of a ray leaving a
+    // plane head-on (h doubles each step), and the guard turned 0 / (t - y) into full shadow. The point under
+    // the light (0, 5, 0) is the image centre; it must be as lit as with shadows off, and as its neighbours.
+    std::string text = read_text(fs::path(IQC_SOURCE_DIR) / "tests" / "hardcases" / "13_shadow_head_on.iq");
+    Compiled soft = compile_text("head_on_soft.iq", text);
+    std::string off_text = text;
+    off_text.replace(off_text.find("shadows = \"soft\""), 16, "shadows = \"none\"");
+    Compiled off = compile_text("head_on_off.iq", off_text);
+    REQUIRE(soft.result.exit_code == 0);
+    REQUIRE(off.result.exit_code == 0);
+    auto rendered = [](const CompileResult& c) {
+        render::RenderResult r = render_compiled(c, 101, 101);
+        INFO(r.error);
+        REQUIRE(r.ok);
+        return r.image;
+    };
+    render::Image a = rendered(soft.result), b = rendered(off.result);
+    for (int c = 0; c < 3; ++c) {
+        INFO("channel " << c);
+        CHECK(a.pixel(50, 50)[c] == Approx(b.pixel(50, 50)[c]).margin(0.02));
+        CHECK(a.pixel(50, 50)[c] == Approx(a.pixel(51, 50)[c]).margin(0.02));
+    }
+}
