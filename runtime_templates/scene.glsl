@@ -365,6 +365,19 @@ vec3 iqc_normal(vec3 p, float t, int id) {
 }
 {{/if}}
 
+{{#if SCENE_EFFECTS}}
+// The distance soft shadows and ambient occlusion read. They use its value (a penumbra, an occlusion), so
+// where instances have `bound` spheres they read the scene without them: a sphere's distance is only a
+// lower bound of the shape's and would darken them.
+float iqc_scene_effects(vec3 p) {
+{{#if SCENE_UNBOUNDED}}
+    return iqc_scene_unbounded(p).x;
+{{#else}}
+    return iqc_scene(p).x;
+{{/if}}
+}
+
+{{/if}}
 {{#if SHADOWS_HARD}}
 // Hard shadow: 1 when nothing lies between p and the light, else 0.
 float iqc_shadow(vec3 p, vec3 N, vec3 light) {
@@ -394,7 +407,7 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
     vec3 rd = to_light / t_max;
     float res = 1.0, t = 0.0, ph = 1.0e20;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
-        float h = iqc_scene(ro + t * rd).x;
+        float h = iqc_scene_effects(ro + t * rd);
         if (h < iqc_eps(t)) return 0.0;
         float y = h * h / (2.0 * ph);
         float d = sqrt(max(h * h - y * y, 0.0));
@@ -417,7 +430,7 @@ float iqc_ao(vec3 p, vec3 N) {
     float occ = 0.0, w = 1.0;
     for (int i = min(iFrame, 0); i < 5; i++) {
         float h = 0.01 + 0.12 * float(i) / 4.0;
-        occ += (h - iqc_scene(p + h * N).x) * w;
+        occ += (h - iqc_scene_effects(p + h * N)) * w;
         w *= 0.5;
     }
     return clamp(1.0 - 3.0 * occ, 0.0, 1.0);

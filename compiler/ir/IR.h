@@ -171,6 +171,7 @@ struct Module {
 // The scene's fixed function names: the runtime (runtime_templates/scene.glsl) calls these.
 namespace names {
 inline constexpr const char* kScene = "iqc_scene";              // (p: ℝ³) -> (distance, instance id as ℝ)
+inline constexpr const char* kSceneUnbounded = "iqc_scene_unbounded";  // (p: ℝ³) -> iqc_scene without `bound` spheres
 inline constexpr const char* kDistanceOf = "iqc_distance_of";   // (p: ℝ³, id: ℤ) -> that instance's distance
 inline constexpr const char* kGradient = "iqc_gradient";        // (p: ℝ³, id: ℤ) -> ∇ of it (analytic normals)
 inline constexpr const char* kShade = "iqc_shade";              // (id, p, N, eye) -> colour without lights

@@ -65,6 +65,9 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     lo.per_instance = opts_.per_instance;
     lo.reflections = s_.effects.reflections > 0;
     lo.refraction = s_.effects.refraction;
+    // Soft shadows and AO read the distance's value: with `bound` spheres they read a lower bound there and
+    // darken (the penumbra estimate); they get the scene without them.
+    lo.unbounded_scene = (s_.effects.shadows == Shadows::Soft || s_.effects.ao) && !opts_.per_instance;
     lo.max_dist = s_.render.max_dist;
     lo.bound_margin = bound_margin();
     return lower_scene(s_, plans, lo);
@@ -161,6 +164,10 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         F.insert(fx.shadows == Shadows::Hard ? "SHADOWS_HARD" : "SHADOWS_SOFT");
     }
     if (fx.ao) F.insert("AO");
+    if (F.count("SHADOWS_SOFT") || F.count("AO")) {
+        F.insert("SCENE_EFFECTS");
+        if (scene.module.find(ir::names::kSceneUnbounded) >= 0) F.insert("SCENE_UNBOUNDED");
+    }
     if (fx.fog > 0) F.insert("FOG");
     if (fx.reflections > 0 && scene.has_reflectivity) F.insert("REFLECTIONS");
     if (fx.refraction && scene.has_transmission) F.insert("REFRACTION");

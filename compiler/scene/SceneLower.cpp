@@ -66,6 +66,7 @@ struct Item {
     std::vector<Field> transform_params;               // runtime transforms: their parameters
     int transform_fn = -1;
     int distance_fn = -1;
+    int unbounded_fn = -1;  // the distance without the `bound` sphere (iqc_scene_unbounded), or -1
 };
 
 class SceneLowering {
@@ -78,8 +79,15 @@ public:
         make_items();
         declare_lights();
         for (Item& it : items_) declare_item(it);
-        for (Item& it : items_) it.distance_fn = item_distance(it);
-        scene_function();
+        for (Item& it : items_) it.distance_fn = item_distance(it, true);
+        scene_function(true);
+        bool any_bound = false;
+        for (const Item& it : items_) any_bound |= it.bound.global >= 0;
+        if (o_.unbounded_scene && any_bound) {
+            for (Item& it : items_)
+                it.unbounded_fn = it.bound.global >= 0 || o_.instrument ? item_distance(it, false) : it.distance_fn;
+            scene_function(false);
+        }
         lipschitz_function();
         if (o_.analytic_normals) gradient_functions();
         shade_functions();
@@ -332,11 +340,14 @@ private:
     // ---- the scene distance ----
 
     // One item's distance at world point p: (p [, k]) -> ℝ, marked for inlining.
-    int item_distance(const Item& it) {
+    // `bounded`: with the item's `bound` sphere (iqc_scene), else without it (iqc_scene_unbounded, never
+    // instrumented).
+    int item_distance(const Item& it, bool bounded) {
         const InstancePlan& first = plan(it.members[0]);
+        const bool counted = o_.instrument && bounded;
         ir::Function f;
-        f.name = "iqc_distance." + it.name;
-        f.glsl_name = it.name + "_distance";
+        f.name = "iqc_distance." + it.name + (bounded ? "" : ".unbounded");
+        f.glsl_name = it.name + (bounded ? "_distance" : "_distance_unbounded");
         f.inline_hint = true;
         int fn = int(m_.functions.size());
         m_.functions.push_back({});
@@ -356,7 +367,7 @@ private:
         int shape_fn = lower_module_cached(*first.shape, ctx_);
         std::vector<ValueId> args = module_args(b, *first.shape, it.shape_params, {{first.query, q}}, k);
         ValueId bound_d = 0, far = 0;
-        if (it.bound.global >= 0) {
+        if (bounded && it.bound.global >= 0) {
             // `bound = R`: outside the sphere ‖q‖ = R by more than the margin, its distance (a lower bound) stands
             // for the shape's, which is not evaluated.
             bound_d = conservative(b.op(Op::Sub, {b.builtin("length", {q}), read(b, it.bound, k)}));
@@ -364,9 +375,9 @@ private:
             far = b.compare(CompareKind::Gt, bound_d, b.scalar(o_.bound_margin));
         }
         ValueId d = conservative(b.call(shape_fn, std::move(args)));
-        if (it.bound.global >= 0) d = b.if_(far, bound_d, d);
+        if (bounded && it.bound.global >= 0) d = b.if_(far, bound_d, d);
         f.result = d;
-        if (o_.instrument) {  // shapes evaluated: 0 where the bound stood in
+        if (counted) {  // shapes evaluated: 0 where the bound stood in
             ValueId one = b.scalar(1);
             ValueId count = it.bound.global >= 0 ? b.op(Op::Select, {far, b.scalar(0), one}) : one;
             f.result = b.construct(Type::vector(2), {d, count});
@@ -426,29 +437,32 @@ private:
     }
 
     // iqc_scene(p) -> (distance, id[, shapes evaluated]): the union of every item, the nearest one's id.
-    void scene_function() {
+    // `bounded`: iqc_scene; else iqc_scene_unbounded, the same union with every shape evaluated (what soft
+    // shadows and ambient occlusion read: they use the distance's value, which a `bound` sphere lowers).
+    void scene_function(bool bounded) {
+        const bool counted = o_.instrument && bounded;
         ir::Function f;
-        f.name = ir::names::kScene;
-        f.glsl_name = ir::names::kScene;
+        f.name = bounded ? ir::names::kScene : ir::names::kSceneUnbounded;
+        f.glsl_name = f.name;
         f.entry = true;
         Builder b(m_, f);
         ValueId p = b.param("p", Type::vector(3));
-        int width = o_.instrument ? 3 : 2;
+        int width = counted ? 3 : 2;
         Type res_t = Type::vector(width);
         std::vector<double> empty = {2 * o_.max_dist, -1, 0};
         empty.resize(size_t(width));
         ValueId res = ValueId(-1);
         for (const Item& it : items_) {
             if (it.group) {
-                res = group_loop(b, it, p, res == ValueId(-1) ? b.constant(res_t, empty) : res);
+                res = group_loop(b, it, p, res == ValueId(-1) ? b.constant(res_t, empty) : res, bounded);
                 continue;
             }
-            ValueId call = b.call(it.distance_fn, {p});
-            ValueId d = o_.instrument ? b.op(Op::Extract, {call}, 0) : call;
+            ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {p});
+            ValueId d = counted ? b.op(Op::Extract, {call}, 0) : call;
             std::string source = plan(it.members[0]).has_transform ? plan(it.members[0]).transform_comment : "";
             d = b.named(d, it.name, source);
             std::vector<ValueId> parts = {d, b.scalar(it.id)};
-            if (o_.instrument) {
+            if (counted) {
                 ValueId count = b.op(Op::Extract, {call}, 1);
                 parts.push_back(res == ValueId(-1) ? count : b.op(Op::Add, {b.op(Op::Extract, {res}, 2), count}));
             }
@@ -458,7 +472,7 @@ private:
                 continue;
             }
             ValueId nearer = b.compare(CompareKind::Lt, d, b.op(Op::Extract, {res}, 0));
-            if (o_.instrument) {  // the count adds up whichever is nearer
+            if (counted) {  // the count adds up whichever is nearer
                 ValueId kept = b.construct(res_t, {b.op(Op::Extract, {res}, 0), b.op(Op::Extract, {res}, 1), parts[2]});
                 res = b.named(b.op(Op::Select, {nearer, here, kept}), "res");
             } else {
@@ -492,10 +506,10 @@ private:
     }
 
     // A group in iqc_scene: k = 0..N-1 over its per-instance data, the nearest member kept.
-    ValueId group_loop(Builder& outer, const Item& it, ValueId p, ValueId res) {
-        bool counted = o_.instrument;
+    ValueId group_loop(Builder& outer, const Item& it, ValueId p, ValueId res, bool bounded) {
+        bool counted = o_.instrument && bounded;
         ir::Function body;
-        body.name = fmt::format("iqc_scene.{}", it.name);
+        body.name = (bounded ? "iqc_scene." : "iqc_scene_unbounded.") + it.name;
         body.glsl_name = body.name;
         Builder b(m_, body);
         ValueId k = b.param("k", Type::integer());
@@ -503,7 +517,7 @@ private:
         ValueId id = b.param("id", Type::scalar());
         ValueId count = counted ? b.param("shapes", Type::scalar()) : ValueId(-1);
         ValueId q = b.param("p", Type::vector(3));
-        ValueId call = b.call(it.distance_fn, {q, k});
+        ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {q, k});
         ValueId d = counted ? b.op(Op::Extract, {call}, 0) : call;
         d = b.named(d, it.name, fmt::format("instance {} + k of {}", it.id, it.members.size()));
         ValueId nearer = b.compare(CompareKind::Lt, d, best);

@@ -29,6 +29,7 @@ struct SceneLowerOptions {
     bool per_instance = false;       // I♥IQ's architecture for the benchmark: no groups, per-instance functions
     bool reflections = false;        // the scene reads k_r
     bool refraction = false;         // the scene reads k_t, η
+    bool unbounded_scene = false;    // also iqc_scene_unbounded: the scene without `bound` spheres (soft shadows, AO)
     double max_dist = 100;           // the scene distance with nothing in it is twice this
     double bound_margin = 0.1;       // `bound`: the shape is evaluated within this distance of its sphere
     int min_group = 4;               // instances of one kind that become a loop
