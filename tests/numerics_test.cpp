@@ -91,6 +91,17 @@ TEST_CASE("a twist without a bound gets a located warning naming the fix", "[num
     // Bounded, its derived factor (16) is far above what samples reach (1.3): the cost is said, located.
     CHECK_THAT(b.diagnostics, Catch::Contains("twisted_bar.iq:16:8: warning: shape 'bar' is marched with steps divided by K = 16, "
                                               "the bound iqc derives for its gradient, but samples of the gradient reach only 1.3"));
+    // With soft shadows the scene has a variant without bound spheres: the same factor, said once.
+    std::string lit = test::read_text(scene("twisted_bar.iq"));
+    lit.replace(lit.find("[[shapes]]"), 10, "[effects]\nshadows = \"soft\"\n[[lights]]\nposition = [1, 5, -2]\n[[shapes]]\nmaterial = \"lambert\"");
+    Compiled s = compile_text("twisted_bar_lit.iq", lit);
+    REQUIRE(s.result.exit_code == 0);
+    CHECK_THAT(s.result.code, Catch::Contains("iqc_scene_unbounded"));
+    size_t said = 0;
+    for (size_t at = s.diagnostics.find("is marched with steps divided by K = 16"); at != std::string::npos;
+         at = s.diagnostics.find("is marched with steps divided by K = 16", at + 1))
+        ++said;
+    CHECK(said == 1);
     Compiled t = compile_path(scene("displaced_torus.iq"));  // 8.69 against 4.91: an honest bound, no word
     CHECK_THAT(t.diagnostics, !Catch::Contains("is marched with steps divided by"));
 }

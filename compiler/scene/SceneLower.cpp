@@ -382,7 +382,9 @@ private:
             ValueId count = it.bound.global >= 0 ? b.op(Op::Select, {far, b.scalar(0), one}) : one;
             f.result = b.construct(Type::vector(2), {d, count});
         }
-        f.lipschitz = lipschitz_spec(it, shape_fn);
+        // The variant without its bound sphere is bounded by the same factor: the same object function, whose
+        // estimate the lipschitz pass computes once.
+        f.lipschitz = bounded ? lipschitz_spec(it, shape_fn) : m_.functions[size_t(it.distance_fn)].lipschitz;
         m_.functions[size_t(fn)] = std::move(f);
         return fn;
     }

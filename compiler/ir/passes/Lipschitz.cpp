@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
+#include <map>
 #include <queue>
 
 #include "ir/Builder.h"
@@ -144,6 +145,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
 std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::string>* report) {
     std::vector<RangeIssue> warnings;
     bool scaled = false;
+    std::map<int, LipschitzEstimate> estimated;  // by object function: a shape's variants share one estimate
     for (size_t fi = 0; fi < m.functions.size(); ++fi) {
         LipschitzSpec spec = m.functions[fi].lipschitz;
         if (spec.object_fn < 0) continue;
@@ -152,7 +154,14 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         std::vector<std::vector<Interval>> others;
         if (spec.group > 0) others.push_back({{0, double(spec.group - 1)}});
         LipschitzEstimate e;
-        if (!spec.trusted || spec.declared > 0) e = estimate_lipschitz(m, spec.object_fn, region, others, spec.ball);
+        size_t warned = warnings.size();
+        bool repeat = estimated.count(spec.object_fn) > 0;  // a variant of an item already reported
+        if (!spec.trusted || spec.declared > 0) {
+            auto known = estimated.find(spec.object_fn);
+            if (known == estimated.end())
+                known = estimated.emplace(spec.object_fn, estimate_lipschitz(m, spec.object_fn, region, others, spec.ball)).first;
+            e = known->second;
+        }
         double applied = 1;
         std::string how;
         if (spec.declared > 0) {
@@ -189,6 +198,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                             "where samples exceed it)",
                                                             spec.shape, e.derived, e.sampled, e.derived / std::max(e.sampled, 1.0))});
         }
+        if (repeat) warnings.resize(warned);
         if (applied > 1 + 1e-9) {
             divide_result(m, int(fi), applied);
             if (spec.factor_global >= 0 && size_t(spec.factor_global) < m.globals.size()) {
