@@ -12,6 +12,7 @@
 #include <optional>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -134,12 +135,25 @@ int serve(const std::string& input, int port, double poll_seconds) {
         while (running) {
             std::this_thread::sleep_for(std::chrono::duration<double>(poll_seconds));
             bool changed = false;
+            std::vector<std::string> paths;
             {
                 std::lock_guard<std::mutex> lock(mu);
-                for (const auto& [path, text] : current.files)
-                    if (read_all(path) != text) { changed = true; break; }
+                for (const auto& [path, text] : current.files) {
+                    paths.push_back(path);
+                    if (!changed && read_all(path) != text) changed = true;
+                }
             }
             if (!changed) continue;
+            // A save in progress (many editors truncate, then write) reads as an empty or half file: wait until
+            // two reads 50 ms apart agree before compiling (at most a second).
+            std::vector<std::optional<std::string>> before;
+            for (int tries = 0; tries < 20; ++tries) {
+                std::vector<std::optional<std::string>> now;
+                for (const auto& path : paths) now.push_back(read_all(path));
+                if (tries > 0 && now == before) break;
+                before = std::move(now);
+                std::this_thread::sleep_for(std::chrono::milliseconds(50));
+            }
             auto t0 = std::chrono::steady_clock::now();
             Build next = build(input, version + 1, poll_seconds);
             {
