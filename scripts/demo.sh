@@ -3,7 +3,7 @@
 # render it headlessly to a PNG.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/build.sh
+bash scripts/build.sh --main
 ./build/iqc examples/two_tori.md -o build/two_tori.frag
 ./build/iqc render examples/two_tori.md -o build/two_tori.png
 echo

@@ -10,6 +10,10 @@
 # the same inputs on every run, so a red run is a reproducible one; set it to 0 for a random seed). The harnesses live in the sanitizer build
 # (scripts/sanitize.sh; built here if missing), so every ASan/UBSan report is a finding too.
 #
+# A long campaign (the issue-16 report: `IQC_FUZZ_BUILD=build-fuzz IQC_FUZZ_SANITIZERS=undefined
+# IQC_FUZZ_JOBS=2 nice -n 19 bash scripts/fuzz.sh 3600`) may use a build of its own with UBSan alone, several
+# times the executions per second of ASan's; IQC_FUZZ_JOBS runs that many processes per harness.
+#
 # A finding stops that harness with the input in build-asan/fuzz/artifacts/. Minimise it with
 #   build-asan/fuzz/fuzz_HARNESS -minimize_crash=1 -runs=100000 ARTIFACT
 # fix the bug, and add the input under tests/fuzz/HARNESS/ (the property test in tests/hostile_test.cpp
@@ -21,13 +25,16 @@ shift || true
 HARNESSES=("$@")
 [ ${#HARNESSES[@]} -eq 0 ] && HARNESSES=(frontend ir scene)
 
-if [ ! -f build-asan/CMakeCache.txt ]; then
+B="${IQC_FUZZ_BUILD:-build-asan}"
+JOBS="${IQC_FUZZ_JOBS:-1}"
+if [ ! -f "$B/CMakeCache.txt" ]; then
   bash scripts/install-deps.sh
-  CC=clang CXX=clang++ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIQC_SANITIZE=ON >/dev/null
+  CC=clang CXX=clang++ cmake -S . -B "$B" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIQC_SANITIZE=ON \
+    -DIQC_SANITIZERS="${IQC_FUZZ_SANITIZERS:-address,undefined}" >/dev/null
 fi
 targets=()
 for h in "${HARNESSES[@]}"; do targets+=("fuzz_$h"); done
-cmake --build build-asan -j "$(nproc)" --target "${targets[@]}"
+cmake --build "$B" -j "$(nproc)" --target "${targets[@]}"
 source scripts/sanitizer-env.sh
 # Fuzzing trades the costly stack-use-after-return check for executions (the test suite keeps it).
 export ASAN_OPTIONS="$ASAN_OPTIONS:detect_stack_use_after_return=0"
@@ -56,8 +63,8 @@ for path in sys.argv[2:]:
 PY
 }
 for h in "${HARNESSES[@]}"; do
-  corpus="build-asan/fuzz/corpus/$h"
-  mkdir -p "$corpus" build-asan/fuzz/artifacts
+  corpus="$B/fuzz/corpus/$h"
+  mkdir -p "$corpus" "$B/fuzz/artifacts"
   if [ "$h" = scene ]; then
     seed "$corpus" examples/* tests/hardcases/*.iq tests/hostile/*.iq tests/hostile/*.iql stdlib/*.iql golden/*/*.md
   else
@@ -70,27 +77,38 @@ done
 status=0
 total=0
 for h in "${HARNESSES[@]}"; do
-  log="build-asan/fuzz/$h.log"
-  stamp="build-asan/fuzz/$h.started"
+  log="$B/fuzz/$h.log"
+  stamp="$B/fuzz/$h.started"
   touch "$stamp"
   set +e
   max_len=8192
   [ "$h" = scene ] && max_len=32768
-  # One process (no -jobs): the machine is shared, and the log stays in $log.
-  "build-asan/fuzz/fuzz_$h" "build-asan/fuzz/corpus/$h" -dict=fuzz/iqc.dict \
-    -seed="${IQC_FUZZ_SEED:-1}" -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 \
-    -artifact_prefix="build-asan/fuzz/artifacts/$h-" >"$log" 2>&1
-  rc=$?
+  # JOBS processes (default one: the machine is shared), each logging to $log.N, sharing the corpus; the
+  # seed of process N is the seed plus N.
+  rc=0
+  pids=()
+  for ((j = 0; j < JOBS; j++)); do
+    seed_j=$(( ${IQC_FUZZ_SEED:-1} == 0 ? 0 : ${IQC_FUZZ_SEED:-1} + j ))
+    "$B/fuzz/fuzz_$h" "$B/fuzz/corpus/$h" -dict=fuzz/iqc.dict \
+      -seed="$seed_j" -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 \
+      -artifact_prefix="$B/fuzz/artifacts/$h-" >"$log.$j" 2>&1 &
+    pids+=($!)
+  done
+  for p in "${pids[@]}"; do wait "$p" || rc=$?; done
   set -e
-  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
-  runs="${runs:-0}"
+  cat "$log".* > "$log"
+  runs=0
+  for ((j = 0; j < JOBS; j++)); do
+    r=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log.$j" | grep -o '[0-9]*$' | tail -1)
+    runs=$((runs + ${r:-0}))
+  done
   total=$((total + runs))
   if [ $rc -ne 0 ]; then
     status=1
-    echo "fuzz $h: FOUND A PROBLEM after $runs executions (exit $rc); see $log and build-asan/fuzz/artifacts/"
+    echo "fuzz $h: FOUND A PROBLEM after $runs executions (exit $rc); see $log and $B/fuzz/artifacts/"
     # What the harness printed before it stopped (diagnostics, sanitizer report) and the input, in base64.
     grep -v -E '^#[0-9]+|^INFO:|^\s*$' "$log" | tail -40 || true
-    for a in $(find build-asan/fuzz/artifacts -name "$h-*" -newer "$stamp"); do
+    for a in $(find "$B/fuzz/artifacts" -name "$h-*" -newer "$stamp"); do
       echo "input $a (base64):"
       head -c 4096 "$a" | base64 -w 100
     done

@@ -3,6 +3,8 @@
 // without a scene block, an unreadable file).
 #include <catch2/catch.hpp>
 
+#include <chrono>
+
 #include "TestUtil.h"
 #include "ir/Pipeline.h"
 
@@ -206,4 +208,67 @@ TEST_CASE("scene keys: a Greek letter by its ASCII name, a name without its unde
     CHECK_THAT(th.err, Catch::Contains("theta.iq:3:18: error: invalid TOML"));
     CHECK_THAT(th.err, Catch::Contains("theta.iq:3:18: note: a TOML key with letters such as θ must be quoted (\"θ\" = 1); "
                                        "a Greek letter may also be written with its ASCII name (theta = 1)"));
+}
+
+TEST_CASE("--depfile names the outputs and every file the compile read, as absolute paths", "[cli][depfile]") {
+    namespace fs = std::filesystem;
+    fs::path dir = temp_dir() / "depfile case";  // a space, escaped in the rule
+    fs::remove_all(dir);
+    fs::create_directories(dir / "mods");
+    {
+        std::ofstream(dir / "mods" / "ring.iql") << "shape\nD = ‖q‖ - r\nq = (‖(p_1, p_3)‖ - 1, p_2)\nwhere\np ∈ ℝ³\n"
+                                                    "r ∈ [0,1] default = 0.25\n";
+        std::ofstream(dir / "blob.iql") << "shape\nD = ‖p‖ - 0.5\nwhere\np ∈ ℝ³\n";  // looked up beside the scene
+        std::ofstream(dir / "scene.iq") << "include = [\"mods/ring.iql\"]\n[[shapes]]\ntype = \"ring\"\n"
+                                           "[[shapes]]\ntype = \"blob\"\n[[shapes]]\ntype = \"box\"\n";
+    }
+    std::string q = "'" + dir.string();
+    RunResult r = run_iqc(q + "/scene.iq' -o " + q + "/out.frag' --meta " + q + "/out.json' --depfile " + q + "/out.d'");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    std::string esc = dir.string();
+    for (size_t k = 0; (k = esc.find(' ', k)) != std::string::npos; k += 2) esc.insert(k, "\\");
+    std::string expected = esc + "/out.frag " + esc + "/out.json: \\\n  " + esc + "/scene.iq \\\n  " + esc +
+                           "/mods/ring.iql \\\n  " + esc + "/blob.iql\n";
+    CHECK(read_text(dir / "out.d") == expected);  // the standard library's `box` is inside iqc: not a file
+    // Without an output file there is nothing to name: a usage error.
+    RunResult u = run_iqc(q + "/scene.iq' --depfile " + q + "/x.d'");
+    CHECK(u.exit_code == 2);
+    CHECK_THAT(u.err, Catch::Contains("--depfile needs an output file (-o FILE)"));
+    // A failed compile writes no depfile (the build keeps the last good one).
+    fs::remove(dir / "out.d");
+    std::ofstream(dir / "mods" / "ring.iql") << "shape\nD = ‖p‖ - nope\nwhere\np ∈ ℝ³\n";
+    RunResult bad = run_iqc(q + "/scene.iq' -o " + q + "/out.frag' --depfile " + q + "/out.d'");
+    CHECK(bad.exit_code == 1);
+    CHECK_FALSE(fs::exists(dir / "out.d"));
+}
+
+TEST_CASE("outputs whose bytes did not change are left alone, and --quiet prints diagnostics only", "[cli][depfile]") {
+    namespace fs = std::filesystem;
+    auto in = write_temp("unchanged.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\n```\n");
+    fs::path out = temp_dir() / "unchanged.frag", meta = temp_dir() / "unchanged.json";
+    fs::remove(out);
+    RunResult first = run_iqc(in.string() + " -o " + out.string() + " --meta " + meta.string());
+    REQUIRE(first.exit_code == 0);
+    CHECK_THAT(first.err, Catch::Contains("iqc: wrote " + out.string()));
+    auto old_time = fs::last_write_time(out);
+    auto old_meta_time = fs::last_write_time(meta);
+    fs::last_write_time(out, old_time - std::chrono::hours(1));  // any rewrite would move it forward again
+    fs::last_write_time(meta, old_meta_time - std::chrono::hours(1));
+    RunResult second = run_iqc(in.string() + " -o " + out.string() + " --meta " + meta.string());
+    REQUIRE(second.exit_code == 0);
+    CHECK_THAT(second.err, Catch::Contains("iqc: " + out.string() + " is unchanged"));
+    CHECK(fs::last_write_time(out) == old_time - std::chrono::hours(1));
+    CHECK(fs::last_write_time(meta) == old_meta_time - std::chrono::hours(1));
+    // A changed output is rewritten; --quiet says nothing about it.
+    RunResult third = run_iqc(in.string() + " --target webgl2 -o " + out.string() + " --quiet");
+    REQUIRE(third.exit_code == 0);
+    CHECK(third.err.empty());
+    CHECK_THAT(read_text(out), Catch::StartsWith("#version 300 es"));
+    // --quiet keeps warnings.
+    auto warn = write_temp("quiet_warn.iq", "[[shapes]]\ntype = \"sphere\"\n[effects]\nshadows = \"soft\"\n");
+    RunResult w = run_iqc(warn.string() + " -o " + (temp_dir() / "quiet_warn.frag").string() + " -q");
+    CHECK(w.exit_code == 0);
+    CHECK_THAT(w.err, Catch::Contains("warning:"));
+    CHECK_THAT(w.err, !Catch::Contains("wrote"));
 }

@@ -189,7 +189,7 @@ TEST_CASE("every shape module is 1-Lipschitz: exact ones have a unit gradient", 
         INFO(s.label << "\n" << d.render());
         REQUIRE(m->ok);
         Evaluable D;
-        LowerContext ctx{D.irm, {}};
+        LowerContext ctx{D.irm, {}, {}};
         D.fn = lower_module(*m, s.module, s.module, ctx);
         for (size_t k = 0; k < m->params.size(); ++k) {
             D.args.push_back({m->params[k].type, m->params[k].value});

@@ -15,6 +15,8 @@
 #include <cstdio>
 #include <fmt/format.h>
 #include <fstream>
+#include <filesystem>
+#include <iterator>
 #include <iostream>
 
 #include "render/Png.h"
@@ -174,10 +176,24 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
 // Writes text with its length (a NUL byte in a diagnostic's source line must not cut off what follows).
 void put(std::FILE* f, std::string_view text) { std::fwrite(text.data(), 1, text.size(), f); }
 
-int write_output(const std::string& path, const std::string& text) {
+// Writes `text` to `path` (standard output for "" or "-") through a temporary file and a rename, so a reader
+// never sees half a file. A file that already holds exactly these bytes is left alone (its modification time
+// too: a build system then rebuilds nothing downstream); `changed`, when given, says which happened.
+int write_output(const std::string& path, const std::string& text, bool* changed = nullptr) {
+    if (changed) *changed = true;
     if (path.empty() || path == "-") {
         std::fwrite(text.data(), 1, text.size(), stdout);
         return 0;
+    }
+    {
+        std::ifstream in(path, std::ios::binary);
+        if (in) {
+            std::string old((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+            if (!in.bad() && old == text) {
+                if (changed) *changed = false;
+                return 0;
+            }
+        }
     }
     std::string tmp = path + ".iqc-tmp";
     {
@@ -194,6 +210,33 @@ int write_output(const std::string& path, const std::string& text) {
         return 1;
     }
     return 0;
+}
+
+// A path as a Makefile rule names it: space, '#' and '\\' before them escaped with '\\', '$' doubled (the
+// syntax GCC's -MD writes, which Make and Ninja both read).
+std::string make_escape(const std::string& path) {
+    std::string out;
+    for (char c : path) {
+        if (c == ' ' || c == '#') out += '\\';
+        if (c == '$') out += '$';
+        out += c;
+    }
+    return out;
+}
+
+// The depfile of one compile: a Makefile rule `OUTPUTS: DEPENDENCIES` naming every file the compile read from
+// disk (the scene or document, included and looked-up module files), as absolute paths.
+std::string depfile_text(const std::vector<std::string>& outputs, const std::vector<std::string>& deps) {
+    auto abs = [](const std::string& p) {
+        std::error_code ec;
+        std::filesystem::path a = std::filesystem::absolute(p, ec);
+        return ec ? p : a.lexically_normal().string();
+    };
+    std::string text;
+    for (const auto& o : outputs) text += (text.empty() ? "" : " ") + make_escape(abs(o));
+    text += ":";
+    for (const auto& d : deps) text += " \\\n  " + make_escape(abs(d));
+    return text + "\n";
 }
 
 }  // namespace
@@ -223,6 +266,13 @@ static int run(int argc, char** argv) {
     std::string meta;
     app.add_option("--meta", meta, "also write a JSON description of every parameter (instance, module, role, "
                                    "uniform or constant name, type, bounds, default, description)");
+    std::string depfile;
+    app.add_option("--depfile", depfile,
+                   "also write a Makefile-syntax depfile: the outputs, then every file the compile read (the scene, "
+                   "included and looked-up modules), for Ninja's and Make's rebuilds (CMake: iqc_add_shader)");
+    bool quiet = false;
+    app.add_flag("-q,--quiet", quiet, "print only diagnostics (no 'wrote' lines); outputs whose bytes did not change are "
+                                      "never rewritten, quiet or not");
     std::string passes_list;
     for (const auto& p : iqc::ir::pipeline_passes()) passes_list += fmt::format("{}{} ({})", passes_list.empty() ? "" : ", ", p.name, p.summary);
     CLI::Option* dump_ir_opt =
@@ -374,6 +424,10 @@ static int run(int argc, char** argv) {
         std::fprintf(stderr, "iqc: error: no input file (see iqc --help)\n");
         return 2;
     }
+    if (!depfile.empty() && (render->parsed() || output.empty() || output == "-")) {
+        std::fprintf(stderr, "iqc: error: --depfile needs an output file (-o FILE) to name in its rule\n");
+        return 2;
+    }
     auto t0 = std::chrono::steady_clock::now();
     iqc::SourceManager sm;
     iqc::Diagnostics diags(sm);
@@ -437,16 +491,28 @@ static int run(int argc, char** argv) {
                          [&] { double s = 0; for (double x : times) s += x; return s; }());
     }
     if (target == "html" && !render->parsed()) r.code = iqc::html_page(r.code, r.meta);
-    int rc = write_output(output, r.code);
+    auto report = [&](const std::string& path, bool changed) {
+        if (!quiet && !path.empty() && path != "-")
+            std::fprintf(stderr, changed ? "iqc: wrote %s\n" : "iqc: %s is unchanged\n", path.c_str());
+    };
+    bool changed = true;
+    int rc = write_output(output, r.code, &changed);
+    bool out_changed = changed;
     if (rc == 0 && !meta.empty()) {
-        rc = write_output(meta, r.meta);
-        if (rc == 0) std::fprintf(stderr, "iqc: wrote %s\n", meta.c_str());
+        rc = write_output(meta, r.meta, &changed);
+        if (rc == 0) report(meta, changed);
+    }
+    if (rc == 0 && !depfile.empty()) {
+        std::vector<std::string> outs;
+        outs.push_back(output);
+        if (!meta.empty()) outs.push_back(meta);
+        rc = write_output(depfile, depfile_text(outs, sm.disk_files()), &changed);
     }
     if (time) {
         double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         std::fprintf(stderr, "iqc: compiled in %.2f ms\n", ms);
     }
-    if (rc == 0 && !output.empty() && output != "-") std::fprintf(stderr, "iqc: wrote %s\n", output.c_str());
+    if (rc == 0) report(output, out_changed);
     return rc;
 }
 

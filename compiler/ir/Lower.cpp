@@ -42,6 +42,8 @@ struct Env {
     std::map<ValueId, ValueId> captured;  // parent value -> body parameter
     std::vector<ValueId> capture_args;    // parent values, in parameter order
 
+    Env(const CheckedModule& m, LowerContext& ctx, ir::Function& f) : m(m), ctx(ctx), f(f) {}
+
     ValueId capture(ValueId outer) {
         if (auto it = captured.find(outer); it != captured.end()) return it->second;
         const Instr& oi = parent->f.body[outer];

@@ -79,7 +79,7 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
             d.error_nospan(fmt::format("cannot read '{}': {}", req.path, err));
             return false;
         }
-        ms.file = sm.add(req.path, std::move(text));
+        ms.file = sm.add_from_disk(req.path, std::move(text));
         ms.name = name.empty() ? fs::path(req.path).stem().string() : name;
         ms.ranges = {{0, uint32_t(sm.text(ms.file).size())}};
         ms.where = {ms.file, 0, 1};

@@ -62,7 +62,7 @@ const ModuleSource* ModuleLibrary::find_source(const std::string& name, Span whe
         }
         auto ms = std::make_unique<ModuleSource>();
         ms->name = name;
-        ms->file = sm_.add(p.string(), std::move(text));
+        ms->file = sm_.add_from_disk(p.string(), std::move(text));
         ms->ranges = {{0, uint32_t(sm_.text(ms->file).size())}};
         ms->where = {ms->file, 0, 1};
         ms->origin = "module file";

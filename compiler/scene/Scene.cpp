@@ -364,7 +364,7 @@ void SceneReader::read_includes(const toml::table& root) {
                     d_.error(span_of(item), fmt::format("cannot read included file '{}': {}", p.string(), err));
                     continue;
                 }
-                FileId f = sm_.add(p.string(), std::move(text));
+                FileId f = sm_.add_from_disk(p.string(), std::move(text));
                 ModuleSource ms;
                 ms.name = p.stem().string();
                 ms.file = f;
@@ -693,7 +693,7 @@ bool load_scene(const std::string& path, SourceManager& sm, Diagnostics& d, Scen
         return false;
     }
     s.path = path;
-    s.file = sm.add(path, std::move(text));
+    s.file = sm.add_from_disk(path, std::move(text));
     std::string ext = fs::path(path).extension().string();
     if (ext == ".md") {
         read_document(sm, d, s);

@@ -90,6 +90,19 @@ FileId SourceManager::add(std::string name, std::string text) {
     return FileId(files_.size() - 1);
 }
 
+FileId SourceManager::add_from_disk(std::string path, std::string text) {
+    FileId id = add(std::move(path), std::move(text));
+    files_[id].from_disk = true;
+    return id;
+}
+
+std::vector<std::string> SourceManager::disk_files() const {
+    std::vector<std::string> out;
+    for (const auto& f : files_)
+        if (f.from_disk && std::find(out.begin(), out.end(), f.name) == out.end()) out.push_back(f.name);
+    return out;
+}
+
 FileId SourceManager::add_embedded(std::string name, std::string text, FileId outer, uint32_t outer_offset) {
     FileId id = add(std::move(name), std::move(text));
     files_[id].embedded = true;

@@ -32,6 +32,9 @@ class SourceManager {
 public:
     // Adds a file with the given display name and contents.
     FileId add(std::string name, std::string text);
+    // Adds a file read from disk at `path` (its display name): it is one of the files the compile depends on
+    // (disk_files(), what `iqc --depfile` lists).
+    FileId add_from_disk(std::string path, std::string text);
     // Adds text that sits inside another file starting at byte `offset` (e.g. an escaped TOML string whose
     // text differs from the file's bytes): diagnostics report the outer file's name and the line where the
     // string starts, plus the line within the string.
@@ -47,12 +50,15 @@ public:
     size_t size() const { return files_.size(); }
     // Bytes of every file added so far (for the limit on what one compile reads).
     size_t total_bytes() const { return total_bytes_; }
+    // The paths of the files added by add_from_disk, in the order they were read, each once.
+    std::vector<std::string> disk_files() const;
 
 private:
     struct File {
         std::string name, text;
         std::vector<uint32_t> line_starts;
         bool embedded = false;
+        bool from_disk = false;
         FileId outer = 0;
         uint32_t outer_offset = 0;
     };
