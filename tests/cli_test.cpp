@@ -178,7 +178,7 @@ TEST_CASE("the IR after a named pass (--dump-ir=after-PASS), and an unknown pass
     CHECK_THAT(last.err, Catch::Contains("entry function iqc_scene(p: ℝ³) -> ℝ² {"));
     RunResult bad = run_iqc(in.string() + " --dump-ir=after-frobnicate");
     CHECK(bad.exit_code == 2);
-    CHECK_THAT(bad.err, Catch::Contains("--dump-ir takes after-PASS with PASS one of lower, lipschitz, inline, tables, fold"));
+    CHECK_THAT(bad.err, Catch::Contains("--dump-ir takes after-PASS with PASS one of lower, stable, lipschitz, inline, tables, fold"));
 }
 
 TEST_CASE("scene keys: a Greek letter by its ASCII name, a name without its underscore, an unquoted θ", "[cli]") {
@@ -210,7 +210,7 @@ TEST_CASE("scene keys: a Greek letter by its ASCII name, a name without its unde
                                        "a Greek letter may also be written with its ASCII name (theta = 1)"));
 }
 
-TEST_CASE("--depfile names the outputs and every file the compile read, as absolute paths", "[cli][depfile]") {
+TEST_CASE("the depfile (--depfile) names the outputs and every file the compile read, as absolute paths", "[cli][depfile]") {
     namespace fs = std::filesystem;
     fs::path dir = temp_dir() / "depfile case";  // a space, escaped in the rule
     fs::remove_all(dir);

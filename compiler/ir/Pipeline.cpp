@@ -10,6 +10,7 @@
 #include "ir/passes/Fold.h"
 #include "ir/passes/Inline.h"
 #include "ir/passes/Lipschitz.h"
+#include "ir/passes/Stable.h"
 #include "ir/passes/Tables.h"
 #include "source/Internal.h"
 
@@ -51,6 +52,10 @@ struct Pass {
 
 const std::vector<Pass>& passes() {
     static const std::vector<Pass> list = {
+        {{"stable", "stable rewrites of forms that fail in 32-bit floats: log-sum-exp, hypot, 1 - cos"},
+         [](Module& m, const PipelineOptions&, PipelineResult& r) {
+             for (auto& w : rewrite_unstable_forms(m)) r.rewrites.push_back(std::move(w));
+         }},
         {{"lipschitz", "each shape's Lipschitz bound, derived from its gradient; distances divided by it"},
          [](Module& m, const PipelineOptions&, PipelineResult& r) {
              for (auto& w : apply_lipschitz_bounds(m, &r.lipschitz)) r.warnings.push_back(std::move(w));

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "ir/IR.h"
+#include "ir/passes/Stable.h"
 #include "ir/passes/Ranges.h"
 
 namespace iqc::ir {
@@ -42,6 +43,7 @@ struct PipelineResult {
     std::vector<RangeIssue> range_issues;                 // from the ranges pass
     std::vector<RangeIssue> warnings;                     // what else a pass wants the user to know (gradient, lipschitz)
     std::vector<std::string> lipschitz;                   // per scene item: derived, sampled and applied bounds
+    std::vector<StableRewrite> rewrites;                  // what the stable pass rewrote, where
     std::string dump;                                     // the module after `dump_after`
     std::vector<std::pair<std::string, double>> pass_ms;  // wall time per pass
 };

@@ -109,6 +109,8 @@ bool SceneCompiler::optimize(SceneIR& scene) {
         res_.ir = opts_.dump_after.empty() ? ir::print(scene.module) : pr.dump;
         std::string notes;
         for (const auto& line : pr.lipschitz) notes += "; lipschitz: " + line + "\n";
+        for (const auto& rw : pr.rewrites)
+            notes += fmt::format("; stable: {} in {}{}\n", rw.what, rw.function, rw.where.valid() ? " at " + sm_.location(rw.where) : "");
         res_.ir = notes + res_.ir;
     }
     return true;
