@@ -9,6 +9,8 @@
 #include <chrono>
 #include <regex>
 
+#include <fmt/format.h>
+
 #include "TestUtil.h"
 #include "glsl/Names.h"
 #include "source/Limits.h"
@@ -294,6 +296,8 @@ TEST_CASE("comment_text: one line, no comment delimiters, no continuation, valid
     CHECK(glsl::comment_text("ends \\ \\\\  ") == "ends");
     CHECK(glsl::comment_text("bad \xFF byte, overlong \xC0\xAF slash") == "bad \xEF\xBF\xBD byte, overlong \xEF\xBF\xBD slash");
     CHECK(glsl::comment_text("‖p‖ - r: keeps math") == "‖p‖ - r: keeps math");
+    // Invisible format characters are spelled out (Trojan Source): bidi override and isolate, zero-width, BOM.
+    CHECK(glsl::comment_text("a\u202Eb\u2066c\u200Dd\uFEFFe") == "a<U+202E>b<U+2066>c<U+200D>d<U+FEFF>e");
 }
 
 TEST_CASE("literals outside float's range are located errors: folded overflow is not an internal error", "[hostile]") {
@@ -354,4 +358,141 @@ TEST_CASE("property: every input of the fuzz corpora ends with exit 0 or 1 withi
             if (b.run.exit_code == 1) CHECK_THAT(b.run.err, Catch::Contains("error"));
         }
     }
+}
+
+// Found by a new-user trial of issue 16 (hostile input), after the first fixes.
+
+TEST_CASE("a depfile cannot inject Make rules: control characters are refused, ':' is escaped", "[hostile][depfile]") {
+    fs::path dir = temp_dir() / "depfile_injection";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::string d = dir.string();
+    std::ofstream(dir / "s.iq") << "[[shapes]]\ntype = \"sphere\"\n";
+    // An output path with a newline and a recipe: refused before anything is written.
+    Bounded out = run_bounded("'" + d + "/s.iq' -o '" + d + "/x.frag:\n\ttouch pwned\nz.frag' --depfile '" + d + "/s.d'");
+    CHECK(out.run.exit_code == 1);
+    CHECK_THAT(out.run.err, Catch::Contains("has a control character") && Catch::Contains("x.frag:\\n\\ttouch pwned\\nz.frag"));
+    CHECK_FALSE(fs::exists(dir / "s.d"));
+    CHECK_FALSE(fs::exists(d + "/x.frag:\n\ttouch pwned\nz.frag"));
+    // An included module whose file name holds a newline and a recipe: the same.
+    std::string evil = "m.iql\nall:\n\ttouch pwned\nZ=q.iql";
+    std::ofstream(dir / evil) << "shape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n";
+    std::ofstream(dir / "inc.iq") << "include = [\"m.iql\\nall:\\n\\ttouch pwned\\nZ=q.iql\"]\n[[shapes]]\ntype = \"sphere\"\n";
+    Bounded inc = run_bounded("'" + d + "/inc.iq' -o '" + d + "/inc.frag' --depfile '" + d + "/inc.d'");
+    CHECK(inc.run.exit_code == 1);
+    CHECK_THAT(inc.run.err, Catch::Contains("cannot write the depfile"));
+    CHECK_FALSE(fs::exists(dir / "inc.d"));
+    CHECK_FALSE(fs::exists(dir / "inc.frag"));
+    // A colon is escaped (GNU Make and Ninja read `\:`).
+    fs::create_directories(dir / "a:b");
+    std::ofstream(dir / "a:b" / "s.iq") << "[[shapes]]\ntype = \"sphere\"\n";
+    Bounded colon = run_bounded("'" + d + "/a:b/s.iq' -o '" + d + "/c.frag' --depfile '" + d + "/c.d'");
+    REQUIRE(colon.run.exit_code == 0);
+    CHECK_THAT(read_text(dir / "c.d"), Catch::Contains("/a\\:b/s.iq"));
+}
+
+TEST_CASE("outputs that are devices are written in place, and write errors are errors", "[hostile]") {
+    auto in = std::string(IQC_SOURCE_DIR) + "/examples/two_tori.md";
+    // -o /dev/null must not replace the device with a regular file (a temporary file renamed over it would).
+    Bounded b = run_bounded(in + " -o /dev/null --meta /dev/null");
+    CHECK(b.run.exit_code == 0);
+    struct stat st {};
+    REQUIRE(stat("/dev/null", &st) == 0);
+    CHECK(S_ISCHR(st.st_mode));
+    // A full device, as an output file and as standard output: exit 1 with the reason, not a silent loss.
+    Bounded full = run_bounded(in + " -o /dev/full");
+    CHECK(full.run.exit_code == 1);
+    CHECK_THAT(full.run.err, Catch::Contains("cannot write '/dev/full': No space left on device"));
+    std::string cmd = std::string(IQC_BINARY) + " " + in + " > /dev/full 2>" + (temp_dir() / "full.err").string();
+    int status = std::system(cmd.c_str());
+    CHECK(WEXITSTATUS(status) == 1);
+    CHECK_THAT(read_text(temp_dir() / "full.err"), Catch::Contains("cannot write standard output"));
+    REQUIRE(stat("/dev/full", &st) == 0);
+    CHECK(S_ISCHR(st.st_mode));
+}
+
+TEST_CASE("code that unrolls exponentially is a located error within the bounds", "[hostile]") {
+    // f0(x) = f1(x) + f1(x), …, 60 deep: 2^60 copies once expanded.
+    std::string text = "shape\n";
+    for (int i = 0; i < 60; ++i) text += fmt::format("`f{}`(x) = `f{}`(x) + `f{}`(x)\n", i, i + 1, i + 1);
+    text += "`f60`(x) = x\nD = `f0`(p_1)\nwhere\np ∈ ℝ³\nx ∈ ℝ\n";
+    fs::path doubled = generated("doubled.iql", text);
+    Bounded b = run_bounded(doubled.string() + " -o -");
+    require_located(b, doubled.string() + ":", "this expands to more than 1000000 IR instructions in one function");
+    // ∑_i ∑_j of a 4096-vector: 16.7 million terms.
+    fs::path sums = generated("nested_sums.iql", "y = ∑_i ∑_j v_i v_j\nwhere\nv ∈ ℝ^4096\n");
+    require_located(run_bounded("eval " + sums.string()), sums.string() + ":1:", "this expands to more than");
+}
+
+TEST_CASE("a min of 20,000 terms and a piecewise of 20,000 cases compile (no emitter recursion)", "[hostile]") {
+    std::string args;
+    for (int i = 0; i < 20000; ++i) args += fmt::format("{}p_{} - {}", i ? ", " : "", 1 + i % 3, i % 7);
+    fs::path mm = generated("min20000.iql", "shape\nD = min(" + args + ")\nwhere\np ∈ ℝ³\n");
+    Bounded a = run_bounded(mm.string() + " -o -");
+    INFO(a.run.err.substr(0, 1000));
+    CHECK(a.run.exit_code == 0);
+    std::string cases;
+    for (int i = 0; i < 20000; ++i) cases += fmt::format("{} if p_1 > {}\n", i % 5, 20000 - i);
+    fs::path pw = generated("piecewise20000.iql", "shape\nD = ‖p‖ - r\nr = { " + cases + "1 otherwise\nwhere\np ∈ ℝ³\n");
+    Bounded c = run_bounded(pw.string() + " -o -");
+    INFO(c.run.err.substr(0, 1000));
+    CHECK(c.run.exit_code == 0);
+}
+
+TEST_CASE("100,001 statements: one located error, and diagnostics stop at 200", "[hostile]") {
+    std::string text = "shape\nD = ‖p‖ - 1\n";
+    for (int i = 0; i < 100000; ++i) text += fmt::format("`a{}` = {}\n", i, i);
+    text += "where\np ∈ ℝ³\n";
+    fs::path many = generated("statements.iql", text);
+    Bounded b = run_bounded(many.string() + " -o -");
+    require_located(b, many.string() + ":", "a module has at most 100000 statements");
+    std::string toml;
+    for (int i = 0; i < 1000; ++i) toml += fmt::format("unknown_key_{} = 1\n", i);
+    fs::path keys = generated("keys.iq", toml + "[[shapes]]\ntype = \"sphere\"\n");
+    Bounded k = run_bounded(keys.string() + " -o -");
+    CHECK(k.run.exit_code == 1);
+    CHECK_THAT(k.run.err, Catch::Contains("more diagnostics not shown"));
+    CHECK(k.run.err.size() < 200000);
+}
+
+TEST_CASE("long names, huge integers, NaN defaults and infinite bounds", "[hostile]") {
+    // A 5,000-letter name (glslang refuses identifiers past 1,024 characters): cut and hashed.
+    std::string name(5000, 'q');
+    fs::path longname = generated("long_name.iq", "[[shapes]]\nname = \"" + name + "\"\ntype = \"sphere\"\n");
+    Bounded l = run_bounded(longname.string() + " --target webgl2 -o -");
+    INFO(l.run.err.substr(0, 500));
+    CHECK(l.run.exit_code == 0);
+    CHECK(glsl::identifier(name).size() <= glsl::kMaxIdentifier);
+    CHECK(glsl::identifier(name) != glsl::identifier(name + "r"));
+    CHECK(glsl::identifier("short_name") == "short_name");
+    fs::path zbig = generated("zbig.iql", "shape\nD = ‖p‖ - n\nwhere\np ∈ ℝ³\nn ∈ ℤ default = 3000000000\n");
+    require_located(run_bounded(zbig.string() + " -o -"), zbig.string() + ":5:17",
+                    "the default of 'n' is 3000000000, not a 32-bit integer");
+    fs::path zover = generated("zover.iq", "[modules]\nz = \"\"\"\nshape\nD = ‖p‖ - n\nwhere\np ∈ ℝ³\nn ∈ ℤ default = 1\n\"\"\"\n"
+                                           "[[shapes]]\ntype = \"z\"\nshape_params = { n = 99999999999 }\n");
+    require_located(run_bounded(zover.string() + " -o -"), zover.string() + ":11:18", "'n' is ℤ, but the value 99999999999 is not a 32-bit integer");
+    fs::path nan = generated("nan_default.iql", "shape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ ℝ default = 0/0\n");
+    require_located(run_bounded(nan.string() + " -o -"), nan.string() + ":5:17", "the default of 'r' is not a number");
+    fs::path inf = generated("inf_bound.iql", "shape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ [0, 1/0] default = 1\n");
+    require_located(run_bounded(inf.string() + " -o -"), inf.string() + ":5:5", "an interval bound must be a finite 32-bit float");
+}
+
+TEST_CASE("eval warns where acosh and atanh leave their domains, and x⁻¹⁻¹ is not read as x⁻¹", "[hostile]") {
+    fs::path dom = generated("domains.iql", "y = acosh(x)\nz = atanh(x)\nacosh, atanh from trigonometry\nwhere\nx ∈ [0, 2]\n");
+    Bounded d = run_bounded("eval " + dom.string() + " --set x=0.5");
+    CHECK(d.run.exit_code == 0);
+    CHECK_THAT(d.run.err, Catch::Contains(":1:1: warning: acosh of a value that can be below 1"));
+    CHECK_THAT(d.run.err, Catch::Contains(":2:1: warning: atanh of a value that can reach ±1"));
+    fs::path inv = generated("inv_twice.iql", "y = x⁻¹⁻¹\nwhere\nx ∈ ℝ\n");
+    require_located(run_bounded("eval " + inv.string() + " --set x=2"), inv.string() + ":1:6",
+                    "a superscript power is one integer such as ² or ⁻¹, not '⁻¹⁻¹'");
+}
+
+TEST_CASE("iqc bench of a scene too costly for the CPU reference falls back instead of failing", "[hostile][bench]") {
+    fs::path rec = generated("bench_recurrence.iql", "shape\nz_1 = p\nz_(k+1) = z_k + (1,1,1) for k ∈ 1..100000000\n"
+                                                     "D = ‖z_100000001‖ - 1\nwhere\np ∈ ℝ³\n");
+    Bounded b = run_bounded("bench " + rec.string() + " --size 1x1 --frames 1");
+    INFO(b.run.err.substr(0, 2000));
+    CHECK(b.run.exit_code != 3);
+    CHECK_THAT(b.run.err + b.run.out, !Catch::Contains("internal compiler error"));
 }

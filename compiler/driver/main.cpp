@@ -8,6 +8,8 @@
 #include <functional>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
+#include <cerrno>
 #include <malloc.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -176,14 +178,34 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
 // Writes text with its length (a NUL byte in a diagnostic's source line must not cut off what follows).
 void put(std::FILE* f, std::string_view text) { std::fwrite(text.data(), 1, text.size(), f); }
 
-// Writes `text` to `path` (standard output for "" or "-") through a temporary file and a rename, so a reader
-// never sees half a file. A file that already holds exactly these bytes is left alone (its modification time
-// too: a build system then rebuilds nothing downstream); `changed`, when given, says which happened.
+// Writes `text` to `path` (standard output for "" or "-"). A regular file (or a new one) is written through a
+// temporary file and a rename, so a reader never sees half a file; a file that already holds exactly these
+// bytes is left alone (its modification time too: a build system then rebuilds nothing downstream). Anything
+// else that exists (a device such as /dev/null, a FIFO, a symbolic link) is written in place: a rename would
+// replace it. `changed`, when given, says whether the bytes were written. Every write error is reported: 1.
 int write_output(const std::string& path, const std::string& text, bool* changed = nullptr) {
     if (changed) *changed = true;
+    auto fail = [&](const char* why) {
+        std::fprintf(stderr, "iqc: error: cannot write '%s': %s\n", path.empty() ? "standard output" : path.c_str(), why);
+        return 1;
+    };
     if (path.empty() || path == "-") {
-        std::fwrite(text.data(), 1, text.size(), stdout);
+        if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0)
+            return fail(std::strerror(errno));
         return 0;
+    }
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::file_status st = fs::symlink_status(path, ec);
+    if (!ec && fs::exists(st) && !fs::is_regular_file(st)) {
+        if (fs::is_directory(fs::status(path, ec))) return fail("it is a directory");
+        std::FILE* f = std::fopen(path.c_str(), "wb");
+        if (!f) return fail(std::strerror(errno));
+        bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+        ok = (std::fflush(f) == 0) && ok;
+        int err = errno;
+        ok = (std::fclose(f) == 0) && ok;
+        return ok ? 0 : fail(std::strerror(err ? err : errno));
     }
     {
         std::ifstream in(path, std::ios::binary);
@@ -199,44 +221,68 @@ int write_output(const std::string& path, const std::string& text, bool* changed
     {
         std::ofstream out(tmp, std::ios::binary);
         if (!out || !(out << text) || !(out.flush())) {
-            std::fprintf(stderr, "iqc: error: cannot write '%s'\n", path.c_str());
             std::remove(tmp.c_str());
-            return 1;
+            return fail(std::strerror(errno));
         }
     }
     if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        std::fprintf(stderr, "iqc: error: cannot write '%s'\n", path.c_str());
+        int err = errno;
         std::remove(tmp.c_str());
-        return 1;
+        return fail(std::strerror(err));
     }
     return 0;
 }
 
-// A path as a Makefile rule names it: space, '#' and '\\' before them escaped with '\\', '$' doubled (the
-// syntax GCC's -MD writes, which Make and Ninja both read).
-std::string make_escape(const std::string& path) {
-    std::string out;
+// A path as a Makefile rule names it: space, '#', ':' and '\\' before them escaped with '\\', '$' doubled
+// (what GNU Make and Ninja both read). A path with a control character (a newline would start a rule or a
+// recipe of its own) cannot be written: false.
+bool make_escape(const std::string& path, std::string& out) {
+    out.clear();
     for (char c : path) {
-        if (c == ' ' || c == '#') out += '\\';
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
+        if (c == ' ' || c == '#' || c == ':' || c == '\\') out += '\\';
         if (c == '$') out += '$';
         out += c;
     }
-    return out;
+    return true;
 }
 
 // The depfile of one compile: a Makefile rule `OUTPUTS: DEPENDENCIES` naming every file the compile read from
-// disk (the scene or document, included and looked-up module files), as absolute paths.
-std::string depfile_text(const std::vector<std::string>& outputs, const std::vector<std::string>& deps) {
+// disk (the scene or document, included and looked-up module files), as absolute paths. False, with `bad` the
+// offending path, when a path cannot be written in Makefile syntax.
+bool depfile_text(const std::vector<std::string>& outputs, const std::vector<std::string>& deps, std::string& text,
+                  std::string& bad) {
     auto abs = [](const std::string& p) {
         std::error_code ec;
         std::filesystem::path a = std::filesystem::absolute(p, ec);
         return ec ? p : a.lexically_normal().string();
     };
-    std::string text;
-    for (const auto& o : outputs) text += (text.empty() ? "" : " ") + make_escape(abs(o));
+    text.clear();
+    std::string e;
+    for (const auto& o : outputs) {
+        if (!make_escape(abs(o), e)) return bad = o, false;
+        text += (text.empty() ? "" : " ") + e;
+    }
     text += ":";
-    for (const auto& d : deps) text += " \\\n  " + make_escape(abs(d));
-    return text + "\n";
+    for (const auto& d : deps) {
+        if (!make_escape(abs(d), e)) return bad = d, false;
+        text += " \\\n  " + e;
+    }
+    text += "\n";
+    return true;
+}
+
+// A path for a message: control characters as \n, \t or \xNN.
+std::string printable(const std::string& s) {
+    std::string out;
+    for (char c : s) {
+        unsigned char u = static_cast<unsigned char>(c);
+        if (c == '\n') out += "\\n";
+        else if (c == '\t') out += "\\t";
+        else if (u < 0x20 || u == 0x7f) out += fmt::format("\\x{:02x}", u);
+        else out += c;
+    }
+    return out;
 }
 
 }  // namespace
@@ -495,6 +541,19 @@ static int run(int argc, char** argv) {
         if (!quiet && !path.empty() && path != "-")
             std::fprintf(stderr, changed ? "iqc: wrote %s\n" : "iqc: %s is unchanged\n", path.c_str());
     };
+    // The depfile's text first: a path it cannot express stops the compile before any output is written.
+    std::string dep_text;
+    if (!depfile.empty()) {
+        std::vector<std::string> outs{output};
+        if (!meta.empty()) outs.push_back(meta);
+        std::string bad;
+        if (!depfile_text(outs, sm.disk_files(), dep_text, bad)) {
+            std::fprintf(stderr, "iqc: error: cannot write the depfile '%s': the path '%s' has a control character "
+                                 "(a newline would start a rule of its own), which Makefile syntax cannot express\n",
+                         printable(depfile).c_str(), printable(bad).c_str());
+            return 1;
+        }
+    }
     bool changed = true;
     int rc = write_output(output, r.code, &changed);
     bool out_changed = changed;
@@ -502,12 +561,7 @@ static int run(int argc, char** argv) {
         rc = write_output(meta, r.meta, &changed);
         if (rc == 0) report(meta, changed);
     }
-    if (rc == 0 && !depfile.empty()) {
-        std::vector<std::string> outs;
-        outs.push_back(output);
-        if (!meta.empty()) outs.push_back(meta);
-        rc = write_output(depfile, depfile_text(outs, sm.disk_files()), &changed);
-    }
+    if (rc == 0 && !depfile.empty()) rc = write_output(depfile, dep_text, &changed);
     if (time) {
         double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         std::fprintf(stderr, "iqc: compiled in %.2f ms\n", ms);
@@ -521,7 +575,14 @@ static int run(int argc, char** argv) {
 int main(int argc, char** argv) {
     tune_allocator();
     try {
-        return run(argc, argv);
+        int rc = run(argc, argv);
+        // What went to standard output (a shader, eval's values, stats, tables) must have arrived: a full disk
+        // or a closed pipe is an error, not a silent truncation.
+        if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+            std::fprintf(stderr, "iqc: error: cannot write standard output: %s\n", std::strerror(errno));
+            return rc == 0 ? 1 : rc;
+        }
+        return rc;
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "iqc: internal compiler error: out of memory (this is a bug in iqc: input should be "
                              "refused with a diagnostic before that)\n");

@@ -157,6 +157,8 @@ constexpr int kSwizzleSize = 4;  // GLSL's widest vector; a larger IR vector has
 // Statement text (a formula as written) for a `//` comment: one line, nothing that could end the comment.
 std::string one_line(const std::string& s) { return comment_text(s); }
 
+constexpr int kMaxInlineDepth = 32;  // deepest expression emitted inline (then a variable)
+
 struct FunctionEmitter {
     const ir::Module& m;
     const ir::Function& f;
@@ -165,6 +167,7 @@ struct FunctionEmitter {
     Namer locals;
     ir::Schedule sched;
     std::vector<int> uses;
+    std::vector<int> depth;        // nesting of the value's expression as emitted (0: in a variable)
     std::vector<std::string> var;  // GLSL variable holding the value, if materialised
     std::map<ValueId, std::vector<std::string>> loop_states;  // a Loop's state variables
     bool failed = false;
@@ -485,6 +488,7 @@ struct FunctionEmitter {
         size_t n = f.body.size();
         sched = ir::schedule(f, roots);
         uses.assign(n, 0);
+        depth.assign(n, 0);
         var.assign(n, "");
         for (ValueId r : roots) uses[r]++;
         for (size_t i = 0; i < n; ++i)
@@ -508,9 +512,17 @@ struct FunctionEmitter {
                 continue;
             }
             bool named = !in.name.empty();
-            bool shared = uses[i] > 1 && !trivial(i) && worth_a_variable(i);
+            // How deep this value's expression would nest: past kMaxInlineDepth it gets a variable, so no
+            // expression (a min of 20,000 arguments, a piecewise of 5,000 cases) nests deeper than that in
+            // the emitter's recursion or in the driver's parser.
+            int d = 1;
+            for (ValueId a : in.args)
+                if (var[a].empty()) d = std::max(d, depth[a] + 1);
+            depth[i] = d;
+            bool deep = d > kMaxInlineDepth && i != skip;
+            bool shared = uses[i] > 1 && !trivial(i) && (deep || worth_a_variable(i));
             if (i == skip && !named) continue;
-            if (!named && !shared) continue;
+            if (!named && !shared && !deep) continue;
             if (in.op == Op::Construct && !named && in.type.is_vector()) {
                 // A shared broadcast such as vec3(x) is cheap: keep it inline.
                 bool same = true;

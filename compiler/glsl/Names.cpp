@@ -77,6 +77,15 @@ std::string identifier(const std::string& math) {
     if (std::isdigit(static_cast<unsigned char>(clean[0]))) clean = "v" + clean;
     if (clean[0] == '_') clean = "v" + clean;
     if (clean.rfind("gl_", 0) == 0) clean = "v_" + clean;
+    // At most kMaxIdentifier characters (glslang refuses names past 1,024, and nobody reads a longer one): a
+    // longer name keeps its start and ends in a hash of the whole (FNV-1a), so different names stay apart.
+    if (clean.size() > kMaxIdentifier) {
+        uint32_t h = 2166136261u;
+        for (char ch : clean) h = (h ^ uint8_t(ch)) * 16777619u;
+        std::string head = clean.substr(0, kMaxIdentifier - 9);
+        while (head.size() > 1 && head.back() == '_') head.pop_back();
+        clean = fmt::format("{}_{:08x}", head, h);
+    }
     return clean;
 }
 
@@ -101,7 +110,12 @@ std::string comment_text(std::string_view text) {
         space = false;
         // `/*` and `*/` are split with a space, so no block comment can open or close here.
         if ((c == '*' && !out.empty() && out.back() == '/') || (c == '/' && !out.empty() && out.back() == '*')) out += ' ';
+        // Invisible format characters (bidirectional overrides and isolates, zero-width characters, a BOM)
+        // are spelled out: a comment then reads in an editor as it is stored ("Trojan Source", CVE-2021-42574).
+        bool format = (c >= 0x202A && c <= 0x202E) || (c >= 0x2066 && c <= 0x2069) || (c >= 0x200B && c <= 0x200F) ||
+                      c == 0x061C || c == 0x2060 || c == 0xFEFF || c == 0x180E || (c >= 0xFFF9 && c <= 0xFFFB);
         if (invalid) utf8::append(out, 0xFFFD);
+        else if (format) out += fmt::format("<U+{:04X}>", uint32_t(c));
         else out.append(text.substr(start, i - start));
     }
     while (!out.empty() && (out.back() == '\\' || out.back() == ' ')) out.pop_back();  // no line continuation

@@ -8,7 +8,9 @@
 
 namespace iqc::glsl {
 
-// A valid GLSL identifier spelling the math name (not yet checked for collisions).
+// A valid GLSL identifier spelling the math name (not yet checked for collisions), of at most kMaxIdentifier
+// characters (a longer spelling is cut and ends in a hash of the whole).
+inline constexpr size_t kMaxIdentifier = 64;
 std::string identifier(const std::string& math_name);
 
 // Text that is safe to put after `// ` in generated GLSL, whatever the user wrote (titles, instance, light
@@ -16,7 +18,8 @@ std::string identifier(const std::string& math_name);
 // LINE/PARAGRAPH SEPARATOR U+2028/U+2029, becomes a space; runs of white space become one), no NUL or
 // other control character, no `/*` or `*/`, no backslash at the end (a line continuation would pull the
 // next line of code into the comment), valid UTF-8 (invalid bytes become U+FFFD). The one function every
-// comment built from user text goes through.
+// comment built from user text goes through. Invisible format characters (bidirectional overrides and isolates,
+// zero-width characters, BOM) are spelled out as <U+XXXX>.
 std::string comment_text(std::string_view text);
 
 // GLSL ES 3.00 / 3.30 keywords, reserved words, built-in functions and variables, and names the runtime uses.

@@ -29,6 +29,13 @@ std::string Type::str() const {
 
 namespace ir {
 
+std::string size_limit_message() {
+    return fmt::format("this expands to more than {} IR instructions in one function (local functions calling each "
+                       "other more than once, or sums over large ranges, unroll to that much code): write it with "
+                       "fewer repetitions",
+                       limits::kMaxFunctionInstructions);
+}
+
 const char* op_name(Op op) {
     switch (op) {
 #define X(name, n) \

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "sema/Type.h"
+#include "source/Limits.h"
 #include "source/Source.h"
 
 namespace iqc::ir {
@@ -86,6 +87,13 @@ struct Instr {
     Span span;
 };
 
+// Thrown when one function's IR would exceed limits::kMaxFunctionInstructions; `span` is the expression
+// being lowered (may be empty). Callers report it as a located error (limit_message()).
+struct SizeLimit {
+    Span span;
+};
+std::string size_limit_message();
+
 struct FunctionParam {
     std::string name;
     Type type;
@@ -125,7 +133,10 @@ struct Function {
     std::vector<std::pair<std::string, ValueId>> outputs;  // every assigned name, in source order
     Type result_type() const { return body.empty() ? Type{} : body[result].type; }
 
+    // Appends an instruction; past limits::kMaxFunctionInstructions throws SizeLimit (what local functions
+    // and sums unroll to can grow exponentially: f(x) = g(x) + g(x), g(x) = h(x) + h(x), …).
     ValueId add(Instr in) {
+        if (body.size() >= limits::kMaxFunctionInstructions) throw SizeLimit{in.span};
         body.push_back(std::move(in));
         return ValueId(body.size() - 1);
     }

@@ -28,6 +28,7 @@ public:
     SceneCompiler(const SceneDesc& s, SourceManager& sm, Diagnostics& d, const CompileOptions& o)
         : s_(s), sm_(sm), d_(d), opts_(o) {}
     CompileResult run();
+    CompileResult run_checked();
 
 private:
     const SceneDesc& s_;
@@ -205,7 +206,21 @@ void SceneCompiler::set_model(const SceneIR& scene) {
     res_.model = std::move(model);
 }
 
+// A function grown past the IR's size limit (ir::SizeLimit, from planning, lowering or a pass) is the
+// input's error, located where the lowering was.
 CompileResult SceneCompiler::run() {
+    try {
+        return run_checked();
+    } catch (const ir::SizeLimit& limit) {
+        if (limit.span.valid()) d_.error(limit.span, ir::size_limit_message());
+        else d_.error_nospan(ir::size_limit_message());
+        CompileResult r;
+        r.exit_code = 1;
+        return r;
+    }
+}
+
+CompileResult SceneCompiler::run_checked() {
     size_t before = d_.error_count();
     for (const auto& m : s_.modules) lib_.add(m);  // a document's blocks with one name are already one module
     std::vector<InstancePlan> plans;

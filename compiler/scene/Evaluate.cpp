@@ -34,7 +34,22 @@ bool parse_value(const std::string& name, const std::string& text, SourceManager
 
 }  // namespace
 
+namespace {
+bool evaluate_checked(const EvalRequest& req, SourceManager& sm, Diagnostics& d, std::vector<EvalOutput>& out);
+}
+
 bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics& d, std::vector<EvalOutput>& out) {
+    try {
+        return evaluate_checked(req, sm, d, out);
+    } catch (const ir::SizeLimit& limit) {
+        if (limit.span.valid()) d.error(limit.span, ir::size_limit_message());
+        else d.error_nospan(ir::size_limit_message());
+        return false;
+    }
+}
+
+namespace {
+bool evaluate_checked(const EvalRequest& req, SourceManager& sm, Diagnostics& d, std::vector<EvalOutput>& out) {
     size_t before = d.error_count();
     auto clock = std::chrono::steady_clock::now();
     auto lap = [&](const char* name) {
@@ -170,5 +185,7 @@ bool evaluate_module_file(const EvalRequest& req, SourceManager& sm, Diagnostics
     if (m->ret) out.push_back({"ret", all[F.result]});
     return true;
 }
+
+}  // namespace
 
 }  // namespace iqc

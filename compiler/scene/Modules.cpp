@@ -133,11 +133,11 @@ std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& nam
         return std::nullopt;
     }
     ir::Module irm;
-    LowerContext ctx{irm, {}, {}};
-    int fn = lower_module(*m, "value", "value", ctx);
-    irm.functions[size_t(fn)].entry = true;
-    ir::run_pipeline(irm, {});
     try {
+        LowerContext ctx{irm, {}, {}};
+        int fn = lower_module(*m, "value", "value", ctx);
+        irm.functions[size_t(fn)].entry = true;
+        ir::run_pipeline(irm, {});
         ir::Value v = ir::evaluate(irm, irm.find("value"), {});
         for (double x : v.v) {
             if (!std::isfinite(x)) {
@@ -155,6 +155,9 @@ std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& nam
         return v;
     } catch (const ir::EvalLimit& limit) {
         d.error(limit.span, fmt::format("evaluating this would take more than {} steps", limits::kMaxEvalSteps));
+        return std::nullopt;
+    } catch (const ir::SizeLimit& limit) {
+        d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))}, ir::size_limit_message());
         return std::nullopt;
     }
 }

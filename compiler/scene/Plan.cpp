@@ -123,6 +123,12 @@ struct Planner {
                 ok = false;
                 continue;
             }
+            if (p.type.kind == Type::Integer && (ov.value[0] < -2147483648.0 || ov.value[0] > 2147483647.0)) {
+                d.error(ov.span, fmt::format("'{}' is ℤ, but the value {} is not a 32-bit integer (a shader's int: "
+                                             "-2147483648 … 2147483647)", ov.name, ov.value[0]));
+                ok = false;
+                continue;
+            }
             if (p.bounded)
                 for (size_t i = 0; i < ov.value.size(); ++i)
                     if (ov.value[i] < p.lo[i] || ov.value[i] > p.hi[i]) {

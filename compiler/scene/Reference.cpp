@@ -16,9 +16,11 @@ V3 normalize(const V3& a) {
 }
 }  // namespace
 
-void SceneModel::init() {
+void SceneModel::init(uint64_t max_steps) {
     scene_fn_ = ir.find(ir::names::kScene);
-    eval_ = std::make_shared<ir::Evaluator>(ir);
+    ir::EvalInputs inputs;
+    inputs.max_steps = max_steps;
+    eval_ = std::make_shared<ir::Evaluator>(ir, inputs);
 }
 
 double SceneModel::distance(const V3& p, int* id) const {

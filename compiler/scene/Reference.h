@@ -18,8 +18,9 @@ struct SceneModel {
     CameraDesc camera;
     RenderDesc render;
 
-    // Prepares the evaluator (after `ir` is set; the model must not move afterwards).
-    void init();
+    // Prepares the evaluator (after `ir` is set; the model must not move afterwards). One scene evaluation
+    // may take at most `max_steps` evaluator steps (else ir::EvalLimit is thrown from distance and trace).
+    void init(uint64_t max_steps = limits::kMaxEvalSteps);
     // Distance to the scene at p and the nearest instance (-1 for none).
     double distance(const std::array<double, 3>& p, int* id = nullptr) const;
     // The camera ray through the centre of pixel (x, y) of a width×height image (y = 0 is the top row),

@@ -136,6 +136,21 @@ std::optional<std::vector<double>> const_eval(const Expr& e) {
 
 namespace {
 
+constexpr double kFloatMax = 3.4028234663852886e38;  // the largest 32-bit float
+
+// Why a parameter's value cannot reach a shader as written ("" when it can): not a number, infinite, beyond
+// the 32-bit floats, or for ℤ not an integer of 32 bits (a shader's int).
+std::string unrepresentable(const std::vector<double>& v, bool integer) {
+    for (double x : v) {
+        if (std::isnan(x)) return "is not a number (0/0, √-1, …)";
+        if (!std::isfinite(x) || std::fabs(x) > kFloatMax)
+            return fmt::format("is {}, outside the range of 32-bit floats (at most about 3.4e38)", x);
+        if (integer && (x != std::floor(x) || x < -2147483648.0 || x > 2147483647.0))
+            return fmt::format("is {}, not a 32-bit integer (a shader's int: -2147483648 … 2147483647)", x);
+    }
+    return "";
+}
+
 // Free names an expression refers to (syntactically), excluding `bound` ones.
 void collect_names(const Expr& e, std::vector<const Expr*>& out) {
     if (e.kind == ExprKind::Name || e.kind == ExprKind::Call) out.push_back(&e);
@@ -400,6 +415,12 @@ void Checker::collect_declarations() {
                     auto lo = constant(*iv.lo), hi = constant(*iv.hi);
                     if (!lo || lo->size() != 1) { d_.error(iv.lo->span, "an interval bound must be a constant number"); continue; }
                     if (!hi || hi->size() != 1) { d_.error(iv.hi->span, "an interval bound must be a constant number"); continue; }
+                    if (!std::isfinite((*lo)[0]) || !std::isfinite((*hi)[0]) || std::fabs((*lo)[0]) > kFloatMax ||
+                        std::fabs((*hi)[0]) > kFloatMax) {
+                        d_.error(iv.span, fmt::format("an interval bound must be a finite 32-bit float, not [{}, {}] (leave "
+                                                      "'{}' unbounded: '{} ∈ ℝ')", (*lo)[0], (*hi)[0], name, name));
+                        continue;
+                    }
                     if ((*lo)[0] > (*hi)[0])
                         d_.error(iv.span, fmt::format("the interval is empty: {} > {}", (*lo)[0], (*hi)[0]));
                     p.lo.push_back((*lo)[0]);
@@ -418,6 +439,8 @@ void Checker::collect_declarations() {
                                                    v->size() == 1 ? "" : "s", name, p.type.str()));
                     if (p.bounded)
                         Diagnostics::note(e, decl.type.span, fmt::format("the bounds give {} interval{}", n, n == 1 ? "" : "s"));
+                } else if (std::string why = unrepresentable(*v, p.type.kind == Type::Integer); !why.empty()) {
+                    d_.error(decl.default_value->span, fmt::format("the default of '{}' {}", name, why));
                 } else {
                     p.value = *v;
                     p.has_default = true;

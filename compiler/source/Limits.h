@@ -34,6 +34,12 @@ constexpr size_t kMaxTotalBytes = size_t(64) << 20;
 // instruction plus one per component it produces; a recurrence is refused before it starts when its
 // iterations alone exceed what is left (ir/Eval.cpp).
 constexpr uint64_t kMaxEvalSteps = 100'000'000;
+// Statements (and declarations) of one module (syntax/Parser.cpp): 100,000 chained statements compile in
+// about 3 s, most of it the driver's GLSL compiler.
+constexpr size_t kMaxStatements = 100'000;
+// Instructions of one IR function, after local functions are expanded and sums unrolled (ir/IR.h,
+// Function::add: every pass and the lowering add through it). About 200 MB of IR.
+constexpr size_t kMaxFunctionInstructions = 1'000'000;
 
 // A size as counted (a literal such as `3` in ℝ^3, a sum of block heights, a concatenation's length):
 // the value when it is from 1 to kMaxComponents, otherwise nothing (the caller reports where).

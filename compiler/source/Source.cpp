@@ -188,22 +188,22 @@ std::string SourceManager::location(Span s) const {
     return fmt::format("{}:{}:{}", file.name, lc.line, lc.col);
 }
 
-Diagnostic& Diagnostics::error(Span s, std::string msg) {
-    list_.push_back({Severity::Error, s, true, std::move(msg), {}});
-    ++errors_;
+Diagnostic& Diagnostics::add(Diagnostic d) {
+    if (d.severity == Severity::Error) ++errors_;
+    if (list_.size() >= kMaxKept) {
+        ++dropped_;
+        overflow_ = std::move(d);
+        return overflow_;
+    }
+    list_.push_back(std::move(d));
     return list_.back();
 }
 
-Diagnostic& Diagnostics::warning(Span s, std::string msg) {
-    list_.push_back({Severity::Warning, s, true, std::move(msg), {}});
-    return list_.back();
-}
+Diagnostic& Diagnostics::error(Span s, std::string msg) { return add({Severity::Error, s, true, std::move(msg), {}}); }
 
-Diagnostic& Diagnostics::error_nospan(std::string msg) {
-    list_.push_back({Severity::Error, {}, false, std::move(msg), {}});
-    ++errors_;
-    return list_.back();
-}
+Diagnostic& Diagnostics::warning(Span s, std::string msg) { return add({Severity::Warning, s, true, std::move(msg), {}}); }
+
+Diagnostic& Diagnostics::error_nospan(std::string msg) { return add({Severity::Error, {}, false, std::move(msg), {}}); }
 
 void Diagnostics::note(Diagnostic& d, Span s, std::string msg) {
     d.notes.push_back({Severity::Note, s, true, std::move(msg), {}});
@@ -257,6 +257,9 @@ std::string Diagnostics::render(const Diagnostic& d) const {
 std::string Diagnostics::render() const {
     std::string out;
     for (const auto& d : list_) out += render(d);
+    if (dropped_ > 0)
+        out += fmt::format("iqc: note: {} more diagnostic{} not shown ({} error{} in all)\n", dropped_, dropped_ == 1 ? "" : "s",
+                           errors_, errors_ == 1 ? "" : "s");
     return out;
 }
 

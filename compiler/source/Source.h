@@ -97,10 +97,16 @@ public:
     std::string render(const Diagnostic& d) const;
     const SourceManager& sources() const { return sm_; }
 
+    // Diagnostics kept and rendered: past this many, the rest are only counted (render() says how many), so
+    // hostile input cannot print megabytes of them.
+    static constexpr size_t kMaxKept = 200;
+
 private:
+    Diagnostic& add(Diagnostic d);
     const SourceManager& sm_;
     std::vector<Diagnostic> list_;
-    size_t errors_ = 0;
+    Diagnostic overflow_;  // where a diagnostic past kMaxKept goes (its notes too)
+    size_t errors_ = 0, dropped_ = 0;
 };
 
 // UTF-8 helpers shared by the lexer and the renderer.

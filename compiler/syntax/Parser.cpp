@@ -924,6 +924,20 @@ Module Parser::parse(std::string name, bool allow_header) {
         } catch (Bail&) {
             skip_line();
         }
+        // Past the statement cap the rest of the module is not read (one error, not one per line).
+        if (m.stmts.size() >= limits::kMaxStatements || m.decls.size() >= limits::kMaxStatements) {
+            while (!at(Tok::Newline) && !at(Tok::End)) advance();
+            while (at(Tok::Newline) || at(Tok::Semicolon)) advance();
+            if (!at(Tok::End)) {
+                try {
+                    fail(cur().span, fmt::format("a module has at most {} statements and {} declarations (split it "
+                                                 "into modules): the rest is not read",
+                                                 limits::kMaxStatements, limits::kMaxStatements));
+                } catch (Bail&) {
+                }
+                break;
+            }
+        }
     }
     return m;
 }
@@ -1205,6 +1219,11 @@ ExprPtr Parser::parse_power() {
             if (t.text.empty() || t.text.find_first_not_of("+-0123456789") != std::string::npos ||
                 t.text.find_first_of("0123456789") == std::string::npos)
                 fail(t.span, "a superscript power must be an integer such as ² or ⁻¹");
+            // One integer: a sign only in front (⁻¹⁻¹ would read as -1 and drop the rest; x⁻¹⁻¹ is (x⁻¹)⁻¹ or x⁻²?).
+            if (t.text.find_first_of("+-", 1) != std::string::npos)
+                fail(t.span, fmt::format("a superscript power is one integer such as ² or ⁻¹, not '{}': write the powers "
+                                         "apart with parentheses, (x⁻¹)⁻¹, or as one power, x^(-1-1)",
+                                         std::string(sm_.slice(t.span))));
             auto ex = make(ExprKind::Number, t.span);
             ex->number = literal_value(t);
             ex->text = t.text;

@@ -15,6 +15,7 @@ namespace iqc::ir {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kWorkBudget = 2e7;  // instructions evaluated per estimate (boxes and samples)
 constexpr double kUnbounded = 64;  // a derived K above this over the region is useless for marching
 
 // The norm bound of the gradient over one box of p.
@@ -136,6 +137,13 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
         e.why = why;
         return e;
     }
+    // The work is boxes and samples times the gradient's size: a huge shape (a min of 100,000 terms) gets
+    // fewer of both, so the pass stays within about a second (its bound is then looser, never smaller).
+    size_t size = 0;
+    for (const auto& f : work.functions) size += f.body.size();
+    double scale = std::min(1.0, kWorkBudget / (double(size) * double(boxes + samples)));
+    boxes = std::max(4, int(boxes * scale));
+    samples = std::max(16, int(samples * scale));
     e.derived = derive(work, grad, box, others, ball, boxes);
     e.sampled = sample(work, grad, box, others, ball, samples);
     e.derived = std::max(e.derived, e.sampled);  // rounding in the intervals' ends never claims less than seen

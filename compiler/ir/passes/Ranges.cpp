@@ -342,6 +342,14 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
                 if (x.known && any(x, [](Interval c) { return c.hi > kExpOverflow; }))
                     a.warn(in, fmt::format("exp of a value that can exceed {:.4g}: a shader's 32-bit float overflows to ∞ "
                                            "there; {}", kExpOverflow, ranges_over(x.c[0])));
+            } else if (n == "acosh") {
+                // acosh is defined from 1 on, atanh strictly inside (-1, 1): NaN or ±∞ elsewhere, in a shader too.
+                if (x.known && any(x, [](Interval c) { return c.lo < 1; }))
+                    a.warn(in, fmt::format("acosh of a value that can be below 1 (NaN there): {}", ranges_over(x.c[0])));
+            } else if (n == "atanh") {
+                if (x.known && any(x, [](Interval c) { return c.lo <= -1 || c.hi >= 1; }))
+                    a.warn(in, fmt::format("atanh of a value that can reach ±1 or beyond (±∞ or NaN there): {}",
+                                           ranges_over(x.c[0])));
             } else if (n == "mod") {
                 Range y = arg(1);
                 if (y.known && any(y, [](Interval c) { return contains_zero(c); }))
