@@ -66,12 +66,15 @@ const int IQC_AA = {{AA}};  // samples per pixel side
 int iqc_evals = 0;           // scene evaluations in this pixel (instrumented build)
 int iqc_shape_evals = 0;     // instance shape evaluations (those skipped by `bound` are not counted)
 int iqc_primary_steps = -1;  // march steps of the first ray from the camera
+int iqc_bad_distances = 0;   // scene distances that were NaN or ±∞ (a marcher cannot step on them)
 
-// Instrumented build: the scene, counting its evaluations and the shapes they evaluated.
+// Instrumented build: the scene, counting its evaluations, the shapes they evaluated and the distances
+// that were not finite.
 vec2 iqc_scene(vec3 p) {
     iqc_evals++;
     vec3 h = iqc_scene_counted(p);
     iqc_shape_evals += int(h.z);
+    if (isnan(h.x) || isinf(h.x)) iqc_bad_distances++;
     return h.xy;
 }
 {{/if}}
@@ -255,6 +258,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
             iqc_evals++;
 {{/if}}
             float h = iqc_instance_distance(i, o + t * dir) * scale;
+{{#if INSTRUMENT}}
+            if (isnan(h) || isinf(h)) iqc_bad_distances++;
+{{/if}}
             steps++;
             if (abs(h) < iqc_eps(t)) {
                 if (id < 0 || t < best) { best = t; id = i; }
@@ -590,10 +596,11 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
         return;
     }
 {{/if}}
-    // Instrumented build: march steps of the camera ray, scene evaluations in the pixel, NaN flag, shape
-    // evaluations in the pixel.
+    // Instrumented build: march steps of the camera ray, scene evaluations in the pixel, flags (1: the colour
+    // is NaN or ∞, 2: some scene distance was), shape evaluations in the pixel.
     bool bad = any(isnan(col)) || any(isinf(col));
-    fragColor = vec4(float(iqc_primary_steps), float(iqc_evals), bad ? 1.0 : 0.0, float(iqc_shape_evals));
+    float flags = (bad ? 1.0 : 0.0) + (iqc_bad_distances > 0 ? 2.0 : 0.0);
+    fragColor = vec4(float(iqc_primary_steps), float(iqc_evals), flags, float(iqc_shape_evals));
 {{#else}}
     fragColor = vec4(clamp(col, 0.0, 1.0), 1.0);
 {{/if}}

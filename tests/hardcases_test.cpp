@@ -77,10 +77,15 @@ TEST_CASE("hard cases render without NaN and agree with the double-precision ref
             Compiled ic = compile_path(path, io);
             REQUIRE(ic.result.exit_code == 0);
             render::Image stats = render_with(*renderer, ic.result.code, W, H);
-            int flagged = 0;
+            int flagged = 0, bad_distances = 0;  // flags: 1 NaN/∞ colour, 2 NaN/∞ scene distance met
             for (int y = 0; y < H; ++y)
-                for (int x = 0; x < W; ++x) flagged += stats.pixel(x, y)[2] > 0.5f;
+                for (int x = 0; x < W; ++x) {
+                    int flags = int(stats.pixel(x, y)[2] + 0.5f);
+                    flagged += (flags & 1) != 0;
+                    bad_distances += (flags & 2) != 0;
+                }
             CHECK(flagged == 0);
+            CHECK(bad_distances == 0);
             if (!reference) return;
             CompileOptions go;
             go.geometry = true;

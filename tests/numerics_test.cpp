@@ -130,3 +130,23 @@ TEST_CASE("the exponential smooth minimum as papers print it draws its surface (
     CHECK(r.exit_code == 0);
     CHECK_THAT(r.err, Catch::Contains("; stable: log-sum-exp in blend at ") && Catch::Contains("exp_smooth_min.iq:11:8"));
 }
+
+TEST_CASE("render --stats counts the rays that met a NaN or infinite distance", "[numerics][render][stats]") {
+    auto stat = [](const std::string& out, const std::string& key) {
+        size_t at = out.find(key + ": ");
+        REQUIRE(at != std::string::npos);
+        return std::stod(out.substr(at + key.size() + 2));
+    };
+    // Every ray of the underflowing ball meets +∞ at its first step; its colour is the background, not NaN.
+    RunResult bad = run_iqc("render " + scene("underflowing_ball.iq").string() + " -o " + (temp_dir() / "u.png").string() +
+                            " --size 32x18 --stats");
+    INFO(bad.err);
+    REQUIRE(bad.exit_code == 0);
+    CHECK(stat(bad.out, "nan_pixels") == 0);
+    CHECK(stat(bad.out, "nan_distance_pixels") == 32 * 18);
+    // The smooth minimum, rewritten, meets none.
+    RunResult good = run_iqc("render " + scene("exp_smooth_min.iq").string() + " -o " + (temp_dir() / "g.png").string() +
+                             " --size 32x18 --stats");
+    REQUIRE(good.exit_code == 0);
+    CHECK(stat(good.out, "nan_distance_pixels") == 0);
+}

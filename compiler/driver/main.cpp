@@ -149,19 +149,22 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
         return 1;
     }
     std::vector<float> steps, evals, shape_evals;
-    long flagged = 0;
+    long flagged = 0, bad_distances = 0;
     for (int y = 0; y < ir.image.height; ++y)
         for (int x = 0; x < ir.image.width; ++x) {
             const float* p = ir.image.pixel(x, y);
             steps.push_back(p[0]);
             evals.push_back(p[1]);
             shape_evals.push_back(p[3]);
-            flagged += p[2] > 0.5f;
+            int flags = std::isfinite(p[2]) ? int(p[2] + 0.5f) : 1;
+            flagged += (flags & 1) != 0;
+            bad_distances += (flags & 2) != 0;
         }
     double sm = 0, em = 0;
     for (float v : steps) sm += v;
     for (float v : evals) em += v;
     std::printf("nan_pixels: %ld\n", std::max(nan, flagged));
+    std::printf("nan_distance_pixels: %ld\n", bad_distances);
     std::printf("steps_mean: %.3f\n", sm / double(steps.size()));
     std::printf("steps_p99: %.0f\n", percentile(steps, 0.99));
     std::printf("evals_mean: %.3f\n", em / double(evals.size()));
@@ -356,7 +359,7 @@ static int run(int argc, char** argv) {
     render->add_option("--fps", r_fps, "frames per second of the animation (default 30)")->check(CLI::PositiveNumber);
     render->add_option("--target", r_target, "which shader to run: shadertoy (default) or webgl2 (its uniforms at their defaults)")
         ->check(CLI::IsMember({"shadertoy", "webgl2"}));
-    render->add_flag("--stats", r_stats, "print nan_pixels, steps_mean, steps_p99, evals_mean, evals_p99, shape_evals_mean, frame_ms, renderer");
+    render->add_flag("--stats", r_stats, "print nan_pixels (colour NaN or ∞), nan_distance_pixels (pixels whose rays met a NaN or ∞ scene distance), steps_mean, steps_p99, evals_mean, evals_p99, shape_evals_mean, frame_ms, renderer");
     CLI::App* bench = app.add_subcommand(
         "bench", "measure what accuracy costs in time on this scene: every march method × hit tolerance × step cap × "
                  "normal method, and I♥IQ's one-march-per-instance architecture, against a reference");
