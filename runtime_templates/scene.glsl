@@ -32,6 +32,9 @@ const int IQC_MAX_STEPS = {{MAX_STEPS}};
 const float IQC_HIT = {{HIT}};  // {{HIT_DOC}}
 {{/if}}
 const float IQC_MAX_DIST = {{MAX_DIST}};
+{{#if FAR}}
+const float IQC_SPACING0 = {{SPACING0}};  // twice the float spacing at the camera's largest coordinate
+{{/if}}
 const vec3 IQC_BACKGROUND = {{BACKGROUND}};
 const vec3 IQC_CAMERA_POSITION = {{CAMERA_POSITION}};
 const vec3 IQC_CAMERA_TARGET = {{CAMERA_TARGET}};
@@ -80,14 +83,39 @@ vec2 iqc_scene(vec3 p) {
 {{/if}}
 
 // The hit tolerance at distance t along a ray.
+{{#if FAR}}
+// Far from the origin a 32-bit float's spacing (its ulp: 1.2e-7 of the value) outgrows the tolerances: a
+// point 10,000 units out moves in steps of 0.001. Twice that spacing at the largest coordinate a ray can
+// reach after t (the camera's, plus t) bounds how exactly a distance there is known.
+float iqc_spacing(float t) {
+    return IQC_SPACING0 + 2.4e-7 * t;
+}
+{{/if}}
 float iqc_eps(float t) {
+{{#if FAR}}
+{{#if HIT_RELATIVE}}
+    float e = IQC_HIT * max(t, 1.0e-3);
+{{#else}}
+    float e = IQC_HIT;
+{{/if}}
+    return max(e, 4.0 * iqc_spacing(t));  // no tolerance below what float spacing can resolve
+{{#else}}
 {{#if HIT_RELATIVE}}
     return IQC_HIT * max(t, 1.0e-3);
 {{#else}}
     return IQC_HIT;
 {{/if}}
+{{/if}}
 }
 
+{{#if FAR}}
+// The step of finite-difference normals: half the hit tolerance, and at least 16 float spacings (differences
+// of distances known to a spacing or two are otherwise noise).
+float iqc_normal_step(float t) {
+    return max(0.5 * iqc_eps(t), 16.0 * iqc_spacing(t));
+}
+
+{{/if}}
 {{#if STEP_CAP_CONE}}
 // The radius of a pixel's cone at distance t along a primary ray: half a pixel's angle at the image centre
 // (Amanatides 1984, cone tracing). When the step cap stops a ray that is still closing in on a surface
@@ -309,7 +337,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 // (a loop the compiler cannot unroll: min(iFrame, 0) is always 0).
 vec3 iqc_normal(vec3 p, float t, int id) {
     const vec3 k[4] = vec3[4](vec3(1.0, -1.0, -1.0), vec3(-1.0, -1.0, 1.0), vec3(-1.0, 1.0, -1.0), vec3(1.0, 1.0, 1.0));
-    float h = 0.5 * iqc_eps(t);
+    float h = {{NORMAL_STEP}};
     vec3 n = vec3(0.0);
     for (int i = min(iFrame, 0); i < 4; i++) n += k[i] * iqc_scene(p + h * k[i]).x;
     if (dot(n, n) < 1.0e-24) {
@@ -326,7 +354,7 @@ vec3 iqc_normal(vec3 p, float t, int id) {
 {{#if NORMALS_CENTRAL}}
 // Normal by central differences: six taps in a loop over one copy of the scene function.
 vec3 iqc_normal(vec3 p, float t, int id) {
-    float h = 0.5 * iqc_eps(t);
+    float h = {{NORMAL_STEP}};
     vec3 n = vec3(0.0);
     for (int i = min(iFrame, 0); i < 3; i++) {
         vec3 e = vec3(0.0);
@@ -339,7 +367,7 @@ vec3 iqc_normal(vec3 p, float t, int id) {
 {{#if NORMALS_FORWARD}}
 // Normal by forward differences: four taps (the point and one step along each axis).
 vec3 iqc_normal(vec3 p, float t, int id) {
-    float h = 0.5 * iqc_eps(t);
+    float h = {{NORMAL_STEP}};
     float d0 = iqc_scene(p).x;
     vec3 n = vec3(0.0);
     for (int i = min(iFrame, 0); i < 3; i++) {
@@ -355,7 +383,7 @@ vec3 iqc_normal(vec3 p, float t, int id) {
 // vanishes (a sphere's centre, a box's edge taken exactly).
 vec3 iqc_tetrahedron_gradient(vec3 p, float t) {
     const vec3 k[4] = vec3[4](vec3(1.0, -1.0, -1.0), vec3(-1.0, -1.0, 1.0), vec3(-1.0, 1.0, -1.0), vec3(1.0, 1.0, 1.0));
-    float h = 0.5 * iqc_eps(t);
+    float h = {{NORMAL_STEP}};
     vec3 n = vec3(0.0);
     for (int i = min(iFrame, 0); i < 4; i++) n += k[i] * iqc_scene(p + h * k[i]).x;
     return n;

@@ -150,3 +150,27 @@ TEST_CASE("render --stats counts the rays that met a NaN or infinite distance", 
     REQUIRE(good.exit_code == 0);
     CHECK(stat(good.out, "nan_distance_pixels") == 0);
 }
+
+TEST_CASE("10,000 units from the origin looks like the origin", "[numerics][render][far]") {
+    const int W = 160, H = 90;
+    auto colour = [&](const char* name) {
+        Compiled c = compile_path(scene(name));
+        INFO(c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        render::RenderResult r = render_compiled(c.result, W, H);
+        REQUIRE(r.ok);
+        return r.image;
+    };
+    render::Image near = colour("far_0.iq"), far = colour("far_10000.iq");
+    int differ = 0, lit = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const float *a = near.pixel(x, y), *b = far.pixel(x, y);
+            float d = std::max({std::fabs(a[0] - b[0]), std::fabs(a[1] - b[1]), std::fabs(a[2] - b[2])});
+            differ += d > 8.0f / 255.0f;
+            lit += a[0] > 0.1f;
+        }
+    INFO(differ << " of " << W * H << " pixels differ by more than 8/255; " << lit << " lit at the origin");
+    CHECK(lit > W * H / 20);
+    CHECK(differ <= W * H / 100);  // silhouettes: the far hit tolerance is a few float spacings (0.014)
+}

@@ -158,6 +158,24 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     static const char* normal_flags[] = {"NORMALS_CENTRAL", "NORMALS_FORWARD", "NORMALS_TETRAHEDRON", "NORMALS_ANALYTIC"};
     F.insert(normal_flags[int(opts_.per_instance && normals() == Normals::Analytic ? Normals::Tetrahedron : normals())]);
     if (render.hit_relative) F.insert("HIT_RELATIVE");
+    {
+        // Float spacing far from the origin (FAR): twice the ulp at the largest coordinate the camera reaches
+        // (its position; an orbit keeps its distance to the target). Emitted only where it can matter: where
+        // spacing along the longest ray reaches a quarter of the hit tolerance.
+        double reach = 0;
+        double radius = 0;
+        for (int k = 0; k < 3; ++k) radius += std::pow(s_.camera.position[k] - s_.camera.target[k], 2);
+        radius = std::sqrt(radius);
+        for (int k = 0; k < 3; ++k)
+            reach = std::max(reach, s_.camera.orbit ? std::fabs(s_.camera.target[k]) + radius : std::fabs(s_.camera.position[k]));
+        double spacing0 = 2.4e-7 * reach;
+        V["SPACING0"] = glsl::float_literal(spacing0);
+        // A relative tolerance (hit · t) grows with t as the spacing does: compare at t = 1 and per unit of t.
+        bool far = render.hit_relative ? 4 * std::max(spacing0, 2.4e-7) > 0.25 * hit()
+                                       : 4 * (spacing0 + 2.4e-7 * render.max_dist) > 0.25 * hit();
+        if (far) F.insert("FAR");
+        V["NORMAL_STEP"] = far ? "iqc_normal_step(t)" : "0.5 * iqc_eps(t)";
+    }
     // Some instance's distance is divided by a Lipschitz factor: the hit test multiplies it back.
     if (int lf = scene.module.find(ir::names::kLipschitz); !opts_.per_instance && lf >= 0 && scene.module.functions[size_t(lf)].entry)
         F.insert("HIT_SCALE");
