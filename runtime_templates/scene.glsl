@@ -430,19 +430,31 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
 }
 {{/if}}
 {{#if SHADOWS_SOFT}}
+{{#if SHADOWS_IMPROVED}}
 // Soft shadow with the improved penumbra estimate (Quilez): the closest approach to the surface is
-// estimated from the intersection of consecutive unbounding spheres, d = sqrt(h² - y²). Guarded:
-// h² - y² is clamped at 0 (rounding can make it negative: a NaN otherwise), and where t - y is not past
-// the ray's start (a ray leaving the surface head-on) the plain estimate h / t stands in.
+// estimated from the intersection of consecutive unbounding spheres, d = sqrt(h² - y²). Every distance in
+// this scene is exact (a bound would make the triangulation invent shadow). Guarded: h² - y² is clamped at
+// 0 (rounding can make it negative: a NaN otherwise), and where t - y is not past the ray's start (a ray
+// leaving the surface head-on) the plain estimate h / t stands in.
+{{#else}}
+// Soft shadow with the classic penumbra estimate k·h/t (Quilez): some distance in this scene is only a bound
+// (a subtraction, a shape without `# exact`, a non-uniform scale), where the improved estimate's
+// triangulation of consecutive spheres would invent shadow.
+{{/if}}
 float iqc_shadow(vec3 p, vec3 N, vec3 light) {
     vec3 ro = p + N * (4.0 * iqc_eps(0.0));
     vec3 to_light = light - ro;
     float t_max = length(to_light);
     vec3 rd = to_light / t_max;
+{{#if SHADOWS_IMPROVED}}
     float res = 1.0, t = 0.0, ph = 1.0e20;
+{{#else}}
+    float res = 1.0, t = 0.0;
+{{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
         float h = iqc_scene_effects(ro + t * rd);
         if (h < iqc_eps(t)) return 0.0;
+{{#if SHADOWS_IMPROVED}}
         float y = h * h / (2.0 * ph);
         float d = sqrt(max(h * h - y * y, 0.0));
         // The estimate's nearest point lies t - y along the ray. At or behind the ray's start it is the
@@ -451,6 +463,9 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
         float along = t - y;
         res = min(res, IQC_SHADOW_K * (along > 1.0e-4 ? d / along : h / max(t, 1.0e-4)));
         ph = h;
+{{#else}}
+        res = min(res, IQC_SHADOW_K * h / max(t, 1.0e-4));
+{{/if}}
         t += h;
         if (t > t_max) break;
     }

@@ -174,3 +174,29 @@ TEST_CASE("10,000 units from the origin looks like the origin", "[numerics][rend
     CHECK(lit > W * H / 20);
     CHECK(differ <= W * H / 100);  // silhouettes: the far hit tolerance is a few float spacings (0.014)
 }
+
+TEST_CASE("soft shadows of a subtraction invent no shadow where the light sees the surface", "[numerics][render][shadows]") {
+    const int W = 160, H = 90;
+    std::string text = read_text(scene("phantom_shadow.iq"));
+    std::string hard = text;
+    hard.replace(hard.find("shadows = \"soft\""), 16, "shadows = \"hard\"");
+    auto colour = [&](const std::filesystem::path& path) {
+        Compiled c = compile_path(path);
+        INFO(c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        render::RenderResult r = render_compiled(c.result, W, H);
+        REQUIRE(r.ok);
+        return r.image;
+    };
+    render::Image soft_img = colour(scene("phantom_shadow.iq")), hard_img = colour(write_temp("phantom_hard.iq", hard));
+    int darker = 0, lit = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const float *s = soft_img.pixel(x, y), *h = hard_img.pixel(x, y);
+            darker += h[0] - s[0] > 8.0f / 255.0f;
+            lit += h[0] > 0.5f;
+        }
+    INFO(darker << " pixels darker with soft shadows than with hard ones, of " << lit << " lit");
+    CHECK(lit > 500);
+    CHECK(darker == 0);
+}

@@ -55,6 +55,11 @@ private:
     bool optimize(SceneIR& scene);
     void warn_idle_effects(const SceneIR& scene);
     std::string assemble(const SceneIR& scene, const SceneCode& code);
+    // Whether every instance's distance is exact (its shape says `# exact` and its transform is a similarity
+    // at the parameters' values and reads no input): only then may soft shadows use the improved penumbra
+    // estimate, whose triangulation of consecutive spheres invents shadow from a mere bound.
+    static bool exact_distances(const std::vector<InstancePlan>& plans);
+    bool exact_ = false;
     void set_model(const SceneIR& scene);
 };
 
@@ -183,6 +188,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     if (fx.shadows != Shadows::None && lights && scene.has_shade_light) {
         F.insert("SHADOWS");
         F.insert(fx.shadows == Shadows::Hard ? "SHADOWS_HARD" : "SHADOWS_SOFT");
+        if (fx.shadows != Shadows::Hard && exact_) F.insert("SHADOWS_IMPROVED");
     }
     if (fx.ao) F.insert("AO");
     if (F.count("SHADOWS_SOFT") || F.count("AO")) {
@@ -212,6 +218,24 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     j["texture"] = code.texture;
     res_.meta = j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";  // invalid UTF-8: U+FFFD
     return expand_template(std::string(*embedded_file("runtime_templates/scene.glsl")), ta);
+}
+
+bool SceneCompiler::exact_distances(const std::vector<InstancePlan>& plans) {
+    for (const auto& p : plans) {
+        if (!p.shape || p.shape->exactness != "exact") return false;
+        if (!p.has_transform) continue;
+        if (p.transform_uses_inputs) return false;
+        // L Lᵀ = s² I: a rotation times a uniform scale keeps a distance exact (after the scale correction).
+        const auto& L = p.inv_linear;
+        double s2 = L[0] * L[0] + L[1] * L[1] + L[2] * L[2];
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) {
+                double dot = L[size_t(3 * r)] * L[size_t(3 * c)] + L[size_t(3 * r + 1)] * L[size_t(3 * c + 1)] +
+                             L[size_t(3 * r + 2)] * L[size_t(3 * c + 2)];
+                if (std::fabs(dot - (r == c ? s2 : 0)) > 1e-9 * std::max(1.0, s2)) return false;
+            }
+    }
+    return true;
 }
 
 // The same scene in double precision: the optimized IR the shader came from, run by the evaluator.
@@ -260,6 +284,7 @@ CompileResult SceneCompiler::run_checked() {
             if (p.material) bo.comments[p.material->ast.name] = "material " + p.material->ast.name;
             bo.comments[p.name + ".transform"] = "transform of " + p.name;
         }
+        exact_ = exact_distances(plans);
         SceneCode code = emit_scene(scene, bo, d_);
         if (d_.error_count() != before) return std::move(res_);
         std::string shader = assemble(scene, code);
