@@ -27,6 +27,7 @@
 #include "bench/Bench.h"
 #include "driver/Serve.h"
 #include "scene/Page.h"
+#include "scene/CppHeader.h"
 #include "scene/Compile.h"
 #include "scene/Evaluate.h"
 #include "ir/Pipeline.h"
@@ -310,8 +311,9 @@ static int run(int argc, char** argv) {
     app.add_option("--target", target,
                    "output kind: shadertoy (default: mainImage, parameters as constants), webgl2 (GLSL ES 3.00 with a "
                    "uniform per parameter), glsl330 (desktop core profile, uniforms), html (one offline page: the webgl2 "
-                   "shader on a canvas with a slider per parameter component, reset, play/pause, mouse orbit)")
-        ->check(CLI::IsMember({"shadertoy", "webgl2", "glsl330", "html"}));
+                   "shader on a canvas with a slider per parameter component, reset, play/pause, mouse orbit), cpp (a C++17 "
+                   "header: the webgl2 shader as a constant and a constexpr table of its parameters)")
+        ->check(CLI::IsMember({"shadertoy", "webgl2", "glsl330", "html", "cpp"}));
     std::string meta;
     app.add_option("--meta", meta, "also write a JSON description of every parameter (instance, module, role, "
                                    "uniform or constant name, type, bounds, default, description)");
@@ -496,7 +498,7 @@ static int run(int argc, char** argv) {
     opts.inject_fault = inject_fault;
     if (verify_ir) opts.verify_each = true;
     opts.strict_ranges = strict_ranges;
-    opts.target = target == "webgl2" || target == "html" ? iqc::Target::WebGL2 : target == "glsl330" ? iqc::Target::GLSL330 : iqc::Target::Shadertoy;
+    opts.target = target == "webgl2" || target == "html" || target == "cpp" ? iqc::Target::WebGL2 : target == "glsl330" ? iqc::Target::GLSL330 : iqc::Target::Shadertoy;
     if (render->parsed()) opts.target = r_target == "webgl2" ? iqc::Target::WebGL2 : iqc::Target::Shadertoy;
     iqc::CompileResult r = iqc::compile_file(render->parsed() ? r_input : input, sm, diags, opts);
     std::string rendered = diags.render();
@@ -540,6 +542,8 @@ static int run(int argc, char** argv) {
                          [&] { double s = 0; for (double x : times) s += x; return s; }());
     }
     if (target == "html" && !render->parsed()) r.code = iqc::html_page(r.code, r.meta);
+    if (target == "cpp" && !render->parsed())
+        r.code = iqc::cpp_header(r.code, r.meta, std::filesystem::path(input).stem().string());
     auto report = [&](const std::string& path, bool changed) {
         if (!quiet && !path.empty() && path != "-")
             std::fprintf(stderr, changed ? "iqc: wrote %s\n" : "iqc: %s is unchanged\n", path.c_str());
