@@ -225,7 +225,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 }
 {{/if}}
 {{#if MARCH_AUTO}}
-// Sphere tracing with automatic step relaxation (after Bálint & Valasek 2023): the slope m of the
+// Sphere tracing with automatic step relaxation (after Bán & Valasek 2023, "Automatic Step Size Relaxation in Sphere Tracing"): the slope m of the
 // distance along the ray is estimated from the last two samples (smoothed), and the step 2d / (1 - m)
 // makes the next unbounding sphere just touch this one where the surface is locally planar. When two
 // spheres do not overlap, it goes back to the previous sample, takes a plain step and resets m.

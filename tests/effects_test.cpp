@@ -26,7 +26,7 @@ const std::vector<std::pair<std::string, std::vector<std::string>>> kEffects = {
     {"orbit_camera", {"iMouse.x > 0.0", "yaw"}},
     {"march_fixed", {"IQC_FIXED_STEP", "bisection"}},
     {"march_relaxed", {"IQC_RELAXATION", "Keinert"}},
-    {"march_auto", {"Bálint & Valasek", "2.0 * d / (1.0 - m)"}},
+    {"march_auto", {"Bán & Valasek", "2.0 * d / (1.0 - m)"}},
     {"normals_central", {"Normal by central differences"}},
     {"normals_forward", {"Normal by forward differences"}},
     {"normals_analytic", {"derived by iqc (forward-mode differentiation)", "vec3 iqc_gradient(vec3 p, int id) {",
