@@ -187,8 +187,8 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{/if}}
 {{#if MARCH_RELAXED}}
 // Over-relaxed sphere tracing (Keinert et al. 2014): steps of ω·d; when the unbounding spheres of two
-// samples stop overlapping the step may have skipped a surface, so it goes back to the previous sample
-// and continues with plain steps.
+// samples stop overlapping the step may have skipped a surface, so it goes back to the previous sample and
+// takes one plain step from there, then relaxes again (a failed step costs one step, not the rest of the ray).
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, omega = IQC_RELAXATION, t_prev = 0.0, r_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
@@ -216,6 +216,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         t_prev = t;
         r_prev = abs(d);
         step_len = omega * d;
+        omega = IQC_RELAXATION;
         t += step_len;
         if (t > IQC_MAX_DIST) return -1.0;
     }
