@@ -496,3 +496,71 @@ TEST_CASE("iqc bench of a scene too costly for the CPU reference falls back inst
     CHECK(b.run.exit_code != 3);
     CHECK_THAT(b.run.err + b.run.out, !Catch::Contains("internal compiler error"));
 }
+
+// Found by a second new-user trial of issue 16.
+
+TEST_CASE("a 10 MB line with errors: each diagnostic shows a window of the line", "[hostile]") {
+    std::string line = "y = ";
+    for (int i = 0; i < 200; ++i) line += fmt::format("`u{}` + ", i) + std::string(50000, ' ');
+    line += "1";
+    fs::path big = generated("long_line.iql", line + "\nwhere\nx ∈ ℝ\n");
+    Bounded b = run_bounded("eval " + big.string());
+    require_located(b, big.string() + ":1:", "undefined name 'u0'");
+    CHECK(b.run.err.size() < 200000);  // not 200 copies of a 10 MB line
+    CHECK_THAT(b.run.err, Catch::Contains("…"));
+}
+
+TEST_CASE("names that are GLSL macros, sequences read by local functions, huge TOML integers, tiny literals", "[hostile]") {
+    fs::path gl = generated("GL_ES.iql", "shape\nD = ‖p‖ - `GL_ES`\nwhere\np ∈ ℝ³\n`GL_ES` ∈ ℝ default = 1\n");
+    Bounded g = run_bounded(gl.string() + " -o -");
+    INFO(g.run.err);
+    CHECK(g.run.exit_code == 0);
+    fs::path seq = generated("seq_local.iql", "shape\ng(y) = z_3 + y\nz_1 = 1\nz_(k+1) = z_k + 1 for k ∈ 1..2\nD = g(p_1)\n"
+                                              "where\np ∈ ℝ³\ny ∈ ℝ\n");
+    require_located(run_bounded(seq.string() + " -o -"), seq.string() + ":2:8", "the local function 'g' cannot read the sequence 'z'");
+    fs::path bigint = generated("bigint.iq", "[modules]\nm = \"\"\"\nshape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ ℝ\n\"\"\"\n"
+                                             "[[shapes]]\ntype = \"m\"\nshape_params = { r = 9007199254740993 }\n");
+    Bounded bi = run_bounded(bigint.string() + " -o -");
+    CHECK(bi.run.exit_code == 0);
+    CHECK_THAT(bi.run.out, Catch::Contains("m_1_shape_r = 9007199000000000.0"));  // not 0.0
+    fs::path tiny = generated("tiny.iql", "shape\nD = p_1 + 1e-400\nwhere\np ∈ ℝ³\n");
+    require_located(run_bounded(tiny.string() + " -o -"), tiny.string() + ":2:11", "the number 1e-400 is below the smallest normal");
+    fs::path cam = generated("camera_float.iq", "[camera]\nposition = [1, 0, 0]\ntarget = [1.00000001, 0, 0]\n[[shapes]]\ntype = \"sphere\"\n");
+    require_located(run_bounded(cam.string() + " -o -"), cam.string() + ":1:1", "the camera's position and target are the same point in 32-bit floats");
+    fs::path z = generated("zset.iql", "y = n + 1\nwhere\nn ∈ ℤ\n");
+    Bounded zs = run_bounded("eval " + z.string() + " --set n=3000000000");
+    CHECK(zs.run.exit_code == 1);
+    CHECK_THAT(zs.run.err, Catch::Contains("is not a 32-bit integer"));
+}
+
+TEST_CASE("outputs may not be the input or each other, and render refuses silly sizes and times", "[hostile]") {
+    fs::path dir = temp_dir() / "aliasing";
+    fs::create_directories(dir);
+    std::ofstream(dir / "s.iq") << "[[shapes]]\ntype = \"sphere\"\n";
+    std::string s = (dir / "s.iq").string();
+    Bounded self = run_bounded(s + " -o " + s);
+    CHECK(self.run.exit_code == 2);
+    CHECK_THAT(self.run.err, Catch::Contains("the input and -o are the same file"));
+    CHECK_THAT(read_text(dir / "s.iq"), Catch::StartsWith("[[shapes]]"));  // not overwritten
+    Bounded meta = run_bounded(s + " -o " + (dir / "x").string() + " --meta " + (dir / "x").string());
+    CHECK(meta.run.exit_code == 2);
+    Bounded pct = run_bounded(s + " -o '" + (dir / "o%.frag").string() + "' --depfile " + (dir / "d.d").string());
+    CHECK(pct.run.exit_code == 1);
+    CHECK_THAT(pct.run.err, Catch::Contains("cannot write the depfile"));
+    Bounded size = run_bounded("render " + s + " -o " + (dir / "r.png").string() + " --size 8193x8193");
+    CHECK(size.run.exit_code == 2);
+    CHECK_THAT(size.run.err, Catch::Contains("too large"));
+    Bounded junk = run_bounded("render " + s + " -o " + (dir / "r.png").string() + " --size 8x8junk");
+    CHECK(junk.run.exit_code == 2);
+    Bounded nan = run_bounded("render " + s + " -o " + (dir / "r.png").string() + " --size 8x8 --time nan");
+    CHECK(nan.run.exit_code == 2);
+}
+
+TEST_CASE("many lights and long descriptions are capped", "[hostile]") {
+    std::string lights;
+    for (int i = 0; i < 300; ++i) lights += fmt::format("[[lights]]\nposition = [{}, 5, 0]\n", i);
+    fs::path many = generated("lights.iq", lights + "[[shapes]]\ntype = \"sphere\"\nmaterial = \"lambert\"\n");
+    require_located(run_bounded(many.string() + " -o -"), many.string() + ":", "a scene has at most 256 lights");
+    fs::path desc = generated("description.iql", "shape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ [0, 1] default = 0.5: " + std::string(5000, 'd') + "\n");
+    require_located(run_bounded(desc.string() + " -o -"), desc.string() + ":5:1", "the description of 'r' has 5000 bytes");
+}

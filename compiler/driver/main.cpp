@@ -74,9 +74,19 @@ double percentile(std::vector<float> v, double q) {
 int render_command(const std::string& code, const iqc::ShaderInputs& inputs, bool webgl2, const std::string& output, const std::string& size, float time, int frames, float fps, bool stats,
                    const std::function<iqc::CompileResult()>& instrumented) {
     iqc::render::RenderOptions ro;
-    if (std::sscanf(size.c_str(), "%dx%d", &ro.width, &ro.height) != 2 || ro.width < 1 || ro.height < 1 ||
-        ro.width > 16384 || ro.height > 16384) {
+    char rest = 0;
+    if (std::sscanf(size.c_str(), "%dx%d%c", &ro.width, &ro.height, &rest) != 2 || ro.width < 1 || ro.height < 1) {
         std::fprintf(stderr, "iqc: error: --size must look like 640x360\n");
+        return 2;
+    }
+    // At most 4096 pixels a side and 16 megapixels: the float image and its copies stay within 1 GB, and the
+    // software renderer within seconds per frame.
+    if (ro.width > 4096 || ro.height > 4096) {
+        std::fprintf(stderr, "iqc: error: --size %dx%d is too large: at most 4096x4096\n", ro.width, ro.height);
+        return 2;
+    }
+    if (!std::isfinite(time) || !std::isfinite(fps)) {
+        std::fprintf(stderr, "iqc: error: --time and --fps must be finite numbers\n");
         return 2;
     }
     for (const auto& u : inputs.uniforms) {
@@ -243,7 +253,8 @@ int write_output(const std::string& path, const std::string& text, bool* changed
 bool make_escape(const std::string& path, std::string& out) {
     out.clear();
     for (char c : path) {
-        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
+        // '%' would make the rule a pattern rule for GNU Make, with no escape Ninja reads too.
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f || c == '%') return false;
         if (c == ' ' || c == '#' || c == ':' || c == '\\') out += '\\';
         if (c == '$') out += '$';
         out += c;
@@ -475,6 +486,26 @@ static int run(int argc, char** argv) {
         std::fprintf(stderr, "iqc: error: no input file (see iqc --help)\n");
         return 2;
     }
+    {
+        // No output may be the input or another output (the scene would be overwritten by its shader).
+        namespace fs = std::filesystem;
+        std::vector<std::pair<std::string, std::string>> files;
+        if (!render->parsed()) files.push_back({"the input", input});
+        if (!output.empty() && output != "-") files.push_back({"-o", output});
+        if (!meta.empty()) files.push_back({"--meta", meta});
+        if (!depfile.empty()) files.push_back({"--depfile", depfile});
+        for (size_t i = 0; i < files.size(); ++i)
+            for (size_t j = i + 1; j < files.size(); ++j) {
+                std::error_code e1, e2;
+                fs::path a = fs::weakly_canonical(files[i].second, e1), b = fs::weakly_canonical(files[j].second, e2);
+                bool device = fs::exists(a, e1) && !fs::is_regular_file(a, e1);  // -o /dev/null --meta /dev/null is fine
+                if (!e1 && !e2 && a == b && !device) {
+                    std::fprintf(stderr, "iqc: error: %s and %s are the same file '%s'\n", files[i].first.c_str(),
+                                 files[j].first.c_str(), printable(files[j].second).c_str());
+                    return 2;
+                }
+            }
+    }
     if (!depfile.empty() && (render->parsed() || output.empty() || output == "-")) {
         std::fprintf(stderr, "iqc: error: --depfile needs an output file (-o FILE) to name in its rule\n");
         return 2;
@@ -556,7 +587,8 @@ static int run(int argc, char** argv) {
         std::string bad;
         if (!depfile_text(outs, sm.disk_files(), dep_text, bad)) {
             std::fprintf(stderr, "iqc: error: cannot write the depfile '%s': the path '%s' has a control character "
-                                 "(a newline would start a rule of its own), which Makefile syntax cannot express\n",
+                                 "or '%%' (a newline would start a rule of its own, '%%' a pattern rule), which Makefile syntax "
+                                 "cannot express\n",
                          printable(depfile).c_str(), printable(bad).c_str());
             return 1;
         }

@@ -76,7 +76,9 @@ std::string identifier(const std::string& math) {
     if (clean.empty() || clean == "_") clean = "v";
     if (std::isdigit(static_cast<unsigned char>(clean[0]))) clean = "v" + clean;
     if (clean[0] == '_') clean = "v" + clean;
-    if (clean.rfind("gl_", 0) == 0) clean = "v_" + clean;
+    // gl_ names are the language's; GL_ names are predefined macros (GL_ES, GL_FRAGMENT_PRECISION_HIGH) and
+    // reserved for future ones: a macro would replace the identifier.
+    if (clean.rfind("gl_", 0) == 0 || clean.rfind("GL_", 0) == 0) clean = "v_" + clean;
     // At most kMaxIdentifier characters (glslang refuses names past 1,024, and nobody reads a longer one): a
     // longer name keeps its start and ends in a hash of the whole (FNV-1a), so different names stay apart.
     if (clean.size() > kMaxIdentifier) {
@@ -112,8 +114,14 @@ std::string comment_text(std::string_view text) {
         if ((c == '*' && !out.empty() && out.back() == '/') || (c == '/' && !out.empty() && out.back() == '*')) out += ' ';
         // Invisible format characters (bidirectional overrides and isolates, zero-width characters, a BOM)
         // are spelled out: a comment then reads in an editor as it is stored ("Trojan Source", CVE-2021-42574).
-        bool format = (c >= 0x202A && c <= 0x202E) || (c >= 0x2066 && c <= 0x2069) || (c >= 0x200B && c <= 0x200F) ||
-                      c == 0x061C || c == 0x2060 || c == 0xFEFF || c == 0x180E || (c >= 0xFFF9 && c <= 0xFFFB);
+        // Also the other default-ignorable code points (soft hyphen, invisible operators, variation selectors,
+        // Hangul fillers, tag characters of "ASCII smuggling") and noncharacters.
+        bool format = (c >= 0x202A && c <= 0x202E) || (c >= 0x2060 && c <= 0x206F) || (c >= 0x200B && c <= 0x200F) ||
+                      c == 0x061C || c == 0xFEFF || c == 0x180E || (c >= 0xFFF9 && c <= 0xFFFB) || c == 0x00AD ||
+                      c == 0x034F || c == 0x115F || c == 0x1160 || c == 0x3164 || c == 0xFFA0 ||
+                      (c >= 0x17B4 && c <= 0x17B5) || (c >= 0x180B && c <= 0x180F) || (c >= 0xFE00 && c <= 0xFE0F) ||
+                      (c >= 0x1D173 && c <= 0x1D17A) || (c >= 0xE0000 && c <= 0xE0FFF) || (c >= 0xFDD0 && c <= 0xFDEF) ||
+                      (c >= 0x1BCA0 && c <= 0x1BCA3) || (c & 0xFFFE) == 0xFFFE;
         if (invalid) utf8::append(out, 0xFFFD);
         else if (format) out += fmt::format("<U+{:04X}>", uint32_t(c));
         else out.append(text.substr(start, i - start));

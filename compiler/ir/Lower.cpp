@@ -819,7 +819,23 @@ int lower_module_cached(const CheckedModule& m, LowerContext& ctx) {
     return idx;
 }
 
+namespace {
+int lower_module_unchecked(const CheckedModule& m, const std::string& name, const std::string& glsl_name, LowerContext& ctx);
+}
+
+// An IR function grown past the size limit with no span of its own (an instruction made by a rule, not
+// from source) is reported at the module.
 int lower_module(const CheckedModule& m, const std::string& name, const std::string& glsl_name, LowerContext& ctx) {
+    try {
+        return lower_module_unchecked(m, name, glsl_name, ctx);
+    } catch (ir::SizeLimit& limit) {
+        if (!limit.span.valid()) limit.span = m.ast.span;
+        throw;
+    }
+}
+
+namespace {
+int lower_module_unchecked(const CheckedModule& m, const std::string& name, const std::string& glsl_name, LowerContext& ctx) {
     ir::Function fn;
     fn.name = name;
     fn.glsl_name = glsl_name;
@@ -851,5 +867,6 @@ int lower_module(const CheckedModule& m, const std::string& name, const std::str
     ctx.module.functions[size_t(idx)] = std::move(fn);
     return idx;
 }
+}  // namespace
 
 }  // namespace iqc

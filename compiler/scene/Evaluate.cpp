@@ -154,6 +154,11 @@ bool evaluate_checked(const EvalRequest& req, SourceManager& sm, Diagnostics& d,
             d.error_nospan(fmt::format("--set {}: '{}' is ℤ, but the value {} is not a whole number", sname, sname, v.v[0]));
             continue;
         }
+        if (want.kind == Type::Integer && (v.v[0] < -2147483648.0 || v.v[0] > 2147483647.0)) {
+            d.error_nospan(fmt::format("--set {}: '{}' is ℤ, but the value {} is not a 32-bit integer (a shader's int: "
+                                       "-2147483648 … 2147483647)", sname, sname, v.v[0]));
+            continue;
+        }
         args[size_t(pi)] = {want, v.v};
     }
     if (d.error_count() != before) return false;

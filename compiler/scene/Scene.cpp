@@ -95,6 +95,7 @@ size_t toml_too_deep(std::string_view t) {
     return std::string_view::npos;
 }
 
+constexpr size_t kMaxLights = 256;
 const std::vector<std::string> kTopKeys = {"title", "include", "modules", "camera", "render", "effects", "lights", "shapes"};
 const std::vector<std::string> kShapeKeys = {"name", "type", "material", "transform", "shape_params", "material_params", "bound"};
 const std::vector<std::string> kCameraKeys = {"position", "target", "fov", "orbit"};
@@ -200,7 +201,9 @@ private:
     // A number's value when it is finite and within 32-bit floats' range (what shaders compute in; TOML
     // also allows inf and nan), else a located error.
     std::optional<double> in_float_range(const toml::node& n, const std::string& key) {
-        double v = *n.value<double>();
+        // toml++ gives no double for an integer beyond 2^53 (it would round): such an integer is read as the
+        // nearest double, as a literal would be (it was silently 0).
+        double v = n.is_integer() ? double(*n.value<int64_t>()) : n.value<double>().value_or(std::nan(""));
         if (std::fabs(v) <= double(std::numeric_limits<float>::max())) return v;
         d_.error(span_of(n), fmt::format("'{}' must be a finite number within the range of 32-bit floats (about ±3.4e38), "
                                          "not {}", key, v));
@@ -408,8 +411,23 @@ void SceneReader::read_camera(const toml::table& root) {
             }
             if (auto* x = t.get("orbit"))
                 if (auto v = get_bool(*x, "orbit")) s_.camera.orbit = *v;
-            if (s_.camera.position == s_.camera.target)
-                d_.error(span_of(*n), "the camera's position and target are the same point");
+            // In the shader's 32-bit floats: the view direction is normalize(target - position), which needs a
+            // difference float spacing can resolve, and coordinates where a float still has fractions.
+            double scale = 1, gap = 0;
+            bool huge = false;
+            for (int k = 0; k < 3; ++k) {
+                double a = double(float(s_.camera.position[size_t(k)])), b = double(float(s_.camera.target[size_t(k)]));
+                scale = std::max({scale, std::fabs(a), std::fabs(b)});
+                gap = std::max(gap, std::fabs(b - a));
+                huge |= std::fabs(a) > 1e7 || std::fabs(b) > 1e7;
+            }
+            if (huge)
+                d_.error(span_of(*n), "the camera's position and target must be within ±1e7 (beyond, a 32-bit float has "
+                                      "no fractions left: the shader's rays would be noise)");
+            else if (gap < 1e-5 * scale)
+                d_.error(span_of(*n), fmt::format("the camera's position and target are the same point in 32-bit floats "
+                                                  "(what shaders compute in): they must differ by more than {:.3g}",
+                                                  1e-5 * scale));
         }
     }
 }
@@ -513,6 +531,11 @@ void SceneReader::read_lights(const toml::table& root) {
         } else {
             for (auto& item : *n->as_array()) {
                 auto& t = *item.as_table();
+                // Every light is a shading pass per pixel: 256 is far past what a shader can afford.
+                if (s_.lights.size() >= kMaxLights) {
+                    d_.error(span_of(item), fmt::format("a scene has at most {} lights", kMaxLights));
+                    break;
+                }
                 check_keys(t, kLightKeys, " in [[lights]]");
                 LightDesc l;
                 l.span = span_of(item);

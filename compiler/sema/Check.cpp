@@ -405,6 +405,12 @@ void Checker::collect_declarations() {
             p.name = name;
             p.span = span;
             p.description = decl.description;
+            // A description is a slider's label and a comment per instance: a megabyte of it, copied into every
+            // instance, would make gigabytes of shader.
+            if (p.description.size() > 1000) {
+                d_.error(span, fmt::format("the description of '{}' has {} bytes: at most 1000", name, p.description.size()));
+                p.description.resize(0);
+            }
             p.zero_based = decl.zero_based;
             p.type = param_type(decl.type, name);
             if (!p.type.valid()) continue;
@@ -855,6 +861,12 @@ std::vector<std::string> Checker::visible_names() const {
 void Checker::undefined(const Expr& e) {
     const std::string& name = e.text;
     if (unbound_functions_.count(name)) return;  // reported at its declaration
+    // Past the diagnostics that are shown, only the count matters: no suggestions (did_you_mean scans every
+    // name: 10,000 undefined names against 10,000 defined ones would take a minute).
+    if (d_.error_count() >= Diagnostics::kMaxKept) {
+        d_.error(e.name_span, fmt::format("undefined name '{}'", name));
+        return;
+    }
     Span s = e.name_span;
     if (e.word_span.end > e.word_span.begin) {
         // A letter of a longer word (`dot` is d·o·t): report the word once, as written, with a hint.
@@ -1935,6 +1947,14 @@ Type Checker::check_sequence_index(Expr& e) {
         return {};
     }
     const Expr& ix = *e.indices[0].expr;
+    // A local function's body cannot read a module's sequence (its elements are not among the values a
+    // local function captures): pass the element as an argument.
+    if (scope_ && scope_->fn && loop_ != &g) {
+        d_.error(e.span, fmt::format("the local function '{}' cannot read the sequence '{}': pass the element as an "
+                                     "argument, e.g. {}(…, {}_{})", scope_->fn->stmt->name, seq.name, scope_->fn->stmt->name,
+                                     seq.name, g.hi_name.empty() ? std::to_string(int(g.hi) + 1) : g.hi_name + "+1"));
+        return {};
+    }
     if (loop_ == &g && ix.kind == ExprKind::Name && ix.text == g.var) {
         e.resolved = R_SeqCurrent;
         return seq.type;

@@ -65,6 +65,11 @@ bool is_combining(char32_t c) {
 size_t width(std::string_view s) {
     size_t w = 0;
     for (size_t i = 0; i < s.size();) {
+        if (static_cast<unsigned char>(s[i]) < 0x80) {  // ASCII: one column
+            ++w;
+            ++i;
+            continue;
+        }
         char32_t c = decode(s, i);
         if (!is_combining(c)) ++w;
     }
@@ -162,7 +167,15 @@ LineCol SourceManager::line_col(FileId f, uint32_t offset) const {
     auto it = std::upper_bound(file.line_starts.begin(), file.line_starts.end(), offset);
     uint32_t line = uint32_t(it - file.line_starts.begin());
     uint32_t start = file.line_starts[line - 1];
-    uint32_t col = 1 + uint32_t(utf8::width(std::string_view(file.text).substr(start, offset - start)));
+    // Columns along one long line are asked for in order (diagnostics of a 10 MB one-liner): continue from
+    // the last answer on the same line instead of counting from its start each time.
+    uint32_t from = start, col = 1;
+    if (cache_.file == f && cache_.line_start == start && cache_.offset <= offset && cache_.offset >= start) {
+        from = cache_.offset;
+        col = cache_.col;
+    }
+    col += uint32_t(utf8::width(std::string_view(file.text).substr(from, offset - from)));
+    cache_ = {f, start, offset, col};
     return {line, col};
 }
 
@@ -241,10 +254,27 @@ std::string Diagnostics::render(const Diagnostic& d) const {
         LineCol b = sm_.line_col(d.span.file, d.span.begin);
         LineCol e = sm_.line_col(d.span.file, d.span.end);
         std::string_view line = sm_.line_text(d.span.file, b.line);
-        out += fmt::format("  {}\n", printable(line, false));
-        size_t line_width = utf8::width(line);
         size_t start = b.col - 1;
         size_t len = (e.line == b.line && e.col > b.col) ? e.col - b.col : 1;
+        // A long line (a 10 MB one-liner) is shown as a window of about 480 bytes around the caret, with …
+        // where it is cut, so each diagnostic stays a few hundred bytes.
+        std::string prefix, suffix;
+        if (line.size() > 640 && e.line == b.line) {
+            std::string_view text = sm_.text(d.span.file);
+            size_t idx = size_t(d.span.begin) - size_t(line.data() - text.data());
+            size_t end_idx = std::min(line.size(), size_t(d.span.end) - size_t(line.data() - text.data()));
+            size_t from = idx > 160 ? idx - 160 : 0;
+            while (from < line.size() && (static_cast<unsigned char>(line[from]) & 0xC0) == 0x80) ++from;
+            size_t to = std::min(line.size(), from + 480);
+            while (to < line.size() && (static_cast<unsigned char>(line[to]) & 0xC0) == 0x80) --to;
+            if (from > 0) prefix = "…";
+            if (to < line.size()) suffix = "…";
+            start = utf8::width(line.substr(from, idx - from)) + (from > 0 ? 1 : 0);
+            len = std::max<size_t>(1, utf8::width(line.substr(idx, std::min(end_idx, to) - std::min(idx, std::min(end_idx, to)))));
+            line = line.substr(from, to - from);
+        }
+        out += fmt::format("  {}{}{}\n", prefix, printable(line, false), suffix);
+        size_t line_width = utf8::width(line) + (prefix.empty() ? 0 : 1);
         if (e.line != b.line) len = std::max<size_t>(1, line_width > start ? line_width - start : 1);
         std::string marks(len, '~');
         marks[0] = '^';

@@ -64,6 +64,11 @@ private:
     };
     std::vector<File> files_;
     size_t total_bytes_ = 0;
+    struct ColumnCache {
+        FileId file = FileId(-1);
+        uint32_t line_start = 0, offset = 0, col = 1;
+    };
+    mutable ColumnCache cache_;  // line_col's last answer
 };
 
 // Reads a source file for a compile that has already read `already` bytes: regular files only (a pipe,

@@ -268,7 +268,13 @@ private:
                                      "which shaders compute in", t.text));
         // Below the smallest normal float a shader computes 0 (or a denormal a GPU may flush to 0): 1e-50 as
         // a guard, max(‖q‖, 1e-50), would guard nothing.
-        if (v != 0 && std::fabs(v) < double(std::numeric_limits<float>::min()))
+        // (A literal so small that even a double is 0, 1e-400, has a nonzero digit before its exponent.)
+        bool written_nonzero = false;
+        for (char c : t.text) {
+            if (c == 'e' || c == 'E') break;
+            written_nonzero |= c >= '1' && c <= '9';
+        }
+        if ((v != 0 || written_nonzero) && std::fabs(v) < double(std::numeric_limits<float>::min()))
             fail(t.span, fmt::format("the number {} is below the smallest normal 32-bit float (about 1.2e-38), which "
                                      "shaders compute in: it would be 0 there (a guard such as max(x, 1e-30) works)", t.text));
         return v;
