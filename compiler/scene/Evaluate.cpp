@@ -154,7 +154,7 @@ bool evaluate_checked(const EvalRequest& req, SourceManager& sm, Diagnostics& d,
             d.error_nospan(fmt::format("--set {}: '{}' is ℤ, but the value {} is not a whole number", sname, sname, v.v[0]));
             continue;
         }
-        if (want.kind == Type::Integer && (v.v[0] < -2147483648.0 || v.v[0] > 2147483647.0)) {
+        if (want.kind == Type::Integer && !limits::is_int32(v.v[0])) {
             d.error_nospan(fmt::format("--set {}: '{}' is ℤ, but the value {} is not a 32-bit integer (a shader's int: "
                                        "-2147483648 … 2147483647)", sname, sname, v.v[0]));
             continue;

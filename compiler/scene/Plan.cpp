@@ -11,6 +11,7 @@
 #include "ir/Eval.h"
 #include "ir/Lower.h"
 #include "sema/Hints.h"
+#include "source/Limits.h"
 
 namespace iqc {
 
@@ -123,7 +124,7 @@ struct Planner {
                 ok = false;
                 continue;
             }
-            if (p.type.kind == Type::Integer && (ov.value[0] < -2147483648.0 || ov.value[0] > 2147483647.0)) {
+            if (p.type.kind == Type::Integer && !limits::is_int32(ov.value[0])) {
                 d.error(ov.span, fmt::format("'{}' is ℤ, but the value {} is not a 32-bit integer (a shader's int: "
                                              "-2147483648 … 2147483647)", ov.name, ov.value[0]));
                 ok = false;

@@ -136,7 +136,7 @@ std::optional<std::vector<double>> const_eval(const Expr& e) {
 
 namespace {
 
-constexpr double kFloatMax = 3.4028234663852886e38;  // the largest 32-bit float
+using limits::kFloatMax;
 
 // Why a parameter's value cannot reach a shader as written ("" when it can): not a number, infinite, beyond
 // the 32-bit floats, or for ℤ not an integer of 32 bits (a shader's int).
@@ -145,7 +145,7 @@ std::string unrepresentable(const std::vector<double>& v, bool integer) {
         if (std::isnan(x)) return "is not a number (0/0, √-1, …)";
         if (!std::isfinite(x) || std::fabs(x) > kFloatMax)
             return fmt::format("is {}, outside the range of 32-bit floats (at most about 3.4e38)", x);
-        if (integer && (x != std::floor(x) || x < -2147483648.0 || x > 2147483647.0))
+        if (integer && (x != std::floor(x) || !limits::is_int32(x)))
             return fmt::format("is {}, not a 32-bit integer (a shader's int: -2147483648 … 2147483647)", x);
     }
     return "";

@@ -41,6 +41,11 @@ constexpr size_t kMaxStatements = 100'000;
 // Function::add: every pass and the lowering add through it). About 200 MB of IR.
 constexpr size_t kMaxFunctionInstructions = 1'000'000;
 
+// The largest 32-bit float, and the range of a 32-bit int: the numbers a shader computes with. Values outside
+// them are located errors where they are written (literals, defaults, overrides, --set).
+constexpr double kFloatMax = 3.4028234663852886e38;
+inline bool is_int32(double x) { return x >= -2147483648.0 && x <= 2147483647.0; }
+
 // A size as counted (a literal such as `3` in ℝ^3, a sum of block heights, a concatenation's length):
 // the value when it is from 1 to kMaxComponents, otherwise nothing (the caller reports where).
 inline std::optional<int> checked_size(int64_t n) {

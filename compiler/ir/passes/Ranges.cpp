@@ -12,7 +12,7 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-constexpr double kFloatMax = 3.4028234663852886e38;  // the largest 32-bit float
+using limits::kFloatMax;
 constexpr double kExpOverflow = 88.72283905206835;   // ln(kFloatMax)
 
 struct Range {
