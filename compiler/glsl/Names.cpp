@@ -176,8 +176,19 @@ bool Namer::taken(const std::string& name) const {
 
 std::string Namer::unique(const std::string& math_name) {
     std::string base = identifier(math_name);
+    // Suffixes are tried from where the last name of this base stopped (names are never freed, so every
+    // smaller one is taken): thousands of `tmp`s in one function cost linear time, not quadratic.
+    int& next = next_suffix_[base];
     std::string n = base;
-    for (int k = 2; is_reserved(n) || taken(n); ++k) n = fmt::format("{}_{}", base, k);
+    if (next == 0) {
+        next = 2;
+        if (!is_reserved(n) && !taken(n)) {
+            used_.insert(n);
+            return n;
+        }
+    }
+    do n = fmt::format("{}_{}", base, next++);
+    while (is_reserved(n) || taken(n));
     used_.insert(n);
     return n;
 }

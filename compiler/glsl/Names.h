@@ -2,6 +2,7 @@
 // the one place that knows GLSL's reserved words and built-ins, so no emitted name can collide with them.
 #pragma once
 
+#include <map>
 #include <set>
 #include <string>
 #include <string_view>
@@ -36,6 +37,7 @@ public:
 private:
     const Namer* parent_;
     std::set<std::string> used_;
+    std::map<std::string, int> next_suffix_;  // per base name: the next suffix to try (0: the bare name first)
 };
 
 }  // namespace iqc::glsl
