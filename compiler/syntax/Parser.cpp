@@ -199,7 +199,6 @@ public:
 private:
     size_t pos_ = 0;
     std::vector<Ctx> ctx_{Ctx::Top};
-    bool failed_ = false;  // an error in the current statement: skip to its end
     int in_condition_ = 0;  // inside a piecewise condition: `<` compares (elsewhere it may open ⟨u, v⟩)
     bool colon_ends_ = false;  // a default's value: `:` starts the description, not A : B
     int depth_ = 0;        // grammar nesting (limits::kMaxNesting)
