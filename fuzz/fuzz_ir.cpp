@@ -51,6 +51,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         std::string code;
         for (int f : emitter.closure({fn})) code += emitter.function(f);
         return code.size() == size_t(-1);
+    } catch (const ir::SizeLimit&) {
+        return 0;  // code past the IR size limit: the compiler reports it as a located error (exit 1)
     } catch (const InternalError& e) {
         std::fprintf(stderr, "internal error: %s\n", e.what());
         std::abort();
