@@ -1,7 +1,5 @@
 #include "ir/passes/Stable.h"
 
-#include <functional>
-
 #include "ir/Builder.h"
 #include "sema/Builtins.h"
 
@@ -19,11 +17,13 @@ bool is_scalar_const(const Instr& in, double v) {
     return in.op == Op::Const && in.type.is_scalar() && in.data.size() == 1 && in.data[0] == v;
 }
 
-// The leaves of the tree of scalar Adds under `v` (v itself when it is no Add); false past kMaxTerms.
-bool sum_terms(const std::vector<Instr>& body, ValueId v, std::vector<ValueId>& out) {
+// The leaves of the tree of scalar Adds under `v` (v itself when it is no Add); false past kMaxTerms. A tree
+// of at most kMaxTerms leaves is at most kMaxTerms deep, so a longer chain (an unrolled ∑ of a million terms)
+// stops there instead of recursing a million levels.
+bool sum_terms(const std::vector<Instr>& body, ValueId v, std::vector<ValueId>& out, size_t depth = 0) {
     const Instr& in = body[v];
     if (in.op == Op::Add && in.type.is_scalar() && body[in.args[0]].type.is_scalar() && body[in.args[1]].type.is_scalar())
-        return sum_terms(body, in.args[0], out) && sum_terms(body, in.args[1], out);
+        return depth < kMaxTerms && sum_terms(body, in.args[0], out, depth + 1) && sum_terms(body, in.args[1], out, depth + 1);
     out.push_back(v);
     return out.size() <= kMaxTerms;
 }
