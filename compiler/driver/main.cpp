@@ -183,6 +183,7 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
     double se = 0;
     for (float v : shape_evals) se += v;
     std::printf("shape_evals_mean: %.3f\n", se / double(shape_evals.size()));
+    std::printf("shape_evals_per_eval: %.3f\n", em > 0 ? se / em : 0.0);
     std::printf("frame_ms: %.3f\n", frame_ms[frame_ms.size() / 2]);
     std::printf("compile_ms: %.3f\n", last.compile_ms);
     std::printf("renderer: %s\n", last.renderer.c_str());
@@ -372,7 +373,7 @@ static int run(int argc, char** argv) {
     render->add_option("--fps", r_fps, "frames per second of the animation (default 30)")->check(CLI::PositiveNumber);
     render->add_option("--target", r_target, "which shader to run: shadertoy (default) or webgl2 (its uniforms at their defaults)")
         ->check(CLI::IsMember({"shadertoy", "webgl2"}));
-    render->add_flag("--stats", r_stats, "print nan_pixels (colour NaN or ∞), nan_distance_pixels (pixels whose rays met a NaN or ∞ scene distance), steps_mean, steps_p99, evals_mean, evals_p99, shape_evals_mean, frame_ms, renderer");
+    render->add_flag("--stats", r_stats, "print nan_pixels (colour NaN or ∞), nan_distance_pixels (pixels whose rays met a NaN or ∞ scene distance), steps_mean, steps_p99, evals_mean, evals_p99, shape_evals_mean (shapes evaluated per pixel: a `bound` sphere or a skipped node of a bounding-volume hierarchy stands in for its shapes), shape_evals_per_eval, frame_ms, renderer");
     CLI::App* bench = app.add_subcommand(
         "bench", "measure what accuracy costs in time on this scene: every march method × hit tolerance × step cap × "
                  "normal method, and I♥IQ's one-march-per-instance architecture, against a reference");

@@ -290,6 +290,7 @@ struct FunctionEmitter {
             return fmt::format("iqc_fetch({})", i);
         };
         const Type& t = in.type;
+        if (t.kind == Type::Integer) return fmt::format("int({}.x)", texel(0));  // stored as an exact float (< 2^24)
         if (t.is_scalar()) return texel(0) + ".x";
         if (t.is_vector()) return texel(0) + "." + std::string(kSwizzle, size_t(t.rows));
         std::vector<std::string> cols;

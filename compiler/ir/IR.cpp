@@ -329,7 +329,7 @@ std::string verify(const Function& f, const Module& m) {
                 const Global& g = m.globals[size_t(in.aux)];
                 if (g.type != in.type) return fault("global type mismatch");
                 if (g.kind != Global::Kind::Prepared && int(g.value.size()) != g.type.components())
-                    return fault("global value size does not match its type");
+                    return fault(fmt::format("global {} has {} values for its type {}", g.name, g.value.size(), g.type.str()));
                 break;
             }
             case Op::Switch: {

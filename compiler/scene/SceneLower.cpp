@@ -9,6 +9,7 @@
 #include <set>
 
 #include "glsl/Names.h"
+#include "scene/Bvh.h"
 #include "ir/Builder.h"
 #include "ir/Lower.h"
 
@@ -67,7 +68,23 @@ struct Item {
     int transform_fn = -1;
     int distance_fn = -1;
     int unbounded_fn = -1;  // the distance without the `bound` sphere (iqc_scene_unbounded), or -1
+    // A group whose members all have `bound`, from kMinTree members: the bounding-volume hierarchy iqc_scene traverses,
+    // its node tables per level (centre, radius, first child, child count) and the members in leaf order.
+    BoundsTree tree;
+    struct TreeLevel {
+        Field center, half, first, count;
+    };
+    std::vector<TreeLevel> tree_globals;
+    Field tree_order;
+    bool exact = false;  // the shape says `# exact`: skipping far subtrees leaves iqc_scene_unbounded's value as is
 };
+
+// A group of this many members or more, each with `bound`, is traversed as a bounding-volume hierarchy (fewer:
+// one loop, each member testing its own sphere); nodes have at most kTreeBranching children. Measured on
+// 1,000 rings with `bound` (llvmpipe, frames after the first): boxes of 8 children 36 ms, of 16 40 ms; spheres
+// of 16 children 75 ms (they overlap around a lattice's clusters); without a hierarchy 356 ms.
+constexpr size_t kMinTree = 16;
+constexpr int kTreeBranching = 8;
 
 class SceneLowering {
 public:
@@ -153,6 +170,7 @@ private:
             g.group = true;
             std::string shape = plan(members[0]).desc->type, material = plan(members[0]).desc->material;
             g.name = unique_name(material.empty() ? shape : shape + "_" + material);
+            if (std::get<2>(key) && members.size() >= kMinTree) build_tree(g);
             out_.group_notes.push_back(fmt::format("{}{}: {} instances in one loop", shape, material.empty() ? "" : " with " + material,
                                                    members.size()));
             items_.push_back(std::move(g));
@@ -165,6 +183,15 @@ private:
             id += int(it.members.size());
             if (!it.group) it.name = plan(it.members[0]).name;
         }
+    }
+
+    // The group's bounding-volume hierarchy from its members' `bound` spheres in world space. The members keep their
+    // order (ids, per-member tables); the hierarchy's leaves list them through a table (Item::tree_order).
+    void build_tree(Item& g) {
+        std::vector<BoundingSphere> spheres;
+        for (size_t mi : g.members) spheres.push_back(world_sphere(plan(mi).inv_linear, plan(mi).inv_offset, plan(mi).desc->bound));
+        g.tree = build_bounds_tree(spheres, kTreeBranching);
+        g.exact = plan(g.members[0]).shape->exactness == "exact";
     }
 
     std::string unique_name(const std::string& base) {
@@ -279,6 +306,35 @@ private:
         if (first.desc->bound > 0) {
             it.bound = constant_field(it, "bound", Type::scalar(), R, "`bound`: radius of the bounding sphere");
             out_.any_bound = true;
+        }
+        for (size_t l = 0; l < it.tree.levels.size(); ++l) {
+            const BoundsTreeLevel& L = it.tree.levels[l];
+            std::vector<double> c, h, fi, co;
+            for (size_t n = 0; n < L.nodes.size(); ++n) {
+                c.insert(c.end(), L.nodes[n].center.begin(), L.nodes[n].center.end());
+                h.insert(h.end(), L.nodes[n].half.begin(), L.nodes[n].half.end());
+                fi.push_back(L.first[n]);
+                co.push_back(L.count[n]);
+            }
+            int nodes = int(L.nodes.size());
+            bool last = l + 1 == it.tree.levels.size();
+            std::string lv = fmt::format("level {} of {}", l + 1, it.tree.levels.size());
+            auto table = [&](const char* what, const Type& t, std::vector<double> v, std::string comment) {
+                return Field{add_global(fmt::format("{}_tree{}_{}", it.name, l, what), Type::array(t, nodes), Global::Kind::Constant,
+                                        std::move(v), std::move(comment)),
+                             true};
+            };
+            it.tree_globals.push_back({table("center", Type::vector(3), std::move(c), "bounding-box hierarchy, " + lv + ": node centres"),
+                                       table("half", Type::vector(3), std::move(h), "node half-extents"),
+                                       table("first", Type::integer(), std::move(fi), last ? "first member" : "first child node"),
+                                       table("count", Type::integer(), std::move(co), last ? "members" : "child nodes")});
+        }
+        if (!it.tree.levels.empty()) {
+            std::vector<double> order(it.tree.order.begin(), it.tree.order.end());
+            const Type t = Type::array(Type::integer(), int(order.size()));
+            it.tree_order = {add_global(it.name + "_tree_members", t, Global::Kind::Constant,
+                                        std::move(order), "bounding-bounding-volume hierarchy: the members in leaf order"),
+                             true};
         }
         auto params = [&](const CheckedModule& mod, const char* role, const std::vector<int>& skip,
                           const std::vector<std::vector<double>> InstancePlan::*values, std::vector<Field>& fields) {
@@ -507,50 +563,131 @@ private:
         m_.functions.push_back(std::move(f));
     }
 
-    // A group in iqc_scene: k = 0..N-1 over its per-instance data, the nearest member kept.
-    ValueId group_loop(Builder& outer, const Item& it, ValueId p, ValueId res, bool bounded) {
-        bool counted = o_.instrument && bounded;
+    // A Loop in `outer` running the body `fill` builds for k = 0..hi over `states` (ℝ each: the nearest
+    // distance, its id[, shapes evaluated]), with `captures` (name, value) read inside; returns the final
+    // states. fill(b, k, states, captures) returns the next states.
+    template <class Fill>
+    std::vector<ValueId> counted_loop(Builder& outer, const std::string& name, ValueId hi, const std::vector<ValueId>& states,
+                                      const std::vector<std::pair<std::string, ValueId>>& captures, const std::string& source,
+                                      Fill fill) {
+        static const char* kStates[] = {"d", "id", "shapes"};
         ir::Function body;
-        body.name = (bounded ? "iqc_scene." : "iqc_scene_unbounded.") + it.name;
-        body.glsl_name = body.name;
-        Builder b(m_, body);
-        ValueId k = b.param("k", Type::integer());
-        ValueId best = b.param("d", Type::scalar());
-        ValueId id = b.param("id", Type::scalar());
-        ValueId count = counted ? b.param("shapes", Type::scalar()) : ValueId(-1);
-        ValueId q = b.param("p", Type::vector(3));
-        ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {q, k});
-        ValueId d = counted ? b.op(Op::Extract, {call}, 0) : call;
-        d = b.named(d, it.name, fmt::format("instance {} + k of {}", it.id, it.members.size()));
-        ValueId nearer = b.compare(CompareKind::Lt, d, best);
-        body.outputs.push_back({"d", b.op(Op::Select, {nearer, d, best})});
-        ValueId kid = b.op(Op::Add, {b.integer(it.id), k});
-        body.outputs.push_back({"id", b.op(Op::Select, {nearer, kid, id})});
-        if (counted) body.outputs.push_back({"shapes", b.op(Op::Add, {count, b.op(Op::Extract, {call}, 1)})});
-        body.result = body.outputs[0].second;
+        body.name = name;
+        body.glsl_name = name;
+        std::vector<ValueId> in_states, in_captures;
+        {
+            Builder b(m_, body);
+            ValueId k = b.param("k", Type::integer());
+            for (size_t j = 0; j < states.size(); ++j) in_states.push_back(b.param(kStates[j], Type::scalar()));
+            for (const auto& [cname, v] : captures) in_captures.push_back(b.param(cname, outer.function().body[v].type));
+            std::vector<ValueId> next = fill(b, k, in_states, in_captures);
+            for (size_t j = 0; j < next.size(); ++j) body.outputs.push_back({kStates[j], next[j]});
+            body.result = body.outputs[0].second;
+        }
         int fn = int(m_.functions.size());
         m_.functions.push_back(std::move(body));
-        std::vector<ValueId> args = {outer.integer(int(it.members.size()) - 1)};
-        for (int c = 0; c < (counted ? 3 : 2); ++c) args.push_back(outer.op(Op::Extract, {res}, c));
-        args.push_back(p);
+        std::vector<ValueId> args = {hi};
+        args.insert(args.end(), states.begin(), states.end());
+        for (const auto& c : captures) args.push_back(c.second);
         ir::Instr loop;
         loop.op = Op::Loop;
-        loop.type = Type::tuple(counted ? 3 : 2);
+        loop.type = Type::tuple(int(states.size()));
         loop.args = std::move(args);
         loop.aux = fn;
         loop.data = {0};
-        loop.source = fmt::format("{}: {} instances", it.name, it.members.size());
+        loop.source = source;
         ValueId lv = outer.function().add(std::move(loop));
-        std::vector<ValueId> parts;
-        for (int c = 0; c < (counted ? 3 : 2); ++c) {
+        std::vector<ValueId> out;
+        for (size_t c = 0; c < states.size(); ++c) {
             ir::Instr mem;
             mem.op = Op::Member;
             mem.type = Type::scalar();
             mem.args = {lv};
-            mem.aux = c;
-            parts.push_back(outer.function().add(std::move(mem)));
+            mem.aux = int(c);
+            out.push_back(outer.function().add(std::move(mem)));
         }
-        return outer.named(outer.construct(Type::vector(counted ? 3 : 2), parts), "res");
+        return out;
+    }
+
+    // The members of a group at [base, base + hi] of its hierarchy's leaf order, or (base -1) 0..hi, the
+    // nearest kept.
+    std::vector<ValueId> member_loop(Builder& outer, const Item& it, ValueId p, ValueId base, ValueId hi, const std::vector<ValueId>& states,
+                                     bool bounded, const std::string& source) {
+        const bool counted = o_.instrument && bounded;
+        std::vector<std::pair<std::string, ValueId>> captures = {{"p", p}};
+        if (base != ValueId(-1)) captures.push_back({"first", base});
+        std::string name = (bounded ? "iqc_scene." : "iqc_scene_unbounded.") + it.name + (base != ValueId(-1) ? ".members" : "");
+        return counted_loop(outer, name, hi, states, captures, source, [&](Builder& b, ValueId k, const std::vector<ValueId>& st,
+                                                                            const std::vector<ValueId>& cap) {
+            ValueId m = cap.size() > 1 ? read(b, it.tree_order, b.op(Op::Add, {cap[1], k})) : k;
+            ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {cap[0], m});
+            ValueId d = counted ? b.op(Op::Extract, {call}, 0) : call;
+            d = b.named(d, it.name, fmt::format("instance {} + k of {}", it.id, it.members.size()));
+            ValueId nearer = b.compare(CompareKind::Lt, d, st[0]);
+            std::vector<ValueId> next = {b.op(Op::Select, {nearer, d, st[0]}),
+                                         b.op(Op::Select, {nearer, b.op(Op::Add, {b.integer(it.id), m}), st[1]})};
+            if (counted) next.push_back(b.op(Op::Add, {st[2], b.op(Op::Extract, {call}, 1)}));
+            return next;
+        });
+    }
+
+    // Level l of a group's bounding-volume hierarchy: its nodes [base, base + hi] (base -1: the top level, from 0); a
+    // node whose box is no nearer than the nearest distance so far is skipped with everything below it.
+    std::vector<ValueId> tree_loop(Builder& outer, const Item& it, size_t l, ValueId p, ValueId base, ValueId hi,
+                                   const std::vector<ValueId>& states, bool bounded) {
+        std::vector<std::pair<std::string, ValueId>> captures = {{"p", p}};
+        if (base != ValueId(-1)) captures.push_back({"first", base});
+        std::string name = fmt::format("{}{}.level{}", bounded ? "iqc_scene." : "iqc_scene_unbounded.", it.name, l + 1);
+        std::string source = l == 0 ? fmt::format("{}: {} instances, a bounding-box hierarchy of {} level{}", it.name, it.members.size(),
+                                                   it.tree.levels.size(), it.tree.levels.size() == 1 ? "" : "s")
+                                     : "";
+        return counted_loop(outer, name, hi, states, captures, source, [&](Builder& b, ValueId k, const std::vector<ValueId>& st,
+                                                                            const std::vector<ValueId>& cap) {
+            const Item::TreeLevel& g = it.tree_globals[l];
+            ValueId node = cap.size() > 1 ? b.op(Op::Add, {cap[1], k}) : k;
+            // The distance to the node's box (0 inside): ‖max(|p - c| - h, 0)‖.
+            ValueId outside = b.op(Op::Sub, {b.builtin("abs", {b.op(Op::Sub, {cap[0], read(b, g.center, node)})}), read(b, g.half, node)});
+            ValueId ds = b.builtin("length", {b.builtin("max", {outside, b.constant(Type::vector(3), {0, 0, 0})})});
+            ds = b.named(ds, "node", "distance to the node's bounding box");
+            ValueId enter = b.compare(CompareKind::Lt, ds, st[0]);
+            ValueId first = read(b, g.first, node);
+            ValueId last = b.op(Op::Sub, {read(b, g.count, node), b.integer(1)});
+            std::vector<ValueId> inner = l + 1 < it.tree.levels.size() ? tree_loop(b, it, l + 1, cap[0], first, last, st, bounded)
+                                                                      : member_loop(b, it, cap[0], first, last, st, bounded, "");
+            Type vt = Type::vector(int(st.size()));
+            ValueId below = b.construct(vt, inner);
+            if (bounded) {
+                // Farther from the node's box than the bound margin, the box's distance stands for everything
+                // below it, as `bound` does for one member: a lower bound of the members' distances, which no
+                // hit test accepts.
+                ValueId reach = b.scalar(o_.bound_margin);
+                ValueId far = b.compare(CompareKind::Gt, ds, reach);
+                std::vector<ValueId> stand_in = {ds, b.scalar(it.id)};
+                if (st.size() > 2) stand_in.push_back(st[2]);
+                below = b.if_(far, b.construct(vt, stand_in), below);
+            }
+            ValueId chosen = b.if_(enter, below, b.construct(vt, st));
+            std::vector<ValueId> next;
+            for (size_t c = 0; c < st.size(); ++c) next.push_back(b.op(Op::Extract, {chosen}, int(c)));
+            return next;
+        });
+    }
+
+    // A group in iqc_scene: the nearest member kept, over its bounding-volume hierarchy when it has one (in
+    // iqc_scene_unbounded only for exact shapes, whose distances are at least their sphere's), else
+    // k = 0..N-1 over its per-instance data.
+    ValueId group_loop(Builder& outer, const Item& it, ValueId p, ValueId res, bool bounded) {
+        const bool counted = o_.instrument && bounded;
+        const int width = counted ? 3 : 2;
+        std::vector<ValueId> states;
+        for (int c = 0; c < width; ++c) states.push_back(outer.op(Op::Extract, {res}, c));
+        std::vector<ValueId> out;
+        if (!it.tree.levels.empty() && (bounded || it.exact))
+            out = tree_loop(outer, it, 0, p, ValueId(-1), outer.integer(int(it.tree.levels[0].nodes.size()) - 1), states, bounded);
+        else
+            out = member_loop(outer, it, p, ValueId(-1), outer.integer(int(it.members.size()) - 1), states, bounded,
+                              fmt::format("{}: {} instances", it.name, it.members.size()));
+        return outer.named(outer.construct(Type::vector(width), out), "res");
     }
 
     // iqc_distance_of(p, id): the instance's own distance (what the analytic normal differentiates), and the

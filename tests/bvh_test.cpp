@@ -1,0 +1,139 @@
+// The bounding-volume hierarchy over a group's instances (scene/Bvh.h): world spheres contain the transformed
+// `bound` balls, every node's box contains what is below it, every member is listed once, and the tree has the
+// same depth everywhere with at most `branching` children per node.
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <cmath>
+#include <fmt/format.h>
+
+#include "scene/Bvh.h"
+
+using namespace iqc;
+
+namespace {
+
+struct Rng {  // deterministic, in [-1, 1)
+    uint32_t h = 2463534242u;
+    double operator()() {
+        h ^= h << 13;
+        h ^= h >> 17;
+        h ^= h << 5;
+        return double(h) / 2147483648.0 - 1.0;
+    }
+};
+
+double dist(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+bool contains(const BoundingBox& outer, const BoundingBox& inner) {
+    for (size_t a = 0; a < 3; ++a)
+        if (inner.center[a] - inner.half[a] < outer.center[a] - outer.half[a] || inner.center[a] + inner.half[a] > outer.center[a] + outer.half[a])
+            return false;
+    return true;
+}
+
+// Row-major 3×3 product.
+std::vector<double> mul(const std::vector<double>& a, const std::vector<double>& b) {
+    std::vector<double> c(9, 0.0);
+    for (int r = 0; r < 3; ++r)
+        for (int k = 0; k < 3; ++k)
+            for (int j = 0; j < 3; ++j) c[size_t(r * 3 + j)] += a[size_t(r * 3 + k)] * b[size_t(k * 3 + j)];
+    return c;
+}
+
+}  // namespace
+
+TEST_CASE("world_sphere contains the object-space ball under any invertible map, and is tight for similarities", "[bvh]") {
+    Rng rnd;
+    for (int trial = 0; trial < 200; ++trial) {
+        // world -> object: a rotation about a random axis, a scale, and (every other trial) a shear.
+        double a = 3 * rnd(), s = std::exp(1.5 * rnd());
+        double c = std::cos(a), si = std::sin(a);
+        std::vector<double> L = {c * s, -si * s, 0, si * s, c * s, 0, 0, 0, s};
+        if (trial % 2) L = mul(L, {1, 0.7 * rnd(), 0, 0, 1, 0.5 * rnd(), 0.3 * rnd(), 0, 1.2 + rnd()});
+        std::vector<double> o = {10 * rnd(), 10 * rnd(), 10 * rnd()};
+        double R = 0.1 + std::fabs(rnd());
+        BoundingSphere w = world_sphere(L, o, R);
+        // Points of the object ball's surface carried to world space (p = L⁻¹(q - o), solved by Cramer's rule).
+        double worst = 0;
+        for (int k = 0; k < 400; ++k) {
+            std::array<double, 3> q = {rnd(), rnd(), rnd()};
+            double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+            for (double& x : q) x = x / n * R;
+            std::array<double, 3> b = {q[0] - o[0], q[1] - o[1], q[2] - o[2]};
+            auto det3 = [](const std::vector<double>& m) {
+                return m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
+            };
+            double D = det3(L);
+            std::array<double, 3> p;
+            for (int col = 0; col < 3; ++col) {
+                std::vector<double> M = L;
+                for (int r = 0; r < 3; ++r) M[size_t(r * 3 + col)] = b[size_t(r)];
+                p[size_t(col)] = det3(M) / D;
+            }
+            worst = std::max(worst, dist(p, w.center));
+        }
+        INFO("trial " << trial << ": farthest point " << worst << ", radius " << w.radius);
+        CHECK(worst <= w.radius);
+        if (trial % 2 == 0) CHECK(w.radius <= R / s * (1 + 1e-5) + 1e-5 * (std::fabs(w.center[0]) + std::fabs(w.center[1]) + std::fabs(w.center[2]) + w.radius));
+    }
+}
+
+TEST_CASE("the bounds tree lists every member once, has one depth, and nests its boxes", "[bvh]") {
+    Rng rnd;
+    for (int n : {1, 2, 15, 16, 17, 100, 256, 257, 1000, 4097}) {
+        for (int branching : {2, 4, 16}) {
+            std::vector<BoundingSphere> members(static_cast<size_t>(n));
+            for (auto& m : members) {
+                m.center = {20 * rnd(), 3 * rnd(), 20 * rnd()};
+                m.radius = 0.2 + 0.3 * std::fabs(rnd());
+            }
+            if (n == 100)  // coincident centres: the median split must still make progress
+                for (auto& m : members) m.center = {1, 2, 3};
+            BoundsTree t = build_bounds_tree(members, branching);
+            INFO(n << " members, branching " << branching);
+            REQUIRE(!t.levels.empty());
+            // Each member once, in leaf order.
+            std::vector<int> seen(size_t(n), 0);
+            for (int m : t.order) {
+                REQUIRE(m >= 0);
+                REQUIRE(m < n);
+                ++seen[size_t(m)];
+            }
+            for (int v : seen) REQUIRE(v == 1);
+            CHECK(t.levels[0].nodes.size() <= size_t(branching));
+            size_t capacity = size_t(branching);
+            for (size_t l = 1; l < t.levels.size(); ++l) capacity *= size_t(branching);
+            CHECK(capacity * size_t(branching) >= size_t(n));  // no deeper than needed
+            for (size_t l = 0; l < t.levels.size(); ++l) {
+                const BoundsTreeLevel& L = t.levels[l];
+                bool last = l + 1 == t.levels.size();
+                size_t below = last ? t.order.size() : t.levels[l + 1].nodes.size();
+                size_t next = 0;
+                for (size_t k = 0; k < L.nodes.size(); ++k) {
+                    CHECK(L.count[k] >= 1);
+                    CHECK(L.count[k] <= branching);
+                    CHECK(size_t(L.first[k]) == next);  // children contiguous, in order, covering the level below
+                    next += size_t(L.count[k]);
+                    for (int c = L.first[k]; c < L.first[k] + L.count[k]; ++c) {
+                        BoundingBox child = last ? box_of(members[size_t(t.order[size_t(c)])]) : t.levels[l + 1].nodes[size_t(c)];
+                        CHECK(contains(L.nodes[k], child));
+                    }
+                }
+                CHECK(next == below);
+            }
+        }
+    }
+}
+
+TEST_CASE("the bounds tree is deterministic", "[bvh]") {
+    Rng rnd;
+    std::vector<BoundingSphere> members(300);
+    for (auto& m : members) m.center = {std::round(4 * rnd()), 0, std::round(4 * rnd())}, m.radius = 0.3;  // many ties
+    BoundsTree a = build_bounds_tree(members, 8), b = build_bounds_tree(members, 8);
+    CHECK(a.order == b.order);
+    REQUIRE(a.levels.size() == b.levels.size());
+    for (size_t l = 0; l < a.levels.size(); ++l) CHECK(a.levels[l].first == b.levels[l].first);
+}
