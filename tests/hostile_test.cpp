@@ -409,6 +409,25 @@ TEST_CASE("outputs that are devices are written in place, and write errors are e
     CHECK_THAT(read_text(temp_dir() / "full.err"), Catch::Contains("cannot write standard output"));
     REQUIRE(stat("/dev/full", &st) == 0);
     CHECK(S_ISCHR(st.st_mode));
+    // Outputs are all or none: a --meta that cannot be written leaves the shader (and the depfile) unwritten,
+    // and an existing shader as it was.
+    fs::path dir = temp_dir() / "all_or_none";
+    fs::create_directories(dir);
+    fs::remove(dir / "s.frag");
+    Bounded meta = run_bounded(in + " -o " + (dir / "s.frag").string() + " --meta /dev/full --depfile " + (dir / "s.d").string());
+    CHECK(meta.run.exit_code == 1);
+    CHECK_THAT(meta.run.err, Catch::Contains("cannot write '/dev/full': No space left on device"));
+    CHECK_FALSE(fs::exists(dir / "s.frag"));
+    CHECK_FALSE(fs::exists(dir / "s.d"));
+    CHECK_FALSE(fs::exists(dir / "s.frag.iqc-tmp"));
+    std::ofstream(dir / "s.frag") << "old";
+    CHECK(run_bounded(in + " -o " + (dir / "s.frag").string() + " --meta /dev/full").run.exit_code == 1);
+    CHECK(read_text(dir / "s.frag") == "old");
+    // The same compile with a meta that can be written writes both.
+    Bounded ok = run_bounded(in + " -o " + (dir / "s.frag").string() + " --meta " + (dir / "s.json").string());
+    CHECK(ok.run.exit_code == 0);
+    CHECK(read_text(dir / "s.frag").rfind("// ", 0) == 0);
+    CHECK(fs::exists(dir / "s.json"));
 }
 
 TEST_CASE("code that unrolls exponentially is a located error within the bounds", "[hostile]") {

@@ -193,60 +193,96 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
 // Writes text with its length (a NUL byte in a diagnostic's source line must not cut off what follows).
 void put(std::FILE* f, std::string_view text) { std::fwrite(text.data(), 1, text.size(), f); }
 
-// Writes `text` to `path` (standard output for "" or "-"). A regular file (or a new one) is written through a
-// temporary file and a rename, so a reader never sees half a file; a file that already holds exactly these
-// bytes is left alone (its modification time too: a build system then rebuilds nothing downstream). Anything
-// else that exists (a device such as /dev/null, a FIFO, a symbolic link) is written in place: a rename would
-// replace it. `changed`, when given, says whether the bytes were written. Every write error is reported: 1.
-int write_output(const std::string& path, const std::string& text, bool* changed = nullptr) {
-    if (changed) *changed = true;
-    auto fail = [&](const char* why) {
-        std::fprintf(stderr, "iqc: error: cannot write '%s': %s\n", path.empty() ? "standard output" : path.c_str(), why);
-        return 1;
-    };
-    if (path.empty() || path == "-") {
-        if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size() || std::fflush(stdout) != 0)
-            return fail(std::strerror(errno));
+// Outputs written together (the shader, --meta, --depfile; bench's CSV and plot), all or none: every regular
+// file (or new one) is first written to a temporary file beside it, then standard output ("" or "-") and
+// anything else that exists and is not a regular file (a device such as /dev/null, a FIFO, a symbolic link:
+// a rename would replace it) is written in place, and only when all of that succeeded are the temporary
+// files renamed over their outputs — so a reader never sees half a file, and a failing output (a full disk,
+// /dev/full) leaves the others as they were. A regular file that already holds exactly its bytes is left
+// alone (its modification time too: a build system then rebuilds nothing downstream). Every write error is
+// reported: commit() returns 1.
+class OutputSet {
+public:
+    // Returns the output's index (for changed()).
+    size_t add(std::string path, std::string text) {
+        Item it;
+        it.path = std::move(path);
+        it.text = std::move(text);
+        items_.push_back(std::move(it));
+        return items_.size() - 1;
+    }
+    // Whether output i's bytes were written (false: a regular file that already held them).
+    bool changed(size_t i) const { return items_[i].changed; }
+
+    int commit() {
+        namespace fs = std::filesystem;
+        for (Item& it : items_) {  // temporaries for regular files
+            if (it.path.empty() || it.path == "-") {
+                it.direct = true;
+                continue;
+            }
+            std::error_code ec;
+            fs::file_status st = fs::symlink_status(it.path, ec);
+            if (!ec && fs::exists(st) && !fs::is_regular_file(st)) {
+                if (fs::is_directory(fs::status(it.path, ec))) return fail(it, "it is a directory");
+                it.direct = true;
+                continue;
+            }
+            {
+                std::ifstream in(it.path, std::ios::binary);
+                if (in) {
+                    std::string old((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+                    if (!in.bad() && old == it.text) {
+                        it.changed = false;
+                        continue;
+                    }
+                }
+            }
+            it.tmp = it.path + ".iqc-tmp";
+            std::ofstream out(it.tmp, std::ios::binary);
+            if (!out || !(out << it.text) || !(out.flush())) return fail(it, std::strerror(errno));
+        }
+        for (Item& it : items_) {  // in place: standard output, devices
+            if (!it.direct) continue;
+            if (it.path.empty() || it.path == "-") {
+                if (std::fwrite(it.text.data(), 1, it.text.size(), stdout) != it.text.size() || std::fflush(stdout) != 0)
+                    return fail(it, std::strerror(errno));
+                continue;
+            }
+            std::FILE* f = std::fopen(it.path.c_str(), "wb");
+            if (!f) return fail(it, std::strerror(errno));
+            bool ok = std::fwrite(it.text.data(), 1, it.text.size(), f) == it.text.size();
+            ok = (std::fflush(f) == 0) && ok;
+            int err = errno;
+            ok = (std::fclose(f) == 0) && ok;
+            if (!ok) return fail(it, std::strerror(err ? err : errno));
+        }
+        for (Item& it : items_) {  // the renames
+            if (it.tmp.empty()) continue;
+            if (std::rename(it.tmp.c_str(), it.path.c_str()) != 0) return fail(it, std::strerror(errno));
+            it.tmp.clear();
+        }
         return 0;
     }
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    fs::file_status st = fs::symlink_status(path, ec);
-    if (!ec && fs::exists(st) && !fs::is_regular_file(st)) {
-        if (fs::is_directory(fs::status(path, ec))) return fail("it is a directory");
-        std::FILE* f = std::fopen(path.c_str(), "wb");
-        if (!f) return fail(std::strerror(errno));
-        bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-        ok = (std::fflush(f) == 0) && ok;
-        int err = errno;
-        ok = (std::fclose(f) == 0) && ok;
-        return ok ? 0 : fail(std::strerror(err ? err : errno));
-    }
-    {
-        std::ifstream in(path, std::ios::binary);
-        if (in) {
-            std::string old((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-            if (!in.bad() && old == text) {
-                if (changed) *changed = false;
-                return 0;
+
+private:
+    struct Item {
+        std::string path, text, tmp;
+        bool direct = false, changed = true;
+    };
+    std::vector<Item> items_;
+
+    int fail(const Item& it, const char* why) {
+        std::fprintf(stderr, "iqc: error: cannot write '%s': %s\n", it.path.empty() || it.path == "-" ? "standard output" : it.path.c_str(),
+                     why);
+        for (Item& other : items_)
+            if (!other.tmp.empty()) {
+                std::remove(other.tmp.c_str());
+                other.tmp.clear();
             }
-        }
+        return 1;
     }
-    std::string tmp = path + ".iqc-tmp";
-    {
-        std::ofstream out(tmp, std::ios::binary);
-        if (!out || !(out << text) || !(out.flush())) {
-            std::remove(tmp.c_str());
-            return fail(std::strerror(errno));
-        }
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        int err = errno;
-        std::remove(tmp.c_str());
-        return fail(std::strerror(err));
-    }
-    return 0;
-}
+};
 
 // A path as a Makefile rule names it: space, '#', ':' and '\\' before them escaped with '\\', '$' doubled
 // (what GNU Make and Ninja both read). A path with a control character (a newline would start a rule or a
@@ -479,8 +515,10 @@ static int run(int argc, char** argv) {
         std::printf("iqc bench %s at %dx%d on %s (%.1f s)\n", b_input.c_str(), bo.width, bo.height, rep.renderer.c_str(), secs);
         std::printf("geometry reference: %s\ncolour reference: %s\n\n", rep.geometry_reference.c_str(), rep.colour_reference.c_str());
         std::fputs(iqc::bench::table(rep).c_str(), stdout);
-        if (!b_csv.empty() && write_output(b_csv, iqc::bench::csv(rep)) != 0) return 1;
-        if (!b_plot.empty() && write_output(b_plot, iqc::bench::svg(rep, b_input)) != 0) return 1;
+        OutputSet outs;
+        if (!b_csv.empty()) outs.add(b_csv, iqc::bench::csv(rep));
+        if (!b_plot.empty()) outs.add(b_plot, iqc::bench::svg(rep, b_input));
+        if (outs.commit() != 0) return 1;
         return 0;
     }
     if (!render->parsed() && input.empty()) {
@@ -594,19 +632,19 @@ static int run(int argc, char** argv) {
             return 1;
         }
     }
-    bool changed = true;
-    int rc = write_output(output, r.code, &changed);
-    bool out_changed = changed;
-    if (rc == 0 && !meta.empty()) {
-        rc = write_output(meta, r.meta, &changed);
-        if (rc == 0) report(meta, changed);
-    }
-    if (rc == 0 && !depfile.empty()) rc = write_output(depfile, dep_text, &changed);
+    OutputSet outs;
+    size_t shader_out = outs.add(output, r.code);
+    size_t meta_out = meta.empty() ? 0 : outs.add(meta, r.meta);
+    if (!depfile.empty()) outs.add(depfile, dep_text);
+    int rc = outs.commit();
     if (time) {
         double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         std::fprintf(stderr, "iqc: compiled in %.2f ms\n", ms);
     }
-    if (rc == 0) report(output, out_changed);
+    if (rc == 0) {
+        if (!meta.empty()) report(meta, outs.changed(meta_out));
+        report(output, outs.changed(shader_out));
+    }
     return rc;
 }
 
