@@ -11,8 +11,10 @@
 # (scripts/sanitize.sh; built here if missing), so every ASan/UBSan report is a finding too.
 #
 # A long campaign (the issue-16 report: `IQC_FUZZ_BUILD=build-fuzz IQC_FUZZ_SANITIZERS=undefined
-# IQC_FUZZ_JOBS=2 nice -n 19 bash scripts/fuzz.sh 3600`) may use a build of its own with UBSan alone, several
-# times the executions per second of ASan's; IQC_FUZZ_JOBS runs that many processes per harness.
+# IQC_FUZZ_JOBS=2 IQC_FUZZ_TIMEOUT=60 nice -n 19 bash scripts/fuzz.sh 3600`) may use a build of its own with
+# UBSan alone, several times the executions per second of ASan's; IQC_FUZZ_JOBS runs that many processes per
+# harness; IQC_FUZZ_TIMEOUT (seconds per input, default 10) keeps a niced process that a build starves from
+# reporting a false hang.
 #
 # A finding stops that harness with the input in build-asan/fuzz/artifacts/. Minimise it with
 #   build-asan/fuzz/fuzz_HARNESS -minimize_crash=1 -runs=100000 ARTIFACT
@@ -90,7 +92,7 @@ for h in "${HARNESSES[@]}"; do
   for ((j = 0; j < JOBS; j++)); do
     seed_j=$(( ${IQC_FUZZ_SEED:-1} == 0 ? 0 : ${IQC_FUZZ_SEED:-1} + j ))
     "$B/fuzz/fuzz_$h" "$B/fuzz/corpus/$h" -dict=fuzz/iqc.dict \
-      -seed="$seed_j" -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 \
+      -seed="$seed_j" -max_total_time="$SECONDS_EACH" -timeout="${IQC_FUZZ_TIMEOUT:-10}" -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 \
       -artifact_prefix="$B/fuzz/artifacts/$h-" >"$log.$j" 2>&1 &
     pids+=($!)
   done

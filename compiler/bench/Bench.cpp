@@ -103,6 +103,7 @@ Report run(const Options& o) {
     // The reference's own copy, with a budget per scene evaluation: a scene whose one evaluation takes more
     // than a million evaluator steps (a long recurrence) could not be ray cast on the CPU in any useful time,
     // and the renderer's most accurate setting stands in (below).
+    rep.lipschitz = base.lipschitz;
     SceneModel model = *base.model;
     model.init(kReferenceEvalSteps);
     double min_hit = *std::min_element(o.hits.begin(), o.hits.end());

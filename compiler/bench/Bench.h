@@ -44,6 +44,7 @@ struct Report {
     std::string renderer;
     std::string geometry_reference;  // "double-precision evaluator" or the setting used
     std::string colour_reference;
+    std::vector<std::string> lipschitz;  // the scene's Lipschitz bounds (CompileResult::lipschitz)
     std::string error;               // non-empty: the bench could not run
 };
 

@@ -513,7 +513,9 @@ static int run(int argc, char** argv) {
         }
         double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         std::printf("iqc bench %s at %dx%d on %s (%.1f s)\n", b_input.c_str(), bo.width, bo.height, rep.renderer.c_str(), secs);
-        std::printf("geometry reference: %s\ncolour reference: %s\n\n", rep.geometry_reference.c_str(), rep.colour_reference.c_str());
+        std::printf("geometry reference: %s\ncolour reference: %s\n", rep.geometry_reference.c_str(), rep.colour_reference.c_str());
+        for (const auto& line : rep.lipschitz) std::printf("lipschitz: %s\n", line.c_str());
+        std::printf("\n");
         std::fputs(iqc::bench::table(rep).c_str(), stdout);
         OutputSet outs;
         if (!b_csv.empty()) outs.add(b_csv, iqc::bench::csv(rep));

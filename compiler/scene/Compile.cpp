@@ -111,6 +111,7 @@ bool SceneCompiler::optimize(SceneIR& scene) {
     }
     for (const auto& w : pr.warnings) d_.warning(w.span, w.message);
     for (const auto& [name, ms] : pr.pass_ms) res_.pass_ms.push_back({"  " + name, ms});
+    res_.lipschitz = pr.lipschitz;
     if (opts_.dump_ir) {
         res_.ir = opts_.dump_after.empty() ? ir::print(scene.module) : pr.dump;
         std::string notes;
