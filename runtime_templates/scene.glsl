@@ -116,6 +116,17 @@ float iqc_normal_step(float t) {
 }
 
 {{/if}}
+{{#if HIT_SCALE}}
+// The field's own value at a scene sample (distance, id): where the compiler divided an instance's distance
+// by its Lipschitz factor K (a safe step), K times it. Hit tests and effects read this value, marches step
+// by the divided one: the divided value is K times too near, so a surface would thicken by K tolerances, a
+// shadow ray would shadow the surface it leaves once K exceeds its start offset (4 tolerances), and
+// penumbrae and occlusion would darken as if every occluder were K times nearer.
+float iqc_value(vec2 h) {
+    return h.x * iqc_lipschitz(int(h.y));
+}
+
+{{/if}}
 {{#if STEP_CAP_CONE}}
 // The radius of a pixel's cone at distance t along a primary ray: half a pixel's angle at the image centre
 // (Amanatides 1984, cone tracing). When the step cap stops a ray that is still closing in on a surface
@@ -131,7 +142,7 @@ float iqc_cone(float t) {
 // tolerances, and at the step cap every pixel within K cones of it would count).
 float iqc_nearness(vec2 h) {
 {{#if HIT_SCALE}}
-    return abs(h.x) * iqc_lipschitz(int(h.y));
+    return abs(iqc_value(h));
 {{#else}}
     return abs(h.x);
 {{/if}}
@@ -316,13 +327,13 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         if (t_next > IQC_MAX_DIST) return -1.0;
         vec2 h_next = iqc_scene(ro + t_next * rd);
         steps++;
-        if (s * h_next.x < iqc_eps(t_next)) {
+        if (s * {{#if HIT_SCALE}}iqc_value(h_next){{#else}}h_next.x{{/if}} < iqc_eps(t_next)) {
             float a = t, b = t_next;
             for (int k = 0; k < 8; k++) {
                 float mid = 0.5 * (a + b);
                 vec2 hm = iqc_scene(ro + mid * rd);
                 steps++;
-                if (s * hm.x < iqc_eps(mid)) { b = mid; h_next = hm; } else { a = mid; }
+                if (s * {{#if HIT_SCALE}}iqc_value(hm){{#else}}hm.x{{/if}} < iqc_eps(mid)) { b = mid; h_next = hm; } else { a = mid; }
             }
             id = int(h_next.y);
             return b;
@@ -401,15 +412,17 @@ vec3 iqc_normal(vec3 p, float t, int id) {
 {{/if}}
 
 {{#if SCENE_EFFECTS}}
-// The distance soft shadows and ambient occlusion read. They use its value (a penumbra, an occlusion), so
-// where instances have `bound` spheres they read the scene without them: a sphere's distance is only a
-// lower bound of the shape's and would darken them.
-float iqc_scene_effects(vec3 p) {
+// What soft shadows and ambient occlusion read: (the step, the field's value). They use the value (a
+// penumbra, an occlusion), so where instances have `bound` spheres they read the scene without them (a
+// sphere's distance is only a lower bound of the shape's and would darken them), and where a distance is
+// divided by a Lipschitz factor they read it multiplied back (iqc_value) while stepping by the divided one.
+vec2 iqc_scene_effects(vec3 p) {
 {{#if SCENE_UNBOUNDED}}
-    return iqc_scene_unbounded(p).x;
+    vec2 h = iqc_scene_unbounded(p);
 {{#else}}
-    return iqc_scene(p).x;
+    vec2 h = iqc_scene(p);
 {{/if}}
+    return vec2(h.x, {{#if HIT_SCALE}}iqc_value(h){{#else}}h.x{{/if}});
 }
 
 {{/if}}
@@ -422,9 +435,9 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
     vec3 rd = to_light / t_max;
     float t = 0.0;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
-        float h = iqc_scene(ro + t * rd).x;
-        if (h < iqc_eps(t)) return 0.0;
-        t += h;
+        vec2 h = iqc_scene(ro + t * rd);
+        if ({{#if HIT_SCALE}}iqc_value(h){{#else}}h.x{{/if}} < iqc_eps(t)) return 0.0;
+        t += h.x;
         if (t > t_max) break;
     }
     return 1.0;
@@ -453,7 +466,8 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
     float res = 1.0, t = 0.0;
 {{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
-        float h = iqc_scene_effects(ro + t * rd);
+        vec2 e = iqc_scene_effects(ro + t * rd);
+        float h = e.y;
         if (h < iqc_eps(t)) return 0.0;
 {{#if SHADOWS_IMPROVED}}
         float y = h * h / (2.0 * ph);
@@ -467,7 +481,7 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
 {{#else}}
         res = min(res, IQC_SHADOW_K * h / max(t, 1.0e-4));
 {{/if}}
-        t += h;
+        t += e.x;
         if (t > t_max) break;
     }
     return clamp(res, 0.0, 1.0);
@@ -480,7 +494,7 @@ float iqc_ao(vec3 p, vec3 N) {
     float occ = 0.0, w = 1.0;
     for (int i = min(iFrame, 0); i < 5; i++) {
         float h = 0.01 + 0.12 * float(i) / 4.0;
-        occ += (h - iqc_scene_effects(p + h * N)) * w;
+        occ += (h - iqc_scene_effects(p + h * N).y) * w;
         w *= 0.5;
     }
     return clamp(1.0 - 3.0 * occ, 0.0, 1.0);
