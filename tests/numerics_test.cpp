@@ -276,3 +276,22 @@ TEST_CASE("the fixed march's hit test multiplies the Lipschitz factor back", "[n
     INFO(n << " pixels differ");
     CHECK(n <= W * H / 100);
 }
+
+TEST_CASE("a discontinuous distance gets a located warning, a continuous repetition none", "[numerics]") {
+    // Found by a new-user trial: a sphere repeated off its cell's centre and a staircase of ⌊2x⌋ are
+    // 1-Lipschitz between their jumps, so the gradient's bound said nothing (K = 1, no word) while sphere
+    // tracing stepped through the jumps' faces (13% of the staircase's pixels against a fixed march).
+    for (auto [name, at] : {std::pair{"repeat_offcentre.iq", "28:8"}, std::pair{"stairs.iq", "25:8"}}) {
+        Compiled c = compile_path(scene(name));
+        INFO(c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        CHECK_THAT(c.diagnostics, Catch::Contains(fmt::format("{}:{}: warning: shape '", name, at)));
+        CHECK_THAT(c.diagnostics, Catch::Contains("has a discontinuous distance: it jumps by"));
+        CHECK_THAT(c.diagnostics, Catch::Contains("keep a repeated shape inside its cell"));
+    }
+    std::string text = read_text(scene("repeat_offcentre.iq"));
+    Compiled centred = compile_text("repeat_centred.iq", replaced(text, "- (0.8, 0, 0)‖ - 0.5", "‖ - 0.5"));
+    REQUIRE(centred.result.exit_code == 0);
+    CHECK(centred.diagnostics.find("discontinuous") == std::string::npos);
+    CHECK(centred.diagnostics.find("warning") == std::string::npos);
+}

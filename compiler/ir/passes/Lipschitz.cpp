@@ -1,6 +1,7 @@
 #include "ir/passes/Lipschitz.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fmt/format.h>
 #include <map>
@@ -238,6 +239,62 @@ double chain_rule_bound(const Module& m, int fn, const std::vector<Interval>& re
     return best;
 }
 
+// Looks for a jump of f (parameter 0 ∈ ℝ³) over the region: pairs of points `delta` apart in random
+// directions whose values differ by more than 1.5·K·delta (a field whose gradient is at most K, continuous
+// along the segment, cannot). Records the largest in e.
+void find_jump(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+               double ball, double K, int pairs, LipschitzEstimate& e) {
+    double extent = 0;
+    for (const Interval& i : region) {
+        if (!std::isfinite(i.lo) || !std::isfinite(i.hi)) return;
+        extent = std::max(extent, i.hi - i.lo);
+    }
+    if (!(extent > 0) || !std::isfinite(K)) return;
+    const double delta = 1e-3 * extent;
+    Evaluator ev(m);
+    const Function& f = m.functions[size_t(fn)];
+    uint64_t state = 0xD1B54A32D192ED03ull;
+    auto next = [&] {  // splitmix64: deterministic
+        state += 0x9E3779B97F4A7C15ull;
+        uint64_t z = state;
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return double((z ^ (z >> 31)) >> 11) / double(1ull << 53);
+    };
+    std::vector<Value> args(f.params.size());
+    for (size_t k = 1; k < f.params.size(); ++k) {  // the others at their midpoints (a group's member 0)
+        std::vector<double> v;
+        for (const Interval& i : others[k - 1]) v.push_back(f.params[k].type.kind == Type::Integer ? std::floor(i.lo) : 0.5 * (i.lo + i.hi));
+        args[k] = {f.params[k].type, v};
+    }
+    try {
+        for (int s = 0; s < pairs; ++s) {
+            std::array<double, 3> a, dir;
+            for (size_t c = 0; c < 3; ++c) a[c] = region[c].lo + (region[c].hi - region[c].lo) * next();
+            if (ball > 0 && a[0] * a[0] + a[1] * a[1] + a[2] * a[2] > ball * ball) continue;
+            double n = 0;
+            for (double& d : dir) {
+                d = 2 * next() - 1;
+                n += d * d;
+            }
+            if (n < 1e-6) continue;
+            n = std::sqrt(n);
+            args[0] = {Type::vector(3), {a[0], a[1], a[2]}};
+            Value va = ev.call(fn, args);
+            args[0] = {Type::vector(3), {a[0] + delta * dir[0] / n, a[1] + delta * dir[1] / n, a[2] + delta * dir[2] / n}};
+            Value vb = ev.call(fn, args);
+            if (va.v.empty() || vb.v.empty()) return;
+            double jump = std::fabs(vb.v[0] - va.v[0]);
+            if (std::isfinite(jump) && jump > 1.5 * K * delta + 1e-9 && jump > e.jump) {
+                e.jump = jump;
+                e.delta = delta;
+                e.jump_at = {a[0], a[1], a[2]};
+            }
+        }
+    } catch (const EvalLimit&) {  // too costly to sample: nothing said
+    }
+}
+
 // Divides function `fn`'s result (its first component, for an instrumented (distance, count)) by K.
 void divide_result(Module& m, int fn, double K) {
     Function& f = m.functions[size_t(fn)];
@@ -275,6 +332,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     if (e.derived > 1 + 1e-9) e.derived = std::min(e.derived, chain_rule_bound(m, fn, box, others, ball, boxes));
     e.sampled = sample(work, grad, box, others, ball, samples);
     e.derived = std::max(e.derived, e.sampled);  // rounding in the intervals' ends never claims less than seen
+    if (std::isfinite(e.derived)) find_jump(m, fn, box, others, ball, std::max(e.derived, 1.0), 4 * samples, e);
     return e;
 }
 
@@ -334,6 +392,13 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                             "where samples exceed it)",
                                                             spec.shape, e.derived, e.sampled, e.derived / std::max(e.sampled, 1.0))});
         }
+        if (e.jump > 0)
+            warnings.push_back({spec.where, fmt::format("shape '{}' has a discontinuous distance: it jumps by {:.3g} between two points "
+                                                        "{:.3g} apart near ({:.3g}, {:.3g}, {:.3g}) in its own space (a floor, a mod, or a "
+                                                        "repetition of a shape that crosses its cell), where no Lipschitz bound holds: "
+                                                        "sphere tracing may step through the faces of the jump; keep a repeated shape "
+                                                        "inside its cell (and symmetric in it), or march it with `march = \"fixed\"`",
+                                                        spec.shape, e.jump, e.delta, e.jump_at[0], e.jump_at[1], e.jump_at[2])});
         if (repeat) warnings.resize(warned);
         if (applied > 1 + 1e-9) {
             divide_result(m, int(fi), applied);
@@ -342,9 +407,12 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                 scaled = true;
             }
         }
-        if (report)
-            report->push_back(fmt::format("{} ({}): K ≤ {:.4g} derived, {:.4g} sampled, {:.4g} applied ({})", spec.shape,
-                                          m.functions[fi].glsl_name, e.derived, e.sampled, applied, how));
+        if (report && spec.trusted && spec.declared <= 0)
+            report->push_back(fmt::format("{} ({}): not derived, {:.4g} applied ({})", spec.shape, m.functions[fi].glsl_name, applied, how));
+        else if (report)
+            report->push_back(fmt::format("{} ({}): K ≤ {:.4g} derived, {:.4g} sampled, {:.4g} applied ({}){}", spec.shape,
+                                          m.functions[fi].glsl_name, e.derived, e.sampled, applied, how,
+                                          e.jump > 0 ? fmt::format("; jumps by {:.3g} (discontinuous)", e.jump) : ""));
         m.functions[fi].lipschitz.object_fn = -1;  // done
     }
     // The runtime's hit test reads the factors back (a distance divided by K is a step, not a proximity):

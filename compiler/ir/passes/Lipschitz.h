@@ -17,6 +17,11 @@
 //    orthogonality that makes a torus exactly 1-Lipschitz): 1;
 //  * else the derived bound — unless it is not finite or exceeds 64 over the region (a twist without a
 //    bound): then the item keeps 1 and gets a located warning naming the fix (`bound = R`).
+//
+// The gradient says nothing about jumps: a field that is 1-Lipschitz between them (‖repeat(p, c) - o‖ - r
+// with the sphere off the cell's centre, a staircase of ⌊x⌋) passes every test above. Pairs of nearby points
+// are sampled too; where two of them differ by more than K times their distance, the field is discontinuous,
+// and the item gets a located warning (sphere tracing may step through the jump's faces).
 #pragma once
 
 #include <string>
@@ -32,6 +37,11 @@ struct LipschitzEstimate {
     double derived = 0;   // proven upper bound of ‖∇f‖ over the region (∞ when none could be derived)
     double sampled = 0;   // the largest ‖∇f‖ seen at sample points (a lower bound of the true K)
     std::string why;      // when derived is ∞: what has no derivative rule or no bound
+    // A jump: two points `delta` apart (the first at `jump_at`) whose distances differ by `jump`, more than
+    // any continuous field with gradient ≤ derived allows (a floor, a mod, a repetition of a shape that
+    // crosses its cell): no Lipschitz bound holds across it. 0: none found.
+    double jump = 0, delta = 0;
+    std::vector<double> jump_at;
 };
 
 // Bounds ‖∇f‖ with respect to parameter 0 (ℝ³) of function `fn` over `box` (its three components); other
