@@ -140,6 +140,19 @@ float iqc_cone(float t) {
 // divided an instance's distance by its Lipschitz factor K (a safe step), the factor is multiplied back:
 // the divided value is K times too small to say how near the surface is (the surface would thicken by K
 // tolerances, and at the step cap every pixel within K cones of it would count).
+// What a ray that reached the step cap shows: the last sample if it lies within the pixel's cone and the ray
+// was still closing in on it (a grazing ray converging on a plane), else the closest approach (in
+// tolerances) if it came within 10 and the ray did not go on from there by more than the pixel's cone (a ray
+// stalled at a silhouette), else nothing. A ray that passed near a surface and went on is not a hit: it
+// would draw that surface in front of what the ray was reaching (a torus 3–6 units in front of the floor it
+// grazed past).
+float iqc_at_step_cap(float best, float best_t, int best_id, float last, float last_t, int last_id, bool closing, out int id) {
+    if (last < iqc_cone(last_t) && closing) { id = last_id; return last_t; }
+    if (best < 10.0 && last_t - best_t <= max(10.0 * iqc_eps(best_t), iqc_cone(best_t))) { id = best_id; return best_t; }
+    id = -1;
+    return -1.0;
+}
+
 float iqc_nearness(vec2 h) {
 {{#if HIT_SCALE}}
     return abs(iqc_value(h));
@@ -168,12 +181,12 @@ float iqc_max_singular(mat3 L) {
 {{/if}}
 {{#if MARCH_SPHERE}}
 // Sphere tracing (Hart 1996): step by the distance bound. Starting inside a shape (a negative distance)
-// it marches to that shape's inner wall. When the step cap is reached, the closest approach counts as a
-// hit if it came within 10 tolerances, and else the last sample if it lies within the pixel's cone (no
-// holes at grazing angles; a ray that only passed near a surface on its way is not a hit).
+// it marches to that shape's inner wall. At the step cap, iqc_at_step_cap decides (no holes at grazing
+// angles; a ray that only passed near a surface on its way is not a hit).
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20;
     int best_id = -1, last_id = -1;
+    bool closing = true;
     id = -1;
     steps = 0;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -185,15 +198,14 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float dn = iqc_nearness(h);
         if (dn < e) { id = int(h.y); return t; }
         if (dn / e < best) { best = dn / e; best_t = t; best_id = int(h.y); }
+        closing = dn <= last;
         last = dn;
         last_t = t;
         last_id = int(h.y);
         t += d;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    if (best < 10.0) { id = best_id; return best_t; }
-    if (last < iqc_cone(last_t)) { id = last_id; return last_t; }
-    return -1.0;
+    return iqc_at_step_cap(best, best_t, best_id, last, last_t, last_id, closing, id);
 }
 {{/if}}
 {{#if MARCH_RELAXED}}
@@ -204,6 +216,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, omega = IQC_RELAXATION, t_prev = 0.0, r_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
     int best_id = -1, last_id = -1;
+    bool closing = true;
     id = -1;
     steps = 0;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -221,6 +234,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float dn = iqc_nearness(h);
         if (dn < e) { id = int(h.y); return t; }
         if (dn / e < best) { best = dn / e; best_t = t; best_id = int(h.y); }
+        closing = dn <= last;
         last = dn;
         last_t = t;
         last_id = int(h.y);
@@ -231,9 +245,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         t += step_len;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    if (best < 10.0) { id = best_id; return best_t; }
-    if (last < iqc_cone(last_t)) { id = last_id; return last_t; }
-    return -1.0;
+    return iqc_at_step_cap(best, best_t, best_id, last, last_t, last_id, closing, id);
 }
 {{/if}}
 {{#if MARCH_AUTO}}
@@ -245,6 +257,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, m = -1.0, t_prev = 0.0, r_prev = 0.0, d_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
     int best_id = -1, last_id = -1;
+    bool closing = true;
     id = -1;
     steps = 0;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -264,6 +277,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float dn = iqc_nearness(h);
         if (dn < e) { id = int(h.y); return t; }
         if (dn / e < best) { best = dn / e; best_t = t; best_id = int(h.y); }
+        closing = dn <= last;
         last = dn;
         last_t = t;
         last_id = int(h.y);
@@ -275,9 +289,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         t += step_len;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    if (best < 10.0) { id = best_id; return best_t; }
-    if (last < iqc_cone(last_t)) { id = last_id; return last_t; }
-    return -1.0;
+    return iqc_at_step_cap(best, best_t, best_id, last, last_t, last_id, closing, id);
 }
 {{/if}}
 {{#if PER_INSTANCE}}

@@ -295,3 +295,45 @@ TEST_CASE("a discontinuous distance gets a located warning, a continuous repetit
     CHECK(centred.diagnostics.find("discontinuous") == std::string::npos);
     CHECK(centred.diagnostics.find("warning") == std::string::npos);
 }
+
+TEST_CASE("a ray that reaches the step cap after passing near a surface does not draw it", "[numerics][render]") {
+    // Found by a new-user trial (20 scaled tori on a floor): at the step cap the closest approach
+    // counted when it came within 10 tolerances, even after the ray had gone on for units, so a torus the ray
+    // grazed past was drawn in front of the floor it was converging on. Here the centre pixel's ray passes
+    // 5 tolerances from a ball at t = 3 and converges on a grazing plane (at t = 25, about 2% closer per
+    // step) until the cap of 100 steps.
+    std::string text = R"(title = "passing near"
+[modules]
+ball = """
+shape
+D = ‖p - (0, 0.505, 3)‖ - 0.5
+where
+p ∈ ℝ³
+"""
+slope = """
+shape
+D = (p_2 + 0.5 - 0.02p_3)/‖(1, 0.02)‖
+where
+p ∈ ℝ³
+"""
+[camera]
+position = [0, 0, 0]
+target = [0, 0, 10]
+[render]
+max_steps = 100
+[[shapes]]
+type = "slope"
+[[shapes]]
+type = "ball"
+)";
+    CompileOptions o;
+    o.ids = true;
+    Compiled c = compile_path(write_temp("passing_near.iq", text), o);
+    REQUIRE(c.result.exit_code == 0);
+    render::RenderResult r = render_compiled(c.result, 9, 9);
+    REQUIRE(r.ok);
+    const float* px = r.image.pixel(4, 4);
+    INFO("id " << px[1] << " at t = " << px[0]);
+    CHECK(std::lround(px[1]) != 1);  // not the ball
+    CHECK(px[0] != Approx(3).margin(0.1));
+}
