@@ -529,6 +529,18 @@ vec3 iqc_colour(int id, vec3 p, vec3 N, vec3 eye) {
     return c;
 }
 
+{{#if BOUNCES}}
+// Where a reflected or refracted ray starts: the hit point p moved onto the surface (one Newton step along
+// the outward normal N), then `side` (1 outside, -1 inside) four tolerances of the surface's own neighbourhood
+// off it. The hit point is only within the hit tolerance at its t, which in relative mode (hit · t) can
+// exceed a thin shape's thickness: an offset by it started a ray into a 0.02-thick pane on its far side.
+vec3 iqc_bounce_origin(vec3 p, vec3 N, float side) {
+    vec2 h = iqc_scene(p);
+    vec3 q = p - N * {{#if HIT_SCALE}}iqc_value(h){{#else}}h.x{{/if}};
+    return q + N * (side * 4.0 * max(iqc_eps(0.0), 1.0e-6 * (1.0 + length(q))));
+}
+
+{{/if}}
 // The colour seen along a ray{{#if BOUNCES}}, following reflections and refractions{{/if}}.
 vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#if BOUNCES}}
@@ -578,15 +590,16 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
             vec3 inside = refract(rd, N, 1.0 / kt.w);
             if (dot(inside, inside) == 0.0) inside = reflect(rd, N);
             int id2, steps2;
-            vec3 ro2 = p - N * (4.0 * iqc_eps(t));
+            vec3 ro2 = iqc_bounce_origin(p, N, -1.0);
             float t2 = iqc_march(ro2, inside, id2, steps2);
             if (id2 < 0) { ro = ro2; rd = inside; continue; }
             vec3 p2 = ro2 + t2 * inside;
             vec3 N2 = iqc_normal(p2, t2, id2);
+            vec3 exit_at = iqc_bounce_origin(p2, N2, 1.0);
             if (dot(N2, inside) < 0.0) N2 = -N2;
             vec3 out_dir = refract(inside, -N2, kt.w);
             if (dot(out_dir, out_dir) == 0.0) out_dir = reflect(inside, -N2);  // total internal reflection
-            ro = p2 + N2 * (4.0 * iqc_eps(t2));
+            ro = exit_at;
             rd = out_dir;
             continue;
         }
@@ -596,7 +609,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
         col += throughput * (1.0 - kr) * c;
         throughput *= kr;
         if (max(throughput.x, max(throughput.y, throughput.z)) < 1.0e-3) break;
-        ro = p + N * (4.0 * iqc_eps(t));
+        ro = iqc_bounce_origin(p, N, 1.0);
         rd = reflect(rd, N);
 {{#else}}
         col += throughput * c;
