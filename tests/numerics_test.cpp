@@ -349,3 +349,22 @@ TEST_CASE("reflected and refracted rays start on the surface, not a relative tol
     INFO(n << " pixels differ");
     CHECK(n <= W * H / 200);
 }
+
+TEST_CASE("a union is bounded term by term, each term through its own cut", "[numerics]") {
+    // Angular repetition rotates p by a piecewise-constant angle (a rigid map where it is continuous) and the
+    // result is unioned with a ball at the centre, so the distance has no single cut: one interval evaluation
+    // of the whole gradient bounded the rotation's entries one by one (K = 4 against 1 sampled). Each term
+    // of the min is now bounded on its own, the petal through the rotation (Gershgorin's bound of JᵀJ: 1 for
+    // a rotation whose angle a box pins). The overhang's jumps at the sector walls are reported too.
+    Compiled c = compile_path(scene("angular_repeat_overhang.iq"));
+    REQUIRE(c.result.exit_code == 0);
+    REQUIRE(c.result.lipschitz.size() == 1);
+    const std::string& line = c.result.lipschitz[0];
+    INFO(line);
+    const std::string k = "K ≤ ";
+    REQUIRE(line.find(k) != std::string::npos);
+    double K = std::stod(line.substr(line.find(k) + k.size()));
+    CHECK(K >= 1);
+    CHECK(K < 3.5);
+    CHECK_THAT(c.diagnostics, Catch::Contains("angular_repeat_overhang.iq:25:8: warning: shape 'flower' has a discontinuous distance"));
+}

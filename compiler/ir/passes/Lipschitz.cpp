@@ -12,6 +12,7 @@
 #include "ir/passes/CSE.h"
 #include "ir/passes/Differentiate.h"
 #include "ir/passes/Inline.h"
+#include "sema/Builtins.h"
 
 namespace iqc::ir {
 
@@ -21,13 +22,33 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kWorkBudget = 2e7;  // instructions evaluated per estimate (boxes and samples)
 constexpr double kUnbounded = 64;  // a derived K above this over the region is useless for marching
 
-// The norm bound of the gradient over one box of p.
-double box_bound(const Module& m, int grad, const std::vector<Interval>& box, const std::vector<std::vector<Interval>>& others) {
+// A bound of ‖J‖₂ for the 3×3 matrix J whose rows are 3 consecutive components each of `c` (row-major):
+// the square root of Gershgorin's bound of λ_max(JᵀJ), with JᵀJ's entries in interval arithmetic. Exact for
+// a rotation whose angle a box pins (JᵀJ = I), where the Frobenius norm says √3.
+double jacobian_norm(const std::vector<Interval>& c) {
+    if (c.size() != 9) return kInf;
+    double worst = 0;
+    for (size_t i = 0; i < 3; ++i) {
+        double row = 0;
+        for (size_t j = 0; j < 3; ++j) {
+            Interval e{0, 0};
+            for (size_t r = 0; r < 3; ++r)
+                e = iv::add(e, i == j ? iv::sqr(c[r * 3 + i]) : iv::mul(c[r * 3 + i], c[r * 3 + j]));
+            row += i == j ? std::max(e.hi, 0.0) : iv::magnitude(e);
+        }
+        worst = std::max(worst, row);
+    }
+    return std::isnan(worst) ? kInf : std::sqrt(worst);
+}
+
+// The norm bound of the gradient (jacobian: of the Jacobian given by its rows) over one box of p.
+double box_bound(const Module& m, int grad, const std::vector<Interval>& box, const std::vector<std::vector<Interval>>& others,
+                 bool jacobian = false) {
     std::vector<std::vector<Interval>> params = {box};
     params.insert(params.end(), others.begin(), others.end());
     auto b = interval_analysis(m, grad, params);
     const Bounds& g = b[m.functions[size_t(grad)].result];
-    double n = g.norm;
+    double n = jacobian ? std::min(g.norm, jacobian_norm(g.c)) : g.norm;
     return std::isnan(n) ? kInf : n;
 }
 
@@ -51,9 +72,9 @@ bool meets_ball(const std::vector<Interval>& box, double ball) {
 // Branch and bound: split the worst box along its longest side until the budget is spent (halves outside
 // the ball are dropped); the worst box's bound then bounds the whole region.
 double derive(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
-              double ball, int budget) {
+              double ball, int budget, bool jacobian = false) {
     std::priority_queue<Box> q;
-    q.push({region, box_bound(m, grad, region, others)});
+    q.push({region, box_bound(m, grad, region, others, jacobian)});
     for (int used = 1; used + 2 <= budget && !q.empty();) {
         Box worst = q.top();
         if (!std::isfinite(worst.bound) && used > budget / 2) break;
@@ -70,7 +91,7 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
             Box b = worst;
             (half ? b.c[axis].lo : b.c[axis].hi) = mid;
             if (!meets_ball(b.c, ball)) continue;
-            b.bound = box_bound(m, grad, b.c, others);
+            b.bound = box_bound(m, grad, b.c, others, jacobian);
             q.push(std::move(b));
             ++used;
         }
@@ -119,8 +140,8 @@ double sample(const Module& m, int grad, const std::vector<Interval>& region, co
 // ‖∇D(p)‖ = ‖J_T(p)ᵀ ∇F(u)‖ ≤ sup ‖∇F‖ · sup ‖J_T‖ (D = F ∘ T), and each factor, bounded by intervals on
 // its own, keeps what one interval evaluation of the whole gradient loses: the twist's sin² + cos² = 1
 // (its rotation's entries are bounded one by one) multiplied into the shape's gradient. ‖J_T‖ is bounded by
-// the Frobenius norm of its rows (the gradients of u's components) over p's region; ‖∇F‖ over the box of u
-// that T's intervals give. Returns the smallest product over the cuts tried (∞ when there is none).
+// Gershgorin's bound of JᵀJ (or the Frobenius norm, if smaller) from its rows (the gradients of u's
+// components) over p's region; ‖∇F‖ over the box of u that T's intervals give. Returns the smallest product over the cuts tried (∞ when there is none).
 double chain_rule_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
                         double ball, int budget) {
     constexpr int kMaxCandidates = 64, kMaxCuts = 4;
@@ -233,7 +254,7 @@ double chain_rule_bound(const Module& m, int fn, const std::vector<Interval>& re
         work.functions.push_back(std::move(J));
         // J is the warp's derivative alone, usually a few dozen instructions: more boxes for it (a twist's
         // rows tighten as p_2's interval narrows: K 16 → 11 on the bench's twisted bar).
-        double kj = derive(work, j_fn, region, others, ball, c < 200 ? 16 * budget : budget);
+        double kj = derive(work, j_fn, region, others, ball, c < 200 ? 16 * budget : budget, true);
         best = std::min(best, kf * kj);
     }
     return best;
@@ -295,6 +316,52 @@ void find_jump(const Module& m, int fn, const std::vector<Interval>& region, con
     }
 }
 
+// The terms of a union-like result: a min or max picks one operand's value at each point (a Select one of
+// two), so ‖∇D‖ is at most the largest of the operands' gradients, and each operand may have a cut of its
+// own (a rotated repetition unioned with a ball at its centre has none as a whole). Up to `limit` terms.
+void union_terms(const Function& f, ValueId v, std::vector<ValueId>& out, size_t limit) {
+    const Instr& in = f.body[v];
+    bool picks = in.op == Op::Select;
+    if (in.op == Op::Builtin && in.type.is_scalar()) {
+        std::string_view name = builtins()[size_t(in.aux)].name;
+        picks = name == "min" || name == "max";
+    }
+    if (!picks || out.size() + in.args.size() > limit) {
+        out.push_back(v);
+        return;
+    }
+    for (size_t k = in.op == Op::Select ? 1 : 0; k < in.args.size(); ++k) union_terms(f, in.args[k], out, limit);
+}
+
+// Bounds ‖∇D‖ term by term (union_terms), each term by intervals on its own gradient and by the chain rule;
+// ∞ when D is not a union of at least two terms.
+double union_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+                   double ball, int budget) {
+    Module work = m;
+    Function flat = inline_calls(work, work.functions[size_t(fn)]);
+    eliminate_common_subexpressions(flat);
+    if (flat.body.empty() || flat.body.size() > 20000) return kInf;
+    std::vector<ValueId> terms;
+    union_terms(flat, flat.result, terms, 8);
+    if (terms.size() < 2) return kInf;
+    double worst = 0;
+    for (ValueId t : terms) {
+        Function term = flat;
+        term.name = "lipschitz_term";
+        term.result = t;
+        int t_fn = int(work.functions.size());
+        work.functions.push_back(std::move(term));
+        std::string why;
+        int g = differentiate(work, t_fn, 0, "lipschitz_term_gradient", &why);
+        if (g < 0) return kInf;
+        double k = derive(work, g, region, others, ball, budget);
+        if (k > 1 + 1e-9) k = std::min(k, chain_rule_bound(work, t_fn, region, others, ball, budget));
+        worst = std::max(worst, k);
+        if (!std::isfinite(worst)) return kInf;
+    }
+    return worst;
+}
+
 // Divides function `fn`'s result (its first component, for an instrumented (distance, count)) by K.
 void divide_result(Module& m, int fn, double K) {
     Function& f = m.functions[size_t(fn)];
@@ -330,6 +397,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     samples = std::max(16, int(samples * scale));
     e.derived = derive(work, grad, box, others, ball, boxes);
     if (e.derived > 1 + 1e-9) e.derived = std::min(e.derived, chain_rule_bound(m, fn, box, others, ball, boxes));
+    if (e.derived > 1 + 1e-9) e.derived = std::min(e.derived, union_bound(m, fn, box, others, ball, boxes));
     e.sampled = sample(work, grad, box, others, ball, samples);
     e.derived = std::max(e.derived, e.sampled);  // rounding in the intervals' ends never claims less than seen
     if (std::isfinite(e.derived)) find_jump(m, fn, box, others, ball, std::max(e.derived, 1.0), 4 * samples, e);

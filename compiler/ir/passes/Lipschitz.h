@@ -10,6 +10,11 @@
 // (branch and bound: the largest bound over a cover of the region by boxes bounds the whole region). The
 // gradient is also sampled at points of the region (the largest sampled ‖∇D‖ is a lower bound of K).
 //
+// Two refinements tighten the derived bound where one interval evaluation of the whole gradient is loose:
+// the chain rule at a cut (D = F(T(p)) with u = T(p) ∈ ℝ³ the only way p reaches D: sup‖∇F‖·sup‖J_T‖, ‖J_T‖
+// by Gershgorin's bound of JᵀJ — a twist, a rotation by a piecewise-constant angle), and a union term by term
+// (a min, max or select picks one operand's gradient: the largest operand bound, each with its own cut).
+//
 // The item's distance is then divided by K_applied:
 //  * the shape says `# lipschitz: K`: K (warned when a sample already exceeds it);
 //  * the shape says `# exact` or `# bound` (1-Lipschitz by construction): 1;
