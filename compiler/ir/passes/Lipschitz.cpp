@@ -13,6 +13,7 @@
 #include "ir/passes/Differentiate.h"
 #include "ir/passes/Inline.h"
 #include "sema/Builtins.h"
+#include "source/Internal.h"
 
 namespace iqc::ir {
 
@@ -396,8 +397,18 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     boxes = std::max(4, int(boxes * scale));
     samples = std::max(16, int(samples * scale));
     e.derived = derive(work, grad, box, others, ball, boxes);
-    if (e.derived > 1 + 1e-9) e.derived = std::min(e.derived, chain_rule_bound(m, fn, box, others, ball, boxes));
-    if (e.derived > 1 + 1e-9) e.derived = std::min(e.derived, union_bound(m, fn, box, others, ball, boxes));
+    // The refinements only ever lower a bound that stands without them: one that cannot be built (a form the
+    // differentiator has no rule for once a cut is a parameter) leaves the bound as it is.
+    auto refine = [&](auto bound) {
+        if (e.derived <= 1 + 1e-9) return;
+        try {
+            e.derived = std::min(e.derived, bound(m, fn, box, others, ball, boxes));
+        } catch (const InternalError&) {
+        } catch (const SizeLimit&) {
+        }
+    };
+    refine(chain_rule_bound);
+    refine(union_bound);
     e.sampled = sample(work, grad, box, others, ball, samples);
     e.derived = std::max(e.derived, e.sampled);  // rounding in the intervals' ends never claims less than seen
     if (std::isfinite(e.derived)) find_jump(m, fn, box, others, ball, std::max(e.derived, 1.0), 4 * samples, e);
