@@ -363,6 +363,89 @@ double union_bound(const Module& m, int fn, const std::vector<Interval>& region,
     return worst;
 }
 
+// √ of a square form of `old` (v⋅v, x·x, a min, max or select of them, a square over a guarded square, a
+// constant ≥ 0), built in `b` from the mapped values: ‖v‖, |x|, … (-1: not a square form). What Quilez's exact
+// distances write as √(min(dot2(a), dot2(b))): equal values, but the root's gradient is a unit vector's
+// where the square's, divided by 2√s, has no useful interval near the surface (an interval of 1/√s).
+ValueId root_of_square(Builder& b, const std::vector<Instr>& old, const std::vector<ValueId>& map, ValueId v, int depth = 0) {
+    const Instr& in = old[v];
+    if (depth > 8 || !in.type.is_scalar()) return ValueId(-1);
+    auto name = [&]() -> std::string_view { return in.op == Op::Builtin ? builtins()[size_t(in.aux)].name : ""; };
+    if (in.op == Op::Dot && in.args[0] == in.args[1]) return b.builtin("length", {map[in.args[0]]});
+    if (in.op == Op::Mul && in.args[0] == in.args[1] && old[in.args[0]].type.is_scalar()) return b.builtin("abs", {map[in.args[0]]});
+    if (in.op == Op::Const && in.data.size() == 1 && in.data[0] >= 0) return b.scalar(std::sqrt(in.data[0]));
+    if (in.op == Op::Builtin && (name() == "min" || name() == "max")) {
+        std::vector<ValueId> roots;
+        for (ValueId a : in.args) {
+            ValueId r = root_of_square(b, old, map, a, depth + 1);
+            if (r == ValueId(-1)) return r;
+            roots.push_back(r);
+        }
+        return b.builtin(builtins()[size_t(in.aux)].name, roots);
+    }
+    if (in.op == Op::Select || in.op == Op::If) {
+        ValueId x = root_of_square(b, old, map, in.args[1], depth + 1), y = root_of_square(b, old, map, in.args[2], depth + 1);
+        if (x == ValueId(-1) || y == ValueId(-1)) return ValueId(-1);
+        return b.op(in.op, {map[in.args[0]], x, y});
+    }
+    if (in.op == Op::Div) {
+        ValueId num = root_of_square(b, old, map, in.args[0], depth + 1);
+        ValueId den = root_of_square(b, old, map, in.args[1], depth + 1);
+        if (num == ValueId(-1) || den == ValueId(-1)) return ValueId(-1);
+        return b.op(Op::Div, {num, den});
+    }
+    return ValueId(-1);
+}
+
+// A copy of `f` (calls inlined, common subexpressions merged) with every √ of a square form taken as the
+// root itself (root_of_square). For the estimate only: the emitted code is the user's.
+Function roots_taken(const Module& m, const Function& fn) {
+    Function flat = inline_calls(m, fn);
+    eliminate_common_subexpressions(flat);
+    std::vector<Instr> old = std::move(flat.body);
+    flat.body.clear();
+    std::vector<ValueId> map(old.size());
+    Module scratch = m;  // Builder needs a module (for calls; there are none left)
+    Builder b(scratch, flat);
+    for (size_t i = 0; i < old.size(); ++i) {
+        const Instr& in = old[i];
+        if (in.op == Op::Builtin && in.type.is_scalar() && builtins()[size_t(in.aux)].name == std::string_view("sqrt")) {
+            ValueId r = root_of_square(b, old, map, in.args[0]);
+            if (r != ValueId(-1)) {
+                map[i] = r;
+                continue;
+            }
+        }
+        Instr copy = in;
+        for (ValueId& a : copy.args) a = map[a];
+        map[i] = flat.add(std::move(copy));
+    }
+    flat.result = map[flat.result];
+    for (auto& [name, v] : flat.outputs) v = map[v];
+    return flat;
+}
+
+// The direct, chain-rule and union bounds of `fn` with its roots of squares taken (roots_taken); ∞ when
+// there is none to take.
+double roots_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+                   double ball, int budget) {
+    Module work = m;
+    Function f = roots_taken(work, work.functions[size_t(fn)]);
+    size_t roots = 0;
+    for (const Instr& in : f.body) roots += in.op == Op::Builtin && builtins()[size_t(in.aux)].name == std::string_view("sqrt");
+    f.name = "lipschitz_roots";
+    int r_fn = int(work.functions.size());
+    work.functions.push_back(std::move(f));
+    std::string why;
+    int g = differentiate(work, r_fn, 0, "lipschitz_roots_gradient", &why);
+    if (g < 0) return kInf;
+    double k = derive(work, g, region, others, ball, budget);
+    if (k > 1 + 1e-9) k = std::min(k, chain_rule_bound(work, r_fn, region, others, ball, budget));
+    if (k > 1 + 1e-9) k = std::min(k, union_bound(work, r_fn, region, others, ball, budget));
+    (void)roots;
+    return k;
+}
+
 // Divides function `fn`'s result (its first component, for an instrumented (distance, count)) by K.
 void divide_result(Module& m, int fn, double K) {
     Function& f = m.functions[size_t(fn)];
@@ -409,6 +492,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     };
     refine(chain_rule_bound);
     refine(union_bound);
+    refine(roots_bound);
     e.sampled = sample(work, grad, box, others, ball, samples);
     e.derived = std::max(e.derived, e.sampled);  // rounding in the intervals' ends never claims less than seen
     if (std::isfinite(e.derived)) find_jump(m, fn, box, others, ball, std::max(e.derived, 1.0), 4 * samples, e);
