@@ -334,6 +334,24 @@ void union_terms(const Function& f, ValueId v, std::vector<ValueId>& out, size_t
     for (size_t k = in.op == Op::Select ? 1 : 0; k < in.args.size(); ++k) union_terms(f, in.args[k], out, limit);
 }
 
+double union_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+                   double ball, int budget);
+
+// Adds `f` to `work` and bounds its gradient: by intervals, then (when that exceeds 1) by the chain rule at a
+// cut and, with `unions`, term by term. ∞ when it has no derivative.
+double bound_added(Module& work, Function f, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+                   double ball, int budget, bool unions) {
+    int f_fn = int(work.functions.size());
+    work.functions.push_back(std::move(f));
+    std::string why;
+    int g = differentiate(work, f_fn, 0, work.functions[size_t(f_fn)].name + "_gradient", &why);
+    if (g < 0) return kInf;
+    double k = derive(work, g, region, others, ball, budget);
+    if (k > 1 + 1e-9) k = std::min(k, chain_rule_bound(work, f_fn, region, others, ball, budget));
+    if (unions && k > 1 + 1e-9) k = std::min(k, union_bound(work, f_fn, region, others, ball, budget));
+    return k;
+}
+
 // Bounds ‖∇D‖ term by term (union_terms), each term by intervals on its own gradient and by the chain rule;
 // ∞ when D is not a union of at least two terms.
 double union_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
@@ -350,14 +368,7 @@ double union_bound(const Module& m, int fn, const std::vector<Interval>& region,
         Function term = flat;
         term.name = "lipschitz_term";
         term.result = t;
-        int t_fn = int(work.functions.size());
-        work.functions.push_back(std::move(term));
-        std::string why;
-        int g = differentiate(work, t_fn, 0, "lipschitz_term_gradient", &why);
-        if (g < 0) return kInf;
-        double k = derive(work, g, region, others, ball, budget);
-        if (k > 1 + 1e-9) k = std::min(k, chain_rule_bound(work, t_fn, region, others, ball, budget));
-        worst = std::max(worst, k);
+        worst = std::max(worst, bound_added(work, std::move(term), region, others, ball, budget, false));
         if (!std::isfinite(worst)) return kInf;
     }
     return worst;
@@ -425,25 +436,13 @@ Function roots_taken(const Module& m, const Function& fn) {
     return flat;
 }
 
-// The direct, chain-rule and union bounds of `fn` with its roots of squares taken (roots_taken); ∞ when
-// there is none to take.
+// The direct, chain-rule and union bounds of `fn` with its roots of squares taken (roots_taken).
 double roots_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
                    double ball, int budget) {
     Module work = m;
     Function f = roots_taken(work, work.functions[size_t(fn)]);
-    size_t roots = 0;
-    for (const Instr& in : f.body) roots += in.op == Op::Builtin && builtins()[size_t(in.aux)].name == std::string_view("sqrt");
     f.name = "lipschitz_roots";
-    int r_fn = int(work.functions.size());
-    work.functions.push_back(std::move(f));
-    std::string why;
-    int g = differentiate(work, r_fn, 0, "lipschitz_roots_gradient", &why);
-    if (g < 0) return kInf;
-    double k = derive(work, g, region, others, ball, budget);
-    if (k > 1 + 1e-9) k = std::min(k, chain_rule_bound(work, r_fn, region, others, ball, budget));
-    if (k > 1 + 1e-9) k = std::min(k, union_bound(work, r_fn, region, others, ball, budget));
-    (void)roots;
-    return k;
+    return bound_added(work, std::move(f), region, others, ball, budget, true);
 }
 
 // Divides function `fn`'s result (its first component, for an instrumented (distance, count)) by K.
