@@ -145,10 +145,11 @@ float iqc_cone(float t) {
 // tolerances) if it came within 10 and the ray did not go on from there by more than the pixel's cone (a ray
 // stalled at a silhouette), else nothing. A ray that passed near a surface and went on is not a hit: it
 // would draw that surface in front of what the ray was reaching (a torus 3–6 units in front of the floor it
-// grazed past).
+// grazed past). Nor is a sample without an instance (id -1: a bounding-volume node standing in for its
+// members, or nothing at all).
 float iqc_at_step_cap(float best, float best_t, int best_id, float last, float last_t, int last_id, bool closing, out int id) {
-    if (last < iqc_cone(last_t) && closing) { id = last_id; return last_t; }
-    if (best < 10.0 && last_t - best_t <= max(10.0 * iqc_eps(best_t), iqc_cone(best_t))) { id = best_id; return best_t; }
+    if (last < iqc_cone(last_t) && closing && last_id >= 0) { id = last_id; return last_t; }
+    if (best < 10.0 && best_id >= 0 && last_t - best_t <= max(10.0 * iqc_eps(best_t), iqc_cone(best_t))) { id = best_id; return best_t; }
     id = -1;
     return -1.0;
 }

@@ -96,6 +96,12 @@ TEST_CASE("analytic gradients agree with central differences of the evaluator", 
         "q = p\nwhere\np ∈ ℝ³\n",
         "shape\nD = { ‖p‖ - 1 if p_2 > 0\n    ‖p - (0, -0.5, 0)‖ - 0.8 otherwise\nwhere\np ∈ ℝ³\n",
         "shape\nD = n⋅p - 0.2 + 0.1(p × (0, 0, 1))⋅(1, 1, 0)\nn = normalize(a)\nwhere\np ∈ ℝ³\na ∈ ℝ³ default = (1, 2, 2)\n",
+        // Recurrences (the tangent rule for the IR's loop): a fold, a scale carried as a state, and a state
+        // updated by a piecewise step (the loop's body has lazy arms).
+        "shape\nq_1 = p\nq_(k+1) = (|q_k_1|, |q_k_2|, |q_k_3|) - 0.4(1, 1, 1) for k ∈ 1..3\nD = ‖q_4‖ - 0.3\nwhere\np ∈ ℝ³\n",
+        "shape\nsin from trigonometry\nz_1 = p\ns_1 = 1\nz_(k+1) = 1.3z_k + 0.2(sin(2z_k_2), sin(2z_k_3), sin(2z_k_1)) for k ∈ 1..4\n"
+        "s_(k+1) = 1.3s_k for k ∈ 1..4\nD = (‖z_5‖ - 1)/s_5\nwhere\np ∈ ℝ³\n",
+        "shape\nw_1 = p\nw_(k+1) = { w_k if ‖w_k‖ > 3\n            w_k + 0.3(w_k_2, w_k_3, w_k_1) otherwise for k ∈ 1..3\nD = ‖w_4‖ - 1\nwhere\np ∈ ℝ³\n",
     };
     for (const char* s : shapes) {
         Angles a = gradient_angles(s, 400);
@@ -104,20 +110,20 @@ TEST_CASE("analytic gradients agree with central differences of the evaluator", 
     }
 }
 
-TEST_CASE("no analytic gradient through recurrences yet: the scene falls back, with a warning", "[differentiate]") {
-    Compiled c = compile_path(std::filesystem::path(IQC_SOURCE_DIR) / "golden" / "lang" / "folded.md");
-    REQUIRE(c.result.exit_code == 0);
+TEST_CASE("analytic normals through recurrences: the loop carries each state's tangent", "[differentiate]") {
+    // Fractals (a fold, the Menger sponge) had no analytic normal: the gradient stopped at the IR's loop and the
+    // runtime fell back to tetrahedron differences, with a warning. The loop's tangent rule makes a loop of
+    // the states and their tangents (forward mode).
     Compiled a = compile_text("folded_analytic.md",
                               "❤: folded\n```iheartla\nshape\nq_1 = p\nq_(k+1) = (|q_k_1|, |q_k_2|, |q_k_3|) - 0.4(1, 1, 1) for k ∈ 1..3\n"
                               "D = ‖q_4‖ - 0.3\nwhere\np ∈ ℝ³\n```\n```scene\n[render]\nnormals = \"analytic\"\n[[shapes]]\ntype = \"folded\"\n```\n");
     REQUIRE(a.result.exit_code == 0);
-    // Located at the recurrence, once.
-    CHECK_THAT(a.diagnostics, Catch::Contains("folded_analytic.md:5:1: warning: no analytic normal here (a recurrence (its loop) "
-                                              "depends on the query point): the normals of the shapes that use it come from "
-                                              "tetrahedron differences\n  q_(k+1) = "));
-    // The instance's gradient is zero, which the runtime's normal replaces by tetrahedron differences.
+    CHECK_THAT(a.diagnostics, !Catch::Contains("no analytic normal here"));
     CHECK_THAT(a.result.code, Catch::Contains("vec3 iqc_gradient(vec3 p, int id) {"));
-    CHECK_THAT(a.result.code, Catch::Contains("if (dot(g, g) < 1.0e-24) g = iqc_tetrahedron_gradient(p, t);"));
+    CHECK_THAT(a.result.code, Catch::Contains("mat3 d_q = "));  // the tangent state
+    Compiled menger = compile_text("menger_analytic.iq", "[render]\nnormals = \"analytic\"\n[[shapes]]\ntype = \"menger\"\n");
+    REQUIRE(menger.result.exit_code == 0);
+    CHECK_THAT(menger.diagnostics, !Catch::Contains("no analytic normal here"));
     const SceneModel& model = *a.result.model;
     int id = -1;
     model.distance({0, 0, 0}, &id);

@@ -338,7 +338,7 @@ private:
             std::vector<double> order(it.tree.order.begin(), it.tree.order.end());
             const Type t = Type::array(Type::integer(), int(order.size()));
             it.tree_order = {add_global(it.name + "_tree_members", t, Global::Kind::Constant,
-                                        std::move(order), "bounding-bounding-volume hierarchy: the members in leaf order"),
+                                        std::move(order), "bounding-volume hierarchy: the members in leaf order"),
                              true};
         }
         auto params = [&](const CheckedModule& mod, const char* role, const std::vector<int>& skip,
@@ -662,12 +662,13 @@ private:
             Type vt = Type::vector(int(st.size()));
             ValueId below = b.construct(vt, inner);
             if (bounded) {
-                // Farther from the node's box than the bound margin, the box's distance stands for everything
-                // below it, as `bound` does for one member: a lower bound of the members' distances, which no
-                // hit test accepts.
-                ValueId reach = b.scalar(o_.bound_margin);
+                // Farther from the node's box than the bound margin and than the box's own half-diagonal, the
+                // box's distance stands for everything below it, as `bound` does for one member: a lower bound
+                // of the members' distances (at least a third of the nearest one's), which no hit test accepts.
+                // Its id is -1, no instance: at the step cap a ray whose last sample is a stand-in is no hit.
+                ValueId reach = b.builtin("max", {b.builtin("length", {read(b, g.half, node)}), b.scalar(o_.bound_margin)});
                 ValueId far = b.compare(CompareKind::Gt, ds, reach);
-                std::vector<ValueId> stand_in = {ds, b.scalar(it.id)};
+                std::vector<ValueId> stand_in = {ds, b.scalar(-1)};
                 if (st.size() > 2) stand_in.push_back(st[2]);
                 below = b.if_(far, b.construct(vt, stand_in), below);
             }

@@ -1,6 +1,7 @@
 #include "ir/passes/Differentiate.h"
 
 #include <fmt/format.h>
+#include <map>
 
 #include "ir/passes/Fold.h"
 #include "ir/passes/Inline.h"
@@ -25,6 +26,10 @@ struct Differentiator {
     Function& g;
     std::vector<ValueId> primal;   // F's value -> G's value
     std::vector<ValueId> tangent;  // F's value -> G's tangent value, or kZero
+    Module* module = nullptr;      // where a loop's tangent body goes
+    // A Loop of F whose tangent is a loop of G carrying the states and their tangents: per state, the index
+    // of its tangent in that loop's results (-1: an integer state, no tangent).
+    std::map<size_t, std::vector<int>> loop_tangents;
 
     ValueId emit(Op op, Type t, std::vector<ValueId> args, int aux = 0) {
         Instr in;
@@ -329,11 +334,110 @@ struct Differentiator {
             case Op::Element:
             case Op::At:
                 return no_rule("an element of a sequence");
-            case Op::Loop:
-            case Op::Member:
-                return no_rule("a recurrence (its loop)");
+            case Op::Loop: return loop_rule(f, i);
+            case Op::Member: {
+                auto it = loop_tangents.find(in.args[0]);
+                if (it == loop_tangents.end() || it->second[size_t(in.aux)] < 0) return kZero;
+                return emit(Op::Member, tangent_type(in.type), {T(0)}, it->second[size_t(in.aux)]);
+            }
         }
         return no_rule("an operation");
+    }
+
+    // The tangent rule of a recurrence (forward mode through a loop): a loop of G that carries each state and
+    // its tangent, whose body is the original body with its tangents (this rule, applied to the body, seeded
+    // with the tangents of the states and of the captured values). Its value stands for the loop's tangent;
+    // Member picks a state's tangent from it.
+    ValueId loop_rule(const Function& f, size_t i) {
+        const Instr& in = f.body[i];
+        if (!module) throw Unsupported{"a recurrence (its loop) depends on the query point"};
+        const Function body = inline_calls(*module, module->functions[size_t(in.aux)]);
+        const int S = int(body.outputs.size());
+        const int C = int(in.args.size()) - 1 - S;
+        std::vector<int> state_tangent(size_t(S), -1), capture_tangent(size_t(C), -1);
+        std::vector<Type> state_types;
+        int T = 0, TC = 0;
+        for (int j = 0; j < S; ++j) {
+            const Type& t = f.body[in.args[size_t(1 + j)]].type;
+            state_types.push_back(t);
+            if (t.kind == Type::Integer) continue;
+            if (!tangent_type(t).valid()) throw Unsupported{"a recurrence of matrices depends on the query point"};
+            state_tangent[size_t(j)] = S + T++;
+        }
+        for (int c = 0; c < C; ++c) {
+            ValueId t = tangent[in.args[size_t(1 + S + c)]];
+            if (t != kZero) capture_tangent[size_t(c)] = TC++;
+        }
+        // The body: params (k, states, state tangents, captures, capture tangents).
+        Function b2;
+        b2.name = body.name + ".tangent";
+        b2.glsl_name = body.glsl_name + "_tangent";
+        b2.params.push_back(body.params[0]);
+        for (int j = 0; j < S; ++j) b2.params.push_back(body.params[size_t(1 + j)]);
+        for (int j = 0; j < S; ++j)
+            if (state_tangent[size_t(j)] >= 0) b2.params.push_back({"d_" + body.params[size_t(1 + j)].name, tangent_type(state_types[size_t(j)])});
+        for (int c = 0; c < C; ++c) b2.params.push_back(body.params[size_t(1 + S + c)]);
+        for (int c = 0; c < C; ++c)
+            if (capture_tangent[size_t(c)] >= 0)
+                b2.params.push_back({"d_" + body.params[size_t(1 + S + c)].name, type(tangent[in.args[size_t(1 + S + c)]])});
+        Differentiator d{b2, std::vector<ValueId>(body.body.size()), std::vector<ValueId>(body.body.size(), kZero), module, {}};
+        auto param = [&](int index) {
+            Instr p;
+            p.op = Op::Param;
+            p.type = b2.params[size_t(index)].type;
+            p.aux = index;
+            p.name = b2.params[size_t(index)].name;
+            return b2.add(std::move(p));
+        };
+        for (size_t k = 0; k < body.body.size(); ++k) {
+            const Instr& bin = body.body[k];
+            if (bin.op == Op::Param) {
+                int a = bin.aux;
+                if (a <= S) {  // k or a state
+                    d.primal[k] = param(a);
+                    if (a >= 1 && state_tangent[size_t(a - 1)] >= 0) d.tangent[k] = param(1 + S + (state_tangent[size_t(a - 1)] - S));
+                } else {  // a capture
+                    int c = a - 1 - S;
+                    d.primal[k] = param(1 + S + T + c);
+                    if (capture_tangent[size_t(c)] >= 0) d.tangent[k] = param(1 + S + T + C + capture_tangent[size_t(c)]);
+                }
+                continue;
+            }
+            Instr copy = bin;
+            for (ValueId& a : copy.args) a = d.primal[a];
+            d.primal[k] = b2.add(std::move(copy));
+            d.tangent[k] = d.rule(*module, body, k);  // Unsupported propagates: the loop has no tangent
+            if (d.tangent[k] == kPoison) throw Unsupported{"a recurrence whose step has no derivative rule"};
+        }
+        for (int j = 0; j < S; ++j) b2.outputs.push_back({body.outputs[size_t(j)].first, d.primal[body.outputs[size_t(j)].second]});
+        for (int j = 0; j < S; ++j) {
+            if (state_tangent[size_t(j)] < 0) continue;
+            ValueId t = d.tangent[body.outputs[size_t(j)].second];
+            // A dense zero tangent is a constant in the body.
+            ValueId dt = t == kZero ? d.zero_of(tangent_type(state_types[size_t(j)])) : t;
+            b2.outputs.push_back({"d_" + body.outputs[size_t(j)].first, dt});
+        }
+        b2.result = b2.outputs[0].second;
+        int fn = int(module->functions.size());
+        module->functions.push_back(std::move(b2));
+        // The loop: hi, states, their tangents, captures, their tangents.
+        std::vector<ValueId> args = {primal[in.args[0]]};
+        for (int j = 0; j < S; ++j) args.push_back(primal[in.args[size_t(1 + j)]]);
+        for (int j = 0; j < S; ++j)
+            if (state_tangent[size_t(j)] >= 0) args.push_back(dense(tangent[in.args[size_t(1 + j)]], state_types[size_t(j)]));
+        for (int c = 0; c < C; ++c) args.push_back(primal[in.args[size_t(1 + S + c)]]);
+        for (int c = 0; c < C; ++c)
+            if (capture_tangent[size_t(c)] >= 0) args.push_back(tangent[in.args[size_t(1 + S + c)]]);
+        Instr loop;
+        loop.op = Op::Loop;
+        loop.type = Type::tuple(S + T);
+        loop.args = std::move(args);
+        loop.aux = fn;
+        loop.data = in.data;
+        loop.source = in.source;
+        ValueId lv = g.add(std::move(loop));
+        loop_tangents[i] = state_tangent;
+        return lv;
     }
 };
 
@@ -347,7 +451,7 @@ int differentiate(Module& m, int fn, int wrt_param, const std::string& name, std
     g.glsl_name = name;
     g.params = f.params;
     g.param_bounds = f.param_bounds;
-    Differentiator d{g, std::vector<ValueId>(f.body.size()), std::vector<ValueId>(f.body.size(), kZero)};
+    Differentiator d{g, std::vector<ValueId>(f.body.size()), std::vector<ValueId>(f.body.size(), kZero), &m, {}};
     std::vector<std::pair<Span, std::string>> missing;
     for (size_t i = 0; i < f.body.size(); ++i) {
         const Instr& in = f.body[i];

@@ -22,6 +22,15 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kWorkBudget = 2e7;  // instructions evaluated per estimate (boxes and samples)
 constexpr double kUnbounded = 64;  // a derived K above this over the region is useless for marching
+// The work of one sampled evaluation (a gradient through a recurrence of 10⁸ steps is not sampled: its
+// samples stop at the first evaluation past this, with what was seen so far).
+constexpr uint64_t kSampleSteps = 1000000;
+
+EvalInputs sample_inputs() {
+    EvalInputs in;
+    in.max_steps = kSampleSteps;
+    return in;
+}
 
 // A bound of ‖J‖₂ for the 3×3 matrix J whose rows are 3 consecutive components each of `c` (row-major):
 // the square root of Gershgorin's bound of λ_max(JᵀJ), with JᵀJ's entries in interval arithmetic. Exact for
@@ -102,7 +111,7 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
 
 double sample(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
               double ball, int samples) {
-    Evaluator ev(m);
+    Evaluator ev(m, sample_inputs());
     const Function& g = m.functions[size_t(grad)];
     uint64_t state = 0x9E3779B97F4A7C15ull;
     auto next = [&] {  // splitmix64: deterministic
@@ -127,7 +136,12 @@ double sample(const Module& m, int grad, const std::vector<Interval>& region, co
             for (const Interval& i : others[k - 1]) v.push_back(t.kind == Type::Integer ? std::floor(pick({i.lo, i.hi + 0.999})) : pick(i));
             args[k] = {t, v};
         }
-        Value r = ev.call(grad, args);
+        Value r;
+        try {
+            r = ev.call(grad, args);
+        } catch (const EvalLimit&) {
+            break;
+        }
         double n = 0;
         for (double x : r.v) n += x * x;
         n = std::sqrt(n);
@@ -273,7 +287,7 @@ void find_jump(const Module& m, int fn, const std::vector<Interval>& region, con
     }
     if (!(extent > 0) || !std::isfinite(K)) return;
     const double delta = 1e-3 * extent;
-    Evaluator ev(m);
+    Evaluator ev(m, sample_inputs());
     const Function& f = m.functions[size_t(fn)];
     uint64_t state = 0xD1B54A32D192ED03ull;
     auto next = [&] {  // splitmix64: deterministic

@@ -63,6 +63,9 @@ std::optional<Lattice> fit(const std::vector<double>& values, size_t stride, siz
 // Lattices for every component of a table, or nothing when one does not fit.
 std::optional<std::vector<Lattice>> fit_table(const Global& g) {
     if (g.kind != Global::Kind::Constant || !g.type.is_array() || g.type.count < 2) return std::nullopt;
+    // Tables of ℤ (a hierarchy's child and member indices) stay tables: the arithmetic built here is real,
+    // and their values index further tables (a real index has no IntDiv or IntMod).
+    if (g.type.elem == Type::Integer) return std::nullopt;
     size_t per = size_t(std::max(1, g.type.element().components()));
     std::vector<Lattice> out;
     for (size_t c = 0; c < per; ++c) {
