@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Many instances with `bound`: a ground and N rings (bench/rings.sh, bench/instances.sh's scene), each ring with
-# `bound = 0.4` — from 16 on, the group is a bounding-volume hierarchy (docs/scene.md, "Many instances") —
+# `bound = 0.4` — from 48 on, the group is a bounding-volume hierarchy (docs/scene.md, "Many instances") —
 # and, for comparison, the same rings without `bound` (every member evaluated at every step).
 #
 # Prints per N: shape evaluations per scene evaluation (`iqc render --stats`), and the frame time on the

@@ -368,3 +368,14 @@ TEST_CASE("a union is bounded term by term, each term through its own cut", "[nu
     CHECK(K < 3.5);
     CHECK_THAT(c.diagnostics, Catch::Contains("angular_repeat_overhang.iq:25:8: warning: shape 'flower' has a discontinuous distance"));
 }
+
+TEST_CASE("a smooth field whose bound cannot be derived is not called non-1-Lipschitz", "[numerics]") {
+    // Found by a new-user trial: ln(1 + e^(‖p‖ - 1)) - ln 2 (a softplus of a sphere) was "not 1-Lipschitz (its
+    // gradient reaches 1 …)": its samples are 1-Lipschitz; what fails is the interval bound (an exponential
+    // over the camera's reach).
+    Compiled c = compile_text("softplus.iql", "shape\nD = ln(1 + exp(‖p‖ - 1)) - ln(2)\nwhere\np ∈ ℝ³\n");
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("softplus.iql:1:1: warning: shape 'softplus' has no Lipschitz bound iqc can derive"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("if it is 1-Lipschitz, say `# bound` in the module"));
+    CHECK_THAT(c.diagnostics, !Catch::Contains("is not 1-Lipschitz"));
+}

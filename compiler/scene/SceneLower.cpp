@@ -81,9 +81,10 @@ struct Item {
 
 // A group of this many members or more, each with `bound`, is traversed as a bounding-volume hierarchy (fewer:
 // one loop, each member testing its own sphere); nodes have at most kTreeBranching children. Measured on
-// 1,000 rings with `bound` (llvmpipe, frames after the first): boxes of 8 children 36 ms, of 16 40 ms; spheres
-// of 16 children 75 ms (they overlap around a lattice's clusters); without a hierarchy 356 ms.
-constexpr size_t kMinTree = 16;
+// rings with `bound` (llvmpipe, frames after the first): at 1,000 boxes of 8 children 36 ms, of 16 40 ms,
+// spheres of 16 children 75 ms (they overlap around a lattice's clusters), no hierarchy 356 ms; the loop
+// wins below about 40 members (32 rings: 12–18 ms against 18–21; 64 rings: 51–57 against 23–39).
+constexpr size_t kMinTree = 48;
 // Where tables are constants in the code (Shadertoy), a hierarchy over more members is not built: its tables
 // (the members in leaf order, the nodes' boxes) grow with the count, and llvmpipe's compile with them faster
 // than linearly (2,000 rings: 2.8 s in all; 4,000: 7.5 s; 10,000: minutes). A lattice without one stays a

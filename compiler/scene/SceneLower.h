@@ -10,7 +10,7 @@
 // (kMinGroup or more): its per-instance data (transforms, parameters, bounds) are arrays indexed by the
 // instance's position in the group, the group is one loop in iqc_scene, one case of each dispatch, and a
 // parameter whose value every member shares is one value (on targets where parameters are constants).
-// Instance ids are numbered so that each group's ids are contiguous. A group of 16 or more members that all
+// Instance ids are numbered so that each group's ids are contiguous. A group of 48 or more members that all
 // have `bound` is traversed as a bounding-volume hierarchy of boxes built at compile time (scene/Bvh.h): per
 // step, up to 8 box tests per node entered instead of one sphere test per member.
 #pragma once

@@ -548,13 +548,16 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             how = "1-Lipschitz at every sample";
         } else if (!std::isfinite(e.derived) || e.derived > kUnbounded) {
             how = "no useful bound";
-            std::string reason = e.why.empty() ? fmt::format("its gradient reaches {:.3g} and iqc cannot bound it where the "
-                                                             "instance is marched", e.sampled)
-                                               : "iqc cannot differentiate it (" + e.why + ")";
-            warnings.push_back({spec.where, fmt::format("shape '{}' is not 1-Lipschitz ({}): marching may step through its "
+            std::string reason = !e.why.empty() ? "iqc cannot differentiate it (" + e.why + ")"
+                                 : e.sampled <= 1 + 1e-3
+                                     ? fmt::format("samples of its gradient reach only {:.3g}, but iqc cannot bound it where the instance "
+                                                   "is marched; if it is 1-Lipschitz, say `# bound` in the module", e.sampled)
+                                     : fmt::format("its gradient reaches {:.3g} and iqc cannot bound it where the instance is marched",
+                                                   e.sampled);
+            warnings.push_back({spec.where, fmt::format("shape '{}' {} ({}): marching may step through its "
                                                         "surface; give the instance `bound = R` (a sphere around the shape) so "
                                                         "iqc can bound its gradient there, or declare `# lipschitz: K`",
-                                                        spec.shape, reason)});
+                                                        spec.shape, e.why.empty() && e.sampled <= 1 + 1e-3 ? "has no Lipschitz bound iqc can derive" : "is not 1-Lipschitz", reason)});
         } else {
             applied = e.derived;
             how = "derived";
