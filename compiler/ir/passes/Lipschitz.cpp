@@ -109,18 +109,23 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
     return q.empty() ? kInf : q.top().bound;
 }
 
-double sample(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
-              double ball, int samples) {
-    Evaluator ev(m, sample_inputs());
-    const Function& g = m.functions[size_t(grad)];
-    uint64_t state = 0x9E3779B97F4A7C15ull;
-    auto next = [&] {  // splitmix64: deterministic
+// Deterministic uniform numbers in [0, 1) (splitmix64, Steele et al. 2014).
+struct SplitMix64 {
+    uint64_t state;
+    double operator()() {
         state += 0x9E3779B97F4A7C15ull;
         uint64_t z = state;
         z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
         z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
         return double((z ^ (z >> 31)) >> 11) / double(1ull << 53);
-    };
+    }
+};
+
+double sample(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+              double ball, int samples) {
+    Evaluator ev(m, sample_inputs());
+    const Function& g = m.functions[size_t(grad)];
+    SplitMix64 next{0x9E3779B97F4A7C15ull};
     auto pick = [&](Interval i) {
         double lo = std::isfinite(i.lo) ? i.lo : -1e3, hi = std::isfinite(i.hi) ? i.hi : 1e3;
         return lo + (hi - lo) * next();
@@ -289,14 +294,7 @@ void find_jump(const Module& m, int fn, const std::vector<Interval>& region, con
     const double delta = 1e-3 * extent;
     Evaluator ev(m, sample_inputs());
     const Function& f = m.functions[size_t(fn)];
-    uint64_t state = 0xD1B54A32D192ED03ull;
-    auto next = [&] {  // splitmix64: deterministic
-        state += 0x9E3779B97F4A7C15ull;
-        uint64_t z = state;
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return double((z ^ (z >> 31)) >> 11) / double(1ull << 53);
-    };
+    SplitMix64 next{0xD1B54A32D192ED03ull};
     std::vector<Value> args(f.params.size());
     for (size_t k = 1; k < f.params.size(); ++k) {  // the others at their midpoints (a group's member 0)
         std::vector<double> v;
