@@ -379,3 +379,24 @@ TEST_CASE("a smooth field whose bound cannot be derived is not called non-1-Lips
     CHECK_THAT(c.diagnostics, Catch::Contains("if it is 1-Lipschitz, say `# bound` in the module"));
     CHECK_THAT(c.diagnostics, !Catch::Contains("is not 1-Lipschitz"));
 }
+
+TEST_CASE("a bound too small for its shape gets a located warning", "[numerics]") {
+    // Found by a new-user trial: `bound = 0.6` on tori of outer radius 1.2 was accepted silently and clipped
+    // them (999 of 14,400 pixels). The sphere itself may miss the shape (it sits in the torus's hole), so the
+    // pass looks at shells outside it.
+    auto scene_with = [](double bound, int n) {
+        std::string s = "[camera]\nposition = [0, 3, -8]\ntarget = [0, 0, 0]\n";
+        for (int i = 0; i < n; ++i)
+            s += fmt::format("[[shapes]]\ntype = \"torus\"\ntransform = \"T(({}, 0, 0))\"\nbound = {}\n", 3 * i, bound);
+        return s;
+    };
+    for (int n : {1, 60}) {
+        Compiled small = compile_text(fmt::format("small_bound_{}.iq", n), scene_with(0.6, n));
+        REQUIRE(small.result.exit_code == 0);
+        CHECK_THAT(small.diagnostics, Catch::Contains(fmt::format("small_bound_{}.iq:5:8: warning: `bound = 0.6` is too small for shape 'torus'", n)));
+        CHECK_THAT(small.diagnostics, Catch::Contains("give a larger `bound`"));
+        Compiled fits = compile_text(fmt::format("fitting_bound_{}.iq", n), scene_with(1.3, n));
+        REQUIRE(fits.result.exit_code == 0);
+        CHECK_THAT(fits.diagnostics, !Catch::Contains("too small"));
+    }
+}

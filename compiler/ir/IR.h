@@ -112,6 +112,9 @@ struct LipschitzSpec {
     int object_fn = -1;          // (q ∈ ℝ³[, k ∈ ℤ]) -> the shape's distance, not yet divided by any factor
     ValueBounds region;          // q's box (3 components)
     double ball = 0;             // > 0: q also lies within this distance of the origin (a `bound` sphere)
+    // The `bound` radii of the first members (one for a single instance; up to 8 for a group, member k's at
+    // k): the pass checks that the shape stays inside its sphere there. Empty: no `bound`.
+    std::vector<double> bounds;
     int group = 0;               // a group's size: k ∈ [0, group - 1] (0: no k)
     double declared = 0;         // `# lipschitz: K` of the shape (0: none)
     bool trusted = false;        // the shape says `# exact` or `# bound`: 1-Lipschitz by construction

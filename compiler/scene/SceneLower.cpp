@@ -470,6 +470,7 @@ private:
         for (int c = 0; c < 3; ++c) reach += std::fabs(cam.position[size_t(c)] - cam.target[size_t(c)]);  // an orbiting camera
         for (size_t mi : it.members) {
             const InstancePlan& p = plan(mi);
+            if (p.desc->bound > 0 && spec.bounds.size() < 8) spec.bounds.push_back(p.desc->bound);
             for (int r = 0; r < 3; ++r) {
                 double lo, hi;
                 if (p.desc->bound > 0) {

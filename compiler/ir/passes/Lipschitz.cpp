@@ -457,6 +457,35 @@ double roots_bound(const Module& m, int fn, const std::vector<Interval>& region,
     return bound_added(work, std::move(f), region, others, ball, budget, true);
 }
 
+// Whether the shape stays inside its `bound` spheres: its distance at points outside each sphere (shells of
+// 1.001, 1.1, 1.25, 1.5, 2 and 3 times the radius, 256 points each on a Fibonacci lattice, per member) must
+// not be negative. Returns the first point found inside the shape (its distance in `d`, member in `member`),
+// or an empty vector. (A shape can miss the sphere itself, a torus around a ball in its hole.)
+std::vector<double> outside_bound(const Module& m, const LipschitzSpec& spec, double& d, int& member) {
+    Evaluator ev(m, sample_inputs());
+    const Function& f = m.functions[size_t(spec.object_fn)];
+    const double golden = M_PI * (3 - std::sqrt(5.0));
+    try {
+        for (size_t k = 0; k < spec.bounds.size(); ++k) {
+            for (double shell : {1.001, 1.1, 1.25, 1.5, 2.0, 3.0})
+            for (int i = 0; i < 256; ++i) {
+                const double R = spec.bounds[k] * shell;
+                double y = 1 - 2 * (i + 0.5) / 256, r = std::sqrt(1 - y * y), a = golden * i;
+                std::vector<Value> args = {{Type::vector(3), {R * r * std::cos(a), R * y, R * r * std::sin(a)}}};
+                if (f.params.size() > 1) args.push_back({Type::integer(), {double(k)}});
+                Value v = ev.call(spec.object_fn, args);
+                if (!v.v.empty() && v.v[0] < -1e-6 * R) {
+                    d = v.v[0];
+                    member = int(k);
+                    return args[0].v;
+                }
+            }
+        }
+    } catch (const EvalLimit&) {
+    }
+    return {};
+}
+
 // Divides function `fn`'s result (its first component, for an instrumented (distance, count)) by K.
 void divide_result(Module& m, int fn, double K) {
     Function& f = m.functions[size_t(fn)];
@@ -576,6 +605,18 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                         "sphere tracing may step through the faces of the jump; keep a repeated shape "
                                                         "inside its cell (and symmetric in it), or march it with `march = \"fixed\"`",
                                                         spec.shape, e.jump, e.delta, e.jump_at[0], e.jump_at[1], e.jump_at[2])});
+        if (!spec.bounds.empty()) {
+            double d = 0;
+            int member = 0;
+            std::vector<double> at = outside_bound(m, spec, d, member);
+            if (!at.empty())
+                warnings.push_back({spec.where, fmt::format("`bound = {:g}` is too small for shape '{}'{}: the shape reaches past its "
+                                                            "sphere (its distance is {:.3g} at ({:.3g}, {:.3g}, {:.3g}), outside the sphere, "
+                                                            "in its own space), so the bound clips it; give a larger `bound`",
+                                                            spec.bounds[size_t(member)], spec.shape,
+                                                            spec.group > 0 ? fmt::format(" (member {} of the group)", member) : "",
+                                                            d, at[0], at[1], at[2])});
+        }
         if (repeat) warnings.resize(warned);
         if (applied > 1 + 1e-9) {
             divide_result(m, int(fi), applied);
