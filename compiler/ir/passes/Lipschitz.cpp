@@ -422,7 +422,7 @@ ValueId root_of_square(Builder& b, const std::vector<Instr>& old, const std::vec
 
 // A copy of `f` (calls inlined, common subexpressions merged) with every √ of a square form taken as the
 // root itself (root_of_square). For the estimate only: the emitted code is the user's.
-Function roots_taken(const Module& m, const Function& fn) {
+Function roots_taken(const Module& m, const Function& fn, bool* changed = nullptr) {
     Function flat = inline_calls(m, fn);
     eliminate_common_subexpressions(flat);
     std::vector<Instr> old = std::move(flat.body);
@@ -436,6 +436,7 @@ Function roots_taken(const Module& m, const Function& fn) {
             ValueId r = root_of_square(b, old, map, in.args[0]);
             if (r != ValueId(-1)) {
                 map[i] = r;
+                if (changed) *changed = true;
                 continue;
             }
         }
@@ -452,7 +453,9 @@ Function roots_taken(const Module& m, const Function& fn) {
 double roots_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
                    double ball, int budget) {
     Module work = m;
-    Function f = roots_taken(work, work.functions[size_t(fn)]);
+    bool changed = false;
+    Function f = roots_taken(work, work.functions[size_t(fn)], &changed);
+    if (!changed) return kInf;  // nothing to take: the other refinements saw the same function
     f.name = "lipschitz_roots";
     return bound_added(work, std::move(f), region, others, ball, budget, true);
 }
@@ -520,10 +523,13 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     boxes = std::max(4, int(boxes * scale));
     samples = std::max(16, int(samples * scale));
     e.derived = derive(work, grad, box, others, ball, boxes);
+    e.sampled = sample(work, grad, box, others, ball, samples);
     // The refinements only ever lower a bound that stands without them: one that cannot be built (a form the
-    // differentiator has no rule for once a cut is a parameter) leaves the bound as it is.
+    // differentiator has no rule for once a cut is a parameter) leaves the bound as it is. They run only where
+    // the bound decides something: above 2, or above 1 where samples exceed 1 (within 2 with every sample
+    // within 1, the distance is not divided at all).
     auto refine = [&](auto bound) {
-        if (e.derived <= 1 + 1e-9) return;
+        if (e.derived <= 1 + 1e-9 || (e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3)) return;
         try {
             e.derived = std::min(e.derived, bound(m, fn, box, others, ball, boxes));
         } catch (const InternalError&) {
@@ -533,7 +539,6 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     refine(chain_rule_bound);
     refine(union_bound);
     refine(roots_bound);
-    e.sampled = sample(work, grad, box, others, ball, samples);
     e.derived = std::max(e.derived, e.sampled);  // rounding in the intervals' ends never claims less than seen
     if (std::isfinite(e.derived)) find_jump(m, fn, box, others, ball, std::max(e.derived, 1.0), 4 * samples, e);
     return e;
