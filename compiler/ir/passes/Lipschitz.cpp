@@ -22,6 +22,7 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kWorkBudget = 2e7;  // instructions evaluated per estimate (boxes and samples)
 constexpr double kUnbounded = 64;  // a derived K above this over the region is useless for marching
+constexpr size_t kMaxRefined = 16;  // items whose bounds the refinements may tighten (in the module's order)
 // The work of one sampled evaluation (a gradient through a recurrence of 10⁸ steps is not sampled: its
 // samples stop at the first evaluation past this, with what was seen so far).
 constexpr uint64_t kSampleSteps = 1000000;
@@ -505,7 +506,8 @@ void divide_result(Module& m, int fn, double K) {
 }  // namespace
 
 LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<Interval>& box,
-                                     const std::vector<std::vector<Interval>>& others, double ball, int samples, int boxes) {
+                                     const std::vector<std::vector<Interval>>& others, double ball, int samples, int boxes,
+                                     bool refine_bound) {
     LipschitzEstimate e;
     Module work = m;  // the gradient is a function of its own, here only
     std::string why;
@@ -529,7 +531,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     // the bound decides something: above 2, or above 1 where samples exceed 1 (within 2 with every sample
     // within 1, the distance is not divided at all).
     auto refine = [&](auto bound) {
-        if (e.derived <= 1 + 1e-9 || (e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3)) return;
+        if (!refine_bound || e.derived <= 1 + 1e-9 || (e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3)) return;
         try {
             e.derived = std::min(e.derived, bound(m, fn, box, others, ball, boxes));
         } catch (const InternalError&) {
@@ -540,7 +542,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     refine(union_bound);
     refine(roots_bound);
     e.derived = std::max(e.derived, e.sampled);  // rounding in the intervals' ends never claims less than seen
-    if (std::isfinite(e.derived)) find_jump(m, fn, box, others, ball, std::max(e.derived, 1.0), 4 * samples, e);
+    if (refine_bound && std::isfinite(e.derived)) find_jump(m, fn, box, others, ball, std::max(e.derived, 1.0), 4 * samples, e);
     return e;
 }
 
@@ -561,7 +563,10 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         if (!spec.trusted || spec.declared > 0) {
             auto known = estimated.find(spec.object_fn);
             if (known == estimated.end())
-                known = estimated.emplace(spec.object_fn, estimate_lipschitz(m, spec.object_fn, region, others, spec.ball)).first;
+                known = estimated
+                            .emplace(spec.object_fn, estimate_lipschitz(m, spec.object_fn, region, others, spec.ball, 1000, 128,
+                                                                        estimated.size() < kMaxRefined))
+                            .first;
             e = known->second;
         }
         double applied = 1;
