@@ -148,8 +148,16 @@ Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
     else if (n == "floor" || n == "ceil" || n == "round")
         each([&](size_t k) { return Interval{std::floor(arg(0, k).lo), std::ceil(arg(0, k).hi)}; });
     else if (n == "fract") each([&](size_t) { return Interval{0, 1}; });
-    else if (n == "sign" || n == "step")
-        each([&](size_t) { return n == "sign" ? Interval{-1, 1} : Interval{0, 1}; });
+    else if (n == "sign")
+        each([&](size_t k) {
+            Interval v = arg(0, k);
+            return Interval{v.lo > 0 ? 1.0 : v.lo >= 0 ? 0.0 : -1.0, v.hi < 0 ? -1.0 : v.hi <= 0 ? 0.0 : 1.0};
+        });
+    else if (n == "step")  // step(edge, x): 0 below the edge, 1 from it on
+        each([&](size_t k) {
+            Interval e = arg(0, k), v = arg(1, k);
+            return Interval{v.lo >= e.hi ? 1.0 : 0.0, v.hi < e.lo ? 0.0 : 1.0};
+        });
     else if (n == "min" || n == "max")
         each([&](size_t k) {
             Interval u = arg(0, k), v = arg(1, k);
@@ -226,6 +234,23 @@ Bounds product(const Type& t, const Type& ta, const Type& tb, const Bounds& a, c
 }
 
 }  // namespace
+
+int decided(CompareKind k, Interval a, Interval b) {
+    switch (k) {
+        case CompareKind::Lt: return a.hi < b.lo ? 1 : a.lo >= b.hi ? 0 : -1;
+        case CompareKind::Le: return a.hi <= b.lo ? 1 : a.lo > b.hi ? 0 : -1;
+        case CompareKind::Gt: return a.lo > b.hi ? 1 : a.hi <= b.lo ? 0 : -1;
+        case CompareKind::Ge: return a.lo >= b.hi ? 1 : a.hi < b.lo ? 0 : -1;
+        case CompareKind::Eq:
+            if (a.hi < b.lo || b.hi < a.lo) return 0;
+            return a.lo == a.hi && b.lo == b.hi && a.lo == b.lo ? 1 : -1;
+        case CompareKind::Ne: {
+            int e = decided(CompareKind::Eq, a, b);
+            return e < 0 ? -1 : 1 - e;
+        }
+    }
+    return -1;
+}
 
 Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std::vector<const Bounds*>& a) {
     (void)m;
@@ -336,7 +361,12 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
         case Op::Select:
         case Op::If:
         case Op::Switch: {
-            size_t first = in.op == Op::Switch ? 1 : 1;
+            if (in.op != Op::Switch && a[0]->c.size() == 1) {  // a decided condition picks its operand
+                Interval c = a[0]->c[0];
+                if (c.lo >= 1) return *a[1];
+                if (c.hi <= 0) return *a[2];
+            }
+            size_t first = 1;
             x = *a[first];
             for (size_t k = first + 1; k < a.size(); ++k) {
                 for (size_t c = 0; c < comps; ++c) x.c[c] = hull(comp(x, c), comp(*a[k], c));
@@ -356,19 +386,30 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
             if (comp(*a[1], 0).lo > 0) x.c = {{0, comp(*a[1], 0).hi - 1}};
             break;
         case Op::Compare:
-        case Op::And:
-        case Op::Or:
             x.c = {{0, 1}};
+            if (a[0]->c.size() == 1 && a[1]->c.size() == 1) {
+                int d = decided(CompareKind(in.aux), a[0]->c[0], a[1]->c[0]);
+                if (d >= 0) x.c = {{double(d), double(d)}};
+            }
             break;
+        case Op::And:
+        case Op::Or: {
+            Interval u = comp(*a[0], 0), v = comp(*a[1], 0);
+            x.c = {in.op == Op::And ? Interval{std::min(u.lo, v.lo), std::min(u.hi, v.hi)}
+                                    : Interval{std::max(u.lo, v.lo), std::max(u.hi, v.hi)}};
+            break;
+        }
         default: break;  // Param, Global, Input, Call, Loop, Member: the caller's business
     }
     return finish(std::move(x));
 }
 
-std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params) {
+std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params,
+                                      const IntervalHook& hook) {
     const Function& f = m.functions[size_t(fn)];
     std::vector<Bounds> r(f.body.size());
     for (size_t i = 0; i < f.body.size(); ++i) {
+        if (i > 0 && hook && !hook(i - 1, r)) return r;
         const Instr& in = f.body[i];
         if (in.op == Op::Param) {
             r[i] = unknown(in.type);
@@ -419,6 +460,7 @@ std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector
         for (ValueId x : in.args) a.push_back(&r[x]);
         r[i] = bounds_of(m, f, in, a);
     }
+    if (!f.body.empty() && hook) hook(f.body.size() - 1, r);
     return r;
 }
 

@@ -10,6 +10,7 @@
 // periodic functions exactly on intervals shorter than a period.
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -50,7 +51,16 @@ struct Bounds {
 // parameter: its components' intervals) and globals are their values (constants, and parameters where
 // Module::constant_parameters) or their slider bounds (parameters). Calls are analysed through the callee;
 // loops and inputs are unbounded.
-std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params);
+//
+// `hook`, when given, is called with each value index i of `fn` itself (not of its callees) right after the
+// rule for value i, in order, with every value so far; it may narrow values up to i in place (what a case
+// split knows, ir/passes/Lipschitz.cpp); returning false stops the analysis there (later values unknown).
+using IntervalHook = std::function<bool(size_t, std::vector<Bounds>&)>;
+std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params,
+                                      const IntervalHook& hook = {});
+
+// Whether `a k b` holds for every a, b in the intervals (1), for none (0), or is undecided (-1).
+int decided(CompareKind k, Interval a, Interval b);
 
 // The bounds of one instruction from its operands' (the rule interval_analysis applies).
 Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std::vector<const Bounds*>& args);

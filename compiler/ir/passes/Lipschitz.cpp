@@ -4,12 +4,14 @@
 #include <array>
 #include <cmath>
 #include <fmt/format.h>
+#include <functional>
 #include <map>
 #include <queue>
 
 #include "ir/Builder.h"
 #include "ir/Eval.h"
 #include "ir/passes/CSE.h"
+#include "ir/passes/DCE.h"
 #include "ir/passes/Differentiate.h"
 #include "ir/passes/Inline.h"
 #include "sema/Builtins.h"
@@ -22,7 +24,10 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kWorkBudget = 2e7;  // instructions evaluated per estimate (boxes and samples)
 constexpr double kUnbounded = 64;  // a derived K above this over the region is useless for marching
-constexpr size_t kMaxRefined = 16;  // items whose bounds the refinements may tighten (in the module's order)
+constexpr size_t kMaxRefined = 16;
+// Interval instruction evaluations case splitting may spend: per estimate, and per pass over a module (~100 ns
+// each in a release build: a second, and two).
+constexpr double kSplitWorkPerEstimate = 8e6, kSplitWorkPerModule = 1.6e7;  // items whose bounds the refinements may tighten (in the module's order)
 // The work of one sampled evaluation (a gradient through a recurrence of 10⁸ steps is not sampled: its
 // samples stop at the first evaluation past this, with what was seen so far).
 constexpr uint64_t kSampleSteps = 1000000;
@@ -52,15 +57,337 @@ double jacobian_norm(const std::vector<Interval>& c) {
     return std::isnan(worst) ? kInf : std::sqrt(worst);
 }
 
-// The norm bound of the gradient (jacobian: of the Jacobian given by its rows) over one box of p.
-double box_bound(const Module& m, int grad, const std::vector<Interval>& box, const std::vector<std::vector<Interval>>& others,
-                 bool jacobian = false) {
-    std::vector<std::vector<Interval>> params = {box};
-    params.insert(params.end(), others.begin(), others.end());
-    auto b = interval_analysis(m, grad, params);
-    const Bounds& g = b[m.functions[size_t(grad)].result];
+double result_norm(const Bounds& g, bool jacobian) {
     double n = jacobian ? std::min(g.norm, jacobian_norm(g.c)) : g.norm;
     return std::isnan(n) ? kInf : n;
+}
+
+// Case splitting: the gradient of a min, max, clamp or |x| is a choice between its operands' gradients by a
+// comparison (ir/passes/Differentiate.cpp), and interval arithmetic on a box where the comparison can go
+// either way takes the hull of both — a box's distance min(max(d₁, d₂), 0) + ‖max(d, 0)‖ gets gradient 2
+// from two terms of which only one varies at any point. Here each undecided comparison a ≤ b of a function
+// without calls is split into its two cases (closed: a point where a = b is in both), and each case narrows
+// what it implies: the operands (a ≤ b: a below b's top, b above a's bottom), and, backwards through the
+// values they were computed from, as far as sums, differences, negations, components, |x|, min and max allow
+// (the forward–backward narrowing of constraint propagation, HC4: Benhamou et al., "Revising hull and box
+// consistency", ICLP 1999). The values are then recomputed with what the case knows, so d₁ ≥ 0 leaves
+// max(d, 0)'s first component d₁ and min(max(d₁, d₂), 0) zero. A case whose narrowing leaves an empty
+// interval cannot happen and bounds nothing. Every point of the box lies in the case of its own comparisons,
+// and every narrowing holds at it, so the largest bound over the cases bounds the gradient over the box.
+// `passes` caps the interval evaluations per box; comparisons left undecided then are hulled as before.
+// Interval passes a case split may spend: per box, and left in all.
+struct SplitBudget {
+    int per_box;
+    double pool;
+};
+
+class CaseSplit {
+public:
+    int passes_left() const { return passes_left_; }
+    CaseSplit(const Module& m, int fn, bool jacobian) : m_(m), fn_(fn), f_(m.functions[size_t(fn)]), jacobian_(jacobian) {}
+
+    double bound(const std::vector<std::vector<Interval>>& params, int passes) {
+        params_ = &params;
+        passes_left_ = passes;
+        std::vector<Choice> choices;
+        return explore(choices);
+    }
+
+private:
+    struct Choice {
+        ValueId at;
+        int comp;     // a sign's component (a comparison: 0)
+        int outcome;  // a comparison: 1 or 0; a sign: 1, -1 or 0
+    };
+    const Module& m_;
+    int fn_;
+    const Function& f_;
+    bool jacobian_;
+    const std::vector<std::vector<Interval>>* params_ = nullptr;
+    // Per value: its narrowed components (empty: none), and the state of the current pass.
+    std::vector<std::vector<Interval>> narrowed_;
+    std::vector<Bounds>* r_ = nullptr;
+    bool changed_ = false, empty_ = false;
+    size_t at_ = 0;  // the value the pass has reached
+    int passes_left_ = 0;
+
+    // a ∩ b; empty marks the case impossible (within rounding in the ends, which leaves a point).
+    Interval meet(Interval a, Interval b) {
+        Interval x{std::max(a.lo, b.lo), std::min(a.hi, b.hi)};
+        if (x.lo > x.hi) {
+            if (x.lo > x.hi + 1e-9 * (1 + std::fabs(x.lo) + std::fabs(x.hi))) empty_ = true;
+            x.lo = x.hi = 0.5 * (x.lo + x.hi);
+        }
+        return x;
+    }
+
+    // What comparison `target` is where comparison `chosen` of the same two operands (in either order) came
+    // out `outcome`: 1, 0, or -1 when it does not say (a ≥ b leaves a ≤ b open: they may be equal).
+    static int implies(const Instr& chosen, bool outcome, const Instr& target) {
+        if (chosen.op != Op::Compare || chosen.args.size() != 2 || target.args.size() != 2) return -1;
+        auto mirror = [](CompareKind k) {
+            switch (k) {
+                case CompareKind::Lt: return CompareKind::Gt;
+                case CompareKind::Le: return CompareKind::Ge;
+                case CompareKind::Gt: return CompareKind::Lt;
+                case CompareKind::Ge: return CompareKind::Le;
+                default: return k;
+            }
+        };
+        CompareKind t = CompareKind(target.aux);
+        if (chosen.args[0] == target.args[1] && chosen.args[1] == target.args[0]) t = mirror(t);
+        else if (chosen.args[0] != target.args[0] || chosen.args[1] != target.args[1]) return -1;
+        // The relation of a to b that holds: <, ≤, >, ≥.
+        CompareKind rel = CompareKind(chosen.aux);
+        if (!outcome) {
+            switch (rel) {
+                case CompareKind::Lt: rel = CompareKind::Ge; break;
+                case CompareKind::Le: rel = CompareKind::Gt; break;
+                case CompareKind::Gt: rel = CompareKind::Le; break;
+                case CompareKind::Ge: rel = CompareKind::Lt; break;
+                default: return -1;
+            }
+        }
+        using K = CompareKind;
+        switch (rel) {
+            case K::Lt: return t == K::Lt || t == K::Le ? 1 : t == K::Gt || t == K::Ge ? 0 : -1;
+            case K::Gt: return t == K::Gt || t == K::Ge ? 1 : t == K::Lt || t == K::Le ? 0 : -1;
+            case K::Le: return t == K::Le ? 1 : t == K::Gt ? 0 : -1;
+            case K::Ge: return t == K::Ge ? 1 : t == K::Lt ? 0 : -1;
+            default: return -1;
+        }
+    }
+
+    // Whether v is the query point (parameter 0) itself, a copy of it or one of its components.
+    bool is_query_coordinate(ValueId v) const {
+        const Instr& in = f_.body[v];
+        if (in.op == Op::Param) return in.aux == 0;
+        if (in.op == Op::Copy || in.op == Op::Extract) return is_query_coordinate(in.args[0]);
+        return false;
+    }
+
+    static bool tighter(Interval want, Interval have) { return want.lo > have.lo || want.hi < have.hi; }
+
+    // Narrows component k of value v to `want` (intersected), then what v was computed from.
+    void narrow(ValueId v, size_t k, Interval want, int depth) {
+        if (empty_ || std::isnan(want.lo) || std::isnan(want.hi)) return;
+        Bounds& b = (*r_)[v];
+        if (k >= b.c.size()) return;
+        Interval have = b.c[k];
+        if (!tighter(want, have)) return;
+        Interval next = meet(have, want);
+        if (empty_) return;
+        b.c[k] = next;
+        if (narrowed_[v].empty()) narrowed_[v] = b.c;
+        narrowed_[v][k] = next;
+        if (v < at_) changed_ = true;  // values computed from v this pass saw less
+        if (depth <= 0) return;
+        const Instr& in = f_.body[v];
+        auto arg = [&](size_t i) -> Bounds& { return (*r_)[in.args[i]]; };
+        auto comp = [&](size_t i, size_t kk) { return arg(i).c.size() == 1 ? arg(i).c[0] : arg(i).c[kk]; };
+        auto narrow_arg = [&](size_t i, Interval w) { narrow(in.args[i], arg(i).c.size() == 1 ? 0 : k, w, depth - 1); };
+        switch (in.op) {
+            case Op::Copy: narrow(in.args[0], k, next, depth - 1); break;
+            case Op::Extract: narrow(in.args[0], size_t(in.aux), next, depth - 1); break;
+            case Op::Construct: {
+                size_t off = 0;
+                for (size_t i = 0; i < in.args.size(); ++i) {
+                    size_t n = arg(i).c.size();
+                    if (k < off + n) {
+                        narrow(in.args[i], k - off, next, depth - 1);
+                        break;
+                    }
+                    off += n;
+                }
+                break;
+            }
+            case Op::Neg: narrow_arg(0, iv::neg(next)); break;
+            case Op::Add:  // x = a + b: a ∈ x - b, b ∈ x - a
+                if (in.type.components() != f_.body[in.args[0]].type.components() ||
+                    in.type.components() != f_.body[in.args[1]].type.components())
+                    break;  // a broadcast scalar
+                narrow_arg(0, iv::add(next, iv::neg(comp(1, k))));
+                narrow_arg(1, iv::add(next, iv::neg(comp(0, k))));
+                break;
+            case Op::Sub:  // x = a - b: a ∈ x + b, b ∈ a - x
+                if (in.type.components() != f_.body[in.args[0]].type.components() ||
+                    in.type.components() != f_.body[in.args[1]].type.components())
+                    break;
+                narrow_arg(0, iv::add(next, comp(1, k)));
+                narrow_arg(1, iv::add(comp(0, k), iv::neg(next)));
+                break;
+            case Op::Builtin: {
+                std::string_view name = builtins()[size_t(in.aux)].name;
+                if ((name == "min" || name == "max") && in.args.size() == 2) {
+                    bool is_max = name == "max";
+                    for (size_t i = 0; i < 2; ++i) {
+                        // max: every operand is at most x; the other below x's bottom makes this one the max.
+                        Interval other = comp(1 - i, k);
+                        Interval w = is_max ? Interval{-kInf, next.hi} : Interval{next.lo, kInf};
+                        if (is_max && other.hi < next.lo) w.lo = next.lo;
+                        if (!is_max && other.lo > next.hi) w.hi = next.hi;
+                        if (f_.body[in.args[i]].type.components() == in.type.components() || arg(i).c.size() == 1)
+                            narrow_arg(i, w);
+                    }
+                } else if (name == "abs") {
+                    Interval a = comp(0, k);
+                    Interval w{-next.hi, next.hi};
+                    if (a.lo >= 0) w = next;
+                    else if (a.hi <= 0) w = iv::neg(next);
+                    narrow_arg(0, w);
+                }
+                break;
+            }
+            default: break;
+        }
+    }
+
+    // A comparison or a sign's component not decided by the intervals: where the next split goes.
+    struct Open {
+        ValueId at = ValueId(-1);
+        int comp = 0;
+        std::vector<int> outcomes;  // the cases with room (a comparison: 1, 0; a sign: 1, -1, 0)
+    };
+
+    // Applies the case's choices to value i (a comparison or a sign) once its rule has run: its value, and
+    // what the choice implies of its operands. Records in `open` the first undecided one no choice covers.
+    void decide(size_t i, std::vector<Bounds>& r, const std::vector<Choice>& choices, Open& open) {
+        const Instr& in = f_.body[i];
+        Bounds& b = r[i];
+        auto choice = [&](int comp) -> const Choice* {
+            for (const Choice& x : choices)
+                if (x.at == ValueId(i) && x.comp == comp) return &x;
+            return nullptr;
+        };
+        if (in.op == Op::Compare && b.c.size() == 1 && b.c[0].lo < b.c[0].hi && r[in.args[0]].c.size() == 1 &&
+            r[in.args[1]].c.size() == 1) {
+            const Choice* c = choice(0);
+            int implied = -1;
+            for (const Choice& x : choices)
+                if (implied < 0 && x.at != ValueId(i)) implied = implies(f_.body[x.at], x.outcome == 1, in);
+            CompareKind kind = CompareKind(in.aux);
+            if (!c && implied >= 0) {
+                b.c[0] = {double(implied), double(implied)};
+            } else if (!c) {
+                if (open.at == ValueId(-1) && kind != CompareKind::Eq && kind != CompareKind::Ne) {
+                    open = {ValueId(i), 0, {}};
+                    for (int o : {1, 0}) {
+                        bool below = (kind == CompareKind::Lt || kind == CompareKind::Le) == (o == 1);
+                        bool strict = (kind == CompareKind::Lt || kind == CompareKind::Gt) == (o == 1);
+                        Interval lo = r[below ? in.args[0] : in.args[1]].c[0], hi = r[below ? in.args[1] : in.args[0]].c[0];
+                        if (strict ? lo.lo < hi.hi : lo.lo <= hi.hi) open.outcomes.push_back(o);
+                    }
+                }
+            } else {
+                b.c[0] = {double(c->outcome), double(c->outcome)};
+                // a ≤ b (and a < b, closed): a ≤ b's top, b ≥ a's bottom. A strict case needs room: a < b is
+                // impossible where a's bottom is not below b's top.
+                bool below = (kind == CompareKind::Lt || kind == CompareKind::Le) == (c->outcome == 1);
+                bool strict = (kind == CompareKind::Lt || kind == CompareKind::Gt) == (c->outcome == 1);
+                ValueId lo_v = below ? in.args[0] : in.args[1], hi_v = below ? in.args[1] : in.args[0];
+                if (strict && !(r[lo_v].c[0].lo < r[hi_v].c[0].hi)) {
+                    empty_ = true;
+                    return;
+                }
+                narrow(lo_v, 0, {-kInf, r[hi_v].c[0].hi}, 12);
+                narrow(hi_v, 0, {r[lo_v].c[0].lo, kInf}, 12);
+            }
+            return;
+        }
+        if (in.op == Op::Builtin && builtins()[size_t(in.aux)].name == std::string_view("sign") && in.args.size() == 1 &&
+            r[in.args[0]].c.size() == b.c.size()) {
+            // sign(x): x > 0, x < 0 or x = 0, each case with the room it needs.
+            for (size_t k = 0; k < b.c.size() && !empty_; ++k) {
+                if (!(b.c[k].lo < b.c[k].hi)) continue;
+                const Choice* c = choice(int(k));
+                Interval x = r[in.args[0]].c[k];
+                if (!c) {
+                    if (open.at != ValueId(-1)) continue;
+                    open = {ValueId(i), int(k), {}};
+                    if (x.hi > 0) open.outcomes.push_back(1);
+                    if (x.lo < 0) open.outcomes.push_back(-1);
+                    // x = 0 where x is a coordinate of the query point is a plane: no volume, and the bound of a
+                    // gradient is wanted only almost everywhere (a continuous field's Lipschitz constant is the
+                    // essential supremum of ‖∇D‖, Rademacher's theorem). Elsewhere (x = max(p₁, 0)) it may be a
+                    // region, and is a case of its own.
+                    if (x.lo <= 0 && x.hi >= 0 && !is_query_coordinate(in.args[0])) open.outcomes.push_back(0);
+                    continue;
+                }
+                bool room = c->outcome > 0 ? x.hi > 0 : c->outcome < 0 ? x.lo < 0 : x.lo <= 0 && x.hi >= 0;
+                if (!room) {
+                    empty_ = true;
+                    return;
+                }
+                b.c[k] = {double(c->outcome), double(c->outcome)};
+                narrow(in.args[0], k, c->outcome > 0 ? Interval{0, kInf} : c->outcome < 0 ? Interval{-kInf, 0} : Interval{0, 0}, 12);
+            }
+            b.norm = std::min(b.norm, b.norm_from_components());
+        }
+    }
+
+    // One pass of intervals over the function with the case's choices; the result's norm bound, 0 for a case
+    // that cannot happen. `open` receives the first comparison or sign left undecided that no choice covers.
+    double pass(const std::vector<Choice>& choices, Open& open) {
+        empty_ = false;
+        double last = kInf;
+        for (int round = 0; round < 3; ++round) {
+            changed_ = false;
+            open = {};
+            IntervalHook hook = [&](size_t i, std::vector<Bounds>& r) {
+                r_ = &r;
+                at_ = i;
+                Bounds& b = r[i];
+                if (!narrowed_[i].empty() && narrowed_[i].size() == b.c.size()) {
+                    for (size_t k = 0; k < b.c.size() && !empty_; ++k) b.c[k] = meet(b.c[k], narrowed_[i][k]);
+                    b.norm = std::min(b.norm, b.norm_from_components());
+                }
+                if (!empty_) decide(i, r, choices, open);
+                return !empty_;
+            };
+            std::vector<Bounds> r = interval_analysis(m_, fn_, *params_, hook);
+            r_ = nullptr;
+            --passes_left_;
+            if (empty_) return 0;
+            last = result_norm(r[f_.result], jacobian_);
+            if (!changed_) return last;
+        }
+        // Still narrowing after three rounds: the last pass's values hold, only not the tightest.
+        return last;
+    }
+
+    // The bound over the case `choices`: one pass, then, while passes are left, the cases of the first
+    // undecided comparison or sign (the largest of their bounds, if below this case's).
+    double explore(std::vector<Choice>& choices) {
+        narrowed_.assign(f_.body.size(), {});
+        Open open;
+        double here = pass(choices, open);
+        if (here == 0 || open.at == ValueId(-1) || passes_left_ < 2) return here;
+        double worst = 0;
+        for (int outcome : open.outcomes) {
+            choices.push_back({open.at, open.comp, outcome});
+            worst = std::max(worst, explore(choices));
+            choices.pop_back();
+            if (!(worst < here)) return here;  // no better than the hull
+        }
+        return worst;
+    }
+};
+
+// The norm bound of the gradient (jacobian: of the Jacobian given by its rows) over one box of p; with
+// `split`, by case splitting (CaseSplit, for a function without calls) while its passes last.
+double box_bound(const Module& m, int grad, const std::vector<Interval>& box, const std::vector<std::vector<Interval>>& others,
+                 bool jacobian = false, SplitBudget* split = nullptr) {
+    std::vector<std::vector<Interval>> params = {box};
+    params.insert(params.end(), others.begin(), others.end());
+    if (split && split->pool >= 1) {
+        CaseSplit cs(m, grad, jacobian);
+        int passes = int(std::min<double>(split->per_box, split->pool));
+        double r = cs.bound(params, passes);
+        split->pool -= passes - cs.passes_left();
+        return r;
+    }
+    auto b = interval_analysis(m, grad, params);
+    return result_norm(b[m.functions[size_t(grad)].result], jacobian);
 }
 
 struct Box {
@@ -83,9 +410,9 @@ bool meets_ball(const std::vector<Interval>& box, double ball) {
 // Branch and bound: split the worst box along its longest side until the budget is spent (halves outside
 // the ball are dropped); the worst box's bound then bounds the whole region.
 double derive(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
-              double ball, int budget, bool jacobian = false) {
+              double ball, int budget, bool jacobian = false, SplitBudget* split = nullptr) {
     std::priority_queue<Box> q;
-    q.push({region, box_bound(m, grad, region, others, jacobian)});
+    q.push({region, box_bound(m, grad, region, others, jacobian, split)});
     for (int used = 1; used + 2 <= budget && !q.empty();) {
         Box worst = q.top();
         if (!std::isfinite(worst.bound) && used > budget / 2) break;
@@ -102,12 +429,30 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
             Box b = worst;
             (half ? b.c[axis].lo : b.c[axis].hi) = mid;
             if (!meets_ball(b.c, ball)) continue;
-            b.bound = box_bound(m, grad, b.c, others, jacobian);
+            b.bound = box_bound(m, grad, b.c, others, jacobian, split);
             q.push(std::move(b));
             ++used;
         }
     }
     return q.empty() ? kInf : q.top().bound;
+}
+
+// The instruction evaluations case splitting may still spend while the current estimate runs (set by
+// estimate_lipschitz; the pass shares one allowance among its items, ~100 ns each).
+thread_local double t_split_work = 0;
+double split_pool_left() { return t_split_work; }
+
+// derive() by case splitting on `grad` (a function without calls): up to kSplitPasses interval passes per
+// box, a quarter of the boxes, while the allowance lasts.
+double split_derive(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+                    double ball, int budget) {
+    constexpr int kSplitPasses = 1500;
+    double size = double(std::max<size_t>(1, m.functions[size_t(grad)].body.size()));
+    if (t_split_work < size) return kInf;
+    SplitBudget split{kSplitPasses, t_split_work / size};
+    double k = derive(m, grad, region, others, ball, std::max(8, budget / 4), false, &split);
+    t_split_work = std::max(0.0, split.pool * size);
+    return k;
 }
 
 // Deterministic uniform numbers in [0, 1) (splitmix64, Steele et al. 2014).
@@ -244,6 +589,13 @@ double chain_rule_bound(const Module& m, int fn, const std::vector<Interval>& re
         int f_grad = differentiate(work, f_fn, 0, "lipschitz_cut_gradF", &why);
         if (f_grad < 0) continue;
         double kf = derive(work, f_grad, u_box, others, 0, budget);
+        if (kf > 1 + 1e-9 && split_pool_left() > 0) {  // the shape behind the warp, by case splitting
+            Function flat_grad = inline_calls(work, work.functions[size_t(f_grad)]);
+            eliminate_common_subexpressions(flat_grad);
+            eliminate_dead_code(flat_grad);
+            work.functions[size_t(f_grad)] = std::move(flat_grad);
+            kf = std::min(kf, split_derive(work, f_grad, u_box, others, 0, budget));
+        }
         if (!std::isfinite(kf)) continue;
         // J_T's rows: the gradients of u's components; their Frobenius norm bounds ‖J_T‖₂.
         Function J;
@@ -387,38 +739,73 @@ double union_bound(const Module& m, int fn, const std::vector<Interval>& region,
     return worst;
 }
 
-// √ of a square form of `old` (v⋅v, x·x, a min, max or select of them, a square over a guarded square, a
-// constant ≥ 0), built in `b` from the mapped values: ‖v‖, |x|, … (-1: not a square form). What Quilez's exact
-// distances write as √(min(dot2(a), dot2(b))): equal values, but the root's gradient is a unit vector's
-// where the square's, divided by 2√s, has no useful interval near the surface (an interval of 1/√s).
-ValueId root_of_square(Builder& b, const std::vector<Instr>& old, const std::vector<ValueId>& map, ValueId v, int depth = 0) {
+// √ of a square form of `old` (v⋅v, x·x, a sum of square forms, a square form times or over a value that
+// does not depend on p, a min, max or select of them, |s| of a square form or of its negation, a constant
+// ≥ 0), built in `b` from the mapped values: ‖v‖, |x|, ‖(√s, √t)‖, √s·√k, … (-1: not a square form). What
+// Quilez's exact distances write as √(min(dot2(a), dot2(b))) or √(x² + y² m): equal values, but the root's
+// gradient is a unit vector's where the square's, divided by 2√s, has no useful interval near the surface
+// (an interval of 1/√s). `dep`: which values depend on the query point.
+ValueId root_of_square(Builder& b, const std::vector<Instr>& old, const std::vector<ValueId>& map, const std::vector<char>& dep,
+                       ValueId v, int depth = 0) {
     const Instr& in = old[v];
     if (depth > 8 || !in.type.is_scalar()) return ValueId(-1);
     auto name = [&]() -> std::string_view { return in.op == Op::Builtin ? builtins()[size_t(in.aux)].name : ""; };
+    auto root = [&](ValueId a) { return root_of_square(b, old, map, dep, a, depth + 1); };
+    constexpr ValueId kNone = ValueId(-1);
     if (in.op == Op::Dot && in.args[0] == in.args[1]) return b.builtin("length", {map[in.args[0]]});
     if (in.op == Op::Mul && in.args[0] == in.args[1] && old[in.args[0]].type.is_scalar()) return b.builtin("abs", {map[in.args[0]]});
     if (in.op == Op::Const && in.data.size() == 1 && in.data[0] >= 0) return b.scalar(std::sqrt(in.data[0]));
     if (in.op == Op::Builtin && (name() == "min" || name() == "max")) {
         std::vector<ValueId> roots;
         for (ValueId a : in.args) {
-            ValueId r = root_of_square(b, old, map, a, depth + 1);
-            if (r == ValueId(-1)) return r;
+            ValueId r = root(a);
+            if (r == kNone) return r;
             roots.push_back(r);
         }
         return b.builtin(builtins()[size_t(in.aux)].name, roots);
     }
+    if (in.op == Op::Builtin && name() == "abs" && in.args.size() == 1) {  // |s|, |-s|, |c ? -s : t|
+        std::function<ValueId(ValueId, int)> root_abs = [&](ValueId a, int d) -> ValueId {
+            const Instr& x = old[a];
+            if (d > 8) return kNone;
+            if (x.op == Op::Neg) return root_of_square(b, old, map, dep, x.args[0], depth + 1);
+            if (x.op == Op::Select || x.op == Op::If) {
+                ValueId t = root_abs(x.args[1], d + 1), e = root_abs(x.args[2], d + 1);
+                if (t == kNone || e == kNone) return kNone;
+                return b.op(x.op, {map[x.args[0]], t, e});
+            }
+            return root_of_square(b, old, map, dep, a, depth + 1);
+        };
+        return root_abs(in.args[0], 0);
+    }
     if (in.op == Op::Select || in.op == Op::If) {
-        ValueId x = root_of_square(b, old, map, in.args[1], depth + 1), y = root_of_square(b, old, map, in.args[2], depth + 1);
-        if (x == ValueId(-1) || y == ValueId(-1)) return ValueId(-1);
+        ValueId x = root(in.args[1]), y = root(in.args[2]);
+        if (x == kNone || y == kNone) return kNone;
         return b.op(in.op, {map[in.args[0]], x, y});
     }
-    if (in.op == Op::Div) {
-        ValueId num = root_of_square(b, old, map, in.args[0], depth + 1);
-        ValueId den = root_of_square(b, old, map, in.args[1], depth + 1);
-        if (num == ValueId(-1) || den == ValueId(-1)) return ValueId(-1);
-        return b.op(Op::Div, {num, den});
+    if (in.op == Op::Add) {  // √(s + t) = ‖(√s, √t)‖
+        ValueId x = root(in.args[0]), y = root(in.args[1]);
+        if (x == kNone || y == kNone) return kNone;
+        return b.builtin("length", {b.construct(Type::vector(2), {x, y})});
     }
-    return ValueId(-1);
+    if (in.op == Op::Mul || in.op == Op::Div) {
+        // √(s·k) = √s·√k and √(s/k) = √s/√k where k does not depend on p (its root has no gradient);
+        // √(s/t) of two square forms.
+        for (int side = 0; side < (in.op == Op::Mul ? 2 : 1); ++side) {
+            ValueId s_v = in.args[size_t(side)], k_v = in.args[size_t(1 - side)];
+            if (dep[k_v] || !old[k_v].type.is_scalar()) continue;
+            ValueId r = root(s_v);
+            if (r == kNone) continue;
+            return b.op(in.op, {r, b.builtin("sqrt", {map[k_v]})});
+        }
+        if (in.op == Op::Div) {
+            ValueId num = root(in.args[0]), den = root(in.args[1]);
+            if (num == kNone || den == kNone) return kNone;
+            return b.op(Op::Div, {num, den});
+        }
+        return kNone;
+    }
+    return kNone;
 }
 
 // A copy of `f` (calls inlined, common subexpressions merged) with every √ of a square form taken as the
@@ -429,12 +816,17 @@ Function roots_taken(const Module& m, const Function& fn, bool* changed = nullpt
     std::vector<Instr> old = std::move(flat.body);
     flat.body.clear();
     std::vector<ValueId> map(old.size());
+    std::vector<char> dep(old.size(), 0);  // depends on the query point
+    for (size_t i = 0; i < old.size(); ++i) {
+        dep[i] = old[i].op == Op::Param && old[i].aux == 0;
+        for (ValueId a : old[i].args) dep[i] |= dep[a];
+    }
     Module scratch = m;  // Builder needs a module (for calls; there are none left)
     Builder b(scratch, flat);
     for (size_t i = 0; i < old.size(); ++i) {
         const Instr& in = old[i];
         if (in.op == Op::Builtin && in.type.is_scalar() && builtins()[size_t(in.aux)].name == std::string_view("sqrt")) {
-            ValueId r = root_of_square(b, old, map, in.args[0]);
+            ValueId r = root_of_square(b, old, map, dep, in.args[0]);
             if (r != ValueId(-1)) {
                 map[i] = r;
                 if (changed) *changed = true;
@@ -459,6 +851,26 @@ double roots_bound(const Module& m, int fn, const std::vector<Interval>& region,
     if (!changed) return kInf;  // nothing to take: the other refinements saw the same function
     f.name = "lipschitz_roots";
     return bound_added(work, std::move(f), region, others, ball, budget, true);
+}
+
+// The bound of ‖∇D‖ by case splitting (CaseSplit) on the gradient of `fn` with its roots of squares taken,
+// calls inlined: fewer boxes, each split into up to kSplitPasses interval passes.
+double split_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+                   double ball, int budget) {
+    Module work = m;
+    Function f = roots_taken(work, work.functions[size_t(fn)]);
+    f.name = "lipschitz_split";
+    int f_fn = int(work.functions.size());
+    work.functions.push_back(std::move(f));
+    std::string why;
+    int g = differentiate(work, f_fn, 0, "lipschitz_split_gradient", &why);
+    if (g < 0) return kInf;
+    Function flat = inline_calls(work, work.functions[size_t(g)]);
+    eliminate_common_subexpressions(flat);
+    eliminate_dead_code(flat);
+    if (flat.body.empty() || flat.body.size() > 20000) return kInf;
+    work.functions[size_t(g)] = std::move(flat);
+    return split_derive(work, g, region, others, ball, budget);
 }
 
 // Whether the shape stays inside its `bound` spheres: its distance at points outside each sphere (shells of
@@ -507,8 +919,11 @@ void divide_result(Module& m, int fn, double K) {
 
 LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<Interval>& box,
                                      const std::vector<std::vector<Interval>>& others, double ball, int samples, int boxes,
-                                     bool refine_bound) {
+                                     bool refine_bound, double* split_work) {
     LipschitzEstimate e;
+    double own_work = kSplitWorkPerEstimate;
+    if (!split_work) split_work = &own_work;
+    t_split_work = *split_work;
     Module work = m;  // the gradient is a function of its own, here only
     std::string why;
     int grad = differentiate(work, fn, 0, "lipschitz_gradient", &why);
@@ -541,6 +956,9 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     refine(chain_rule_bound);
     refine(union_bound);
     refine(roots_bound);
+    refine(split_bound);
+    *split_work = t_split_work;
+    t_split_work = 0;
     e.derived = std::max(e.derived, e.sampled);  // rounding in the intervals' ends never claims less than seen
     if (refine_bound && std::isfinite(e.derived)) find_jump(m, fn, box, others, ball, std::max(e.derived, 1.0), 4 * samples, e);
     return e;
@@ -550,6 +968,8 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
     std::vector<RangeIssue> warnings;
     bool scaled = false;
     std::map<int, LipschitzEstimate> estimated;  // by object function: a shape's variants share one estimate
+    // Case splitting for the items whose derived bound is applied (a declared one only words a warning).
+    double split_work = kSplitWorkPerModule;
     for (size_t fi = 0; fi < m.functions.size(); ++fi) {
         LipschitzSpec spec = m.functions[fi].lipschitz;
         if (spec.object_fn < 0) continue;
@@ -562,11 +982,14 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         bool repeat = estimated.count(spec.object_fn) > 0;  // a variant of an item already reported
         if (!spec.trusted || spec.declared > 0) {
             auto known = estimated.find(spec.object_fn);
-            if (known == estimated.end())
+            if (known == estimated.end()) {
+                double allowance = spec.declared > 0 ? 0 : std::min(kSplitWorkPerEstimate, split_work), given = allowance;
                 known = estimated
                             .emplace(spec.object_fn, estimate_lipschitz(m, spec.object_fn, region, others, spec.ball, 1000, 128,
-                                                                        estimated.size() < kMaxRefined))
+                                                                        estimated.size() < kMaxRefined, &allowance))
                             .first;
+                split_work -= given - allowance;
+            }
             e = known->second;
         }
         double applied = 1;

@@ -55,9 +55,12 @@ struct LipschitzEstimate {
 // Bounds ‖∇f‖ with respect to parameter 0 (ℝ³) of function `fn` over `box` (its three components); other
 // parameters take the intervals in `others` (one per parameter after the first). Adds nothing to `m`.
 // `ball` > 0: only points of the box within that distance of the origin count (a `bound` sphere).
+// `refine`: try the tighter bounds (chain rule at a warp, unions, roots of squares, case splitting) where the
+// direct one decides something; case splitting spends at most `*split_work` interval instruction evaluations
+// (decremented; null: 8·10⁶, about a second).
 LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<Interval>& box,
                                      const std::vector<std::vector<Interval>>& others, double ball = 0,
-                                     int samples = 1000, int boxes = 128, bool refine = true);
+                                     int samples = 1000, int boxes = 128, bool refine = true, double* split_work = nullptr);
 
 // The pass: every function with a LipschitzSpec. Returns the warnings (located at the instances) and, in
 // `report`, one line per item ("shape 'twisted': K ≤ 7.6 derived, 3.9 sampled, 7.6 applied").
