@@ -96,6 +96,10 @@ TEST_CASE("analytic gradients agree with central differences of the evaluator", 
         "q = p\nwhere\np ∈ ℝ³\n",
         "shape\nD = { ‖p‖ - 1 if p_2 > 0\n    ‖p - (0, -0.5, 0)‖ - 0.8 otherwise\nwhere\np ∈ ℝ³\n",
         "shape\nD = n⋅p - 0.2 + 0.1(p × (0, 0, 1))⋅(1, 1, 0)\nn = normalize(a)\nwhere\np ∈ ℝ³\na ∈ ℝ³ default = (1, 2, 2)\n",
+        // Quilez's elongation: the query point clamped per component (a clamp of vectors, with scalar and
+        // vector bounds).
+        "shape\nD = ‖(‖(q_1, q_3)‖ - 0.6, q_2)‖ - 0.2\nq = p - clamp(p, -h, h)\nwhere\np ∈ ℝ³\nh ∈ ℝ³ default = (0.8, 0, 0.3)\n",
+        "shape\nD = ‖p - clamp(p, -0.5, 0.5)‖ - 0.2\nwhere\np ∈ ℝ³\n",
         // Recurrences (the tangent rule for the IR's loop): a fold, a scale carried as a state, and a state
         // updated by a piecewise step (the loop's body has lazy arms).
         "shape\nq_1 = p\nq_(k+1) = (|q_k_1|, |q_k_2|, |q_k_3|) - 0.4(1, 1, 1) for k ∈ 1..3\nD = ‖q_4‖ - 0.3\nwhere\np ∈ ℝ³\n",

@@ -105,9 +105,9 @@ struct Differentiator {
             return emit(Op::Select, Type::vector(3), {c, da, db});
         }
         std::vector<ValueId> rows;
-        for (int i = 0; i < pt.rows; ++i) {
-            ValueId ai = emit(Op::Extract, Type::scalar(), {a}, i);
-            ValueId bi = emit(Op::Extract, Type::scalar(), {b}, i);
+        for (int i = 0; i < pt.rows; ++i) {  // a scalar operand stands for every component (clamp(v, 0, 1))
+            ValueId ai = type(a).is_scalar() ? a : emit(Op::Extract, Type::scalar(), {a}, i);
+            ValueId bi = type(b).is_scalar() ? b : emit(Op::Extract, Type::scalar(), {b}, i);
             ValueId c = emit(Op::Compare, Type::boolean(), {ai, bi}, int(k));
             rows.push_back(emit(Op::Select, Type::vector(3), {c, emit(Op::Row, Type::vector(3), {da}, i),
                                                               emit(Op::Row, Type::vector(3), {db}, i)}));
@@ -298,13 +298,12 @@ struct Differentiator {
                     return mul(d, T(2));
                 }
                 if (n == "clamp") {
-                    ValueId inner = select_rows(P(0), P(2), t, CompareKind::Gt, T(2), T(0));  // x > hi ? ∂hi : ∂x
-                    ValueId lo_c = P(0);
-                    if (t.is_scalar()) {
-                        ValueId c = emit(Op::Compare, Type::boolean(), {lo_c, P(1)}, int(CompareKind::Lt));
-                        return emit(Op::Select, Type::vector(3), {c, dense(T(1), t), dense(inner, t)});
-                    }
-                    return no_rule("clamp of vectors");
+                    // x < lo ? ∂lo : x > hi ? ∂hi : ∂x, per component (Quilez's elongation clamps the query point).
+                    // A scalar bound of a vector x that varies has no tangent of x's shape.
+                    if (!t.is_scalar() && ((PT(1).is_scalar() && T(1) != kZero) || (PT(2).is_scalar() && T(2) != kZero)))
+                        return no_rule("clamp of a vector between varying scalars");
+                    ValueId inner = select_rows(P(0), P(2), t, CompareKind::Gt, T(2), T(0));
+                    return select_rows(P(0), P(1), t, CompareKind::Lt, T(1), inner);
                 }
                 if (n == "mix") {
                     // (1 - s) ∂a + s ∂b + (b - a) ⊗ ∂s

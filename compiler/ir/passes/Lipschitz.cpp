@@ -1012,7 +1012,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                  : e.sampled <= 1 + 1e-3
                                      ? fmt::format("samples of its gradient reach only {:.3g}, but iqc cannot bound it where the instance "
                                                    "is marched; if it is 1-Lipschitz, say `# bound` in the module", e.sampled)
-                                     : fmt::format("its gradient reaches {:.3g} and iqc cannot bound it where the instance is marched",
+                                     : fmt::format("its gradient reaches {:.4g} and iqc cannot bound it where the instance is marched",
                                                    e.sampled);
             warnings.push_back({spec.where, fmt::format("shape '{}' {} ({}): marching may step through its "
                                                         "surface; give the instance `bound = R` (a sphere around the shape) so "
