@@ -440,17 +440,27 @@ vec2 iqc_scene_effects(vec3 p) {
 
 {{/if}}
 {{#if SHADOWS_HARD}}
-// Hard shadow: 1 when nothing lies between p and the light, else 0.
+// Hard shadow: 1 when nothing lies between p and the light, else 0. A ray that starts within the tolerance of
+// another surface (p in a crease: the floor beside a wall, both facing the light, and N the hit instance's own
+// normal) is leaving it while the distance grows: that surface is behind the ray, not an occluder (else a
+// black dot at every lit inside corner); a distance that shrinks there is a wall the light is behind.
 float iqc_shadow(vec3 p, vec3 N, vec3 light) {
     vec3 ro = p + N * (4.0 * iqc_eps(0.0));
     vec3 to_light = light - ro;
     float t_max = length(to_light);
     vec3 rd = to_light / t_max;
-    float t = 0.0;
+    float t = 0.0, last = -1.0;
+    bool leaving = true;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
         vec2 h = iqc_scene(ro + t * rd);
-        if ({{#if HIT_SCALE}}iqc_value(h){{#else}}h.x{{/if}} < iqc_eps(t)) return 0.0;
-        t += h.x;
+        float v = {{#if HIT_SCALE}}iqc_value(h){{#else}}h.x{{/if}}, e = iqc_eps(t);
+        if (v < e) {
+            if (!leaving || v <= last) return 0.0;
+        } else {
+            leaving = false;
+        }
+        last = v;
+        t += leaving ? max(h.x, e) : h.x;
         if (t > t_max) break;
     }
     return 1.0;
@@ -478,10 +488,20 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
 {{#else}}
     float res = 1.0, t = 0.0;
 {{/if}}
+    float last = -1.0;
+    bool leaving = true;  // from a crease, as for hard shadows: a surface the ray moves away from is no occluder
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
         vec2 e = iqc_scene_effects(ro + t * rd);
         float h = e.y;
-        if (h < iqc_eps(t)) return 0.0;
+        if (h < iqc_eps(t)) {
+            if (!leaving || h <= last) return 0.0;
+            last = h;
+            t += max(e.x, iqc_eps(t));
+            if (t > t_max) break;
+            continue;
+        }
+        leaving = false;
+        last = h;
 {{#if SHADOWS_IMPROVED}}
         float y = h * h / (2.0 * ph);
         float d = sqrt(max(h * h - y * y, 0.0));

@@ -400,3 +400,35 @@ TEST_CASE("a bound too small for its shape gets a located warning", "[numerics]"
         CHECK_THAT(fits.diagnostics, !Catch::Contains("too small"));
     }
 }
+
+TEST_CASE("lit inside corners get no shadow acne with any normals method", "[numerics][render][shadows]") {
+    // Shadow rays from a crease start within the tolerance of the other wall; they leave it while the light
+    // faces both walls. The shadows each method casts there must be those of the finite-difference normals
+    // (only the box's real shadow): pixels that shadows darken by more than 40/255, method by method.
+    const int W = 320, H = 180;
+    std::string text = read_text(scene("crease_analytic.iq"));
+    auto darkened = [&](const std::string& normals, const std::string& shadows) {
+        std::string with = replaced(replaced(text, "normals = \"analytic\"", "normals = \"" + normals + "\""),
+                                    "shadows = \"hard\"", "shadows = \"" + shadows + "\"");
+        std::string without = replaced(with, "shadows = \"" + shadows + "\"", "shadows = \"none\"");
+        render::Image a = render_text("crease_" + normals + "_" + shadows + ".iq", with, W, H);
+        render::Image b = render_text("crease_" + normals + "_none.iq", without, W, H);
+        int n = 0;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                float d = 0;
+                for (int c = 0; c < 3; ++c) d = std::max(d, b.pixel(x, y)[c] - a.pixel(x, y)[c]);
+                n += d * 255.0f > 40.0f;
+            }
+        return n;
+    };
+    for (const char* shadows : {"hard", "soft"}) {
+        int reference = darkened("tetrahedron", shadows);
+        INFO(shadows << " shadows: tetrahedron normals darken " << reference << " pixels");
+        CHECK(reference > 0);  // the box's own shadow
+        for (const char* normals : {"analytic", "forward", "central"}) {
+            INFO(normals);
+            CHECK(darkened(normals, shadows) == reference);
+        }
+    }
+}
