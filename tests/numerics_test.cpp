@@ -432,3 +432,40 @@ TEST_CASE("lit inside corners get no shadow acne with any normals method", "[num
         }
     }
 }
+
+TEST_CASE("a shape without a useful bound is marched by its steepest samples, and a bound sphere steps undivided", "[numerics][render]") {
+    // A recurrence (no interval bound): 1.25 times the steepest sample, said in a warning that names the fix
+    // the instance can still take (it has a `bound` already).
+    Compiled c = compile_path(scene("recurrence_no_bound.iq"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("recurrence_no_bound.iq:25:8: warning: shape 'scaled' is not 1-Lipschitz"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("iqc marches it with K = 10, 1.25 times the steepest gradient its samples reach"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("declare `# lipschitz: K` in the module (the instance's `bound` does not make"));
+    Coverage r = coverage(scene("recurrence_no_bound.iq"));
+    INFO(r.map);
+    CHECK(r.reference_hits > 20);
+    CHECK(r.holes == 0);
+    // A declared K of 30 inside `bound`: the sphere's stand-in steps by its own distance (rays reached nothing
+    // in 128 steps when it was divided too).
+    Coverage s = coverage(scene("steep_declared_bound.iq"));
+    INFO(s.map);
+    CHECK(s.reference_hits > 50);
+    CHECK(s.holes == 0);
+}
+
+TEST_CASE("a field that moves with time is sampled over time, not at time 0 only", "[numerics]") {
+    Compiled c = compile_path(scene("time_displacement.iq"));
+    INFO(c.diagnostics);
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("warning: shape 'bumpy' is not 1-Lipschitz"));
+    bool scaled = false;
+    for (const auto& line : c.result.lipschitz) {
+        INFO(line);
+        double applied = 0;
+        size_t at = line.find(" applied");
+        if (at == std::string::npos) continue;
+        size_t start = line.rfind(' ', at - 1);
+        applied = std::stod(line.substr(start + 1, at - start - 1));
+        scaled |= applied > 5;
+    }
+    CHECK(scaled);
+}

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <functional>
 #include <map>
+#include <memory>
 #include <queue>
 
 #include "ir/Builder.h"
@@ -24,6 +25,7 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kWorkBudget = 2e7;  // instructions evaluated per estimate (boxes and samples)
 constexpr double kUnbounded = 64;  // a derived K above this over the region is useless for marching
+constexpr double kSampledMargin = 1.25;  // without a useful bound: the steepest sample times this
 constexpr size_t kMaxRefined = 16;
 // Interval instruction evaluations case splitting may spend: per estimate, and per pass over a module (~100 ns
 // each in a release build: a second, and two).
@@ -469,7 +471,17 @@ struct SplitMix64 {
 
 double sample(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
               double ball, int samples) {
-    Evaluator ev(m, sample_inputs());
+    // A field that moves (time, the mouse) is sampled at 16 moments over two minutes and mouse positions
+    // over the view: its gradient at time 0 alone says nothing of time 40 (sin(time·p) steepens).
+    std::vector<std::unique_ptr<Evaluator>> evs;
+    SplitMix64 moments{0x2545F4914F6CDD1Dull};
+    for (int k = 0; k < 16; ++k) {
+        EvalInputs in = sample_inputs();
+        in.time = k == 0 ? 0 : 120 * moments();
+        in.mouse[0] = k == 0 ? 0 : moments();
+        in.mouse[1] = k == 0 ? 0 : moments();
+        evs.push_back(std::make_unique<Evaluator>(m, in));
+    }
     const Function& g = m.functions[size_t(grad)];
     SplitMix64 next{0x9E3779B97F4A7C15ull};
     auto pick = [&](Interval i) {
@@ -489,7 +501,7 @@ double sample(const Module& m, int grad, const std::vector<Interval>& region, co
         }
         Value r;
         try {
-            r = ev.call(grad, args);
+            r = evs[size_t(s) % evs.size()]->call(grad, args);
         } catch (const EvalLimit&) {
             break;
         }
@@ -902,6 +914,47 @@ std::vector<double> outside_bound(const Module& m, const LipschitzSpec& spec, do
     return {};
 }
 
+// Divides the value of every call of `object` in function `fn` (its first component, for an instrumented
+// (distance, count)) by K, leaving what `fn` computes around the calls as it is: a `bound` sphere's stand-in
+// length(p) - R is a true distance, and divided by K it made rays crawl toward the sphere (a shape with K = 30
+// was never reached within 128 steps). Returns whether `fn` calls `object`.
+bool divide_object_calls(Module& m, int fn, int object, double K) {
+    // The item's distance calls the object function, or the shape's module function the object function calls.
+    const Function& o = m.functions[size_t(object)];
+    int shape = o.body.empty() || o.body[o.result].op != Op::Call ? -1 : o.body[o.result].aux;
+    Function& f = m.functions[size_t(fn)];
+    bool found = false;
+    for (const Instr& in : f.body) found |= in.op == Op::Call && (in.aux == object || in.aux == shape);
+    if (!found) return false;
+    object = [&] {
+        for (const Instr& in : f.body)
+            if (in.op == Op::Call && in.aux == object) return object;
+        return shape;
+    }();
+    std::vector<Instr> old = std::move(f.body);
+    f.body.clear();
+    std::vector<ValueId> map(old.size());
+    Builder b(m, f);
+    for (size_t i = 0; i < old.size(); ++i) {
+        Instr copy = old[i];
+        for (ValueId& a : copy.args) a = map[a];
+        ValueId v = f.add(std::move(copy));
+        if (old[i].op == Op::Call && old[i].aux == object) {
+            const Type& t = old[i].type;
+            if (t.is_scalar()) {
+                v = b.op(Op::Div, {v, b.scalar(K)});
+            } else {
+                ValueId d = b.op(Op::Div, {b.op(Op::Extract, {v}, 0), b.scalar(K)});
+                v = b.construct(t, {d, b.op(Op::Extract, {v}, 1)});
+            }
+        }
+        map[i] = v;
+    }
+    f.result = map[f.result];
+    for (auto& [name, v] : f.outputs) v = map[v];
+    return true;
+}
+
 // Divides function `fn`'s result (its first component, for an instrumented (distance, count)) by K.
 void divide_result(Module& m, int fn, double K) {
     Function& f = m.functions[size_t(fn)];
@@ -1008,16 +1061,31 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             how = "1-Lipschitz at every sample";
         } else if (!std::isfinite(e.derived) || e.derived > kUnbounded) {
             how = "no useful bound";
+            // Without a bound worth marching by, the samples' steepest gradient with a margin: not proven (a
+            // steeper spot between samples may still be stepped through), but 1 would skip what samples saw.
+            if (e.sampled > 1 + 1e-3) {
+                applied = std::min(kSampledMargin * e.sampled, std::isfinite(e.derived) ? e.derived : kInf);
+                how = fmt::format("no useful bound: {:g} times the steepest sample, not proven", kSampledMargin);
+            }
+            bool bounded = !spec.bounds.empty() || spec.ball > 0;
             std::string reason = !e.why.empty() ? "iqc cannot differentiate it (" + e.why + ")"
                                  : e.sampled <= 1 + 1e-3
                                      ? fmt::format("samples of its gradient reach only {:.3g}, but iqc cannot bound it where the instance "
                                                    "is marched; if it is 1-Lipschitz, say `# bound` in the module", e.sampled)
+                                 : std::isfinite(e.derived)
+                                     ? fmt::format("its gradient reaches {:.4g}, and the bound iqc derives where the instance is marched, "
+                                                   "{:.3g}, would take too many steps", e.sampled, e.derived)
                                      : fmt::format("its gradient reaches {:.4g} and iqc cannot bound it where the instance is marched",
                                                    e.sampled);
-            warnings.push_back({spec.where, fmt::format("shape '{}' {} ({}): marching may step through its "
-                                                        "surface; give the instance `bound = R` (a sphere around the shape) so "
-                                                        "iqc can bound its gradient there, or declare `# lipschitz: K`",
-                                                        spec.shape, e.why.empty() && e.sampled <= 1 + 1e-3 ? "has no Lipschitz bound iqc can derive" : "is not 1-Lipschitz", reason)});
+            std::string marched = applied > 1 ? fmt::format("iqc marches it with K = {:.3g}, {:g} times the steepest gradient its samples "
+                                                            "reach, which is not a proven bound: ", applied, kSampledMargin)
+                                              : "";
+            std::string fix = bounded ? "declare `# lipschitz: K` in the module (the instance's `bound` does not make its gradient boundable)"
+                                      : "give the instance `bound = R` (a sphere around the shape) so iqc can bound its gradient there, "
+                                        "or declare `# lipschitz: K`";
+            warnings.push_back({spec.where, fmt::format("shape '{}' {} ({}): {}marching may step through its surface; {}", spec.shape,
+                                                        e.why.empty() && e.sampled <= 1 + 1e-3 ? "has no Lipschitz bound iqc can derive" : "is not 1-Lipschitz",
+                                                        reason, marched, fix)});
         } else {
             applied = e.derived;
             how = "derived";
@@ -1052,7 +1120,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         }
         if (repeat) warnings.resize(warned);
         if (applied > 1 + 1e-9) {
-            divide_result(m, int(fi), applied);
+            if (!divide_object_calls(m, int(fi), spec.object_fn, applied)) divide_result(m, int(fi), applied);
             if (spec.factor_global >= 0 && size_t(spec.factor_global) < m.globals.size()) {
                 m.globals[size_t(spec.factor_global)].value = {applied};
                 scaled = true;
