@@ -469,3 +469,60 @@ TEST_CASE("a field that moves with time is sampled over time, not at time 0 only
     }
     CHECK(scaled);
 }
+
+TEST_CASE("a camera within the hit tolerance, too far out or too near its target is told so at its position", "[numerics]") {
+    // A scene 1e-4 across under the default hit tolerance (1e-3): every ray stopped where it started, one grey
+    // picture, silently (found by a new-user trial).
+    Compiled tiny = compile_text("tiny_scene.iq", "[camera]\nposition = [0, 0.0001, -0.0004]\ntarget = [0, 0, 0]\n"
+                                                  "[[shapes]]\ntype = \"sphere\"\nshape_params = { r = 0.0001 }\n");
+    CHECK(tiny.result.exit_code == 0);
+    CHECK_THAT(tiny.diagnostics, Catch::Contains("tiny_scene.iq:2:12: warning: the camera is 0.000312 from the nearest surface, "
+                                                 "within the hit tolerance (0.001)"));
+    Compiled tuned = compile_text("tiny_tuned.iq", "[camera]\nposition = [0, 0.0001, -0.0004]\ntarget = [0, 0, 0]\n[render]\nhit = 1e-7\n"
+                                                   "[[shapes]]\ntype = \"sphere\"\nshape_params = { r = 0.0001 }\n");
+    CHECK(tuned.diagnostics.find("warning") == std::string::npos);
+    // 1e5 from the origin floats are 0.0078 apart: 8% of the pixels differ from the scene at the origin.
+    Compiled far = compile_text("far_out.iq", "[camera]\nposition = [100000, 1.5, 99996]\ntarget = [100000, 0, 100000]\n"
+                                              "[[shapes]]\ntype = \"sphere\"\ntransform = \"T((100000, 0, 100000))\"\n");
+    CHECK(far.result.exit_code == 0);
+    CHECK_THAT(far.diagnostics, Catch::Contains("far_out.iq:2:12: warning: the camera is 1e+05 from the origin, where 32-bit floats "
+                                                "(what shaders compute in) are 0.00781 apart, coarser than the hit tolerance (0.001)"));
+    Compiled near = compile_text("far_10000.iq", "[camera]\nposition = [10000, 1.5, 9996]\ntarget = [10000, 0, 10000]\n"
+                                                 "[[shapes]]\ntype = \"sphere\"\ntransform = \"T((10000, 0, 10000))\"\n");
+    CHECK(near.diagnostics.find("warning") == std::string::npos);
+    // 1e6 out, a target 4 away: not "the same point" (floats are 0.0625 apart there), but a direction known to 0.9°.
+    Compiled close = compile_text("close_target.iq", "[camera]\nposition = [1000000, 1.5, 999996]\ntarget = [1000000, 0, 1000000]\n"
+                                                     "[[shapes]]\ntype = \"sphere\"\n");
+    CHECK(close.result.exit_code == 1);
+    CHECK_THAT(close.diagnostics, Catch::Contains("close_target.iq:1:1: error: the camera's target is too close to its position for "
+                                                  "coordinates this large: 4 apart where 32-bit floats (what shaders compute in) "
+                                                  "are 0.0625 apart"));
+}
+
+TEST_CASE("Lipschitz pragmas: each said once, no exact distance with a factor, a factor within 32-bit floats", "[numerics]") {
+    // Found by a new-user trial: these were accepted silently (the last pragma won; 1e39 became 1e38 in the shader).
+    struct Case {
+        const char* name;
+        const char* pragmas;
+        const char* message;
+    };
+    const Case cases[] = {
+        {"twice.iql", "# lipschitz: 2\n# lipschitz: 3\n", "twice.iql:3:1: error: '# lipschitz' is said twice in this module"},
+        {"exact_factor.iql", "# exact\n# lipschitz: 5\n",
+         "exact_factor.iql:3:1: error: '# lipschitz' contradicts '# exact': an exact distance is 1-Lipschitz"},
+        {"exact_bound.iql", "# bound\n# exact\n", "exact_bound.iql:3:1: error: '# exact' contradicts '# bound'"},
+        {"huge.iql", "# lipschitz: 1e39\n", "huge.iql:2:1: error: '# lipschitz: K' needs a number K ≥ 1 (how much D can change per "
+                                            "unit of distance), within 32-bit floats"},
+    };
+    for (const Case& c : cases) {
+        auto path = write_temp(c.name, std::string("shape\n") + c.pragmas + "D = ‖p‖ - 1\nwhere\np ∈ ℝ³\n");
+        RunResult r = run_iqc("eval " + path.string() + " --set \"p=(2, 0, 0)\"");
+        INFO(r.err);
+        CHECK(r.exit_code == 1);
+        CHECK_THAT(r.err, Catch::Contains(c.message));
+    }
+    // A K-Lipschitz bound: `# bound` with `# lipschitz: K` (examples/christmas_tree.iq's tree).
+    RunResult ok = run_iqc("eval " + write_temp("bound_factor.iql", "shape\n# bound\n# lipschitz: 1.5\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n").string() +
+                           " --set \"p=(2, 0, 0)\"");
+    CHECK(ok.exit_code == 0);
+}

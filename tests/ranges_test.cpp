@@ -92,3 +92,21 @@ TEST_CASE("values past the largest float are warned where they start: a folded c
     RunResult ok = run_iqc("eval " + write_temp("in_range.iql", "y = 10^38 + exp(x)\nwhere\nx ∈ [0, 80] default = 1\n").string());
     CHECK(ok.err.empty());
 }
+
+TEST_CASE("values below the smallest normal float are warned where they start, and a division by one can be by 0", "[ranges]") {
+    // Found by a new-user trial: (‖p‖ - 1)(1e-20 1e-20)/(1e-20 1e-20) folded to 1e-40, which a GPU flushes to 0
+    // (0/0 at every pixel, no word); exp(-a) with a = 100 is 3.7e-44, the same 0/0.
+    Compiled c = compile_text("tiny.md", doc("D = (‖p‖ - 1)(1e-20 1e-20)/(1e-20 1e-20)", ""));
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("tiny.md:4:14: warning: this value is below the smallest normal 32-bit float "
+                                              "(1.2e-38): a shader may compute 0; it ranges over [0, 1e-40]"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("tiny.md:4:1: warning: division by a value that can be 0 (it can fall below the "
+                                              "smallest normal 32-bit float, 1.2e-38, which a shader may flush to 0)"));
+    Compiled e = compile_text("exp_tiny.md", doc("D = (‖p‖ - 1) exp(-a)/exp(-a)", "a ∈ [0,200] default = 100\n"));
+    REQUIRE(e.result.exit_code == 0);
+    CHECK_THAT(e.diagnostics, Catch::Contains("exp_tiny.md:4:1: warning: division by a value that can be 0 (it can fall below "
+                                              "the smallest normal 32-bit float"));
+    // Small but normal: no word.
+    Compiled ok = compile_text("small_ok.md", doc("D = (‖p‖ - 1)(1e-10 1e-10)/(1e-10 1e-10)", ""));
+    CHECK(ok.diagnostics.empty());
+}

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 #include <filesystem>
 #include <fmt/format.h>
 
@@ -197,7 +198,26 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
     ModuleLookup lookup = [this](const std::string& n, Span where) { return get(n, where); };
     auto m = check_module(std::move(ast), lookup, co, d_);
     if (d_.error_count() != before) m->ok = false;  // syntax errors too
-    // Pragmas in comment lines.
+    // Pragmas in comment lines, each said once: `# exact` (a true distance, so 1-Lipschitz) excludes `# bound`
+    // and `# lipschitz: K`; `# bound` with `# lipschitz: K` is a K-Lipschitz bound.
+    std::map<std::string, Span> said;
+    auto pragma = [&](Span at, const std::string& kind) {
+        const char* clash = nullptr;
+        if (said.count(kind)) clash = kind.c_str();
+        else if (kind == "exact" && said.count("bound")) clash = "bound";
+        else if (kind == "exact" && said.count("lipschitz")) clash = "lipschitz";
+        else if ((kind == "bound" || kind == "lipschitz") && said.count("exact")) clash = "exact";
+        if (clash) {
+            auto& e = d_.error(at, kind == clash ? fmt::format("'# {}' is said twice in this module", kind)
+                                                 : fmt::format("'# {}' contradicts '# {}': an exact distance is 1-Lipschitz and not "
+                                                               "only a bound (say `# bound` with `# lipschitz: K` for a K-Lipschitz bound)",
+                                                               kind, clash));
+            Diagnostics::note(e, said[clash], "said here first");
+            return false;
+        }
+        said[kind] = at;
+        return true;
+    };
     for (const auto& r : src.ranges) {
         std::string_view text = sm_.text(src.file).substr(r.begin, r.end - r.begin);
         size_t pos = 0;
@@ -209,15 +229,20 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
             if (h != std::string_view::npos && line[h] == '#') {
                 std::string_view body = line.substr(h + 1);
                 while (!body.empty() && body.front() == ' ') body.remove_prefix(1);
-                if (body.rfind("exact", 0) == 0) m->exactness = "exact";
-                else if (body.rfind("bound", 0) == 0) m->exactness = "bound";
-                else if (body.rfind("lipschitz", 0) == 0) {
+                Span at = {src.file, uint32_t(r.begin + pos + h), uint32_t(r.begin + eol)};
+                if (body.rfind("exact", 0) == 0) {
+                    if (pragma(at, "exact")) m->exactness = "exact";
+                } else if (body.rfind("bound", 0) == 0) {
+                    if (pragma(at, "bound")) m->exactness = "bound";
+                } else if (body.rfind("lipschitz", 0) == 0) {
                     std::string rest(body.substr(9));
                     size_t k = rest.find_first_of("0123456789.");
                     double v = k == std::string::npos ? 0 : std::atof(rest.c_str() + k);
-                    Span at = {src.file, uint32_t(r.begin + pos + h), uint32_t(r.begin + eol)};
-                    if (!(v >= 1)) d_.error(at, "'# lipschitz: K' needs a number K ≥ 1 (how much D can change per unit of distance)");
-                    else m->lipschitz = v;
+                    if (!(v >= 1) || !(v <= limits::kFloatMax))
+                        d_.error(at, "'# lipschitz: K' needs a number K ≥ 1 (how much D can change per unit of distance), within "
+                                     "32-bit floats (at most about 3.4e38)");
+                    else if (pragma(at, "lipschitz"))
+                        m->lipschitz = v;
                 }
             }
             pos = eol + 1;

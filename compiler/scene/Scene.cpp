@@ -401,7 +401,10 @@ void SceneReader::read_camera(const toml::table& root) {
         } else {
             auto& t = *n->as_table();
             check_keys(t, kCameraKeys, " in [camera]");
-            if (auto* x = t.get("position")) get_vec3(*x, "position", s_.camera.position);
+            if (auto* x = t.get("position")) {
+                get_vec3(*x, "position", s_.camera.position);
+                s_.camera.position_span = span_of(*x);
+            }
             if (auto* x = t.get("target")) get_vec3(*x, "target", s_.camera.target);
             if (auto* x = t.get("fov")) {
                 if (auto v = get_number(*x, "fov")) {
@@ -425,9 +428,16 @@ void SceneReader::read_camera(const toml::table& root) {
                 d_.error(span_of(*n), "the camera's position and target must be within ±1e7 (beyond, a 32-bit float has "
                                       "no fractions left: the shader's rays would be noise)");
             else if (gap < 1e-5 * scale)
-                d_.error(span_of(*n), fmt::format("the camera's position and target are the same point in 32-bit floats "
-                                                  "(what shaders compute in): they must differ by more than {:.3g}",
-                                                  1e-5 * scale));
+                d_.error(span_of(*n), gap == 0 ? fmt::format("the camera's position and target are the same point in 32-bit floats "
+                                                             "(what shaders compute in): they must differ by more than {:.3g}",
+                                                             1e-5 * scale)
+                                               : fmt::format("the camera's target is too close to its position for coordinates this "
+                                                             "large: {:.3g} apart where 32-bit floats (what shaders compute in) are "
+                                                             "{:.3g} apart, the view direction is only known to about {:.2g}°; put the "
+                                                             "target more than {:.3g} away (1e-5 of the largest coordinate)",
+                                                             gap, std::nextafter(float(scale), INFINITY) - float(scale),
+                                                             (std::nextafter(float(scale), INFINITY) - float(scale)) / gap * 180 / M_PI,
+                                                             1e-5 * scale));
         }
     }
 }

@@ -52,6 +52,7 @@ struct CameraDesc {
     std::array<double, 3> target{0, 0, 5};
     double fov = 60;  // vertical, degrees
     bool orbit = false;
+    Span position_span;  // where `position` is written (empty: the default)
 };
 
 enum class March { Fixed, Sphere, Relaxed, Auto };

@@ -44,6 +44,8 @@ constexpr size_t kMaxFunctionInstructions = 1'000'000;
 // The largest 32-bit float, and the range of a 32-bit int: the numbers a shader computes with. Values outside
 // them are located errors where they are written (literals, defaults, overrides, --set).
 constexpr double kFloatMax = 3.4028234663852886e38;
+// The smallest normal 32-bit float: below it GPUs may flush to 0 (denormals are optional in GLSL ES).
+constexpr double kFloatMinNormal = 1.1754943508222875e-38;
 inline bool is_int32(double x) { return x >= -2147483648.0 && x <= 2147483647.0; }
 
 // A size as counted (a literal such as `3` in ℝ^3, a sum of block heights, a concatenation's length):

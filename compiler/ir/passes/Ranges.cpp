@@ -55,6 +55,7 @@ struct Analyzer {
     const Function& f;
     std::vector<Range> r;
     std::vector<RangeIssue> issues;
+    std::vector<char> underflows = {};  // per value: it can fall below the smallest normal float (a shader's 0)
 
     Range all_unknown(const Type& t) {
         Range x;
@@ -235,7 +236,11 @@ struct Analyzer {
                 Interval d = comp(in.args[1], 0);
                 if (contains_zero(d)) {
                     if (r[in.args[1]].known)
-                        warn(in, fmt::format("division by a value that can be 0: with the parameters' bounds {}",
+                        warn(in, fmt::format("division by a value that can be 0{}: with the parameters' bounds {}",
+                                             underflows[in.args[1]] ? fmt::format(" (it can fall below the smallest normal 32-bit "
+                                                                                  "float, {:.2g}, which a shader may flush to 0)",
+                                                                                  limits::kFloatMinNormal)
+                                                                    : "",
                                              ranges_over(d)));
                     return all_unknown(in.type);
                 }
@@ -294,6 +299,7 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
     Function& f = m.functions[size_t(fn)];
     Analyzer a{m, f, {}, {}};
     a.r.resize(f.body.size());
+    a.underflows.assign(f.body.size(), 0);
     // Analysis and warnings.
     std::vector<int> needs;  // per instruction: 0 none, else the guard kind
     needs.assign(f.body.size(), 0);
@@ -368,6 +374,13 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
                 needs[i] = kDivLength;
         }
         a.r[i] = a.eval(i);
+        // In 32-bit floats a nonzero value below the smallest normal (1.2e-38) may be 0 (GPUs flush denormals):
+        // e^-100, 1e-20·1e-20. Its range takes 0 in, so a division by it is a division by a value that can be 0.
+        if (in.type.kind != Type::Integer && in.op != Op::Compare)
+            for (auto& c : a.r[i].c) {
+                if (c.lo > 0 && c.lo < limits::kFloatMinNormal) c.lo = 0, a.underflows[i] = 1;
+                if (c.hi < 0 && c.hi > -limits::kFloatMinNormal) c.hi = 0, a.underflows[i] = 1;
+            }
         // A value of constants and parameters that is beyond the largest float wherever it is (10^40): the
         // shader computes ∞ where iqc eval, in double, prints a number.
         // Said once, where it starts (a folded constant keeps the span of what it was folded from).
@@ -380,6 +393,15 @@ std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
             if (beyond[i] && !inherited && in.span.valid())
                 a.warn(in, fmt::format("this value is beyond the largest 32-bit float (3.4e38): a shader computes ∞; {}",
                                        ranges_over(a.r[i].c[0])));
+            // Nonzero but below the smallest normal float wherever it is (a product of 1e-20 and 1e-20): a shader
+            // may compute 0. Said where it starts.
+            bool tiny = a.underflows[i] != 0;
+            for (const auto& c : a.r[i].c) tiny = tiny && std::max(std::fabs(c.lo), std::fabs(c.hi)) < limits::kFloatMinNormal;
+            bool tiny_inherited = false;
+            for (ValueId arg : in.args) tiny_inherited |= a.underflows[arg] && a.r[arg].known;
+            if (tiny && !tiny_inherited && in.span.valid())
+                a.warn(in, fmt::format("this value is below the smallest normal 32-bit float ({:.2g}): a shader may compute 0; {}",
+                                       limits::kFloatMinNormal, ranges_over(a.r[i].c[0])));
         }
         // A guarded operation's result is in range.
         if (needs[i] == kNonNegative)
