@@ -100,6 +100,10 @@ TEST_CASE("analytic gradients agree with central differences of the evaluator", 
         // vector bounds).
         "shape\nD = ‖(‖(q_1, q_3)‖ - 0.6, q_2)‖ - 0.2\nq = p - clamp(p, -h, h)\nwhere\np ∈ ℝ³\nh ∈ ℝ³ default = (0.8, 0, 0.3)\n",
         "shape\nD = ‖p - clamp(p, -0.5, 0.5)‖ - 0.2\nwhere\np ∈ ℝ³\n",
+        // clamp with lo > hi (min(max(x, lo), hi) = hi) and mod with a varying modulus (∂x - ⌊x/y⌋∂y): both
+        // were wrong (a soundness trial).
+        "shape\nD = clamp(-5, 2 + 0.1p_1, 3p_2) + 0.2p_3\nwhere\np ∈ ℝ³\n",
+        "shape\nD = 6mod(2.5 + 0.1p_1, 1 + 0.1p_2) + 0.1p_3\nwhere\np ∈ ℝ³\n",
         // Recurrences (the tangent rule for the IR's loop): a fold, a scale carried as a state, and a state
         // updated by a piecewise step (the loop's body has lazy arms).
         "shape\nq_1 = p\nq_(k+1) = (|q_k_1|, |q_k_2|, |q_k_3|) - 0.4(1, 1, 1) for k ∈ 1..3\nD = ‖q_4‖ - 0.3\nwhere\np ∈ ℝ³\n",

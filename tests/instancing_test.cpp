@@ -346,3 +346,21 @@ TEST_CASE("a hierarchy node standing in for its members is never a hit", "[insta
     CHECK(hits > 100);
     CHECK(behind == 0);
 }
+
+TEST_CASE("a bounded group too large for a hierarchy on Shadertoy is told so, located", "[instancing][bvh]") {
+    // Past 2,048 members the hierarchy's tables would be code (llvmpipe compiles them for minutes): the group is
+    // one loop there, and said to be (it was silent; stop 20's trial).
+    auto path = write_temp("rings_2049.iq", rings_scene(2049, false, 0.4));
+    Compiled toy = compile_path(path);
+    REQUIRE(toy.result.exit_code == 0);
+    CHECK_THAT(toy.diagnostics, Catch::Contains("rings_2049.iq:39:8: warning: 2049 instances of 'ring' with `bound` are marched in "
+                                                "one loop, without a bounding-volume hierarchy"));
+    CHECK_THAT(toy.diagnostics, Catch::Contains("--target webgl2 keeps them in a texture"));
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled web = compile_path(path, o);
+    REQUIRE(web.result.exit_code == 0);
+    CHECK(web.diagnostics.find("bounding-volume hierarchy") == std::string::npos);
+    Compiled small = compile_path(write_temp("rings_2048.iq", rings_scene(2048, false, 0.4)));
+    CHECK(small.diagnostics.find("bounding-volume hierarchy") == std::string::npos);
+}

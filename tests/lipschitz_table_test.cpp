@@ -160,6 +160,13 @@ TEST_CASE("case splitting bounds kinked fields by their pieces, and never below 
         // the field is 3p_2 (gradient 3), so the case sign = 0 has volume and must stay (only a coordinate's own
         // zero is a plane).
         {"slab_sign", "D = 3p_2 (1 - sign(max(p_1 + 2.999, 0)))", 3, 3},
+        // The same through a cut (a soundness trial's finding): u = T(p) is not the query point, and u_1 = 0 on a
+        // slab of p (|p_1| ≤ 0.001) has volume; there the gradient is (∓3, 1.5·…) of norm √(3² + 1.5²).
+        {"cut_slab_sign", "D = 1.5u_3 + 3(1 - sign(u_1))(0.001 - |u_2|)\nu = max((|p_1| - 0.001, p_1, p_2), (0, -9, -9))",
+         3.354102 * 2, 3.354101},
+        // clamp with lo > hi is min(max(x, lo), hi) = hi, as the evaluator computes it: slope 40 on |p_2| < 0.001
+        // (the rule took ∂lo there, and the bound 1.5).
+        {"inverted_clamp", "D = 1.5p_3 + clamp(-9, -1, 40|p_2| - 1.04)", 40.03 * 2, 40.02},
         // A clamp inside a length (a segment's capsule, scaled): K 2.5.
         {"capsule", "D = 2.5(‖p - t b‖ - 0.3)\nt = clamp(p⋅b/(b⋅b), 0, 1)\nb = (1, 0.5, 0)", 2.5 * 2},
     };

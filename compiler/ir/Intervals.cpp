@@ -165,8 +165,8 @@ Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
         });
     else if (n == "clamp")
         each([&](size_t k) {
-            Interval v = arg(0, k), lo = arg(1, k), hi = arg(2, k);
-            return Interval{std::max(std::min(v.lo, hi.lo), lo.lo), std::min(std::max(v.hi, lo.hi), hi.hi)};
+            Interval v = arg(0, k), lo = arg(1, k), hi = arg(2, k);  // min(max(v, lo), hi), also where lo > hi
+            return Interval{std::min(std::max(v.lo, lo.lo), hi.lo), std::min(std::max(v.hi, lo.hi), hi.hi)};
         });
     else if (n == "mix")
         each([&](size_t k) {

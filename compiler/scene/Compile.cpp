@@ -307,6 +307,7 @@ CompileResult SceneCompiler::run_checked() {
     if (!planned || d_.error_count() != before) return std::move(res_);
     try {
         SceneIR scene = lower(plans);
+        for (const auto& [span, message] : scene.warnings) d_.warning(span, message);
         lap("lower to IR");
         warn_idle_effects(scene);
         optimize(scene);

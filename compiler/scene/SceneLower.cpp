@@ -177,6 +177,13 @@ private:
             std::string shape = plan(members[0]).desc->type, material = plan(members[0]).desc->material;
             g.name = unique_name(material.empty() ? shape : shape + "_" + material);
             if (std::get<2>(key) && members.size() >= kMinTree && (!o_.params_constant || members.size() <= kMaxTreeInCode)) build_tree(g);
+            else if (std::get<2>(key) && members.size() > kMaxTreeInCode)
+                out_.warnings.push_back({plan(members[0]).desc->type_span,
+                                         fmt::format("{} instances of '{}' with `bound` are marched in one loop, without a bounding-volume "
+                                                     "hierarchy: on the shadertoy target its tables would be code, and past {} members "
+                                                     "llvmpipe compiles them for minutes; --target webgl2 keeps them in a texture "
+                                                     "and builds the hierarchy",
+                                                     members.size(), shape, kMaxTreeInCode)});
             out_.group_notes.push_back(fmt::format("{}{}: {} instances in one loop", shape, material.empty() ? "" : " with " + material,
                                                    members.size()));
             items_.push_back(std::move(g));

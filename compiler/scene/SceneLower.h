@@ -48,6 +48,7 @@ struct SceneIR {
     bool has_reflectivity = false;
     bool has_transmission = false;
     std::vector<std::string> group_notes;  // "torus with lambert: 1000 instances in one loop"
+    std::vector<std::pair<Span, std::string>> warnings;  // what the lowering chose against the scene's wish, located
 };
 
 // Lowers the planned instances (plans[i] is scene.instances[i]) with their modules.

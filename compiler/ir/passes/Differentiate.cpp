@@ -264,7 +264,14 @@ struct Differentiator {
                 if (n == "abs") return chain(builtin("sign", {x}), x, T(0));
                 if (n == "floor" || n == "ceil" || n == "sign" || n == "step" || n == "round") return kZero;
                 if (n == "fract") return T(0);
-                if (n == "mod") return T(0) == kZero ? kZero : T(0);  // for a constant modulus (repetition)
+                if (n == "mod") {
+                    // mod(x, y) = x - y⌊x/y⌋: ∂x - ⌊x/y⌋∂y (a constant modulus, a repetition's, leaves ∂x).
+                    if (T(1) == kZero) return T(0);
+                    ValueId fl = builtin("floor", {op2(Op::Div, x, P(1))});
+                    if (PT(1).is_vector() && !t.is_scalar() && PT(1).rows != t.rows) return no_rule("mod by a vector of another size");
+                    ValueId dy = t.is_scalar() ? mul(fl, T(1)) : PT(1).is_scalar() ? outer(fl, T(1)) : scale_rows(fl, T(1));
+                    return sub(dense(T(0), t), dy);
+                }
                 if (n == "min" || n == "max") {
                     // At a tie, the first argument's derivative (a subgradient; never 0 where both sides have one).
                     CompareKind k = n == "min" ? CompareKind::Le : CompareKind::Ge;
@@ -298,12 +305,15 @@ struct Differentiator {
                     return mul(d, T(2));
                 }
                 if (n == "clamp") {
-                    // x < lo ? ∂lo : x > hi ? ∂hi : ∂x, per component (Quilez's elongation clamps the query point).
-                    // A scalar bound of a vector x that varies has no tangent of x's shape.
+                    // min(max(x, lo), hi), as the evaluator computes it (and GPUs do; GLSL leaves lo > hi undefined),
+                    // per component: m = max(x, lo) picks ∂x or ∂lo, then min(m, hi) picks ∂m or ∂hi. Quilez's
+                    // elongation clamps the query point. A scalar bound of a vector x that varies has no tangent of
+                    // x's shape.
                     if (!t.is_scalar() && ((PT(1).is_scalar() && T(1) != kZero) || (PT(2).is_scalar() && T(2) != kZero)))
                         return no_rule("clamp of a vector between varying scalars");
-                    ValueId inner = select_rows(P(0), P(2), t, CompareKind::Gt, T(2), T(0));
-                    return select_rows(P(0), P(1), t, CompareKind::Lt, T(1), inner);
+                    ValueId m = builtin("max", {P(0), P(1)});
+                    ValueId dm = select_rows(P(0), P(1), t, CompareKind::Ge, T(0), T(1));
+                    return select_rows(m, P(2), t, CompareKind::Le, dm, T(2));
                 }
                 if (n == "mix") {
                     // (1 - s) ∂a + s ∂b + (b - a) ⊗ ∂s

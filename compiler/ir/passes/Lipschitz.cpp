@@ -82,12 +82,14 @@ double result_norm(const Bounds& g, bool jacobian) {
 struct SplitBudget {
     int per_box;
     double pool;
+    bool query_point = true;  // parameter 0 is the query point p (not a cut's intermediate vector u = T(p))
 };
 
 class CaseSplit {
 public:
     int passes_left() const { return passes_left_; }
-    CaseSplit(const Module& m, int fn, bool jacobian) : m_(m), fn_(fn), f_(m.functions[size_t(fn)]), jacobian_(jacobian) {}
+    CaseSplit(const Module& m, int fn, bool jacobian, bool query_point)
+        : m_(m), fn_(fn), f_(m.functions[size_t(fn)]), jacobian_(jacobian), query_point_(query_point) {}
 
     double bound(const std::vector<std::vector<Interval>>& params, int passes) {
         params_ = &params;
@@ -106,6 +108,7 @@ private:
     int fn_;
     const Function& f_;
     bool jacobian_;
+    bool query_point_;
     const std::vector<std::vector<Interval>>* params_ = nullptr;
     // Per value: its narrowed components (empty: none), and the state of the current pass.
     std::vector<std::vector<Interval>> narrowed_;
@@ -161,8 +164,10 @@ private:
         }
     }
 
-    // Whether v is the query point (parameter 0) itself, a copy of it or one of its components.
+    // Whether v is the query point (parameter 0, when it is the query point p: a cut's u = T(p) can be 0 on a
+    // whole slab of p) itself, a copy of it or one of its components.
     bool is_query_coordinate(ValueId v) const {
+        if (!query_point_) return false;
         const Instr& in = f_.body[v];
         if (in.op == Op::Param) return in.aux == 0;
         if (in.op == Op::Copy || in.op == Op::Extract) return is_query_coordinate(in.args[0]);
@@ -383,7 +388,7 @@ double box_bound(const Module& m, int grad, const std::vector<Interval>& box, co
     std::vector<std::vector<Interval>> params = {box};
     params.insert(params.end(), others.begin(), others.end());
     if (split && split->pool >= 1) {
-        CaseSplit cs(m, grad, jacobian);
+        CaseSplit cs(m, grad, jacobian, split->query_point);
         int passes = int(std::min<double>(split->per_box, split->pool));
         double r = cs.bound(params, passes);
         split->pool -= passes - cs.passes_left();
@@ -448,11 +453,11 @@ double split_pool_left() { return t_split_work; }
 // derive() by case splitting on `grad` (a function without calls): up to kSplitPasses interval passes per
 // box, a quarter of the boxes, while the allowance lasts.
 double split_derive(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
-                    double ball, int budget) {
+                    double ball, int budget, bool query_point = true) {
     constexpr int kSplitPasses = 1500;
     double size = double(std::max<size_t>(1, m.functions[size_t(grad)].body.size()));
     if (t_split_work < size) return kInf;
-    SplitBudget split{kSplitPasses, t_split_work / size};
+    SplitBudget split{kSplitPasses, t_split_work / size, query_point};
     double k = derive(m, grad, region, others, ball, std::max(8, budget / 4), false, &split);
     t_split_work = std::max(0.0, split.pool * size);
     return k;
@@ -610,7 +615,7 @@ double chain_rule_bound(const Module& m, int fn, const std::vector<Interval>& re
             eliminate_common_subexpressions(flat_grad);
             eliminate_dead_code(flat_grad);
             work.functions[size_t(f_grad)] = std::move(flat_grad);
-            kf = std::min(kf, split_derive(work, f_grad, u_box, others, 0, budget));
+            kf = std::min(kf, split_derive(work, f_grad, u_box, others, 0, budget, false));
         }
         if (!std::isfinite(kf)) continue;
         // J_T's rows: the gradients of u's components; their Frobenius norm bounds ‖J_T‖₂.

@@ -130,8 +130,8 @@ struct Analyzer {
             });
         else if (n == "clamp")
             each([&](size_t k) {
-                Interval a = comp(in.args[0], k), lo = comp(in.args[1], k), hi = comp(in.args[2], k);
-                return Interval{std::max(std::min(a.lo, hi.lo), lo.lo), std::min(std::max(a.hi, lo.hi), hi.hi)};
+                Interval a = comp(in.args[0], k), lo = comp(in.args[1], k), hi = comp(in.args[2], k);  // min(max(a, lo), hi)
+                return Interval{std::min(std::max(a.lo, lo.lo), hi.lo), std::min(std::max(a.hi, lo.hi), hi.hi)};
             });
         else if (n == "length") {
             double lo2 = 0, hi2 = 0;
