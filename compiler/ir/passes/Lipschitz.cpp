@@ -102,7 +102,7 @@ private:
     struct Choice {
         ValueId at;
         int comp;     // a sign's component (a comparison: 0)
-        int outcome;  // a comparison: 1 or 0; a sign: 1, -1 or 0
+        int outcome;  // a comparison: 1 or 0; a sign: 1 or -1 (strict), 2 or -2 (x ≥ 0, x ≤ 0)
     };
     const Module& m_;
     int fn_;
@@ -254,7 +254,7 @@ private:
     struct Open {
         ValueId at = ValueId(-1);
         int comp = 0;
-        std::vector<int> outcomes;  // the cases with room (a comparison: 1, 0; a sign: 1, -1, 0)
+        std::vector<int> outcomes;  // the cases with room (a comparison: 1, 0; a sign: 1, -1 or 2, -2)
     };
 
     // Applies the case's choices to value i (a comparison or a sign) once its rule has run: its value, and
@@ -304,30 +304,34 @@ private:
         }
         if (in.op == Op::Builtin && builtins()[size_t(in.aux)].name == std::string_view("sign") && in.args.size() == 1 &&
             r[in.args[0]].c.size() == b.c.size()) {
-            // sign(x): x > 0, x < 0 or x = 0, each case with the room it needs.
+            // sign(x) of a query-point coordinate: x > 0 or x < 0. x = 0 is a plane there: no volume, and the
+            // bound of a gradient is wanted only almost everywhere (a continuous field's Lipschitz constant is the
+            // essential supremum of ‖∇D‖, Rademacher's theorem). Elsewhere x = 0 may be a region (max(p₁, 0), or
+            // a cut's u = T(p)): the cases are the closed halves x ≥ 0 (outcome 2) and x ≤ 0 (-2), each sign the
+            // interval of what its half allows ([0, 1] where x can be 0).
             for (size_t k = 0; k < b.c.size() && !empty_; ++k) {
                 if (!(b.c[k].lo < b.c[k].hi)) continue;
                 const Choice* c = choice(int(k));
                 Interval x = r[in.args[0]].c[k];
+                bool plane = is_query_coordinate(in.args[0]);
                 if (!c) {
                     if (open.at != ValueId(-1)) continue;
                     open = {ValueId(i), int(k), {}};
-                    if (x.hi > 0) open.outcomes.push_back(1);
-                    if (x.lo < 0) open.outcomes.push_back(-1);
-                    // x = 0 where x is a coordinate of the query point is a plane: no volume, and the bound of a
-                    // gradient is wanted only almost everywhere (a continuous field's Lipschitz constant is the
-                    // essential supremum of ‖∇D‖, Rademacher's theorem). Elsewhere (x = max(p₁, 0)) it may be a
-                    // region, and is a case of its own.
-                    if (x.lo <= 0 && x.hi >= 0 && !is_query_coordinate(in.args[0])) open.outcomes.push_back(0);
+                    if (x.hi > 0) open.outcomes.push_back(plane ? 1 : 2);
+                    if (x.lo < 0) open.outcomes.push_back(plane ? -1 : -2);
                     continue;
                 }
-                bool room = c->outcome > 0 ? x.hi > 0 : c->outcome < 0 ? x.lo < 0 : x.lo <= 0 && x.hi >= 0;
+                int o = c->outcome;
+                bool room = o == 1 ? x.hi > 0 : o == -1 ? x.lo < 0 : o == 2 ? x.hi >= 0 : x.lo <= 0;
                 if (!room) {
                     empty_ = true;
                     return;
                 }
-                b.c[k] = {double(c->outcome), double(c->outcome)};
-                narrow(in.args[0], k, c->outcome > 0 ? Interval{0, kInf} : c->outcome < 0 ? Interval{-kInf, 0} : Interval{0, 0}, 12);
+                narrow(in.args[0], k, o > 0 ? Interval{0, kInf} : Interval{-kInf, 0}, 12);
+                if (empty_) return;
+                Interval n = r[in.args[0]].c[k];
+                if (o == 1 || o == -1) b.c[k] = {double(o), double(o)};
+                else b.c[k] = {n.lo > 0 ? 1.0 : n.lo >= 0 ? 0.0 : -1.0, n.hi < 0 ? -1.0 : n.hi <= 0 ? 0.0 : 1.0};
             }
             b.norm = std::min(b.norm, b.norm_from_components());
         }
