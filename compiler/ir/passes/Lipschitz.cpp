@@ -927,6 +927,13 @@ std::vector<double> outside_bound(const Module& m, const LipschitzSpec& spec, do
     return {};
 }
 
+// v / K for a distance, or (v₀ / K, v₁) for an instrumented (distance, count) of type t.
+ValueId divided(Builder& b, ValueId v, const Type& t, double K) {
+    if (t.is_scalar()) return b.op(Op::Div, {v, b.scalar(K)});
+    ValueId d = b.op(Op::Div, {b.op(Op::Extract, {v}, 0), b.scalar(K)});
+    return b.construct(t, {d, b.op(Op::Extract, {v}, 1)});
+}
+
 // Divides the value of every call of `object` in function `fn` (its first component, for an instrumented
 // (distance, count)) by K, leaving what `fn` computes around the calls as it is: a `bound` sphere's stand-in
 // length(p) - R is a true distance, and divided by K it made rays crawl toward the sphere (a shape with K = 30
@@ -952,15 +959,7 @@ bool divide_object_calls(Module& m, int fn, int object, double K) {
         Instr copy = old[i];
         for (ValueId& a : copy.args) a = map[a];
         ValueId v = f.add(std::move(copy));
-        if (old[i].op == Op::Call && old[i].aux == object) {
-            const Type& t = old[i].type;
-            if (t.is_scalar()) {
-                v = b.op(Op::Div, {v, b.scalar(K)});
-            } else {
-                ValueId d = b.op(Op::Div, {b.op(Op::Extract, {v}, 0), b.scalar(K)});
-                v = b.construct(t, {d, b.op(Op::Extract, {v}, 1)});
-            }
-        }
+        if (old[i].op == Op::Call && old[i].aux == object) v = divided(b, v, old[i].type, K);
         map[i] = v;
     }
     f.result = map[f.result];
@@ -972,13 +971,7 @@ bool divide_object_calls(Module& m, int fn, int object, double K) {
 void divide_result(Module& m, int fn, double K) {
     Function& f = m.functions[size_t(fn)];
     Builder b(m, f);
-    ValueId r = f.result;
-    if (f.body[r].type.is_scalar()) {
-        f.result = b.op(Op::Div, {r, b.scalar(K)});
-        return;
-    }
-    ValueId d = b.op(Op::Div, {b.op(Op::Extract, {r}, 0), b.scalar(K)});
-    f.result = b.construct(f.body[r].type, {d, b.op(Op::Extract, {r}, 1)});
+    f.result = divided(b, f.result, f.body[f.result].type, K);
 }
 
 }  // namespace
