@@ -25,7 +25,7 @@ fi
     # The header: the run, the references, and each item's Lipschitz bound (derived by the compiler).
     sed -n '1,/^$/p' "$out/$name.txt" | grep . | sed 's/^/> /; s/$/  /'
     echo
-    echo "![frame time against depth error]($name.svg)"
+    echo "![frame time against depth error](accuracy/$name.svg)"
     echo
     echo "The four march methods at hit 1e-3, 256 steps, tetrahedron normals, and I♥IQ's per-instance architecture:"
     echo
@@ -40,7 +40,7 @@ fi
     echo "| --- | --- | --- | --- |"
     awk -F, 'NR > 1 && $1 == "sphere" && $2 == "0.001" && $3 == "256" { printf "| %s | %s | %s | %s |\n", $4, $5, $6, $10 }' "$out/$name.csv"
     echo
-    echo "Full results: [$name.csv]($name.csv)."
+    echo "Full results: [$name.csv](accuracy/$name.csv)."
   done
 } > docs/accuracy.md
 echo "wrote docs/accuracy.md" >&2
