@@ -31,6 +31,7 @@ constexpr size_t kMaxRefined = 16;  // items whose bounds the refinements may ti
 // a module (~150 ns each in a release build, ~12× that under the sanitizers: a compile spends at most ~0.1 s
 // on it, 1 s under ASan, whose fuzzing allows 10 s per input; the twisted bar's 5.7 needs less).
 constexpr double kSplitWorkPerEstimate = 8e6, kSplitWorkPerModule = 5e5;
+constexpr size_t kSplitMaxInstructions = 2000;  // a function larger than this is not split
 // The work of one sampled evaluation (a gradient through a recurrence of 10⁸ steps is not sampled: its
 // samples stop at the first evaluation past this, with what was seen so far).
 constexpr uint64_t kSampleSteps = 1000000;
@@ -614,7 +615,8 @@ double chain_rule_bound(const Module& m, int fn, const std::vector<Interval>& re
         int f_grad = differentiate(work, f_fn, 0, "lipschitz_cut_gradF", &why);
         if (f_grad < 0) continue;
         double kf = derive(work, f_grad, u_box, others, 0, budget);
-        if (kf > 1 + 1e-9 && split_pool_left() > 0) {  // the shape behind the warp, by case splitting
+        if (kf > 1 + 1e-9 && split_pool_left() > 0 && work.functions[size_t(f_grad)].body.size() <= kSplitMaxInstructions) {
+            // the shape behind the warp, by case splitting
             Function flat_grad = inline_calls(work, work.functions[size_t(f_grad)]);
             eliminate_common_subexpressions(flat_grad);
             eliminate_dead_code(flat_grad);
@@ -884,6 +886,9 @@ double split_bound(const Module& m, int fn, const std::vector<Interval>& region,
                    double ball, int budget) {
     Module work = m;
     Function f = roots_taken(work, work.functions[size_t(fn)]);
+    // Past a few thousand instructions the allowance buys too few passes to split anything, and differentiating
+    // and flattening alone cost more than the rest of the pass (5,000 chained statements: 0.8 s).
+    if (f.body.size() > kSplitMaxInstructions) return kInf;
     f.name = "lipschitz_split";
     int f_fn = int(work.functions.size());
     work.functions.push_back(std::move(f));
@@ -1069,7 +1074,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             how = "no useful bound";
             // Without a bound worth marching by, the samples' steepest gradient with a margin: not proven (a
             // steeper spot between samples may still be stepped through), but 1 would skip what samples saw.
-            if (e.sampled > 1 + 1e-3) {
+            if (e.sampled > 1 + 1e-3 && kSampledMargin * e.sampled <= kUnbounded) {  // beyond, as useless as the bound
                 applied = std::min(kSampledMargin * e.sampled, std::isfinite(e.derived) ? e.derived : kInf);
                 how = fmt::format("no useful bound: {:g} times the steepest sample, not proven", kSampledMargin);
             }
