@@ -33,14 +33,20 @@ std::string prose(const std::string& text) {
     return out;
 }
 
-}  // namespace
-
-TEST_CASE("every link and image in README.md and docs/ that points into the repository resolves", "[docs]") {
+// README.md and docs/*.md, in order.
+std::vector<fs::path> doc_pages() {
     fs::path root(IQC_SOURCE_DIR);
     std::vector<fs::path> pages = {root / "README.md"};
     for (auto& e : fs::directory_iterator(root / "docs"))
         if (e.path().extension() == ".md") pages.push_back(e.path());
     std::sort(pages.begin(), pages.end());
+    return pages;
+}
+
+}  // namespace
+
+TEST_CASE("every link and image in README.md and docs/ that points into the repository resolves", "[docs]") {
+    const std::vector<fs::path> pages = doc_pages();
     const std::regex link(R"(\]\(([^)\s]+)\))");
     int checked = 0;
     for (const auto& page : pages) {
@@ -61,11 +67,7 @@ TEST_CASE("every link and image in README.md and docs/ that points into the repo
 TEST_CASE("every TOML scene in README.md and docs/ compiles as written", "[docs]") {
     // docs/scene.md's schema example named a `phong` parameter `D` that does not exist (issue 15). A scene's
     // `include` files are stood in for by a small shape module of the same name.
-    fs::path root(IQC_SOURCE_DIR);
-    std::vector<fs::path> pages = {root / "README.md"};
-    for (auto& e : fs::directory_iterator(root / "docs"))
-        if (e.path().extension() == ".md") pages.push_back(e.path());
-    std::sort(pages.begin(), pages.end());
+    const std::vector<fs::path> pages = doc_pages();
     int compiled = 0;
     for (const auto& page : pages) {
         std::string text = test::read_text(page);

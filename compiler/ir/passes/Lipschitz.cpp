@@ -455,10 +455,17 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
 thread_local double t_split_work = 0;
 double split_pool_left() { return t_split_work; }
 
-// derive() by case splitting on `grad` (a function without calls): up to kSplitPasses interval passes per
+// derive() by case splitting on `grad` (flattened in place first): up to kSplitPasses interval passes per
 // box, a quarter of the boxes, while the allowance lasts.
-double split_derive(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
+double split_derive(Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
                     double ball, int budget, bool query_point = true) {
+    // Case splitting needs a function without calls: `grad` is replaced by its flattened copy (calls inlined,
+    // common subexpressions merged, dead code dropped).
+    Function flat = inline_calls(m, m.functions[size_t(grad)]);
+    eliminate_common_subexpressions(flat);
+    eliminate_dead_code(flat);
+    if (flat.body.empty() || flat.body.size() > 20000) return kInf;
+    m.functions[size_t(grad)] = std::move(flat);
     constexpr int kSplitPasses = 1500;
     double size = double(std::max<size_t>(1, m.functions[size_t(grad)].body.size()));
     if (t_split_work < size) return kInf;
@@ -617,10 +624,6 @@ double chain_rule_bound(const Module& m, int fn, const std::vector<Interval>& re
         double kf = derive(work, f_grad, u_box, others, 0, budget);
         if (kf > 1 + 1e-9 && split_pool_left() > 0 && work.functions[size_t(f_grad)].body.size() <= kSplitMaxInstructions) {
             // the shape behind the warp, by case splitting
-            Function flat_grad = inline_calls(work, work.functions[size_t(f_grad)]);
-            eliminate_common_subexpressions(flat_grad);
-            eliminate_dead_code(flat_grad);
-            work.functions[size_t(f_grad)] = std::move(flat_grad);
             kf = std::min(kf, split_derive(work, f_grad, u_box, others, 0, budget, false));
         }
         if (!std::isfinite(kf)) continue;
@@ -895,11 +898,6 @@ double split_bound(const Module& m, int fn, const std::vector<Interval>& region,
     std::string why;
     int g = differentiate(work, f_fn, 0, "lipschitz_split_gradient", &why);
     if (g < 0) return kInf;
-    Function flat = inline_calls(work, work.functions[size_t(g)]);
-    eliminate_common_subexpressions(flat);
-    eliminate_dead_code(flat);
-    if (flat.body.empty() || flat.body.size() > 20000) return kInf;
-    work.functions[size_t(g)] = std::move(flat);
     return split_derive(work, g, region, others, ball, budget);
 }
 
