@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 # What iqc itself needs (`--main`: the README's main job, scripts/demo.sh) ...
 PKGS=(
   build-essential cmake pkg-config
-  glslang-dev
+  glslang-dev spirv-tools libspirv-cross-c-shared-dev
   libcli11-dev libtomlplusplus-dev libfmt-dev
   libpng-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
   nlohmann-json3-dev libcpp-httplib-dev
@@ -20,7 +20,7 @@ MAIN_ONLY=0
 # ... and what the tests need besides (the default: scripts/test.sh, CI).
 if [ $MAIN_ONLY -eq 0 ]; then
   PKGS+=(
-    glslang-tools spirv-tools catch2 ninja-build
+    glslang-tools catch2 ninja-build
     nodejs chromium
     clang libclang-rt-14-dev   # the sanitizer build and libFuzzer (scripts/sanitize.sh, scripts/fuzz.sh)
   )

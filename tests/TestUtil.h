@@ -84,7 +84,7 @@ inline render::RenderResult render_compiled(const CompileResult& c, int w, int h
     o.width = w;
     o.height = h;
     o.time = time;
-    for (const auto& u : c.inputs.uniforms) {
+    for (const auto& u : c.inputs.all_uniforms()) {
         if (u.integer) o.int_uniforms.push_back({u.name, int(u.value[0])});
         else o.uniforms.push_back({u.name, std::vector<float>(u.value.begin(), u.value.end())});
     }

@@ -90,3 +90,35 @@ TEST_CASE("every TOML scene in README.md and docs/ compiles as written", "[docs]
     }
     CHECK(compiled >= 2);
 }
+
+TEST_CASE("every shell block marked tested in README.md and docs/ runs as written", "[docs]") {
+    // A ```sh block right after a `<!-- tested` comment is run by bash -e in a fresh folder holding examples/
+    // (a link to the repository's), with the built iqc first on PATH: docs/engines.md's commands for each target
+    // and the validators of other projects that check their output.
+    const std::vector<fs::path> pages = doc_pages();
+    std::string iqc_dir = fs::path(IQC_BINARY).parent_path().string();
+    int ran = 0;
+    for (const auto& page : pages) {
+        std::string text = test::read_text(page);
+        const std::string mark = "<!-- tested";
+        for (size_t at = text.find(mark); at != std::string::npos; at = text.find(mark, at + 1)) {
+            size_t open = text.find("```sh\n", at);
+            REQUIRE(open != std::string::npos);
+            REQUIRE(text.find("\n\n", at) > open - 1);  // the block follows the mark directly
+            size_t begin = open + 6, end = text.find("\n```", begin);
+            REQUIRE(end != std::string::npos);
+            std::string script = text.substr(begin, end - begin + 1);
+            fs::path dir = test::temp_dir() / fmt::format("docs_sh_{}_{}", page.stem().string(), ran);
+            fs::remove_all(dir);
+            fs::create_directories(dir);
+            fs::create_directory_symlink(fs::path(IQC_SOURCE_DIR) / "examples", dir / "examples");
+            fs::path file = test::write_temp(fmt::format("docs_sh_{}_{}.sh", page.stem().string(), ran), script);
+            std::string cmd = fmt::format("cd '{}' && PATH='{}':\"$PATH\" bash -e '{}' > out.txt 2>&1", dir.string(), iqc_dir, file.string());
+            int rc = std::system(cmd.c_str());
+            INFO(page.filename().string() << " block at byte " << open << ":\n" << script << "\n" << test::read_text(dir / "out.txt"));
+            CHECK(rc == 0);
+            ++ran;
+        }
+    }
+    CHECK(ran >= 3);
+}

@@ -1,6 +1,8 @@
 // Golden tests: every example and every input under golden/ compiles, for every target, to exactly the
 // expected shader, byte for byte, and the expected file itself passes glslang (Shadertoy's wrapper for
-// shadertoy; ES 3.00 for webgl2; core 3.30 for glsl330).
+// shadertoy; ES 3.00 for webgl2; core 3.30 for glsl330; for the examples also Vulkan GLSL 4.50 to SPIR-V and
+// SPIRV-Tools for spirv, whose golden is the Vulkan GLSL the module is compiled from, and glslang's HLSL front
+// end for hlsl).
 //
 // Inputs: examples/<name>.{md,iq}  ->  golden/examples/<name>.<target>.expected
 //         golden/<area>/<name>.{md,iq,iql} -> golden/<area>/<name>.<target>.expected
@@ -13,6 +15,7 @@
 
 #include "TestUtil.h"
 #include "glsl/ShadertoyWrapper.h"
+#include "glsl/Spirv.h"
 #include "glsl/Validate.h"
 
 using namespace iqc;
@@ -35,16 +38,19 @@ std::vector<GoldenCase> golden_cases() {
         auto e = p.extension();
         return e == ".md" || e == ".iq" || e == ".iql";
     };
-    auto add = [&](const fs::path& input, const fs::path& dir) {
+    auto add = [&](const fs::path& input, const fs::path& dir, bool engines) {
         for (Target t : kTargets)
             cases.push_back({input, dir / (input.stem().string() + "." + target_name(t) + ".expected"), t});
+        if (engines)  // the SPIR-V target's Vulkan GLSL (the module is its compilation) and the HLSL
+            for (Target t : {Target::SPIRV, Target::HLSL})
+                cases.push_back({input, dir / (input.stem().string() + "." + target_name(t) + ".expected"), t});
     };
     for (auto& e : fs::directory_iterator(root / "examples"))
-        if (is_input(e.path()) && e.path().filename() != "README.md") add(e.path(), root / "golden" / "examples");
+        if (is_input(e.path()) && e.path().filename() != "README.md") add(e.path(), root / "golden" / "examples", true);
     for (auto& area : fs::directory_iterator(root / "golden")) {
         if (!area.is_directory()) continue;
         for (auto& e : fs::directory_iterator(area.path()))
-            if (is_input(e.path())) add(e.path(), area.path());
+            if (is_input(e.path())) add(e.path(), area.path(), false);
     }
     std::sort(cases.begin(), cases.end(), [](auto& a, auto& b) { return a.expected < b.expected; });
     return cases;
@@ -85,9 +91,20 @@ TEST_CASE("golden: every example compiles to its expected shader", "[golden]") {
             std::string expected = read_text(c.expected);
             INFO("golden mismatch; the diff (expected -> actual):\n" << unified_diff(c.expected, r.result.code));
             CHECK(r.result.code == expected);
-            auto v = c.target == Target::Shadertoy ? glsl::validate_fragment(glsl::wrap_shadertoy(expected), glsl::Profile::Es300)
-                     : c.target == Target::WebGL2  ? glsl::validate_fragment(expected, glsl::Profile::Es300)
-                                                   : glsl::validate_fragment(expected, glsl::Profile::Core330);
+            glsl::ValidationResult v;
+            switch (c.target) {
+                case Target::Shadertoy: v = glsl::validate_fragment(glsl::wrap_shadertoy(expected), glsl::Profile::Es300); break;
+                case Target::WebGL2:
+                case Target::ThreeJS: v = glsl::validate_fragment(expected, glsl::Profile::Es300); break;
+                case Target::GLSL330: v = glsl::validate_fragment(expected, glsl::Profile::Core330); break;
+                case Target::SPIRV: {
+                    glsl::SpirvResult spv = glsl::compile_vulkan_fragment(expected);
+                    v.ok = spv.ok && spv.words == r.result.spirv;  // the module is the golden's compilation
+                    v.log = spv.log;
+                    break;
+                }
+                case Target::HLSL: v = glsl::validate_hlsl_fragment(expected); break;
+            }
             INFO(v.log);
             CHECK(v.ok);
         }

@@ -75,6 +75,15 @@ TEST_CASE("every example becomes a working page: sliders, uniforms, a moved slid
             REQUIRE(first[u].size() == want.size());
             for (size_t i = 0; i < want.size(); ++i) CHECK(first[u][i] == Approx(want[i]).margin(1e-6));
         }
+        // And the scene's camera (the shader takes it as uniforms on every target but Shadertoy).
+        REQUIRE(meta.contains("camera"));
+        for (const auto& [u, v] : meta["camera"]["defaults"].items()) {
+            INFO(u);
+            REQUIRE(first.count(u));
+            std::vector<double> want = v.is_array() ? v.get<std::vector<double>>() : std::vector<double>{v.get<double>()};
+            REQUIRE(first[u].size() == want.size());
+            for (size_t i = 0; i < want.size(); ++i) CHECK(first[u][i] == Approx(want[i]).margin(1e-6));
+        }
         if (components > 0) {
             std::string u = h["moved"]["uniform"];
             size_t k = h["moved"]["component"];

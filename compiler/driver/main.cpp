@@ -28,6 +28,7 @@
 #include "driver/Serve.h"
 #include "scene/Page.h"
 #include "scene/CppHeader.h"
+#include "scene/ThreeModule.h"
 #include "scene/Compile.h"
 #include "scene/Evaluate.h"
 #include "ir/Pipeline.h"
@@ -89,7 +90,7 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
         std::fprintf(stderr, "iqc: error: --time and --fps must be finite numbers\n");
         return 2;
     }
-    for (const auto& u : inputs.uniforms) {
+    for (const auto& u : inputs.all_uniforms()) {
         if (u.integer) ro.int_uniforms.push_back({u.name, int(u.value[0])});
         else ro.uniforms.push_back({u.name, std::vector<float>(u.value.begin(), u.value.end())});
     }
@@ -360,8 +361,14 @@ static int run(int argc, char** argv) {
                    "output kind: shadertoy (default: mainImage, parameters as constants), webgl2 (GLSL ES 3.00 with a "
                    "uniform per parameter), glsl330 (desktop core profile, uniforms), html (one offline page: the webgl2 "
                    "shader on a canvas with a slider per parameter component, reset, play/pause, mouse orbit), cpp (a C++17 "
-                   "header: the webgl2 shader as a constant and a constexpr table of its parameters)")
-        ->check(CLI::IsMember({"shadertoy", "webgl2", "glsl330", "html", "cpp"}));
+                   "header: the webgl2 shader as a constant and a constexpr table of its parameters), spirv (a SPIR-V "
+                   "binary for Vulkan, needs -o: Vulkan GLSL 4.50 compiled by glslang and validated by SPIRV-Tools; "
+                   "inputs, camera and parameters in std140 uniform blocks at set 0, layout in --meta), hlsl (Shader Model "
+                   "5.0, cross-compiled from that SPIR-V by SPIRV-Cross and re-checked by glslang), threejs (an ES module: "
+                   "createMesh(camera) gives a three.js mesh that raymarches the scene through a PerspectiveCamera and "
+                   "writes depth, so it and other meshes occlude each other). Every target but shadertoy takes the "
+                   "camera as uniforms and writes depth (docs/engines.md)")
+        ->check(CLI::IsMember({"shadertoy", "webgl2", "glsl330", "html", "cpp", "spirv", "hlsl", "threejs"}));
     std::string meta;
     app.add_option("--meta", meta, "also write a JSON description of every parameter (instance, module, role, "
                                    "uniform or constant name, type, bounds, default, description)");
@@ -570,7 +577,16 @@ static int run(int argc, char** argv) {
     opts.inject_fault = inject_fault;
     if (verify_ir) opts.verify_each = true;
     opts.strict_ranges = strict_ranges;
-    opts.target = target == "webgl2" || target == "html" || target == "cpp" ? iqc::Target::WebGL2 : target == "glsl330" ? iqc::Target::GLSL330 : iqc::Target::Shadertoy;
+    opts.target = target == "webgl2" || target == "html" || target == "cpp" ? iqc::Target::WebGL2
+                  : target == "glsl330"                                      ? iqc::Target::GLSL330
+                  : target == "spirv"                                        ? iqc::Target::SPIRV
+                  : target == "hlsl"                                         ? iqc::Target::HLSL
+                  : target == "threejs"                                      ? iqc::Target::ThreeJS
+                                                                             : iqc::Target::Shadertoy;
+    if (target == "spirv" && !render->parsed() && (output.empty() || output == "-")) {
+        std::fprintf(stderr, "iqc: error: --target spirv writes a binary SPIR-V module: give the file with -o (e.g. -o scene.spv)\n");
+        return 2;
+    }
     if (render->parsed()) opts.target = r_target == "webgl2" ? iqc::Target::WebGL2 : iqc::Target::Shadertoy;
     iqc::CompileResult r = iqc::compile_file(render->parsed() ? r_input : input, sm, diags, opts);
     std::string rendered = diags.render();
@@ -616,6 +632,13 @@ static int run(int argc, char** argv) {
     if (target == "html" && !render->parsed()) r.code = iqc::html_page(r.code, r.meta);
     if (target == "cpp" && !render->parsed())
         r.code = iqc::cpp_header(r.code, r.meta, std::filesystem::path(input).stem().string());
+    if (target == "threejs" && !render->parsed())
+        r.code = iqc::three_module(r.code, r.meta, std::filesystem::path(input).filename().string());
+    if (target == "spirv" && !render->parsed()) {  // the module's words, little-endian as SPIR-V files are
+        r.code.clear();
+        for (uint32_t w : r.spirv)
+            for (int b = 0; b < 4; ++b) r.code.push_back(char((w >> (8 * b)) & 0xFF));
+    }
     auto report = [&](const std::string& path, bool changed) {
         if (!quiet && !path.empty() && path != "-")
             std::fprintf(stderr, changed ? "iqc: wrote %s\n" : "iqc: %s is unchanged\n", path.c_str());

@@ -15,10 +15,14 @@ struct Process {
 };
 }  // namespace
 
-ValidationResult validate_fragment(const std::string& source, Profile profile) {
+std::mutex& glslang_mutex() {
     static Process process;
     static std::mutex mu;
-    std::lock_guard<std::mutex> lock(mu);
+    return mu;
+}
+
+ValidationResult validate_fragment(const std::string& source, Profile profile) {
+    std::lock_guard<std::mutex> lock(glslang_mutex());
     ValidationResult r;
     glslang::TShader shader(EShLangFragment);
     const char* strings[] = {source.c_str()};

@@ -2,6 +2,7 @@
 // user's fault: the driver reports it with exit code 3 and writes nothing.
 #pragma once
 
+#include <mutex>
 #include <string>
 
 namespace iqc::glsl {
@@ -12,6 +13,9 @@ struct ValidationResult {
     bool ok = false;
     std::string log;  // glslang's messages when not ok
 };
+
+// glslang's process-wide set-up (done on the first call) and the lock every use of glslang holds.
+std::mutex& glslang_mutex();
 
 // Compiles and links `source` (a complete fragment shader with its #version line).
 ValidationResult validate_fragment(const std::string& source, Profile profile);

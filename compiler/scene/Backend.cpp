@@ -90,12 +90,18 @@ const char* entry_comment(const std::string& name) {
     return it == c.end() ? nullptr : it->second;
 }
 
+// A layout that needs uniform blocks on a target without them (BackendOptions::blocks false).
+struct BlocksNeeded {
+    std::string what;
+};
+
 struct Layout {
     const ir::Module& m;
     const BackendOptions& o;
     std::vector<GlobalStorage> storage;
     std::vector<std::vector<int>> offsets;  // per global: byte offset (block) or float index (texture) of each component
     std::vector<int> block_of;              // per global: its block, or -1
+    std::vector<int> block_at;              // per global in a block: its byte offset (members are declared in this order)
     SceneCode& code;
 
     void decide() {
@@ -103,6 +109,7 @@ struct Layout {
         storage.assign(n, {});
         offsets.assign(n, {});
         block_of.assign(n, -1);
+        block_at.assign(n, -1);
         glsl::Namer names;
         for (size_t i = 0; i < n; ++i) storage[i].name = names.unique(m.globals[i].name);
         if (o.constants) {
@@ -111,7 +118,7 @@ struct Layout {
             return;
         }
         std::vector<size_t> data, plain;
-        int vectors = 4;  // iResolution, iTime, iMouse, iFrame
+        int vectors = 13;  // iResolution, iTime, iMouse, iFrame; the camera (position, basis 3, focal, projection 4)
         for (size_t i = 0; i < n; ++i) {
             const Global& g = m.globals[i];
             if (g.kind == Global::Kind::Prepared) storage[i].kind = Kind::Private;
@@ -124,11 +131,21 @@ struct Layout {
                 data.push_back(i);
             }
         }
+        if (!o.blocks) {
+            if (vectors > kMaxUniformVectors)
+                throw BlocksNeeded{fmt::format("{} vectors of plain parameters (WebGL2 guarantees {}); the webgl2 target "
+                                               "puts the rest into uniform blocks",
+                                               vectors, kMaxUniformVectors)};
+            for (size_t i : plain) storage[i].kind = Kind::Uniform;
+            code.uniform_vectors = vectors;
+            if (!data.empty()) pack_texture(data);
+            return;
+        }
         std::vector<size_t> block_members;
-        if (vectors > kMaxUniformVectors) block_members = plain;  // too many plain uniforms: into blocks too
+        if (vectors > kMaxUniformVectors || o.vulkan) block_members = plain;  // too many plain uniforms (or Vulkan): into blocks too
         else
             for (size_t i : plain) storage[i].kind = Kind::Uniform;
-        code.uniform_vectors = vectors > kMaxUniformVectors ? 4 : vectors;
+        code.uniform_vectors = vectors > kMaxUniformVectors ? 13 : vectors;
         // Arrays: blocks while they fit, else all of them in the data texture.
         std::vector<size_t> arrays = data;
         bool texture = false;
@@ -164,12 +181,14 @@ struct Layout {
             int align = std140_align(g.type), size = std140_size(g.type);
             int at = (used + align - 1) / align * align;
             if (!b || at + size > kMaxBlockBytes) {
-                code.inputs.blocks.push_back({fmt::format("iqc_block_{}", code.inputs.blocks.size()), int(code.inputs.blocks.size()), {}});
+                int binding = int(code.inputs.blocks.size()) + (o.vulkan ? 1 : 0);
+                code.inputs.blocks.push_back({fmt::format("iqc_block_{}", code.inputs.blocks.size()), binding, {}});
                 b = &code.inputs.blocks.back();
                 at = 0;
             }
             storage[i].kind = Kind::BlockMember;
             block_of[i] = int(code.inputs.blocks.size() - 1);
+            block_at[i] = at;
             b->bytes.resize(size_t(at + size), 0);
             Type e = g.type.is_array() ? g.type.element() : g.type;
             int stride = g.type.is_array() ? (std140_element_size(e) + 15) / 16 * 16 : 0;
@@ -283,18 +302,27 @@ struct Declarations {
             return m.globals[i].kind == Global::Kind::Constant && is(i, Kind::Const);
         });
         for (size_t b = 0; b < code.inputs.blocks.size(); ++b) {
-            std::string members;
+            // In the order of their offsets: std140 lays members out in declaration order.
+            std::vector<size_t> in_block;
             for (size_t i = 0; i < m.globals.size(); ++i)
-                if (lay.block_of[i] == int(b)) members += declare(i);
-            out += fmt::format("// ---- per-instance data: a std140 uniform block the host fills (--meta: \"blocks\") ----\n"
-                               "layout(std140) uniform {} {{\n{}}};\n\n", code.inputs.blocks[b].name, members);
+                if (lay.block_of[i] == int(b)) in_block.push_back(i);
+            std::stable_sort(in_block.begin(), in_block.end(), [&](size_t x, size_t y) { return lay.block_at[x] < lay.block_at[y]; });
+            std::string members;
+            for (size_t i : in_block) members += declare(i);
+            std::string layout = o.vulkan ? fmt::format("std140, set = 0, binding = {}", code.inputs.blocks[b].binding) : "std140";
+            out += fmt::format("// ---- {}: a std140 uniform block the host fills (--meta: \"blocks\") ----\n"
+                               "layout({}) uniform {} {{\n{}}};\n\n",
+                               o.vulkan && b == 0 ? "parameters and per-instance data" : "per-instance data", layout,
+                               code.inputs.blocks[b].name, members);
         }
         if (!code.inputs.texture.name.empty()) {
             const auto& t = code.inputs.texture;
             out += fmt::format("// ---- per-instance data: a {}×{} RGBA32F texture the host fills (--meta: \"texture\") ----\n"
-                               "uniform highp sampler2D {};\n"
+                               "{}uniform highp sampler2D {};\n"
                                "vec4 iqc_fetch(int i) {{ return texelFetch({}, ivec2(i % {}, i / {}), 0); }}\n\n",
-                               t.width, t.height, t.name, t.name, t.width, t.width);
+                               t.width, t.height,
+                               o.vulkan ? fmt::format("layout(set = 0, binding = {}) ", code.inputs.blocks.size() + 1) : "", t.name,
+                               t.name, t.width, t.width);
         }
         out += section("computed once per pixel (iqc_prepare)", [&](size_t i) { return is(i, Kind::Private); });
         return out;
@@ -355,8 +383,13 @@ nlohmann::ordered_json describe(const ir::Module& m, const Layout& lay, const Sh
 SceneCode emit_scene(const SceneIR& scene, const BackendOptions& o, Diagnostics& d) {
     const ir::Module& m = scene.module;
     SceneCode code;
-    Layout lay{m, o, {}, {}, {}, code};
-    lay.decide();
+    Layout lay{m, o, {}, {}, {}, {}, code};
+    try {
+        lay.decide();
+    } catch (const BlocksNeeded& e) {
+        d.error_nospan("this target has no uniform blocks, and the scene has " + e.what);
+        return code;
+    }
     code.declarations = Declarations{m, o, lay, code}.run();
     // Host inputs: plain uniforms (GLSL matrices are column-major).
     for (size_t i = 0; i < m.globals.size(); ++i) {
@@ -374,6 +407,7 @@ SceneCode emit_scene(const SceneIR& scene, const BackendOptions& o, Diagnostics&
         const auto& t = code.inputs.texture;
         code.texture = {{"name", t.name}, {"width", t.width}, {"height", t.height}, {"format", "RGBA32F"},
                         {"data", base64(reinterpret_cast<const uint8_t*>(t.rgba.data()), t.rgba.size() * 4)}};
+        if (o.vulkan) code.texture["binding"] = code.inputs.blocks.size() + 1;  // a combined image sampler at set 0
     }
     code.parameters = describe(m, lay, code.inputs);
     for (size_t i = 0; i < m.globals.size(); ++i) {

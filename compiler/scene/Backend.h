@@ -44,7 +44,16 @@ struct ShaderInputs {
         int width = 0, height = 0;
         std::vector<float> rgba;     // width·height texels
     };
-    std::vector<Uniform> uniforms;
+    std::vector<Uniform> uniforms;  // parameters
+    // The camera's uniforms with the scene's camera (iqc_camera_position, iqc_camera_basis, iqc_camera_focal,
+    // iqc_projection: see runtime_templates/scene.glsl); a host drawing with its own camera sets its own.
+    std::vector<Uniform> camera;
+    // Every plain uniform a host sets: the parameters, then the camera.
+    std::vector<Uniform> all_uniforms() const {
+        std::vector<Uniform> all = uniforms;
+        all.insert(all.end(), camera.begin(), camera.end());
+        return all;
+    }
     std::vector<Block> blocks;
     Texture texture;
 };
@@ -62,6 +71,12 @@ struct SceneCode {
 
 struct BackendOptions {
     bool constants = true;     // Shadertoy: every global is a constant
+    // Vulkan GLSL (the spirv target): no plain uniforms; parameters go into std140 blocks at set 0, bindings
+    // from 1 (binding 0 is the template's IqcInputs), the data texture at the binding after the last block.
+    bool vulkan = false;
+    // three.js (the threejs target): no uniform blocks (three.js lays out its own uniform groups and cannot take
+    // std140 bytes); per-instance data goes into the data texture, a DataTexture there.
+    bool blocks = true;
     bool instrument = false;   // iqc_scene is emitted as iqc_scene_counted (the runtime counts evaluations)
     // Comments for module functions by IR function name ("torus" -> "shape torus").
     std::map<std::string, std::string> comments;

@@ -8,6 +8,7 @@
 
 #include "glsl/Emit.h"
 #include "glsl/ShadertoyWrapper.h"
+#include "glsl/Spirv.h"
 #include "glsl/Validate.h"
 #include "ir/Pipeline.h"
 #include "resources/Embedded.h"
@@ -22,6 +23,61 @@ namespace iqc {
 namespace {
 
 std::string vec3_literal(const std::array<double, 3>& v) { return glsl::constant(Type::vector(3), {v[0], v[1], v[2]}); }
+
+// The scene's camera as the uniform targets take it (runtime_templates/scene.glsl): the eye, a basis of unit
+// columns right, up, forward (world up +y, as iqc_look_at), 1 / tan(fov / 2), and a perspective projection
+// (column-major, clip from view space looking down -z) from near = 1e-4 · max_dist to far = max_dist; only its
+// depth rows matter to the shader. `zero_to_one`: Vulkan's depth range [0, 1], else OpenGL's [-1, 1].
+struct CameraUniforms {
+    std::array<double, 3> position{};
+    std::array<double, 9> basis{};
+    double focal = 1;
+    std::array<double, 16> projection{};
+};
+
+CameraUniforms camera_uniforms(const CameraDesc& cam, double max_dist, bool zero_to_one) {
+    CameraUniforms c;
+    c.position = cam.position;
+    std::array<double, 3> f{}, up{0, 1, 0}, r{}, u{};
+    double n = 0;
+    for (int k = 0; k < 3; ++k) n += std::pow(cam.target[size_t(k)] - cam.position[size_t(k)], 2);
+    n = std::sqrt(n);
+    for (int k = 0; k < 3; ++k) f[size_t(k)] = n > 0 ? (cam.target[size_t(k)] - cam.position[size_t(k)]) / n : (k == 2 ? 1 : 0);
+    if (std::fabs(f[1]) > 0.999) up = {0, 0, 1};
+    auto cross = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
+        return std::array<double, 3>{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    };
+    r = cross(up, f);
+    double rn = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    for (double& x : r) x /= rn;
+    u = cross(f, r);
+    for (int k = 0; k < 3; ++k) {
+        c.basis[size_t(k)] = r[size_t(k)];
+        c.basis[size_t(3 + k)] = u[size_t(k)];
+        c.basis[size_t(6 + k)] = f[size_t(k)];
+    }
+    c.focal = 1.0 / std::tan(cam.fov * M_PI / 360.0);
+    double near = 1e-4 * max_dist, far = max_dist;
+    c.projection[0] = c.focal;  // aspect 1: a host sets its own; the depth rows do not depend on it
+    c.projection[5] = c.focal;
+    c.projection[10] = zero_to_one ? far / (near - far) : (far + near) / (near - far);
+    c.projection[11] = -1;
+    c.projection[14] = zero_to_one ? far * near / (near - far) : 2 * far * near / (near - far);
+    return c;
+}
+
+nlohmann::ordered_json camera_json(const CameraDesc& cam, const CameraUniforms& c) {
+    nlohmann::ordered_json j;
+    j["position"] = cam.position;
+    j["target"] = cam.target;
+    j["fov"] = cam.fov;
+    j["orbit"] = cam.orbit;
+    j["uniforms"] = {{"position", "iqc_camera_position"}, {"basis", "iqc_camera_basis"}, {"focal", "iqc_camera_focal"},
+                     {"projection", "iqc_projection"}};
+    j["defaults"] = {{"iqc_camera_position", c.position}, {"iqc_camera_basis", c.basis}, {"iqc_camera_focal", c.focal},
+                     {"iqc_projection", c.projection}};
+    return j;
+}
 
 class SceneCompiler {
 public:
@@ -47,6 +103,9 @@ private:
     March march() const { return opts_.march.value_or(s_.render.march); }
     Normals normals() const { return opts_.normals.value_or(s_.render.normals); }
     double hit() const { return opts_.hit.value_or(s_.render.hit); }
+    CameraUniforms camera() const {
+        return camera_uniforms(s_.camera, s_.render.max_dist, opts_.target == Target::SPIRV || opts_.target == Target::HLSL);
+    }
     // `bound`: ten hit tolerances (at the farthest distance for a relative tolerance), and at least 0.1: a
     // march never stops on a bounding sphere, and the shape is evaluated wherever a hit is possible.
     double bound_margin() const { return std::max(0.1, 10 * hit() * (s_.render.hit_relative ? s_.render.max_dist : 1.0)); }
@@ -156,7 +215,21 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     V["DECLARATIONS"] = code.declarations;
     V["FUNCTIONS"] = code.functions;
     V["INSTANCES"] = std::to_string(scene.instances);
-    F.insert(opts_.target == Target::Shadertoy ? "SHADERTOY" : opts_.target == Target::WebGL2 ? "WEBGL2" : "GLSL330");
+    switch (opts_.target) {
+        case Target::Shadertoy: F.insert("SHADERTOY"); break;
+        case Target::WebGL2:
+        case Target::ThreeJS: F.insert("WEBGL2"); break;
+        case Target::GLSL330: F.insert("GLSL330"); break;
+        case Target::SPIRV:
+        case Target::HLSL: F.insert("VULKAN"); break;
+    }
+    // Depth for compositing with meshes: every uniform target's colour build (not the probes).
+    if (opts_.target != Target::Shadertoy && !opts_.instrument && !opts_.geometry && !opts_.ids && !opts_.bench) F.insert("DEPTH");
+    {
+        double r2 = 0;
+        for (int k = 0; k < 3; ++k) r2 += std::pow(s_.camera.position[size_t(k)] - s_.camera.target[size_t(k)], 2);
+        V["ORBIT_RADIUS"] = glsl::float_literal(std::sqrt(r2));
+    }
     static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO"};
     F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march())]);
     if (opts_.per_instance) F.insert("LIPSCHITZ");
@@ -205,6 +278,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     static const char* debug_flags[] = {"", "DEBUG_NORMALS", "DEBUG_STEPS", "DEBUG_DEPTH"};
     if (render.debug != DebugView::None) F.insert(debug_flags[int(render.debug)]);
     if (s_.camera.orbit) F.insert("ORBIT");
+    if (s_.camera.orbit || opts_.target == Target::Shadertoy) F.insert("LOOK_AT");
     if (scene.module.find(ir::names::kPrepare) >= 0) F.insert("PREPARE");
     if (opts_.instrument || opts_.bench) F.insert("INSTRUMENT");
     if (opts_.geometry || opts_.ids || opts_.bench) F.insert("GEOMETRY");
@@ -214,6 +288,28 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     j["title"] = s_.title;
     j["target"] = target_name(opts_.target);
     j["inputs"] = nlohmann::ordered_json::array({"iResolution", "iTime", "iMouse", "iFrame"});
+    if (opts_.target != Target::Shadertoy) j["camera"] = camera_json(s_.camera, camera());
+    if (opts_.target == Target::SPIRV || opts_.target == Target::HLSL) {
+        // The template's IqcInputs block (std140, set 0, binding 0): what the host writes every frame.
+        nlohmann::ordered_json members = nlohmann::ordered_json::array();
+        auto member = [&](const char* name, const char* type, int offset) {
+            nlohmann::ordered_json m;
+            m["name"] = name;
+            m["type"] = type;
+            m["offset"] = offset;
+            if (type == std::string("mat3") || type == std::string("mat4")) m["column_stride"] = 16;
+            members.push_back(m);
+        };
+        member("iqc_camera_basis", "mat3", 0);
+        member("iqc_camera_position", "vec3", 48);
+        member("iqc_camera_focal", "float", 60);
+        member("iqc_projection", "mat4", 64);
+        member("iResolution", "vec3", 128);
+        member("iTime", "float", 140);
+        member("iMouse", "vec4", 144);
+        member("iFrame", "int", 160);
+        j["inputs_block"] = {{"name", "IqcInputs"}, {"set", 0}, {"binding", 0}, {"bytes", 176}, {"members", members}};
+    }
     j["parameters"] = code.parameters;
     j["lights"] = code.lights;
     j["blocks"] = code.blocks;
@@ -315,6 +411,8 @@ CompileResult SceneCompiler::run_checked() {
         if (d_.error_count() != before) return std::move(res_);
         BackendOptions bo;
         bo.constants = opts_.target == Target::Shadertoy;
+        bo.vulkan = opts_.target == Target::SPIRV || opts_.target == Target::HLSL;
+        bo.blocks = opts_.target != Target::ThreeJS;
         bo.instrument = opts_.instrument || opts_.bench;
         for (const auto& p : plans) {
             bo.comments[p.shape->ast.name] = "shape " + p.shape->ast.name;
@@ -327,18 +425,51 @@ CompileResult SceneCompiler::run_checked() {
         std::string shader = assemble(scene, code);
         lap("GLSL backend + assembly");
         if (opts_.inject_fault == "glslang") shader += "\nthis line is not GLSL;\n";
-        glsl::ValidationResult v =
-            opts_.target == Target::Shadertoy ? glsl::validate_fragment(glsl::wrap_shadertoy(shader), glsl::Profile::Es300)
-            : opts_.target == Target::WebGL2  ? glsl::validate_fragment(shader, glsl::Profile::Es300)
-                                              : glsl::validate_fragment(shader, glsl::Profile::Core330);
+        glsl::ValidationResult v;
+        switch (opts_.target) {
+            case Target::Shadertoy: v = glsl::validate_fragment(glsl::wrap_shadertoy(shader), glsl::Profile::Es300); break;
+            case Target::WebGL2:
+            case Target::ThreeJS: v = glsl::validate_fragment(shader, glsl::Profile::Es300); break;
+            case Target::GLSL330: v = glsl::validate_fragment(shader, glsl::Profile::Core330); break;
+            case Target::SPIRV:
+            case Target::HLSL: {
+                glsl::SpirvResult spv = glsl::compile_vulkan_fragment(shader);
+                v.ok = spv.ok;
+                v.log = spv.log;
+                res_.spirv = std::move(spv.words);
+                break;
+            }
+        }
         lap("glslang validation");
         if (!v.ok) {
             res_.exit_code = 3;
-            res_.internal = internal_error_message("glslang rejected the generated shader") + ":\n" + v.log;
+            res_.internal = internal_error_message(opts_.target == Target::SPIRV || opts_.target == Target::HLSL
+                                                       ? "glslang or SPIRV-Tools rejected the generated Vulkan shader"
+                                                       : "glslang rejected the generated shader") +
+                            ":\n" + v.log;
+            res_.spirv.clear();
             return std::move(res_);
+        }
+        if (opts_.target == Target::HLSL) {
+            glsl::HlslResult h = glsl::spirv_to_hlsl(res_.spirv);
+            lap("SPIRV-Cross + HLSL check");
+            if (!h.ok) {
+                res_.exit_code = 3;
+                res_.internal = internal_error_message("the HLSL cross-compiled from the shader's SPIR-V was rejected") + ":\n" + h.log;
+                res_.spirv.clear();
+                return std::move(res_);
+            }
+            shader = std::move(h.text);
         }
         res_.code = std::move(shader);
         res_.inputs = std::move(code.inputs);
+        if (opts_.target != Target::Shadertoy) {
+            CameraUniforms c = camera();
+            res_.inputs.camera = {{"iqc_camera_position", {c.position.begin(), c.position.end()}, false},
+                                  {"iqc_camera_basis", {c.basis.begin(), c.basis.end()}, false},
+                                  {"iqc_camera_focal", {c.focal}, false},
+                                  {"iqc_projection", {c.projection.begin(), c.projection.end()}, false}};
+        }
         set_model(scene);
         warn_camera();
         res_.exit_code = 0;
@@ -356,6 +487,9 @@ const char* target_name(Target t) {
         case Target::Shadertoy: return "shadertoy";
         case Target::WebGL2: return "webgl2";
         case Target::GLSL330: return "glsl330";
+        case Target::SPIRV: return "spirv";
+        case Target::HLSL: return "hlsl";
+        case Target::ThreeJS: return "threejs";
     }
     return "?";
 }

@@ -11,6 +11,7 @@
 // a transform that scales divides the distance by its Lipschitz factor so sphere tracing stays conservative.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -23,7 +24,11 @@
 
 namespace iqc {
 
-enum class Target { Shadertoy, WebGL2, GLSL330 };
+// Shadertoy: mainImage, parameters as constants. WebGL2 (GLSL ES 3.00), GLSL330 (desktop core): uniforms, the
+// camera as uniforms, gl_FragDepth. SPIRV: Vulkan GLSL 4.50 (uniform blocks at set 0) compiled to SPIR-V and
+// validated; HLSL: that SPIR-V cross-compiled to Shader Model 5.0 and re-checked.
+// ThreeJS: the WebGL2 shader without uniform blocks (per-instance data in the data texture), for three.js.
+enum class Target { Shadertoy, WebGL2, GLSL330, SPIRV, HLSL, ThreeJS };
 
 const char* target_name(Target t);
 
@@ -60,7 +65,8 @@ struct CompileOptions {
 
 struct CompileResult {
     int exit_code = 1;     // 0 ok, 1 diagnostics about the input, 3 internal error (glslang rejected our output)
-    std::string code;      // the shader (only when exit_code == 0)
+    std::string code;      // the shader (only when exit_code == 0): for SPIRV the Vulkan GLSL it was compiled from
+    std::vector<uint32_t> spirv;  // SPIRV and HLSL targets: the validated SPIR-V module
     std::string ir;        // the IR, when dump_ir
     // Per scene item, the Lipschitz bound applied to its distance: "dtorus (dtorus_1_distance): K ≤ 8.689
     // derived, 4.906 sampled, 8.689 applied (derived)" (ir/passes/Lipschitz.h).

@@ -3,8 +3,8 @@
 //  1. every example's --target html page loads offline with no console error and draws a non-blank
 //     picture; moving a slider changes the picture;
 //  2. a hostile title is shown as text (no dialog opens, the heading reads the title);
-//  3. three.js, given the webgl2 shader and --meta JSON, draws the same picture as the html page, with plain
-//     uniforms, uniform blocks (many instances) and the data texture (more);
+//  3. three.js, given the --target threejs module, draws the same picture as the html page, with plain
+//     uniforms and the data texture (many instances); a raymarched sphere and three.js meshes occlude each other;
 //  3b. pages of 100 and 400 rings fill their uniform blocks and data texture, and those sliders work;
 //  4. under `iqc serve`, editing an included module updates the page, sliders keep their values.
 import { chromium } from "playwright-core";
@@ -137,15 +137,27 @@ for (const [n, storage] of [[100, "iqc_block_"], [400, "texture:"]]) {
 
 // three.js: the webgl2 shader and --meta JSON on a RawShaderMaterial give the html page's picture — with
 // plain uniforms (two_tori), uniform blocks (100 tilted rings) and the data texture (400).
-async function threeMatchesPage(label, input, viewport) {
+// Serves three.html, three and the scene's --target threejs module at http://iqc.test/ (module scripts need http).
+function threeFiles(input) {
   const dir = fs.mkdtempSync(path.join(tmp, "three-"));
-  execFileSync(iqc, [input, "--target", "webgl2", "-o", path.join(dir, "shader.frag"), "--meta", path.join(dir, "meta.json")],
-               { stdio: "pipe" });
-  const files = {
+  execFileSync(iqc, [input, "--target", "threejs", "-o", path.join(dir, "scene.mjs")], { stdio: "pipe" });
+  return {
     "three.html": path.join(src, "tests/browser/three.html"),
     "three.module.js": path.join(src, "tests/browser/node_modules/three/build/three.module.js"),
-    "shader.frag": path.join(dir, "shader.frag"), "meta.json": path.join(dir, "meta.json"),
+    "scene.mjs": path.join(dir, "scene.mjs"),
   };
+}
+async function routeThree(page, files) {
+  await page.route("http://iqc.test/**", route => {
+    const file = files[new URL(route.request().url()).pathname.slice(1)];
+    if (!file) return route.fulfill({ status: 404, body: "" });
+    const type = file.endsWith(".js") || file.endsWith(".mjs") ? "text/javascript" : file.endsWith(".html") ? "text/html" : "text/plain";
+    return route.fulfill({ status: 200, contentType: type, body: fs.readFileSync(file) });
+  });
+}
+async function threeMatchesPage(label, input, viewport) {
+  const dir = fs.mkdtempSync(path.join(tmp, "three-"));
+  const files = threeFiles(input);
   const out = path.join(dir, "ref.html");
   execFileSync(iqc, [input, "--target", "html", "-o", out], { stdio: "pipe" });
   const ref = await open("file://" + out, viewport);
@@ -156,12 +168,7 @@ async function threeMatchesPage(label, input, viewport) {
   const errors = [];
   page.on("console", m => { if (m.type() === "error") errors.push(m.text()); });
   page.on("pageerror", e => errors.push(String(e)));
-  await page.route("http://iqc.test/**", route => {
-    const file = files[new URL(route.request().url()).pathname.slice(1)];
-    if (!file) return route.fulfill({ status: 404, body: "" });
-    const type = file.endsWith(".js") ? "text/javascript" : file.endsWith(".json") ? "application/json" : file.endsWith(".html") ? "text/html" : "text/plain";
-    return route.fulfill({ status: 200, contentType: type, body: fs.readFileSync(file) });
-  });
+  await routeThree(page, files);
   await page.goto(`http://iqc.test/three.html?w=${size[0]}&h=${size[1]}`);
   await waitFor(page, () => window.iqcFrames > 0);
   const got = await picture(page);
@@ -173,8 +180,41 @@ async function threeMatchesPage(label, input, viewport) {
   await ref.page.close();
 }
 await threeMatchesPage("two_tori (uniforms)", path.join(src, "examples", "two_tori.md"), { width: 480, height: 270 });
-await threeMatchesPage("100 rings (uniform blocks)", path.join(tmp, "rings_100.iq"), { width: 440, height: 200 });
+await threeMatchesPage("100 rings (data texture: the threejs target has no uniform blocks)", path.join(tmp, "rings_100.iq"), { width: 440, height: 200 });
 await threeMatchesPage("400 rings (data texture)", path.join(tmp, "rings_400.iq"), { width: 440, height: 200 });
+
+// three.js occlusion: a raymarched unit sphere and two red boxes (MeshBasicMaterial), one in front of the sphere,
+// one cutting into it, seen through a camera of the page's own (not the scene's): each hides what is behind it.
+{
+  const input = path.join(tmp, "occlusion.iq");
+  fs.writeFileSync(input, '[camera]\nposition = [0, 0, -4]\ntarget = [0, 0, 0]\n[render]\nbackground = [0.1, 0.2, 0.9]\n' +
+                          '[[lights]]\nposition = [-3, 4, -5]\n[[shapes]]\ntype = "sphere"\nmaterial = "lambert"\n');
+  const page = await browser.newPage({ viewport: { width: 320, height: 240 } });
+  const errors = [];
+  page.on("console", m => { if (m.type() === "error") errors.push(m.text()); });
+  page.on("pageerror", e => errors.push(String(e)));
+  await routeThree(page, threeFiles(input));
+  await page.goto("http://iqc.test/three.html?w=320&h=240&mesh");
+  await waitFor(page, () => window.iqcFrames > 0);
+  const at = async point => page.evaluate(p => {
+    const [x, y] = window.project(p);
+    const c = document.getElementById("canvas"), gl = c.getContext("webgl2");
+    const px = new Uint8Array(4);
+    gl.readPixels(x, c.height - 1 - y, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    return Array.from(px);
+  }, point);
+  const red = c => c[0] > 200 && c[1] < 40 && c[2] < 40;
+  const sky = c => c[0] < 60 && c[1] < 80 && c[2] > 180;
+  const front = await at([-0.3, 0, -2.0]), sphere = await at([0.65, 0, -0.76]), out = await at([1.1, 0, -0.7]);
+  const bare = await at([-0.5, 0.6, -0.63]), corner = await at([2.5, 2.2, 0]);
+  check(errors.length === 0, `three.js occlusion: no console errors ${errors.join(" | ")}`);
+  check(red(front), `three.js occlusion: the box in front of the sphere hides it (${front})`);
+  check(!red(sphere) && !sky(sphere), `three.js occlusion: the sphere hides the box behind its surface (${sphere})`);
+  check(red(out), `three.js occlusion: the box where it leaves the sphere shows (${out})`);
+  check(!red(bare) && !sky(bare), `three.js occlusion: the sphere alone (${bare})`);
+  check(sky(corner), `three.js occlusion: the background where nothing is (${corner})`);
+  await page.close();
+}
 
 {
   const hostile = "</script><script>alert(1)</script>";

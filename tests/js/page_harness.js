@@ -28,7 +28,8 @@ const gl = new Proxy({}, {
     if (name === "getShaderParameter" || name === "getProgramParameter") return () => true;
     if (name === "getUniformLocation") return (p, n) => ({ name: n });
     return (...args) => {
-      if (String(name).startsWith("uniform")) frameCalls.push([args[0] && args[0].name, Array.from(args.slice(1)).flat()]);
+      if (String(name).startsWith("uniform"))  // uniformMatrix*: (location, transpose, values)
+        frameCalls.push([args[0] && args[0].name, Array.from(args.slice(String(name).startsWith("uniformMatrix") ? 2 : 1)).flat()]);
       if (name === "drawArrays") { calls.push(frameCalls); frameCalls = []; }
       if (name === "shaderSource") calls.sources = (calls.sources || []).concat([args[1]]);
       return {};

@@ -1,0 +1,61 @@
+#include "scene/ThreeModule.h"
+
+#include <nlohmann/json.hpp>
+
+#include <map>
+
+#include "glsl/Names.h"
+#include "resources/Embedded.h"
+
+namespace iqc {
+
+namespace {
+
+// A JSON text as a JavaScript literal safe anywhere: ASCII only (ensure_ascii escapes U+2028/U+2029 too), and
+// '<', '>', '&' (which occur in JSON only inside strings) as \u escapes.
+std::string js_literal(const nlohmann::json& j) {
+    std::string text = j.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace), out;
+    out.reserve(text.size());
+    for (char c : text) {
+        if (c == '<') out += "\\u003c";
+        else if (c == '>') out += "\\u003e";
+        else if (c == '&') out += "\\u0026";
+        else out += c;
+    }
+    return out;
+}
+
+// One pass over the template: each {{KEY}} is replaced by its value, and values are never searched again.
+std::string expand(std::string_view tmpl, const std::map<std::string, std::string>& values) {
+    std::string out;
+    size_t at = 0;
+    while (true) {
+        size_t open = tmpl.find("{{", at);
+        size_t close = open == std::string_view::npos ? open : tmpl.find("}}", open + 2);
+        if (close == std::string_view::npos) break;
+        auto it = values.find(std::string(tmpl.substr(open + 2, close - open - 2)));
+        out += tmpl.substr(at, open - at);
+        if (it != values.end()) out += it->second;
+        else out += tmpl.substr(open, close + 2 - open);
+        at = close + 2;
+    }
+    out += tmpl.substr(at);
+    return out;
+}
+
+}  // namespace
+
+std::string three_module(std::string_view shader, std::string_view meta_json, std::string_view source) {
+    nlohmann::json meta = nlohmann::json::parse(meta_json);
+    std::string body(shader);
+    const std::string version = "#version 300 es\n";
+    if (body.rfind(version, 0) == 0) body.erase(0, version.size());
+    return expand(*embedded_file("runtime_templates/three.mjs"),
+                  {{"TITLE", glsl::comment_text(meta.value("title", std::string("iqc scene")))},
+                   {"VERSION", IQC_VERSION},
+                   {"SOURCE", glsl::comment_text(std::string(source))},
+                   {"META", js_literal(meta)},
+                   {"SHADER", js_literal(nlohmann::json(body))}});
+}
+
+}  // namespace iqc

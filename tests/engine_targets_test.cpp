@@ -1,0 +1,192 @@
+// The engine targets that go through SPIR-V (issue 14): `spirv` (Vulkan GLSL 4.50 compiled to a SPIR-V module)
+// and `hlsl` (cross-compiled from it). Every example's output passes the command-line validators of other
+// projects (spirv-val, glslangValidator's HLSL front end), its --meta gives the Vulkan layout, and the module
+// draws the webgl2 target's picture: translated back to GLSL ES by SPIRV-Cross and drawn on the headless
+// renderer with its uniform blocks filled from --meta alone (no Vulkan driver is needed).
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <spirv_glsl.hpp>
+
+#include "TestUtil.h"
+#include "render/Png.h"
+
+using namespace iqc;
+using namespace iqc::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<fs::path> example_inputs() {
+    std::vector<fs::path> inputs;
+    for (auto& e : fs::directory_iterator(fs::path(IQC_SOURCE_DIR) / "examples"))
+        if ((e.path().extension() == ".iq" || e.path().extension() == ".md") && e.path().filename() != "README.md")
+            inputs.push_back(e.path());
+    std::sort(inputs.begin(), inputs.end());
+    return inputs;
+}
+
+int shell(const std::string& cmd, std::string* out = nullptr) {
+    std::string full = cmd + " 2>&1";
+    std::string text;
+    FILE* p = popen(full.c_str(), "r");
+    if (!p) return -1;
+    char buf[4096];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0) text.append(buf, n);
+    int rc = pclose(p);
+    if (out) *out = text;
+    return WEXITSTATUS(rc);
+}
+
+void put_floats(std::vector<uint8_t>& bytes, int offset, const std::vector<double>& v) {
+    for (size_t i = 0; i < v.size(); ++i) {
+        float f = float(v[i]);
+        std::memcpy(&bytes[size_t(offset) + 4 * i], &f, 4);
+    }
+}
+
+}  // namespace
+
+TEST_CASE("spirv and hlsl targets: every example passes spirv-val and glslangValidator, with the layout in --meta",
+          "[engine-targets]") {
+    fs::path dir = temp_dir() / "engine_targets";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    for (const auto& in : example_inputs()) {
+        std::string stem = in.stem().string();
+        fs::path spv = dir / (stem + ".spv"), meta = dir / (stem + ".json"), hlsl = dir / (stem + ".hlsl");
+        RunResult s = run_iqc(in.string() + " --target spirv -o " + spv.string() + " --meta " + meta.string());
+        INFO(stem << ": " << s.err);
+        REQUIRE(s.exit_code == 0);
+        std::string bytes = read_text(spv);
+        REQUIRE(bytes.size() > 20);
+        REQUIRE(bytes.size() % 4 == 0);
+        uint32_t magic = 0;
+        std::memcpy(&magic, bytes.data(), 4);
+        CHECK(magic == 0x07230203u);  // SPIR-V's magic number, little-endian
+        std::string log;
+        CHECK(shell("spirv-val --target-env vulkan1.0 " + spv.string(), &log) == 0);
+        INFO(log);
+        auto j = nlohmann::json::parse(read_text(meta));
+        CHECK(j["target"] == "spirv");
+        REQUIRE(j.contains("inputs_block"));
+        CHECK(j["inputs_block"]["binding"] == 0);
+        for (const auto& b : j["blocks"]) CHECK(b["binding"].get<int>() >= 1);
+        if (j["texture"].is_object()) CHECK(j["texture"]["binding"].get<size_t>() == j["blocks"].size() + 1);
+        for (const auto& p : j["parameters"]) CHECK(p["storage"] != "uniform");  // Vulkan has no plain uniforms
+        REQUIRE(j["camera"]["defaults"]["iqc_camera_basis"].size() == 9);
+
+        RunResult h = run_iqc(in.string() + " --target hlsl -o " + hlsl.string());
+        INFO(h.err);
+        REQUIRE(h.exit_code == 0);
+        std::string text = read_text(hlsl);
+        CHECK_THAT(text, Catch::Contains("cbuffer IqcInputs : register(b0)"));
+        CHECK_THAT(text, Catch::Contains("SV_Depth"));
+        CHECK(shell("glslangValidator -D -V -e main -S frag -o " + (dir / "hlsl.spv").string() + " " + hlsl.string(), &log) == 0);
+        INFO(log);
+    }
+    // Binary output needs a file.
+    RunResult none = run_iqc(example_inputs()[0].string() + " --target spirv");
+    CHECK(none.exit_code == 2);
+    CHECK_THAT(none.err, Catch::Contains("--target spirv writes a binary SPIR-V module: give the file with -o"));
+}
+
+TEST_CASE("the spirv target draws the webgl2 target's picture, its blocks filled from --meta", "[engine-targets][render]") {
+    const int W = 96, H = 54;
+    // Parameters in a block; 120 spheres whose transforms read sliders: past WebGL2's 224 uniform vectors, so on
+    // webgl2 too their parameters go into blocks (declared in offset order: they were declared in reverse, and
+    // webgl2 drew the wrong spheres where distinct values met).
+    std::string many = "[camera]\nposition = [0, 4, -14]\ntarget = [0, 0, 0]\n";
+    for (int i = 0; i < 120; ++i)
+        many += fmt::format("[[shapes]]\ntype = \"sphere\"\nshape_params = {{ r = {} }}\n"
+                            "transform = \"\"\"T(X)\nwhere\nX ∈ ℝ³ default = ({}, {}, {})\"\"\"\n",
+                            0.2 + 0.003 * i, (i % 12) - 5.5 + 0.01 * i, (i / 12) * 0.8 - 4, 0.05 * (i % 7));
+    std::vector<fs::path> inputs = {fs::path(IQC_SOURCE_DIR) / "examples" / "lights_and_effects.iq",
+                                    fs::path(IQC_SOURCE_DIR) / "examples" / "two_tori.md", write_temp("spheres_120.iq", many)};
+    for (const auto& in : inputs) {
+        INFO(in.filename().string());
+        CompileOptions wo;
+        wo.target = Target::WebGL2;
+        Compiled web = compile_path(in, wo);
+        REQUIRE(web.result.exit_code == 0);
+        CompileOptions vo;
+        vo.target = Target::SPIRV;
+        Compiled vk = compile_path(in, vo);
+        INFO(vk.diagnostics << vk.result.internal);
+        REQUIRE(vk.result.exit_code == 0);
+        REQUIRE(!vk.result.spirv.empty());
+        auto meta = nlohmann::json::parse(vk.result.meta);
+        // Back to GLSL ES 3.00 (the renderer's language); blocks keep their names.
+        spirv_cross::CompilerGLSL glsl(vk.result.spirv);
+        spirv_cross::CompilerGLSL::Options go;
+        go.version = 300;
+        go.es = true;
+        glsl.set_common_options(go);
+        std::string es = glsl.compile();
+        // The host's work, from --meta only: IqcInputs by its member offsets, the parameter blocks' bytes.
+        render::RenderOptions o;
+        o.width = W;
+        o.height = H;
+        const auto& ib = meta["inputs_block"];
+        std::vector<uint8_t> inputs(ib["bytes"].get<size_t>(), 0);
+        const auto& cam = meta["camera"]["defaults"];
+        for (const auto& m : ib["members"]) {
+            std::string name = m["name"];
+            int at = m["offset"];
+            if (name == "iqc_camera_basis")  // mat3: three columns on a 16-byte stride
+                for (int c = 0; c < 3; ++c)
+                    put_floats(inputs, at + 16 * c, {cam[name][size_t(3 * c)], cam[name][size_t(3 * c + 1)], cam[name][size_t(3 * c + 2)]});
+            else if (name == "iqc_projection") put_floats(inputs, at, cam[name].get<std::vector<double>>());
+            else if (name == "iqc_camera_position") put_floats(inputs, at, cam[name].get<std::vector<double>>());
+            else if (name == "iqc_camera_focal") put_floats(inputs, at, {cam[name].get<double>()});
+            else if (name == "iResolution") put_floats(inputs, at, {double(W), double(H), 1.0});
+        }
+        o.uniform_blocks.push_back({ib["name"], 0, inputs});
+        for (const auto& b : vk.result.inputs.blocks) o.uniform_blocks.push_back({b.name, b.binding, b.bytes});
+        o.data_texture = {vk.result.inputs.texture.name, vk.result.inputs.texture.width, vk.result.inputs.texture.height,
+                          vk.result.inputs.texture.rgba};
+        std::string err;
+        static std::unique_ptr<render::Renderer> renderer = render::Renderer::create(&err);
+        REQUIRE(renderer);
+        render::RenderResult a = renderer->render(es, o);
+        INFO(a.error);
+        REQUIRE(a.ok);
+        render::RenderResult b = render_compiled(web.result, W, H);
+        INFO(b.error);
+        REQUIRE(b.ok);
+        // Vulkan's framebuffer origin is the top left: drawn by GL, the module's rows come out flipped.
+        int differ = 0, lit = 0;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                const float* p = a.image.pixel(x, H - 1 - y);
+                const float* q = b.image.pixel(x, y);
+                float d = 0;
+                for (int k = 0; k < 3; ++k) d = std::max(d, std::fabs(p[k] - q[k]));
+                if (d > 3.0f / 255) ++differ;
+                if (q[0] + q[1] + q[2] > 0.05f) ++lit;
+            }
+        if (differ > W * H / 200) {
+            std::ofstream(temp_dir() / ("spirv_" + in.stem().string() + ".frag")) << es;
+            render::write_png((temp_dir() / ("spirv_" + in.stem().string() + ".png")).string(), a.image, nullptr);
+            render::write_png((temp_dir() / ("webgl2_" + in.stem().string() + ".png")).string(), b.image, nullptr);
+        }
+        CHECK(differ <= W * H / 200);
+        CHECK(lit > W * H / 20);  // a picture, not a blank
+        // And webgl2 draws Shadertoy's picture (parameters as constants there).
+        Compiled toy = compile_path(in, {});
+        REQUIRE(toy.result.exit_code == 0);
+        render::RenderResult c = render_compiled(toy.result, W, H);
+        REQUIRE(c.ok);
+        int differ_toy = 0;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                float d = 0;
+                for (int k = 0; k < 3; ++k) d = std::max(d, std::fabs(c.image.pixel(x, y)[k] - b.image.pixel(x, y)[k]));
+                if (d > 3.0f / 255) ++differ_toy;
+            }
+        CHECK(differ_toy <= W * H / 200);
+    }
+}
