@@ -33,7 +33,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     SourceManager sm;
     Diagnostics diags(sm);
     CompileOptions opts;
-    opts.target = size % 3 == 0 ? Target::Shadertoy : size % 3 == 1 ? Target::WebGL2 : Target::GLSL330;
+    // Every target but hlsl (its SPIRV-Cross pass is the spirv target's module, already covered).
+    const Target targets[] = {Target::Shadertoy, Target::WebGL2, Target::GLSL330, Target::SPIRV, Target::ThreeJS};
+    opts.target = targets[size % 5];
     CompileResult r = compile_file(path.string(), sm, diags, opts);
     std::string rendered = diags.render();
     if (r.exit_code == 3) {

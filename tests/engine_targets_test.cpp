@@ -50,7 +50,7 @@ void put_floats(std::vector<uint8_t>& bytes, int offset, const std::vector<doubl
 
 }  // namespace
 
-TEST_CASE("spirv and hlsl targets: every example passes spirv-val and glslangValidator, with the layout in --meta",
+TEST_CASE("spirv, hlsl and threejs targets: every example passes spirv-val, glslangValidator and node --check, with the layout in --meta",
           "[engine-targets]") {
     fs::path dir = temp_dir() / "engine_targets";
     fs::remove_all(dir);
@@ -87,6 +87,44 @@ TEST_CASE("spirv and hlsl targets: every example passes spirv-val and glslangVal
         CHECK_THAT(text, Catch::Contains("SV_Depth"));
         CHECK(shell("glslangValidator -D -V -e main -S frag -o " + (dir / "hlsl.spv").string() + " " + hlsl.string(), &log) == 0);
         INFO(log);
+
+        // threejs: an ES module node parses, holding the webgl2 shader (without #version) and --meta.
+        fs::path mjs = dir / (stem + ".mjs");
+        RunResult t = run_iqc(in.string() + " --target threejs -o " + mjs.string());
+        INFO(t.err);
+        REQUIRE(t.exit_code == 0);
+        CHECK(shell("node --check " + mjs.string(), &log) == 0);
+        INFO(log);
+        std::string module = read_text(mjs);
+        CHECK_THAT(module, Catch::Contains("import * as THREE from \"three\";"));
+        CHECK_THAT(module, Catch::Contains("export function createMesh(camera"));
+        CHECK(std::count_if(module.begin(), module.end(), [](char c) { return (unsigned char)c >= 0x80; }) == 0);  // ASCII: strings escaped
+    }
+    // A hostile title and description: the module still parses, and `meta` gives them back as written.
+    {
+        std::string title = "a */ b\n// c `${x}` </script> \u2028 \" ' \\";
+        nlohmann::json t = title;
+        auto in = write_temp("three_hostile.iq", "title = " + t.dump() + "\n[modules]\nball = \"\"\"\nshape\nD = ‖p‖ - r\nwhere\n"
+                                                 "p ∈ ℝ³\nr ∈ [0,3] default = 1: */ `${alert(1)}` </script>\n\"\"\"\n[[shapes]]\ntype = \"ball\"\n");
+        fs::path mjs = dir / "three_hostile.mjs";
+        RunResult t3 = run_iqc(in.string() + " --target threejs -o " + mjs.string());
+        INFO(t3.err);
+        REQUIRE(t3.exit_code == 0);
+        std::string log;
+        CHECK(shell("node --check " + mjs.string(), &log) == 0);
+        INFO(log);
+        // Evaluate the module's `meta` (its import of three removed) and print what it holds.
+        std::string module = read_text(mjs);
+        size_t from = module.find("export const meta = "), to = module.find(";\n", from);
+        REQUIRE(from != std::string::npos);
+        auto js = write_temp("three_hostile_meta.js", "const meta = " + module.substr(from + 20, to - from - 20) +
+                                                          ";\nprocess.stdout.write(JSON.stringify([meta.title, meta.parameters[0].description]));\n");
+        std::string out;
+        REQUIRE(shell("node " + js.string(), &out) == 0);
+        auto back = nlohmann::json::parse(out);
+        CHECK(back[0] == title);
+        CHECK(back[1] == "*/ `${alert(1)}` </script>");
+        CHECK(module.find("</script>") == std::string::npos);
     }
     // Binary output needs a file.
     RunResult none = run_iqc(example_inputs()[0].string() + " --target spirv");

@@ -43,6 +43,17 @@ std::string expand(std::string_view tmpl, const std::map<std::string, std::strin
     return out;
 }
 
+// A comment line's text: one line (glsl::comment_text), and no "</" so that a module inlined into a page's
+// <script> element cannot end it.
+std::string js_comment(const std::string& text) {
+    std::string line = glsl::comment_text(text), out;
+    for (size_t i = 0; i < line.size(); ++i) {
+        out += line[i];
+        if (line[i] == '<' && i + 1 < line.size() && line[i + 1] == '/') out += ' ';
+    }
+    return out;
+}
+
 }  // namespace
 
 std::string three_module(std::string_view shader, std::string_view meta_json, std::string_view source) {
@@ -51,9 +62,9 @@ std::string three_module(std::string_view shader, std::string_view meta_json, st
     const std::string version = "#version 300 es\n";
     if (body.rfind(version, 0) == 0) body.erase(0, version.size());
     return expand(*embedded_file("runtime_templates/three.mjs"),
-                  {{"TITLE", glsl::comment_text(meta.value("title", std::string("iqc scene")))},
+                  {{"TITLE", js_comment(meta.value("title", std::string("iqc scene")))},
                    {"VERSION", IQC_VERSION},
-                   {"SOURCE", glsl::comment_text(std::string(source))},
+                   {"SOURCE", js_comment(std::string(source))},
                    {"META", js_literal(meta)},
                    {"SHADER", js_literal(nlohmann::json(body))}});
 }
