@@ -64,10 +64,6 @@ const vec3 IQC_BACKGROUND = {{BACKGROUND}};
 const vec3 IQC_CAMERA_POSITION = {{CAMERA_POSITION}};
 const vec3 IQC_CAMERA_TARGET = {{CAMERA_TARGET}};
 const float IQC_CAMERA_FOCAL = {{CAMERA_FOCAL}};  // 1 / tan(fov / 2)
-{{#else}}
-{{#if ORBIT}}
-const vec3 IQC_CAMERA_TARGET = {{CAMERA_TARGET}};  // what the mouse orbits around
-{{/if}}
 {{/if}}
 {{#if MARCH_FIXED}}
 const float IQC_FIXED_STEP = {{FIXED_STEP}};

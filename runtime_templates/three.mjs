@@ -22,13 +22,17 @@ export const fragmentShader = {{SHADER}};
 
 export const vertexShader = "in vec3 position;\nvoid main() { gl_Position = vec4(position.xy, 0.0, 1.0); }\n";
 
-function uniformValue(v) {
+// A parameter's value as three.js uploads it. --meta lists a matrix row by row: Matrix3/Matrix4.set take rows;
+// a mat2 goes as a plain array, column by column. (iqc refuses non-square matrices for this target: three.js has
+// no uniform setter for them.)
+function uniformValue(v, type) {
+  if (type === "mat2") return [v[0], v[2], v[1], v[3]];
+  if (type === "mat3") return new THREE.Matrix3().set(...v);
+  if (type === "mat4") return new THREE.Matrix4().set(...v);
   if (v.length === 1) return v[0];
   if (v.length === 2) return new THREE.Vector2(v[0], v[1]);
   if (v.length === 3) return new THREE.Vector3(v[0], v[1], v[2]);
   if (v.length === 4) return new THREE.Vector4(v[0], v[1], v[2], v[3]);
-  if (v.length === 9) return new THREE.Matrix3().fromArray(v);   // --meta lists matrices column by column
-  if (v.length === 16) return new THREE.Matrix4().fromArray(v);
   return v;
 }
 
@@ -41,7 +45,7 @@ export function createMaterial(camera, options = {}) {
     iFrame: { value: 0 }, iqc_camera_position: { value: new THREE.Vector3() }, iqc_camera_basis: { value: new THREE.Matrix3() },
     iqc_camera_focal: { value: 1 }, iqc_projection: { value: new THREE.Matrix4() },
   };
-  for (const p of meta.parameters) if (p.storage === "uniform") uniforms[p.uniform] = { value: uniformValue(p.default) };
+  for (const p of meta.parameters) if (p.storage === "uniform") uniforms[p.uniform] = { value: uniformValue(p.default, p.type) };
   if (meta.texture) {
     const t = meta.texture;
     const bytes = Uint8Array.from(atob(t.data), c => c.charCodeAt(0));

@@ -6,12 +6,17 @@ cd "$(dirname "$0")/.."
 out=docs/accuracy
 mkdir -p "$out"
 size=${SIZE:-160x90}
-# REPORT_ONLY=1 rebuilds the page from the existing results without measuring again.
+# REPORT_ONLY=1 rebuilds the page and the plots from the existing results without measuring again.
 if [ -z "${REPORT_ONLY:-}" ]; then
 for f in bench/*.iq; do
   name=$(basename "$f" .iq)
   echo "bench $name ..." >&2
   ./build/iqc bench "$f" --size "$size" --csv "$out/$name.csv" --plot "$out/$name.svg" > "$out/$name.txt"
+done
+else  # the plots again from the measurements
+for f in bench/*.iq; do
+  name=$(basename "$f" .iq)
+  ./build/iqc bench "$f" --replot "$out/$name.csv" --plot "$out/$name.svg"
 done
 fi
 {
@@ -25,7 +30,7 @@ fi
     # The header: the run, the references, and each item's Lipschitz bound (derived by the compiler).
     sed -n '1,/^$/p' "$out/$name.txt" | grep . | sed 's/^/> /; s/$/  /'
     echo
-    echo "![frame time against depth error](accuracy/$name.svg)"
+    echo "![scene evaluations per pixel against depth error, log axes, the Pareto front named](accuracy/$name.svg)"
     echo
     echo "The four march methods at hit 1e-3, 256 steps, tetrahedron normals, and I♥IQ's per-instance architecture:"
     echo

@@ -21,6 +21,7 @@ MAIN_ONLY=0
 if [ $MAIN_ONLY -eq 0 ]; then
   PKGS+=(
     glslang-tools catch2 ninja-build
+    imagemagick libmagickcore-6.q16-6-extra fonts-dejavu-core  # the accuracy plots render in ImageMagick too (its SVG coder, the plots' font)
     nodejs chromium
     clang libclang-rt-14-dev   # the sanitizer build and libFuzzer (scripts/sanitize.sh, scripts/fuzz.sh)
   )

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "TestUtil.h"
+#include "render/Png.h"
 
 using namespace iqc::test;
 
@@ -107,6 +108,30 @@ TEST_CASE("iqc bench: columns, rows, reproducibility and the direction of every 
     std::string svg = read_text(plot);
     CHECK_THAT(svg, Catch::StartsWith("<svg"));
     CHECK_THAT(svg, Catch::Contains("Pareto"));
+    CHECK_THAT(svg, Catch::Contains("scene evaluations per pixel (mean, log scale)"));
+    // The Pareto front's settings are named on the plot (as text, not only in tooltips).
+    bool named = svg.find("font-size=\"9\" fill=\"#333333\">sphere hit ") != std::string::npos ||
+                 svg.find("font-size=\"9\" fill=\"#333333\">auto hit ") != std::string::npos ||
+                 svg.find("font-size=\"9\" fill=\"#333333\">relaxed hit ") != std::string::npos ||
+                 svg.find("font-size=\"9\" fill=\"#333333\">fixed hit ") != std::string::npos;
+    CHECK(named);
+    // ImageMagick (Debian's, not a stand-in on PATH) draws the points: it drew none when each circle held its
+    // <title>. Count the plot area's pixels of the sphere-tracing blue (#1f77b4; ImageMagick ignores fill-opacity).
+    auto png = temp_dir() / "bench_plot.png";
+    REQUIRE(std::system(("/usr/bin/convert " + plot.string() + " -depth 8 PNG24:" + png.string() + " 2>/dev/null").c_str()) == 0);
+    iqc::render::Image img;
+    std::string err;
+    REQUIRE(iqc::render::read_png(png.string(), img, &err));
+    int blue = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width - 170; ++x) {  // not the legend
+            const float* p = img.pixel(x, y);
+            auto near = [&](float r, float g, float b) {
+                return std::fabs(p[0] - r) < 0.08f && std::fabs(p[1] - g) < 0.08f && std::fabs(p[2] - b) < 0.08f;
+            };
+            if (near(0.12f, 0.47f, 0.71f) || near(0.34f, 0.60f, 0.78f)) ++blue;  // opaque, or at 0.75 on white
+        }
+    CHECK(blue > 20);  // 0 when ImageMagick drew no points
 }
 
 TEST_CASE("iqc bench usage errors", "[bench]") {

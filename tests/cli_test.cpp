@@ -272,3 +272,19 @@ TEST_CASE("outputs whose bytes did not change are left alone, and --quiet prints
     CHECK_THAT(w.err, Catch::Contains("warning:"));
     CHECK_THAT(w.err, !Catch::Contains("wrote"));
 }
+
+TEST_CASE("iqc render makes the output's folder, and says so when it cannot", "[cli][render]") {
+    // `iqc render --frames 3 -o frames/a.png` failed when frames/ did not exist.
+    auto dir = temp_dir() / "render_new_dir" / "frames";
+    std::filesystem::remove_all(dir.parent_path());
+    std::string scene = (std::filesystem::path(IQC_SOURCE_DIR) / "examples" / "two_tori.md").string();
+    RunResult r = run_iqc("render " + scene + " --size 32x18 --frames 3 -o " + (dir / "a.png").string());
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    for (int k = 0; k < 3; ++k) CHECK(std::filesystem::exists(dir / ("a_000" + std::to_string(k) + ".png")));
+    // A folder that cannot be made: a path through a regular file.
+    auto file = write_temp("render_not_a_dir", "x");
+    RunResult bad = run_iqc("render " + scene + " --size 32x18 -o " + (file / "sub" / "a.png").string());
+    CHECK(bad.exit_code == 1);
+    CHECK_THAT(bad.err, Catch::Contains("iqc: error: cannot create the folder '" + (file / "sub").string() + "' for the PNG:"));
+}

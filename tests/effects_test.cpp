@@ -49,7 +49,10 @@ TEST_CASE("each effect's code appears only when the scene asks for it", "[effect
             INFO(effect << " (" << target << ")");
             REQUIRE(!on.empty());
             for (const auto& m : markers) {
-                CHECK_THAT(on, Catch::Contains(m));
+                // The mouse orbit is the Shadertoy shader's: the uniform targets take the host's camera (the html
+                // page orbits it), so there the orbit scene's shader has none of it either.
+                if (effect == "orbit_camera" && std::string(target) != "shadertoy") CHECK_THAT(on, !Catch::Contains(m));
+                else CHECK_THAT(on, Catch::Contains(m));
                 CHECK_THAT(base, !Catch::Contains(m));
             }
         }

@@ -169,7 +169,7 @@ TEST_CASE("the spirv target draws the webgl2 target's picture, its blocks filled
         o.width = W;
         o.height = H;
         const auto& ib = meta["inputs_block"];
-        std::vector<uint8_t> inputs(ib["bytes"].get<size_t>(), 0);
+        std::vector<uint8_t> inputs((ib["bytes"].get<size_t>() + 15) / 16 * 16, 0);
         const auto& cam = meta["camera"]["defaults"];
         for (const auto& m : ib["members"]) {
             std::string name = m["name"];
@@ -227,4 +227,45 @@ TEST_CASE("the spirv target draws the webgl2 target's picture, its blocks filled
             }
         CHECK(differ_toy <= W * H / 200);
     }
+}
+
+TEST_CASE("matrix parameters as uniforms draw what Shadertoy's constants draw, and threejs refuses non-square ones",
+          "[engine-targets][render]") {
+    // Found by a new-user trial: a mat2 went to glUniform4fv (GL refused it) and a mat3x2 was never set, so
+    // `iqc render --target webgl2` drew A = 0; the page sent matrices with uniform1fv; three.js read --meta's
+    // rows as columns. --meta lists a matrix row by row (as written).
+    std::string scene = "[modules]\nsheared = \"\"\"\nshape\nD = ‖(A (p_1, p_2), B p)‖ - 1\nwhere\np ∈ ℝ³\n"
+                        "A ∈ ℝ^(2×2) default = [1 0.6; 0 1]\nB ∈ ℝ^(2×3) default = [0 0 1; 0.3 0 0.2]\n\"\"\"\n"
+                        "[camera]\nposition = [0, 0.5, -4]\ntarget = [0, 0, 0]\n[[shapes]]\ntype = \"sheared\"\n";
+    auto in = write_temp("matrices.iq", scene);
+    const int W = 80, H = 45;
+    Compiled toy = compile_path(in, {});
+    REQUIRE(toy.result.exit_code == 0);
+    CompileOptions wo;
+    wo.target = Target::WebGL2;
+    Compiled web = compile_path(in, wo);
+    INFO(web.diagnostics);
+    REQUIRE(web.result.exit_code == 0);
+    auto meta = nlohmann::json::parse(web.result.meta);
+    bool row_major = false;
+    for (const auto& p : meta["parameters"])
+        if (p["name"] == "A") row_major = p["default"] == nlohmann::json::array({1, 0.6, 0, 1});
+    CHECK(row_major);
+    render::RenderResult a = render_compiled(toy.result, W, H), b = render_compiled(web.result, W, H);
+    REQUIRE(a.ok);
+    INFO(b.error);
+    REQUIRE(b.ok);
+    int differ = 0, lit = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            float d = 0;
+            for (int k = 0; k < 3; ++k) d = std::max(d, std::fabs(a.image.pixel(x, y)[k] - b.image.pixel(x, y)[k]));
+            if (d > 3.0f / 255) ++differ;
+            if (std::fabs(a.image.pixel(x, y)[0] - a.image.pixel(0, 0)[0]) > 0.05f) ++lit;
+        }
+    CHECK(differ <= W * H / 200);
+    CHECK(lit > W * H / 20);
+    RunResult t = run_iqc(in.string() + " --target threejs -o " + (temp_dir() / "matrices.mjs").string());
+    CHECK(t.exit_code == 1);
+    CHECK_THAT(t.err, Catch::Contains("the threejs target cannot take sheared_1's parameter B (a mat3x2 uniform"));
 }

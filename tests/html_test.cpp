@@ -62,7 +62,12 @@ TEST_CASE("every example becomes a working page: sliders, uniforms, a moved slid
         auto h = run_harness(page);
         CHECK(h["error"].is_null());
         CHECK(h["title"] == meta["title"]);
-        CHECK(h["sliders"].get<size_t>() == components);
+        // A slider per component, except colours: a picker each (three components), lights' with an intensity.
+        CHECK(h["sliders"].get<size_t>() + 3 * h["colours"].get<size_t>() == components);
+        size_t lights = 0;
+        for (const auto& p : meta["parameters"])
+            if (p["role"] == "light" && p["name"] == "color") ++lights;
+        CHECK(h["colours"].get<size_t>() >= lights);
         CHECK(h["fragment_shader_chars"].get<size_t>() > 1000);
         // The first frame sends every parameter at its default.
         std::map<std::string, std::vector<double>> first;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
+#include <sstream>
 #include <map>
 #include <set>
 
@@ -282,6 +283,39 @@ std::string csv(const Report& r) {
     return out;
 }
 
+bool read_csv(const std::string& text, Report& r, std::string* error) {
+    std::istringstream in(text);
+    std::string line;
+    int number = 0;
+    r.rows.clear();
+    while (std::getline(in, line)) {
+        if (++number == 1 || line.empty()) continue;  // the header
+        std::vector<std::string> f;
+        std::stringstream ls(line);
+        for (std::string cell; std::getline(ls, cell, ',');) f.push_back(cell);
+        try {
+            if (f.size() != 11) throw std::invalid_argument("11 columns");
+            Row x;
+            x.method = f[0];
+            x.hit = std::stod(f[1]);
+            x.max_steps = std::stoi(f[2]);
+            x.normals = f[3];
+            x.frame_ms = std::stod(f[4]);
+            x.evals_mean = std::stod(f[5]);
+            x.evals_p99 = std::stod(f[6]);
+            x.hit_mismatch_pct = std::stod(f[7]);
+            x.depth_err_p99 = std::stod(f[8]);
+            x.normal_err_deg_p99 = std::stod(f[9]);
+            x.psnr_db = std::stod(f[10]);
+            r.rows.push_back(x);
+        } catch (const std::exception&) {
+            if (error) *error = fmt::format("line {}: not a row of iqc bench's CSV (11 columns: {})", number, line.substr(0, 80));
+            return false;
+        }
+    }
+    return true;
+}
+
 std::string table(const Report& r) {
     std::string out = fmt::format("{:<13} {:>7} {:>6} {:<12} {:>9} {:>10} {:>9} {:>9} {:>10} {:>10} {:>7}\n", "method", "hit",
                                   "steps", "normals", "frame ms", "evals/px", "evals p99", "miss %", "depth p99",
@@ -294,64 +328,75 @@ std::string table(const Report& r) {
 }
 
 std::string svg(const Report& r, const std::string& title) {
-    const double W = 760, H = 480, L = 80, R = 170, T = 50, B = 60;
-    double tmin = 1e30, tmax = 0, emin = 1e30, emax = 0;
+    // Both axes logarithmic: scene evaluations per pixel (exact counts, not a timing) against the 99th
+    // percentile depth error. Plain SVG 1.1 (self-closing shapes, attributes only, no CSS; one font family,
+    // DejaVu Sans: ImageMagick's renderer takes no list) so ImageMagick and librsvg draw what browsers draw; each point's setting is in a <title>, the Pareto front's also as text.
+    const double W = 820, H = 500, L = 80, R = 170, T = 50, B = 60;
+    double vmin = 1e300, vmax = 0, emin = 1e300, emax = 0;
     auto err = [](const Row& x) { return std::max(x.depth_err_p99, 1e-7); };
+    auto evals = [](const Row& x) { return std::max(x.evals_mean, 1e-3); };
     for (const auto& x : r.rows) {
-        tmin = std::min(tmin, x.frame_ms);
-        tmax = std::max(tmax, x.frame_ms);
+        vmin = std::min(vmin, evals(x));
+        vmax = std::max(vmax, evals(x));
         emin = std::min(emin, err(x));
         emax = std::max(emax, err(x));
     }
-    if (r.rows.empty()) return "<svg xmlns=\"http://www.w3.org/2000/svg\"/>\n";
-    if (tmax <= tmin) tmax = tmin + 1;
+    if (r.rows.empty()) return "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"1\" height=\"1\"/>\n";
     double lmin = std::floor(std::log10(emin)), lmax = std::ceil(std::log10(emax));
     if (lmax <= lmin) lmax = lmin + 1;
-    double t0 = std::max(0.0, tmin - 0.05 * (tmax - tmin)), t1 = tmax + 0.05 * (tmax - tmin);
-    auto X = [&](double t) { return L + (t - t0) / (t1 - t0) * (W - L - R); };
+    double vlo = std::floor(std::log10(vmin)), vhi = std::ceil(std::log10(vmax));
+    if (vhi <= vlo) vhi = vlo + 1;
+    auto X = [&](double v) { return L + (std::log10(v) - vlo) / (vhi - vlo) * (W - L - R); };
     auto Y = [&](double e) { return T + (lmax - std::log10(e)) / (lmax - lmin) * (H - T - B); };
     std::map<std::string, std::string> colours = {{"fixed", "#7f7f7f"}, {"sphere", "#1f77b4"}, {"relaxed", "#2ca02c"},
                                                   {"auto", "#d62728"}, {"per_instance", "#9467bd"}};
-    std::string s = fmt::format("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" "
-                                "font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
-                                W, H);
+    auto setting = [](const Row& x) { return fmt::format("{} hit {:g} steps {} {}", x.method, x.hit, x.max_steps, x.normals); };
+    std::string s = fmt::format("<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"{}\" height=\"{}\" "
+                                "font-family=\"DejaVu Sans\" font-size=\"12\">\n<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"white\"/>\n",
+                                W, H, W, H);
     s += fmt::format("<text x=\"{}\" y=\"24\" font-size=\"15\">{}</text>\n", L, title);
-    // Axes and grid.
+    // Axes and grid, a line per decade.
     s += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\"/>\n", L, H - B, W - R, H - B);
     s += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\"/>\n", L, T, L, H - B);
-    for (int k = 0; k <= 5; ++k) {
-        double t = t0 + (t1 - t0) * k / 5;
-        s += fmt::format("<text x=\"{:.1f}\" y=\"{}\" text-anchor=\"middle\">{:.1f}</text>\n", X(t), H - B + 18, t);
+    for (double l = vlo; l <= vhi; l += 1) {
+        double x = X(std::pow(10, l));
+        s += fmt::format("<line x1=\"{:.1f}\" y1=\"{}\" x2=\"{:.1f}\" y2=\"{}\" stroke=\"#dddddd\"/>\n", x, T, x, H - B);
+        s += fmt::format("<text x=\"{:.1f}\" y=\"{}\" text-anchor=\"middle\">{:g}</text>\n", x, H - B + 18, std::pow(10, l));
     }
     for (double l = lmin; l <= lmax; l += 1) {
-        s += fmt::format("<line x1=\"{}\" y1=\"{:.1f}\" x2=\"{}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>\n", L, Y(std::pow(10, l)), W - R,
+        s += fmt::format("<line x1=\"{}\" y1=\"{:.1f}\" x2=\"{}\" y2=\"{:.1f}\" stroke=\"#dddddd\"/>\n", L, Y(std::pow(10, l)), W - R,
                          Y(std::pow(10, l)));
         s += fmt::format("<text x=\"{}\" y=\"{:.1f}\" text-anchor=\"end\">1e{:.0f}</text>\n", L - 6, Y(std::pow(10, l)) + 4, l);
     }
-    s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">frame time (ms, median)</text>\n", (L + W - R) / 2, H - 18);
-    s += fmt::format("<text transform=\"translate(20,{}) rotate(-90)\" text-anchor=\"middle\">depth error, 99th percentile</text>\n",
-                     (T + H - B) / 2);
-    // Pareto front: no other setting is both faster and more accurate.
+    s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">scene evaluations per pixel (mean, log scale)</text>\n",
+                     (L + W - R) / 2, H - 18);
+    s += fmt::format("<text x=\"20\" y=\"{}\" text-anchor=\"middle\" transform=\"rotate(-90 20 {})\">depth error, 99th percentile</text>\n",
+                     (T + H - B) / 2, (T + H - B) / 2);
+    // Pareto front: no other setting needs fewer evaluations and is more accurate.
     std::vector<const Row*> rows;
     for (const auto& x : r.rows) rows.push_back(&x);
     std::sort(rows.begin(), rows.end(), [&](const Row* a, const Row* b) {
-        return a->frame_ms != b->frame_ms ? a->frame_ms < b->frame_ms : err(*a) < err(*b);
+        return evals(*a) != evals(*b) ? evals(*a) < evals(*b) : err(*a) < err(*b);
     });
-    std::string front;
+    std::vector<const Row*> front;
     double best = 1e300;
     for (const Row* x : rows)
         if (err(*x) < best) {
             best = err(*x);
-            front += fmt::format("{:.1f},{:.1f} ", X(x->frame_ms), Y(err(*x)));
+            front.push_back(x);
         }
-    s += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"black\" stroke-dasharray=\"4 3\"/>\n", front);
+    std::string points;
+    for (const Row* x : front) points += fmt::format("{:.1f},{:.1f} ", X(evals(*x)), Y(err(*x)));
+    s += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"black\" stroke-dasharray=\"4,3\"/>\n", points);
     for (const auto& x : r.rows) {
         std::string c = colours.count(x.method) ? colours[x.method] : "black";
-        s += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3.5\" fill=\"{}\" fill-opacity=\"0.75\"><title>{} hit {} steps {} "
-                         "normals {}: {:.2f} ms, depth p99 {:.3g}, {:.1f} evals/px</title></circle>\n",
-                         X(x.frame_ms), Y(err(x)), c, x.method, x.hit, x.max_steps, x.normals, x.frame_ms, x.depth_err_p99,
-                         x.evals_mean);
+        s += fmt::format("<g><title>{}: {:.2f} ms, depth p99 {:.3g}, {:.1f} evals/px</title>"
+                         "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3.5\" fill=\"{}\" fill-opacity=\"0.75\"/></g>\n",
+                         setting(x), x.frame_ms, x.depth_err_p99, x.evals_mean, X(evals(x)), Y(err(x)), c);
     }
+    for (size_t k = 0; k < front.size(); ++k)  // the front's settings by name, above and below in turn
+        s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"9\" fill=\"#333333\">{}</text>\n", X(evals(*front[k])) + 6,
+                         Y(err(*front[k])) + (k % 2 ? 13 : -5), setting(*front[k]));
     double ly = T + 10;
     for (const auto& entry : colours) {
         const std::string& m = entry.first;  // (clang 14 cannot capture a structured binding in a lambda)
@@ -362,7 +407,7 @@ std::string svg(const Report& r, const std::string& title) {
                          W - R + 32, ly + 4, m);
         ly += 20;
     }
-    s += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\" stroke-dasharray=\"4 3\"/><text x=\"{}\" "
+    s += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\" stroke-dasharray=\"4,3\"/><text x=\"{}\" "
                      "y=\"{}\">Pareto front</text>\n",
                      W - R + 12, ly, W - R + 28, ly, W - R + 32, ly + 4);
     s += "</svg>\n";

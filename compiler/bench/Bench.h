@@ -51,8 +51,12 @@ struct Report {
 Report run(const Options& o);
 
 std::string csv(const Report& r);
+// The rows of a CSV written by csv() (for plotting again without measuring); false with *error (the line)
+// on anything else.
+bool read_csv(const std::string& text, Report& r, std::string* error);
 std::string table(const Report& r);
-// An SVG scatter plot of frame time against depth error, one colour per method, the Pareto front drawn.
+// An SVG scatter plot of scene evaluations per pixel against depth error (both on log axes), one colour per
+// method, the Pareto front drawn and its settings named; plain SVG 1.1 that ImageMagick renders too.
 std::string svg(const Report& r, const std::string& title);
 
 }  // namespace iqc::bench

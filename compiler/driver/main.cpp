@@ -58,6 +58,8 @@ void tune_allocator() {
 }
 
 // The PNG path of frame k of an animation: out.png -> out_0007.png.
+std::string printable(const std::string& s);
+
 std::string frame_path(const std::string& out, int k, int frames) {
     if (frames <= 1) return out;
     size_t dot = out.rfind('.');
@@ -110,6 +112,16 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
         ro.progress = [&](int done, int total) { std::fprintf(stderr, "\riqc: rendering %3d%%", 100 * done / total); };
     iqc::render::RenderResult last;
     std::vector<double> frame_ms;
+    // The output's folder is made as needed (`--frames 8 -o frames/a.png` into a new frames/).
+    if (auto dir = std::filesystem::path(output).parent_path(); !dir.empty()) {
+        std::error_code ec;
+        std::filesystem::create_directories(dir, ec);
+        if (ec) {
+            std::fprintf(stderr, "iqc: error: cannot create the folder '%s' for the PNG: %s\n", printable(dir.string()).c_str(),
+                         ec.message().c_str());
+            return 1;
+        }
+    }
     for (int k = 0; k < frames; ++k) {
         ro.time = time + float(k) / fps;
         ro.frame = k;
@@ -425,7 +437,10 @@ static int run(int argc, char** argv) {
     bench->add_option("input", b_input, "scene (.iq), document (.md) or shape module (.iql)")->required();
     bench->add_option("--size", b_size, "image size WxH (default 160x90)");
     bench->add_option("--csv", b_csv, "write the results as CSV");
-    bench->add_option("--plot", b_plot, "write an SVG plot of frame time against depth error (with the Pareto front)");
+    bench->add_option("--plot", b_plot, "write an SVG plot of scene evaluations per pixel against depth error (log axes, the "
+                                        "Pareto front and its settings named)");
+    std::string b_replot;
+    bench->add_option("--replot", b_replot, "plot the results of an earlier --csv instead of measuring (with --plot)");
     bench->add_option("--frames", b_frames, "timed frames per setting, after a warm-up (default 5)")->check(CLI::Range(1, 1000));
     CLI::App* serve = app.add_subcommand(
         "serve", "serve the scene's interactive page on 127.0.0.1 only; recompile when the scene or a module it reads "
@@ -498,6 +513,27 @@ static int run(int argc, char** argv) {
         return 0;
     }
     if (serve->parsed()) return iqc::serve(s_input, s_port, s_poll);
+    if (bench->parsed() && !b_replot.empty()) {
+        if (b_plot.empty()) {
+            std::fprintf(stderr, "iqc: error: --replot needs --plot FILE.svg\n");
+            return 2;
+        }
+        std::ifstream in(b_replot, std::ios::binary);
+        if (!in) {
+            std::fprintf(stderr, "iqc: error: cannot read '%s'\n", printable(b_replot).c_str());
+            return 1;
+        }
+        std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        iqc::bench::Report rep;
+        std::string err;
+        if (!iqc::bench::read_csv(text, rep, &err)) {
+            std::fprintf(stderr, "iqc: error: %s: %s\n", printable(b_replot).c_str(), printable(err).c_str());
+            return 1;
+        }
+        OutputSet outs;
+        outs.add(b_plot, iqc::bench::svg(rep, b_input));
+        return outs.commit() != 0 ? 1 : 0;
+    }
     if (bench->parsed()) {
         iqc::bench::Options bo;
         bo.input = b_input;
@@ -632,8 +668,14 @@ static int run(int argc, char** argv) {
     if (target == "html" && !render->parsed()) r.code = iqc::html_page(r.code, r.meta);
     if (target == "cpp" && !render->parsed())
         r.code = iqc::cpp_header(r.code, r.meta, std::filesystem::path(input).stem().string());
-    if (target == "threejs" && !render->parsed())
-        r.code = iqc::three_module(r.code, r.meta, std::filesystem::path(input).filename().string());
+    if (target == "threejs" && !render->parsed()) {
+        try {
+            r.code = iqc::three_module(r.code, r.meta, std::filesystem::path(input).filename().string());
+        } catch (const iqc::ThreeUnsupported& e) {
+            put(stderr, "iqc: error: " + e.message + "\n");
+            return 1;
+        }
+    }
     if (target == "spirv" && !render->parsed()) {  // the module's words, little-endian as SPIR-V files are
         r.code.clear();
         for (uint32_t w : r.spirv)

@@ -563,16 +563,40 @@ RenderResult render_current(Renderer::State& st, const std::string& fs_source, c
     set_shadertoy_uniforms(program, o);
     for (const auto& [name, v] : o.int_uniforms)
         if (GLint l = glGetUniformLocation(program, name.c_str()); l != -1) glUniform1i(l, v);
+    // Float uniforms by their declared type (a mat2 and a vec4 both have 4 values; mat3x2 has 6), values in
+    // GLSL's order (matrices column by column).
+    std::map<std::string, GLenum> types;
+    {
+        GLint count = 0;
+        glGetProgramiv(program, GL_ACTIVE_UNIFORMS, &count);
+        char name[512];
+        for (GLint i = 0; i < count; ++i) {
+            GLsizei len = 0;
+            GLint size = 0;
+            GLenum type = 0;
+            glGetActiveUniform(program, GLuint(i), sizeof name, &len, &size, &type, name);
+            types[std::string(name, size_t(len))] = type;
+        }
+    }
     for (const auto& [name, v] : o.uniforms) {
         GLint l = glGetUniformLocation(program, name.c_str());
-        if (l == -1) continue;
-        switch (v.size()) {
-            case 1: glUniform1f(l, v[0]); break;
-            case 2: glUniform2fv(l, 1, v.data()); break;
-            case 3: glUniform3fv(l, 1, v.data()); break;
-            case 4: glUniform4fv(l, 1, v.data()); break;
-            case 9: glUniformMatrix3fv(l, 1, GL_FALSE, v.data()); break;
-            case 16: glUniformMatrix4fv(l, 1, GL_FALSE, v.data()); break;
+        if (l == -1 || !types.count(name)) continue;
+        const float* d = v.data();
+        auto need = [&](size_t n) { return v.size() == n; };
+        switch (types[name]) {
+            case GL_FLOAT: if (need(1)) glUniform1f(l, d[0]); break;
+            case GL_FLOAT_VEC2: if (need(2)) glUniform2fv(l, 1, d); break;
+            case GL_FLOAT_VEC3: if (need(3)) glUniform3fv(l, 1, d); break;
+            case GL_FLOAT_VEC4: if (need(4)) glUniform4fv(l, 1, d); break;
+            case GL_FLOAT_MAT2: if (need(4)) glUniformMatrix2fv(l, 1, GL_FALSE, d); break;
+            case GL_FLOAT_MAT3: if (need(9)) glUniformMatrix3fv(l, 1, GL_FALSE, d); break;
+            case GL_FLOAT_MAT4: if (need(16)) glUniformMatrix4fv(l, 1, GL_FALSE, d); break;
+            case GL_FLOAT_MAT2x3: if (need(6)) glUniformMatrix2x3fv(l, 1, GL_FALSE, d); break;
+            case GL_FLOAT_MAT3x2: if (need(6)) glUniformMatrix3x2fv(l, 1, GL_FALSE, d); break;
+            case GL_FLOAT_MAT2x4: if (need(8)) glUniformMatrix2x4fv(l, 1, GL_FALSE, d); break;
+            case GL_FLOAT_MAT4x2: if (need(8)) glUniformMatrix4x2fv(l, 1, GL_FALSE, d); break;
+            case GL_FLOAT_MAT3x4: if (need(12)) glUniformMatrix3x4fv(l, 1, GL_FALSE, d); break;
+            case GL_FLOAT_MAT4x3: if (need(12)) glUniformMatrix4x3fv(l, 1, GL_FALSE, d); break;
             default: break;
         }
     }

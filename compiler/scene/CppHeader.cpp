@@ -78,7 +78,7 @@ std::string cpp_header(std::string_view shader, std::string_view meta_json, std:
            "    std::string_view location;  // the uniform's name, the block member, or the constant\n"
            "    std::string_view type;      // the GLSL type: float, vec3, int, mat4, ...\n"
            "    int components;\n"
-           "    std::array<float, 16> defaults;  // the first `components` entries\n"
+           "    std::array<float, 16> defaults;  // the first `components` entries (a matrix row by row)\n"
            "    std::array<float, 16> lo, hi;    // slider bounds per component (±infinity: unbounded)\n"
            "    int block;                       // the block's binding (storage block), else -1\n"
            "    std::array<int, 16> offsets;     // bytes in the block, floats in the data texture; -1: none\n"

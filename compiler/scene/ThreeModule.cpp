@@ -58,6 +58,13 @@ std::string js_comment(const std::string& text) {
 
 std::string three_module(std::string_view shader, std::string_view meta_json, std::string_view source) {
     nlohmann::json meta = nlohmann::json::parse(meta_json);
+    for (const auto& p : meta["parameters"]) {
+        std::string type = p.value("type", std::string());
+        if (p.value("storage", std::string()) == "uniform" && type.size() > 4 && type.rfind("mat", 0) == 0 && type.find('x') != std::string::npos)
+            throw ThreeUnsupported{"the threejs target cannot take " + p.value("instance", std::string()) + "'s parameter " +
+                                   p.value("name", std::string()) + " (a " + type +
+                                   " uniform: three.js has no setter for non-square matrices); write it as vectors, or use --target webgl2"};
+    }
     std::string body(shader);
     const std::string version = "#version 300 es\n";
     if (body.rfind(version, 0) == 0) body.erase(0, version.size());

@@ -15,6 +15,11 @@ namespace iqc {
 
 // `shader`: the webgl2 (three.js variant) shader; `meta_json`: its --meta; `title`, `source`: for the header
 // comment (sanitized here). Throws nlohmann::json errors only on a malformed `meta_json` (an internal error).
+// What the threejs target cannot express (a non-square matrix uniform): the input's error, not iqc's.
+struct ThreeUnsupported {
+    std::string message;
+};
+// Throws ThreeUnsupported for a parameter three.js cannot upload.
 std::string three_module(std::string_view shader, std::string_view meta_json, std::string_view source);
 
 }  // namespace iqc

@@ -88,6 +88,38 @@ for (const name of examples) {
   await page.close();
 }
 
+// A static scene draws only when something changes (its --meta lists no iTime), and its frame-time readout is
+// honest: at least a quarter of a frame's wall time measured by reading pixels back (it said 0.2 ms for ~1 s).
+{
+  const out = path.join(tmp, "static.html");
+  execFileSync(iqc, [path.join(src, "examples", "menger.iq"), "--target", "html", "-o", out], { stdio: "pipe" });
+  const { page, errors } = await open("file://" + out);
+  await new Promise(r => setTimeout(r, 500));
+  const idle0 = await page.evaluate(() => window.iqcFrames);
+  await new Promise(r => setTimeout(r, 1000));
+  const idle1 = await page.evaluate(() => window.iqcFrames);
+  check(idle1 === idle0 && idle0 <= 3, `static scene: no redraw loop (${idle0} frames, then ${idle1 - idle0} in a second)`);
+  const wall = await page.evaluate(async () => {
+    const c = document.getElementById("canvas"), gl = c.getContext("webgl2");
+    const s = document.querySelectorAll("#params input[type=range]")[0];
+    const n = window.iqcFrames, t0 = performance.now();
+    s.value = s.value === s.max ? s.min : s.max;
+    s.dispatchEvent(new Event("input"));
+    while (window.iqcFrames === n) await new Promise(r => requestAnimationFrame(r));
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));  // waits for the draw
+    const wall = performance.now() - t0;
+    await new Promise(r => requestAnimationFrame(r));
+    await new Promise(r => requestAnimationFrame(r));
+    return wall;
+  });
+  const text = await page.evaluate(() => document.getElementById("fps").textContent);
+  const ms = parseFloat(text);
+  check(/ms\/frame \((GPU|frame to frame)\)/.test(text) && ms >= 0.25 * wall,
+        `static scene: the frame time readout "${text}" is at least a quarter of a frame's wall time (${wall.toFixed(1)} ms)`);
+  check(errors.length === 0, `static scene: no console errors ${errors.join(" | ")}`);
+  await page.close();
+}
+
 // Many instances: per-instance data in uniform blocks (100 tilted rings) and in the data texture (400: their
 // matrices alone pass one block's 16 KiB):
 // the page fills them from --meta, draws them, and their sliders (written into the block or texture) change
@@ -119,15 +151,15 @@ for (const [n, storage] of [[100, "iqc_block_"], [400, "texture:"]]) {
   const frames = await page.evaluate(() => window.iqcFrames);
   const moved = await page.evaluate(prefix => {
     let k = 0;
-    for (const s of document.querySelectorAll("#params input[type=range]"))
-      if (s.dataset.uniform.startsWith(prefix) && s.dataset.name === "k_d" && s.dataset.component === "0") {
-        s.value = s.min;  // the rings' red: a colour, so the frame costs what it did
+    for (const s of document.querySelectorAll("#params input[type=color]"))
+      if (s.dataset.colour.startsWith(prefix)) {
+        s.value = "#202020";  // the rings' colour (k_d ∈ [0,1]³: a colour picker), so the frame costs what it did
         s.dispatchEvent(new Event("input"));
         k++;
       }
     return k;
   }, storage);
-  check(moved === n, `${n} rings: a colour slider per ring stored in ${storage}… (${moved})`);
+  check(moved === n, `${n} rings: a colour picker per ring stored in ${storage}… (${moved})`);
   await waitFor(page, f => window.iqcFrames > f, frames);
   const after = await picture(page);
   // Thin rings are few pixels: compare the whole canvas's mean, not the sampled digest.

@@ -59,8 +59,12 @@ if (inline.length !== 1) throw new Error("expected one inline script, found " + 
 vm.runInNewContext(inline[0][2], sandbox);
 const step = t => { const f = rafQueue.shift(); if (f) f(t); };
 step(16);
-const sliders = [];
-const walk = e => { if (e.tag === "input" && e.type === "range") sliders.push(e); e.children.forEach(walk); };
+const sliders = [], colours = [], intensities = [];
+const walk = e => {
+  if (e.tag === "input" && e.type === "range") (e.dataset.intensity ? intensities : sliders).push(e);
+  if (e.tag === "input" && e.type === "color") colours.push(e);
+  e.children.forEach(walk);
+};
 walk(byId.params);
 // Move the first slider to its maximum and draw again: the next frame must send the new value.
 let moved = null;
@@ -76,6 +80,6 @@ const walkLabels = e => { if (e.tag === "label" || e.tag === "summary" || e.tag 
 walkLabels(byId.params);
 console.log(JSON.stringify({
   title: document.title, heading: byId.title.textContent, error: sandbox.window.iqcError || byId.error.textContent || null,
-  sliders: sliders.length, frames: calls.length, first: calls[0] || [], last: calls[calls.length - 1] || [], moved, labels,
+  sliders: sliders.length, colours: colours.length, intensities: intensities.length, frames: calls.length, first: calls[0] || [], last: calls[calls.length - 1] || [], moved, labels,
   fragment_shader_chars: (calls.sources || [""])[1] ? calls.sources[1].length : 0,
 }));
