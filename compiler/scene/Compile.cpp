@@ -24,21 +24,13 @@ namespace {
 
 std::string vec3_literal(const std::array<double, 3>& v) { return glsl::constant(Type::vector(3), {v[0], v[1], v[2]}); }
 
-// The scene's camera as the uniform targets take it (runtime_templates/scene.glsl): the eye, a basis of unit
-// columns right, up, forward (world up +y, as iqc_look_at), 1 / tan(fov / 2), and a perspective projection
-// (column-major, clip from view space looking down -z) from near = 1e-4 · max_dist to far = max_dist; only its
-// depth rows matter to the shader. `zero_to_one`: Vulkan's depth range [0, 1], else OpenGL's [-1, 1].
-struct CameraUniforms {
-    std::array<double, 3> position{};
-    std::array<double, 9> basis{};
-    double focal = 1;
-    std::array<double, 16> projection{};
-};
-
-CameraUniforms camera_uniforms(const CameraDesc& cam, double max_dist, bool zero_to_one) {
-    CameraUniforms c;
-    c.position = cam.position;
-    std::array<double, 3> f{}, up{0, 1, 0}, r{}, u{};
+// The scene's camera as the uniform targets take it (runtime_templates/scene.glsl), as the host sets it:
+// iqc_camera_position (the eye), iqc_camera_basis (unit columns right, up, forward; world up +y, as
+// iqc_look_at), iqc_camera_focal (1 / tan(fov / 2)) and iqc_projection (column-major, clip from view space
+// looking down -z; from near = 1e-4 · max_dist to far = max_dist; only its depth rows matter to the shader).
+// `zero_to_one`: Vulkan's depth range [0, 1], else OpenGL's [-1, 1].
+std::vector<ShaderInputs::Uniform> camera_uniforms(const CameraDesc& cam, double max_dist, bool zero_to_one) {
+    std::array<double, 3> f{}, up{0, 1, 0};
     double n = 0;
     for (int k = 0; k < 3; ++k) n += std::pow(cam.target[size_t(k)] - cam.position[size_t(k)], 2);
     n = std::sqrt(n);
@@ -47,26 +39,26 @@ CameraUniforms camera_uniforms(const CameraDesc& cam, double max_dist, bool zero
     auto cross = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
         return std::array<double, 3>{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
     };
-    r = cross(up, f);
+    std::array<double, 3> r = cross(up, f);
     double rn = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
     for (double& x : r) x /= rn;
-    u = cross(f, r);
-    for (int k = 0; k < 3; ++k) {
-        c.basis[size_t(k)] = r[size_t(k)];
-        c.basis[size_t(3 + k)] = u[size_t(k)];
-        c.basis[size_t(6 + k)] = f[size_t(k)];
-    }
-    c.focal = 1.0 / std::tan(cam.fov * M_PI / 360.0);
+    std::array<double, 3> u = cross(f, r);
+    double focal = 1.0 / std::tan(cam.fov * M_PI / 360.0);
     double near = 1e-4 * max_dist, far = max_dist;
-    c.projection[0] = c.focal;  // aspect 1: a host sets its own; the depth rows do not depend on it
-    c.projection[5] = c.focal;
-    c.projection[10] = zero_to_one ? far / (near - far) : (far + near) / (near - far);
-    c.projection[11] = -1;
-    c.projection[14] = zero_to_one ? far * near / (near - far) : 2 * far * near / (near - far);
-    return c;
+    std::vector<double> projection(16, 0.0);
+    projection[0] = focal;  // aspect 1: a host sets its own; the depth rows do not depend on it
+    projection[5] = focal;
+    projection[10] = zero_to_one ? far / (near - far) : (far + near) / (near - far);
+    projection[11] = -1;
+    projection[14] = zero_to_one ? far * near / (near - far) : 2 * far * near / (near - far);
+    return {{"iqc_camera_position", {cam.position.begin(), cam.position.end()}, false},
+            {"iqc_camera_basis", {r[0], r[1], r[2], u[0], u[1], u[2], f[0], f[1], f[2]}, false},
+            {"iqc_camera_focal", {focal}, false},
+            {"iqc_projection", projection, false}};
 }
 
-nlohmann::ordered_json camera_json(const CameraDesc& cam, const CameraUniforms& c) {
+// --meta's "camera": the scene's camera and each camera uniform's default (a number for a float).
+nlohmann::ordered_json camera_json(const CameraDesc& cam, const std::vector<ShaderInputs::Uniform>& uniforms) {
     nlohmann::ordered_json j;
     j["position"] = cam.position;
     j["target"] = cam.target;
@@ -74,8 +66,9 @@ nlohmann::ordered_json camera_json(const CameraDesc& cam, const CameraUniforms& 
     j["orbit"] = cam.orbit;
     j["uniforms"] = {{"position", "iqc_camera_position"}, {"basis", "iqc_camera_basis"}, {"focal", "iqc_camera_focal"},
                      {"projection", "iqc_projection"}};
-    j["defaults"] = {{"iqc_camera_position", c.position}, {"iqc_camera_basis", c.basis}, {"iqc_camera_focal", c.focal},
-                     {"iqc_projection", c.projection}};
+    nlohmann::ordered_json defaults;
+    for (const auto& u : uniforms) defaults[u.name] = u.value.size() == 1 ? nlohmann::ordered_json(u.value[0]) : nlohmann::ordered_json(u.value);
+    j["defaults"] = defaults;
     return j;
 }
 
@@ -103,7 +96,7 @@ private:
     March march() const { return opts_.march.value_or(s_.render.march); }
     Normals normals() const { return opts_.normals.value_or(s_.render.normals); }
     double hit() const { return opts_.hit.value_or(s_.render.hit); }
-    CameraUniforms camera() const {
+    std::vector<ShaderInputs::Uniform> camera() const {
         return camera_uniforms(s_.camera, s_.render.max_dist, opts_.target == Target::SPIRV || opts_.target == Target::HLSL);
     }
     // `bound`: ten hit tolerances (at the farthest distance for a relative tolerance), and at least 0.1: a
@@ -479,13 +472,7 @@ CompileResult SceneCompiler::run_checked() {
         }
         res_.code = std::move(shader);
         res_.inputs = std::move(code.inputs);
-        if (opts_.target != Target::Shadertoy) {
-            CameraUniforms c = camera();
-            res_.inputs.camera = {{"iqc_camera_position", {c.position.begin(), c.position.end()}, false},
-                                  {"iqc_camera_basis", {c.basis.begin(), c.basis.end()}, false},
-                                  {"iqc_camera_focal", {c.focal}, false},
-                                  {"iqc_projection", {c.projection.begin(), c.projection.end()}, false}};
-        }
+        if (opts_.target != Target::Shadertoy) res_.inputs.camera = camera();
         set_model(scene);
         warn_camera();
         res_.exit_code = 0;

@@ -2,10 +2,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include <map>
 
 #include "glsl/Names.h"
 #include "resources/Embedded.h"
+#include "scene/Template.h"
 
 namespace iqc {
 
@@ -22,24 +22,6 @@ std::string js_literal(const nlohmann::json& j) {
         else if (c == '&') out += "\\u0026";
         else out += c;
     }
-    return out;
-}
-
-// One pass over the template: each {{KEY}} is replaced by its value, and values are never searched again.
-std::string expand(std::string_view tmpl, const std::map<std::string, std::string>& values) {
-    std::string out;
-    size_t at = 0;
-    while (true) {
-        size_t open = tmpl.find("{{", at);
-        size_t close = open == std::string_view::npos ? open : tmpl.find("}}", open + 2);
-        if (close == std::string_view::npos) break;
-        auto it = values.find(std::string(tmpl.substr(open + 2, close - open - 2)));
-        out += tmpl.substr(at, open - at);
-        if (it != values.end()) out += it->second;
-        else out += tmpl.substr(open, close + 2 - open);
-        at = close + 2;
-    }
-    out += tmpl.substr(at);
     return out;
 }
 
@@ -68,12 +50,13 @@ std::string three_module(std::string_view shader, std::string_view meta_json, st
     std::string body(shader);
     const std::string version = "#version 300 es\n";
     if (body.rfind(version, 0) == 0) body.erase(0, version.size());
-    return expand(*embedded_file("runtime_templates/three.mjs"),
-                  {{"TITLE", js_comment(meta.value("title", std::string("iqc scene")))},
+    TemplateArgs args;
+    args.values = {{"TITLE", js_comment(meta.value("title", std::string("iqc scene")))},
                    {"VERSION", IQC_VERSION},
                    {"SOURCE", js_comment(std::string(source))},
                    {"META", js_literal(meta)},
-                   {"SHADER", js_literal(nlohmann::json(body))}});
+                   {"SHADER", js_literal(nlohmann::json(body))}};
+    return expand_template(std::string(*embedded_file("runtime_templates/three.mjs")), args);
 }
 
 }  // namespace iqc
