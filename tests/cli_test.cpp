@@ -273,7 +273,7 @@ TEST_CASE("outputs whose bytes did not change are left alone, and --quiet prints
     CHECK_THAT(w.err, !Catch::Contains("wrote"));
 }
 
-TEST_CASE("iqc render makes the output's folder, and says so when it cannot", "[cli][render]") {
+TEST_CASE("iqc render makes the output's folder, and says so when it cannot, and takes -q", "[cli][render]") {
     // `iqc render --frames 3 -o frames/a.png` failed when frames/ did not exist.
     auto dir = temp_dir() / "render_new_dir" / "frames";
     std::filesystem::remove_all(dir.parent_path());
@@ -282,6 +282,10 @@ TEST_CASE("iqc render makes the output's folder, and says so when it cannot", "[
     INFO(r.err);
     CHECK(r.exit_code == 0);
     for (int k = 0; k < 3; ++k) CHECK(std::filesystem::exists(dir / ("a_000" + std::to_string(k) + ".png")));
+    CHECK_THAT(r.err, Catch::Contains("iqc: rendered"));
+    RunResult q = run_iqc("render " + scene + " --size 32x18 -q -o " + (dir / "q.png").string());
+    CHECK(q.exit_code == 0);
+    CHECK(q.err.empty());  // -q, as the compile command takes it
     // A folder that cannot be made: a path through a regular file.
     auto file = write_temp("render_not_a_dir", "x");
     RunResult bad = run_iqc("render " + scene + " --size 32x18 -o " + (file / "sub" / "a.png").string());

@@ -75,7 +75,7 @@ double percentile(std::vector<float> v, double q) {
 }
 
 int render_command(const std::string& code, const iqc::ShaderInputs& inputs, bool webgl2, const std::string& output, const std::string& size, float time, int frames, float fps, bool stats,
-                   const std::function<iqc::CompileResult()>& instrumented) {
+                   bool quiet, const std::function<iqc::CompileResult()>& instrumented) {
     iqc::render::RenderOptions ro;
     char rest = 0;
     if (std::sscanf(size.c_str(), "%dx%d%c", &ro.width, &ro.height, &rest) != 2 || ro.width < 1 || ro.height < 1) {
@@ -145,6 +145,7 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
     std::sort(later.begin(), later.end());
     std::sort(frame_ms.begin(), frame_ms.end());
     std::string later_text = later.empty() ? "" : fmt::format(", later frames {:.1f} ms median", later[later.size() / 2]);
+    if (!quiet)
     std::fprintf(stderr, "iqc: rendered %s (%dx%d%s, %s, shader compile %.1f ms, frame %.1f ms%s)\n",
                  frame_path(output, 0, frames).c_str(), ro.width, ro.height,
                  frames > 1 ? fmt::format(", {} frames", frames).c_str() : "", last.renderer.c_str(), last.compile_ms,
@@ -428,6 +429,7 @@ static int run(int argc, char** argv) {
     render->add_option("--fps", r_fps, "frames per second of the animation (default 30)")->check(CLI::PositiveNumber);
     render->add_option("--target", r_target, "which shader to run: shadertoy (default) or webgl2 (its uniforms at their defaults)")
         ->check(CLI::IsMember({"shadertoy", "webgl2"}));
+    render->add_flag("-q,--quiet", quiet, "print only diagnostics and --stats (no 'rendered' line)");
     render->add_flag("--stats", r_stats, "print nan_pixels (colour NaN or ∞), nan_distance_pixels (pixels whose rays met a NaN or ∞ scene distance), steps_mean, steps_p99, evals_mean, evals_p99, shape_evals_mean (shapes evaluated per pixel: a `bound` sphere or a skipped node of a bounding-volume hierarchy stands in for its shapes), shape_evals_per_eval, frame_ms, renderer");
     CLI::App* bench = app.add_subcommand(
         "bench", "measure what accuracy costs in time on this scene: every march method × hit tolerance × step cap × "
@@ -638,7 +640,7 @@ static int run(int argc, char** argv) {
         if (diags.error_count() > 1) std::fprintf(stderr, "%zu errors\n", diags.error_count());
         return 1;
     }
-    if (render->parsed()) return render_command(r.code, r.inputs, opts.target != iqc::Target::Shadertoy, r_output, r_size, r_time, r_frames, r_fps, r_stats,
+    if (render->parsed()) return render_command(r.code, r.inputs, opts.target != iqc::Target::Shadertoy, r_output, r_size, r_time, r_frames, r_fps, r_stats, quiet,
                                                 [&]() {
                                                     iqc::SourceManager sm2;
                                                     iqc::Diagnostics d2(sm2);
