@@ -269,3 +269,41 @@ TEST_CASE("matrix parameters as uniforms draw what Shadertoy's constants draw, a
     CHECK(t.exit_code == 1);
     CHECK_THAT(t.err, Catch::Contains("the threejs target cannot take sheared_1's parameter B (a mat3x2 uniform"));
 }
+
+TEST_CASE("threejs: plain parameters past WebGL2's uniform vectors go into the data texture and draw Shadertoy's picture",
+          "[engine-targets][render]") {
+    // The threejs target has no uniform blocks: it refused such a scene (a new-user trial's 150 slider spheres).
+    std::string many = "[camera]\nposition = [0, 4, -14]\ntarget = [0, 0, 0]\n";
+    for (int i = 0; i < 120; ++i)
+        many += fmt::format("[[shapes]]\ntype = \"sphere\"\nshape_params = {{ r = {} }}\n"
+                            "transform = \"\"\"T(X)\nwhere\nX ∈ ℝ³ default = ({}, {}, {})\"\"\"\n",
+                            0.2 + 0.003 * i, (i % 12) - 5.5 + 0.01 * i, (i / 12) * 0.8 - 4, 0.05 * (i % 7));
+    auto in = write_temp("three_spheres_120.iq", many);
+    CompileOptions o;
+    o.target = Target::ThreeJS;
+    Compiled three = compile_path(in, o);
+    INFO(three.diagnostics);
+    REQUIRE(three.result.exit_code == 0);
+    auto meta = nlohmann::json::parse(three.result.meta);
+    int in_texture = 0;
+    for (const auto& p : meta["parameters"]) in_texture += p["storage"] == "texture";
+    CHECK(in_texture >= 120);
+    CHECK(meta["blocks"].empty());
+    const int W = 96, H = 54;
+    Compiled toy = compile_path(in, {});
+    REQUIRE(toy.result.exit_code == 0);
+    render::RenderResult a = render_compiled(toy.result, W, H), b = render_compiled(three.result, W, H);
+    REQUIRE(a.ok);
+    INFO(b.error);
+    REQUIRE(b.ok);
+    int differ = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            float d = 0;
+            for (int k = 0; k < 3; ++k) d = std::max(d, std::fabs(a.image.pixel(x, y)[k] - b.image.pixel(x, y)[k]));
+            if (d > 3.0f / 255) ++differ;
+        }
+    CHECK(differ <= W * H / 200);
+    RunResult r = run_iqc(in.string() + " --target threejs -o " + (temp_dir() / "three_spheres_120.mjs").string());
+    CHECK(r.exit_code == 0);
+}

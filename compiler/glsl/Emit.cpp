@@ -275,6 +275,8 @@ struct FunctionEmitter {
 
     std::string global(const Instr& in) {
         const GlobalStorage* s = storage(in.aux);
+        // A plain parameter in the data texture (targets without uniform blocks): its texels.
+        if (s && s->kind == GlobalStorage::Kind::Texture && !in.type.is_array()) return fetch(s, in.type, "0", true, in.span);
         return s ? s->name : identifier(m.globals[size_t(in.aux)].name);
     }
 
@@ -284,18 +286,22 @@ struct FunctionEmitter {
         const GlobalStorage* s = a.op == Op::Global ? storage(a.aux) : nullptr;
         std::string k = arg(in, 1, false);
         if (!s || s->kind != GlobalStorage::Kind::Texture) return postfix_base(in.args[0]) + "[" + k + "]";
+        return fetch(s, in.type, k, f.body[in.args[1]].op == Op::Const, in.span);
+    }
+
+    // Element k (an int expression; `k_const` when a literal) of type t stored in the data texture at s.
+    std::string fetch(const GlobalStorage* s, const Type& t, const std::string& k, bool k_const, const Span& span) {
         auto texel = [&](int col) {
-            std::string i = s->texels == 1 ? k : fmt::format("{} * {}", s->texels, f.body[in.args[1]].op == Op::Const ? k : "(" + k + ")");
-            if (s->texel + col != 0) i = fmt::format("{} + {}", s->texel + col, i);
+            std::string i = s->texels == 1 ? k : fmt::format("{} * {}", s->texels, k_const ? k : "(" + k + ")");
+            if (s->texel + col != 0) i = k == "0" ? std::to_string(s->texel + col) : fmt::format("{} + {}", s->texel + col, i);
             return fmt::format("iqc_fetch({})", i);
         };
-        const Type& t = in.type;
         if (t.kind == Type::Integer) return fmt::format("int({}.x)", texel(0));  // stored as an exact float (< 2^24)
         if (t.is_scalar()) return texel(0) + ".x";
         if (t.is_vector()) return texel(0) + "." + std::string(kSwizzle, size_t(t.rows));
         std::vector<std::string> cols;
         for (int c = 0; c < t.cols; ++c) cols.push_back(texel(c) + "." + std::string(kSwizzle, size_t(t.rows)));
-        return fmt::format("{}({})", type_of(t, in.span), fmt::join(cols, ", "));
+        return fmt::format("{}({})", type_of(t, span), fmt::join(cols, ", "));
     }
 
     // An array's declarator after the name (`vec3 P[3]`); empty for other types.

@@ -578,7 +578,9 @@ RenderResult render_current(Renderer::State& st, const std::string& fs_source, c
             types[std::string(name, size_t(len))] = type;
         }
     }
-    for (const auto& [name, v] : o.uniforms) {
+    for (const auto& uniform : o.uniforms) {
+        const std::string& name = uniform.first;  // (clang 14 cannot capture a structured binding in a lambda)
+        const std::vector<float>& v = uniform.second;
         GLint l = glGetUniformLocation(program, name.c_str());
         if (l == -1 || !types.count(name)) continue;
         const float* d = v.data();

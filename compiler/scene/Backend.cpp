@@ -90,11 +90,6 @@ const char* entry_comment(const std::string& name) {
     return it == c.end() ? nullptr : it->second;
 }
 
-// A layout that needs uniform blocks on a target without them (BackendOptions::blocks false).
-struct BlocksNeeded {
-    std::string what;
-};
-
 struct Layout {
     const ir::Module& m;
     const BackendOptions& o;
@@ -131,13 +126,11 @@ struct Layout {
                 data.push_back(i);
             }
         }
-        if (!o.blocks) {
-            if (vectors > kMaxUniformVectors)
-                throw BlocksNeeded{fmt::format("{} vectors of plain parameters (WebGL2 guarantees {}); the webgl2 target "
-                                               "puts the rest into uniform blocks",
-                                               vectors, kMaxUniformVectors)};
-            for (size_t i : plain) storage[i].kind = Kind::Uniform;
-            code.uniform_vectors = vectors;
+        if (!o.blocks) {  // three.js: past WebGL2's uniform vectors, plain parameters go into the texture too
+            if (vectors > kMaxUniformVectors) data.insert(data.end(), plain.begin(), plain.end());
+            else
+                for (size_t i : plain) storage[i].kind = Kind::Uniform;
+            code.uniform_vectors = vectors > kMaxUniformVectors ? 13 : vectors;
             if (!data.empty()) pack_texture(data);
             return;
         }
@@ -212,16 +205,20 @@ struct Layout {
         }
     }
 
+    // Arrays, and on targets without blocks plain parameters too (one element), into the data texture.
+    static Type element_of(const Type& t) { return t.is_array() ? t.element() : t; }
+    static int count_of(const Type& t) { return t.is_array() ? t.count : 1; }
+
     void pack_texture(const std::vector<size_t>& arrays) {
         int texels = 0;
         for (size_t i : arrays) {
             const Global& g = m.globals[i];
-            Type e = g.type.element();
+            Type e = element_of(g.type);
             int per = e.is_matrix() && e.rows > 1 ? e.cols : 1;
             storage[i].kind = Kind::Texture;
             storage[i].texel = texels;
             storage[i].texels = per;
-            texels += per * g.type.count;
+            texels += per * count_of(g.type);
         }
         auto& t = code.inputs.texture;
         t.name = "iqc_data";
@@ -230,10 +227,10 @@ struct Layout {
         t.rgba.assign(size_t(t.width) * size_t(t.height) * 4, 0.0f);
         for (size_t i : arrays) {
             const Global& g = m.globals[i];
-            Type e = g.type.element();
+            Type e = element_of(g.type);
             size_t per = size_t(std::max(1, e.components()));
             bool mat = e.is_matrix() && e.rows > 1;
-            for (int k = 0; k < g.type.count; ++k)
+            for (int k = 0; k < count_of(g.type); ++k)
                 for (size_t c = 0; c < per; ++c) {
                     // Row-major component c of element k: its column's texel, its row's channel.
                     int row = mat ? int(c) / e.cols : 0, col = mat ? int(c) % e.cols : 0;
@@ -384,12 +381,7 @@ SceneCode emit_scene(const SceneIR& scene, const BackendOptions& o, Diagnostics&
     const ir::Module& m = scene.module;
     SceneCode code;
     Layout lay{m, o, {}, {}, {}, {}, code};
-    try {
-        lay.decide();
-    } catch (const BlocksNeeded& e) {
-        d.error_nospan("this target has no uniform blocks, and the scene has " + e.what);
-        return code;
-    }
+    lay.decide();
     code.declarations = Declarations{m, o, lay, code}.run();
     // Host inputs: plain uniforms (GLSL matrices are column-major).
     for (size_t i = 0; i < m.globals.size(); ++i) {
