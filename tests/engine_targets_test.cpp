@@ -41,6 +41,21 @@ int shell(const std::string& cmd, std::string* out = nullptr) {
     return WEXITSTATUS(rc);
 }
 
+// Pixels whose colours differ by more than 3/255 in some channel; `flip_a`: a's rows bottom to top (a Vulkan
+// picture drawn by GL).
+int differing_pixels(const render::Image& a, const render::Image& b, bool flip_a = false) {
+    int n = 0;
+    for (int y = 0; y < b.height; ++y)
+        for (int x = 0; x < b.width; ++x) {
+            const float* p = a.pixel(x, flip_a ? b.height - 1 - y : y);
+            const float* q = b.pixel(x, y);
+            float d = 0;
+            for (int k = 0; k < 3; ++k) d = std::max(d, std::fabs(p[k] - q[k]));
+            n += d > 3.0f / 255;
+        }
+    return n;
+}
+
 void put_floats(std::vector<uint8_t>& bytes, int offset, const std::vector<double>& v) {
     for (size_t i = 0; i < v.size(); ++i) {
         float f = float(v[i]);
@@ -196,14 +211,10 @@ TEST_CASE("the spirv target draws the webgl2 target's picture, its blocks filled
         INFO(b.error);
         REQUIRE(b.ok);
         // Vulkan's framebuffer origin is the top left: drawn by GL, the module's rows come out flipped.
-        int differ = 0, lit = 0;
+        int differ = differing_pixels(a.image, b.image, true), lit = 0;
         for (int y = 0; y < H; ++y)
             for (int x = 0; x < W; ++x) {
-                const float* p = a.image.pixel(x, H - 1 - y);
                 const float* q = b.image.pixel(x, y);
-                float d = 0;
-                for (int k = 0; k < 3; ++k) d = std::max(d, std::fabs(p[k] - q[k]));
-                if (d > 3.0f / 255) ++differ;
                 if (q[0] + q[1] + q[2] > 0.05f) ++lit;
             }
         if (differ > W * H / 200) {
@@ -218,14 +229,7 @@ TEST_CASE("the spirv target draws the webgl2 target's picture, its blocks filled
         REQUIRE(toy.result.exit_code == 0);
         render::RenderResult c = render_compiled(toy.result, W, H);
         REQUIRE(c.ok);
-        int differ_toy = 0;
-        for (int y = 0; y < H; ++y)
-            for (int x = 0; x < W; ++x) {
-                float d = 0;
-                for (int k = 0; k < 3; ++k) d = std::max(d, std::fabs(c.image.pixel(x, y)[k] - b.image.pixel(x, y)[k]));
-                if (d > 3.0f / 255) ++differ_toy;
-            }
-        CHECK(differ_toy <= W * H / 200);
+        CHECK(differing_pixels(c.image, b.image) <= W * H / 200);
     }
 }
 
@@ -255,15 +259,11 @@ TEST_CASE("matrix parameters as uniforms draw what Shadertoy's constants draw, a
     REQUIRE(a.ok);
     INFO(b.error);
     REQUIRE(b.ok);
-    int differ = 0, lit = 0;
+    int lit = 0;
     for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            float d = 0;
-            for (int k = 0; k < 3; ++k) d = std::max(d, std::fabs(a.image.pixel(x, y)[k] - b.image.pixel(x, y)[k]));
-            if (d > 3.0f / 255) ++differ;
+        for (int x = 0; x < W; ++x)
             if (std::fabs(a.image.pixel(x, y)[0] - a.image.pixel(0, 0)[0]) > 0.05f) ++lit;
-        }
-    CHECK(differ <= W * H / 200);
+    CHECK(differing_pixels(a.image, b.image) <= W * H / 200);
     CHECK(lit > W * H / 20);
     RunResult t = run_iqc(in.string() + " --target threejs -o " + (temp_dir() / "matrices.mjs").string());
     CHECK(t.exit_code == 1);
@@ -296,14 +296,7 @@ TEST_CASE("threejs: plain parameters past WebGL2's uniform vectors go into the d
     REQUIRE(a.ok);
     INFO(b.error);
     REQUIRE(b.ok);
-    int differ = 0;
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            float d = 0;
-            for (int k = 0; k < 3; ++k) d = std::max(d, std::fabs(a.image.pixel(x, y)[k] - b.image.pixel(x, y)[k]));
-            if (d > 3.0f / 255) ++differ;
-        }
-    CHECK(differ <= W * H / 200);
+    CHECK(differing_pixels(a.image, b.image) <= W * H / 200);
     RunResult r = run_iqc(in.string() + " --target threejs -o " + (temp_dir() / "three_spheres_120.mjs").string());
     CHECK(r.exit_code == 0);
 }
