@@ -59,7 +59,13 @@ const float IQC_MAX_DIST = {{MAX_DIST}};
 {{#if FAR}}
 const float IQC_SPACING0 = {{SPACING0}};  // twice the float spacing at the camera's largest coordinate
 {{/if}}
+{{#if SKY}}
+const vec3 IQC_BACKGROUND = {{BACKGROUND}};  // the sky gradient's horizon
+const vec3 IQC_ZENITH = {{ZENITH}};
+const vec3 IQC_GROUND = {{GROUND}};  // below the horizon
+{{#else}}
 const vec3 IQC_BACKGROUND = {{BACKGROUND}};
+{{/if}}
 {{#if SHADERTOY}}
 const vec3 IQC_CAMERA_POSITION = {{CAMERA_POSITION}};
 const vec3 IQC_CAMERA_TARGET = {{CAMERA_TARGET}};
@@ -83,6 +89,9 @@ const int IQC_BOUNCES = {{BOUNCES}};
 {{/if}}
 {{#if SHADE_LIGHT}}
 const int IQC_LIGHTS = {{LIGHTS}};
+{{#if SUNS}}
+const int IQC_POINT_LIGHTS = {{POINT_LIGHTS}};  // lights from here on are suns (directional)
+{{/if}}
 {{/if}}
 {{#if AA}}
 const int IQC_AA = {{AA}};  // samples per pixel side
@@ -560,12 +569,28 @@ float iqc_ao(vec3 p, vec3 N) {
 }
 {{/if}}
 
-// The colour of instance `id` at p: its material once, plus each light's term times that light's shadow.
+{{#if SKY}}
+// What a ray that hits nothing sees: the horizon's colour blended into the zenith's by √(rd_y), into the
+// ground's below the horizon.
+vec3 iqc_background(vec3 rd) {
+    return rd.y >= 0.0 ? mix(IQC_BACKGROUND, IQC_ZENITH, sqrt(rd.y)) : mix(IQC_BACKGROUND, IQC_GROUND, sqrt(-rd.y));
+}
+
+{{/if}}
+// The colour of instance `id` at p: its material's light-independent part (ambient, emission, indirect light){{#if AO}}
+// darkened by ambient occlusion{{/if}}, plus each light's part{{#if SHADOWS}} times that light's shadow{{/if}}.
 vec3 iqc_colour(int id, vec3 p, vec3 N, vec3 eye) {
     vec3 c = iqc_shade(id, p, N, eye);
+{{#if AO}}
+    c *= iqc_ao(p, N);
+{{/if}}
 {{#if SHADE_LIGHT}}
     for (int l = 0; l < IQC_LIGHTS; l++) {
         vec3 P_L = iqc_light_position(l);
+{{#if SUNS}}
+        // A sun: a point along its direction, as far as the march reaches (its shadow ray stops there).
+        if (l >= IQC_POINT_LIGHTS) P_L = p + IQC_MAX_DIST * normalize(P_L);
+{{/if}}
         vec3 c_l = iqc_shade_light(id, p, N, eye, P_L, iqc_light_color(l));
 {{#if SHADOWS}}
         if (dot(c_l, c_l) > 0.0) c_l *= iqc_shadow(p, N, P_L);  // no shadow ray where the light adds nothing
@@ -587,6 +612,35 @@ vec3 iqc_bounce_origin(vec3 p, vec3 N, float side) {
     return q + N * (side * 4.0 * max(iqc_eps(0.0), 1.0e-6 * (1.0 + length(q))));
 }
 
+{{#if FRESNEL_GLANCE}}
+// What a ray reflected off a glass surface sees: its first hit, shaded without further bounces, or the
+// background.
+vec3 iqc_glance(vec3 p, vec3 N, vec3 rd) {
+    vec3 ro = iqc_bounce_origin(p, N, 1.0);
+    int id, steps;
+    float t = iqc_march(ro, rd, id, steps);
+    if (id < 0) return {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}};
+    vec3 q = ro + t * rd;
+    vec3 Nq = iqc_normal(q, t, id);
+    if (dot(Nq, rd) > 0.0) Nq = -Nq;
+    vec3 c = iqc_colour(id, q, Nq, ro);
+{{#if FOG}}
+    c = mix(c, IQC_FOG_COLOR, 1.0 - exp(-IQC_FOG * t));
+{{/if}}
+    return c;
+}
+
+{{/if}}
+{{#if FRESNEL}}
+// Fresnel reflectance by Schlick's approximation: F0 at normal incidence rising to 1 at grazing angles
+// (Schlick 1994); cos_i = cos of the angle between the ray and the normal.
+vec3 iqc_fresnel(vec3 F0, float cos_i) {
+    float m = 1.0 - clamp(cos_i, 0.0, 1.0);
+    float m2 = m * m;
+    return F0 + (1.0 - F0) * (m2 * m2 * m);
+}
+
+{{/if}}
 {{/if}}
 {{#if DEPTH}}
 float iqc_hit_t = 1.0e30;  // the nearest primary hit of this pixel's rays (distance along the ray, point)
@@ -611,10 +665,10 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{/if}}
         if (id < 0) {
 {{#if BOUNCES}}
-            col += throughput * IQC_BACKGROUND;
+            col += throughput * {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}};
             break;
 {{#else}}
-            return IQC_BACKGROUND;
+            return {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}};
 {{/if}}
         }
         vec3 p = ro + t * rd;
@@ -633,9 +687,6 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
         return vec3(1.0 - t / IQC_MAX_DIST);
 {{/if}}
         vec3 c = iqc_colour(id, p, N, ro);
-{{#if AO}}
-        c *= iqc_ao(p, N);
-{{/if}}
 {{#if FOG}}
         c = mix(c, IQC_FOG_COLOR, 1.0 - exp(-IQC_FOG * t));
 {{/if}}
@@ -645,7 +696,20 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
         if (max(kt.x, max(kt.y, kt.z)) > 0.0) {
             // Into the shape, through it (marching its inside), and out again.
             col += throughput * (1.0 - kt.rgb) * c;
+{{#if FRESNEL_GLANCE}}
+            // Fresnel: of the light the glass passes on, the share R reflected at this angle (F0 from η, or
+            // the material's k_r where that is more) is what the reflected ray sees; the rest refracts.
+            float r0 = (kt.w - 1.0) / (kt.w + 1.0);
+{{#if REFLECTIVITY}}
+            vec3 R = iqc_fresnel(max(vec3(r0 * r0), iqc_reflectivity(id)), -dot(rd, N));
+{{#else}}
+            vec3 R = iqc_fresnel(vec3(r0 * r0), -dot(rd, N));
+{{/if}}
+            col += throughput * kt.rgb * R * iqc_glance(p, N, reflect(rd, N));
+            throughput *= kt.rgb * (1.0 - R);
+{{#else}}
             throughput *= kt.rgb;
+{{/if}}
             vec3 inside = refract(rd, N, 1.0 / kt.w);
             if (dot(inside, inside) == 0.0) inside = reflect(rd, N);
             int id2, steps2;
@@ -665,6 +729,9 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{/if}}
 {{#if REFLECTIONS}}
         vec3 kr = iqc_reflectivity(id);
+{{#if FRESNEL}}
+        if (max(kr.x, max(kr.y, kr.z)) > 0.0) kr = iqc_fresnel(kr, -dot(rd, N));  // more reflection at grazing angles
+{{/if}}
         col += throughput * (1.0 - kr) * c;
         throughput *= kr;
         if (max(throughput.x, max(throughput.y, throughput.z)) < 1.0e-3) break;
@@ -680,6 +747,29 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
         return c;
 {{/if}}
 }
+{{#if OUTPUT}}
+
+// The output transform (docs/look.md): linear light{{#if EXPOSURE}} times the exposure{{/if}}{{#if TONEMAP_ACES}}, tone mapped by Narkowicz's
+// fit of the ACES curve (2015){{/if}}{{#if TONEMAP_REINHARD}}, tone mapped by Reinhard's c/(1 + c) (2002){{/if}}{{#if SRGB}}, encoded with the sRGB transfer function (IEC 61966-2-1){{/if}}.
+vec3 iqc_output(vec3 c) {
+{{#if EXPOSURE}}
+    c *= {{EXPOSURE}};
+{{/if}}
+{{#if TONEMAP_ACES}}
+    c = max(c, 0.0);
+    c = (c * (2.51 * c + 0.03)) / (c * (2.43 * c + 0.59) + 0.14);
+{{/if}}
+{{#if TONEMAP_REINHARD}}
+    c = max(c, 0.0);
+    c = c / (1.0 + c);
+{{/if}}
+{{#if SRGB}}
+    c = clamp(c, 0.0, 1.0);
+    c = mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+{{/if}}
+    return c;
+}
+{{/if}}
 {{#if LOOK_AT}}
 
 // A camera basis looking from eye at target: columns right, up, forward (world up +y; +z when looking straight
@@ -756,7 +846,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
 {{#if INSTRUMENT}}
 {{#if BENCH}}
     if (iqc_mode == 0) {
-        fragColor = vec4(clamp(col, 0.0, 1.0), 1.0);
+        fragColor = vec4(clamp({{#if OUTPUT}}iqc_output(col){{#else}}col{{/if}}, 0.0, 1.0), 1.0);
         return;
     }
 {{/if}}
@@ -766,7 +856,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     float flags = (bad ? 1.0 : 0.0) + (iqc_bad_distances > 0 ? 2.0 : 0.0);
     fragColor = vec4(float(iqc_primary_steps), float(iqc_evals), flags, float(iqc_shape_evals));
 {{#else}}
-    fragColor = vec4(clamp(col, 0.0, 1.0), 1.0);
+    fragColor = vec4(clamp({{#if OUTPUT}}iqc_output(col){{#else}}col{{/if}}, 0.0, 1.0), 1.0);
 {{/if}}
 }
 {{#if !SHADERTOY}}

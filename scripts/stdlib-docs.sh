@@ -62,6 +62,7 @@ fov = 45
 max_steps = 160
 max_dist = 40
 background = [0.92, 0.93, 0.95]
+output = "linear"      # the thesis's look: the stdlib's default colours were chosen for it
 
 [[lights]]
 position = [-4, 6, -5]

@@ -91,6 +91,29 @@ TEST_CASE("every TOML scene in README.md and docs/ compiles as written", "[docs]
     CHECK(compiled >= 2);
 }
 
+TEST_CASE("every module snippet in README.md and docs/ compiles as written", "[docs]") {
+    // A ```iheartla block is a whole module: compiled alone (a shape at the origin; a material on a sphere).
+    int compiled = 0;
+    for (const auto& page : doc_pages()) {
+        std::string text = test::read_text(page);
+        for (size_t at = text.find("```iheartla\n"); at != std::string::npos; at = text.find("```iheartla\n", at + 1)) {
+            size_t begin = at + 12, end = text.find("\n```", begin);
+            REQUIRE(end != std::string::npos);
+            std::string module = text.substr(begin, end - begin + 1);
+            std::string stem = fmt::format("{}_module_{}", page.stem().string(), compiled);
+            fs::path path = test::write_temp(stem + ".iql", module);
+            if (module.rfind("material", 0) == 0)  // a material is shown on a sphere, as the stdlib reference does
+                path = test::write_temp(stem + ".iq", "include = [\"" + stem + ".iql\"]\n[[shapes]]\ntype = \"sphere\"\n"
+                                                      "material = \"" + stem + "\"\n");
+            test::Compiled c = test::compile_path(path);
+            INFO(page.filename().string() << " block at byte " << at << "\n" << c.diagnostics << c.result.internal);
+            CHECK(c.result.exit_code == 0);
+            ++compiled;
+        }
+    }
+    CHECK(compiled >= 2);
+}
+
 TEST_CASE("every shell block marked tested in README.md and docs/ runs as written", "[docs]") {
     // A ```sh block right after a `<!-- tested` comment is run by bash -e in a fresh folder holding examples/
     // (a link to the repository's), with the built iqc first on PATH: docs/engines.md's commands for each target

@@ -103,6 +103,34 @@ TEST_CASE("every example becomes a working page: sliders, uniforms, a moved slid
     }
 }
 
+TEST_CASE("a colour picker gives the shader linear light where the output is sRGB", "[html]") {
+    // Mid grey (#808080) picked in the page: 128/255 as it is for a document's linear output, decoded from
+    // sRGB (0.2158) for a scene's sRGB output.
+    auto picked = [](const std::string& name, const std::string& text) {
+        auto in = write_temp(name, text);
+        auto page = temp_dir() / (name + ".html");
+        RunResult r = run_iqc(in.string() + " --target html -o " + page.string());
+        REQUIRE(r.exit_code == 0);
+        auto h = run_harness(page);
+        INFO(h.dump());
+        REQUIRE(h["picked"].is_object());
+        std::string key = h["picked"]["key"];
+        for (const auto& c : h["picked"]["frame"])
+            if (c[0] == key) return c[1].get<std::vector<double>>();
+        FAIL("the picked colour's uniform was not sent");
+        return std::vector<double>{};
+    };
+    const std::string scene = "[[shapes]]\ntype = \"sphere\"\nmaterial = \"phong\"\n";
+    std::vector<double> srgb = picked("picker_srgb.iq", scene);
+    std::vector<double> linear = picked("picker_linear.iq", scene + "[render]\noutput = \"linear\"\n");
+    REQUIRE(srgb.size() == 3);
+    REQUIRE(linear.size() == 3);
+    for (int i = 0; i < 3; ++i) {
+        CHECK(srgb[size_t(i)] == Approx(0.2158).margin(1e-3));
+        CHECK(linear[size_t(i)] == Approx(128.0 / 255).margin(1e-3));
+    }
+}
+
 TEST_CASE("a hostile title is shown as text, never run", "[html]") {
     const std::string hostile = "</script><script>alert(1)</script>";
     auto in = write_temp("hostile.iq", "title = \"" + hostile +

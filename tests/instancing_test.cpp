@@ -93,7 +93,9 @@ TEST_CASE("1000 rings are one loop and one case of each dispatch on every target
         // called from 16 places whatever the count.
         CHECK(count(code, "for (int k0 = 0; k0 <= 999; k0 += 16) {  // ring_lambert: 1000 instances (unrolled by 16)") == 1);
         CHECK(count(code, "ring(q, ") == 16);
-        CHECK(count(code, "if (id >= 1 && id < 1001) c = lambert(") == 1);  // one branch for all of them
+        // One branch for all of them, in the light-independent part and the light's part of the material.
+        CHECK(count(code, "if (id >= 1 && id < 1001) c = lambert_ambient(") == 1);
+        CHECK(count(code, "if (id >= 1 && id < 1001) c = lambert_light(") == 1);
         CHECK(count(code, "if (id ==") < 5);
     }
     // Shadertoy: the grid's offsets are arithmetic on k (a lattice), and a value every ring shares is one

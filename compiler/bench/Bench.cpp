@@ -197,7 +197,8 @@ Report run(const Options& o) {
         for (const auto& n : o.normals)
             for (double h : o.hits)
                 for (int cap : o.step_caps) settings.push_back({m, h, cap, n});
-    if (o.per_instance) settings.push_back({"per_instance", model.render.hit, model.render.max_steps, "tetrahedron"});
+    // I♥IQ's per-instance march takes each instance alone: it cannot draw a blend.
+    if (o.per_instance && !base.blends) settings.push_back({"per_instance", model.render.hit, model.render.max_steps, "tetrahedron"});
 
     // One benchmark build per (method, normals): the hit tolerance, the step cap and the output are uniforms.
     std::string bench_code;

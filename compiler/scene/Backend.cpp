@@ -75,9 +75,9 @@ const char* entry_comment(const std::string& name) {
     static const std::map<std::string, const char*> c = {
         {ir::names::kScene, "Distance to the nearest surface (x) and that instance's id (y)."},
         {ir::names::kGradient, "The gradient of instance `id`'s distance at p, derived by iqc (forward-mode differentiation)."},
-        {ir::names::kShade, "Colour of instance `id` at surface point p with unit normal N, seen from eye (materials without lights)."},
-        {ir::names::kShadeLight, "Instance `id`'s colour from one light at P_L with colour C_L (the runtime adds one per light)."},
-        {ir::names::kLightPosition, "Position of light l."},
+        {ir::names::kShade, "Colour of instance `id` at surface point p, unit normal N, seen from eye, that no light's shadow darkens."},
+        {ir::names::kShadeLight, "Instance `id`'s colour from one light at P_L with colour C_L (the runtime adds one per light, times its shadow)."},
+        {ir::names::kLightPosition, "Position of light l (a sun's: the direction toward it)."},
         {ir::names::kLightColor, "Colour of light l."},
         {ir::names::kReflectivity, "Reflectivity of instance `id` (its material's `k_r`)."},
         {ir::names::kTransmission, "Transmission (`k_t`) and index of refraction (`η`) of instance `id`'s material."},
@@ -402,18 +402,20 @@ SceneCode emit_scene(const SceneIR& scene, const BackendOptions& o, Diagnostics&
         if (o.vulkan) code.texture["binding"] = code.inputs.blocks.size() + 1;  // a combined image sampler at set 0
     }
     code.parameters = describe(m, lay, code.inputs);
+    // The lights, in the scene's order: name, type (point, sun, sky, bounce) and the uniforms of their
+    // position, direction and colour.
     for (size_t i = 0; i < m.globals.size(); ++i) {
         const Global& g = m.globals[i];
-        if (g.params.empty() || g.params[0].role != "light" || g.params[0].name != "position") continue;
-        nlohmann::ordered_json jl;
-        jl["name"] = g.params[0].instance;
-        jl["position"] = lay.storage[i].name;
-        for (size_t c = 0; c < m.globals.size(); ++c) {
-            const auto& ps = m.globals[c].params;
-            if (!ps.empty() && ps[0].role == "light" && ps[0].name == "color" && ps[0].instance == g.params[0].instance)
-                jl["color"] = lay.storage[c].name;
+        if (g.params.empty() || g.params[0].role != "light") continue;
+        const auto& gp = g.params[0];
+        nlohmann::ordered_json* jl = nullptr;
+        for (auto& e : code.lights)
+            if (e["name"] == gp.instance) jl = &e;
+        if (!jl) {
+            code.lights.push_back({{"name", gp.instance}, {"type", gp.module}});
+            jl = &code.lights.back();
         }
-        code.lights.push_back(jl);
+        (*jl)[gp.name] = lay.storage[i].name;
     }
     // Functions: what the entry points need, callees first; entries under their fixed names.
     glsl::Namer names;

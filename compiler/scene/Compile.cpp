@@ -137,10 +137,18 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
 // refraction need a material with `k_r`, `k_t`.
 void SceneCompiler::warn_idle_effects(const SceneIR& scene) {
     const EffectsDesc& fx = s_.effects;
+    bool shading_lights = false;
+    for (const auto& l : s_.lights) {
+        shading_lights |= l.kind == LightKind::Point || l.kind == LightKind::Sun;
+        if ((l.kind == LightKind::Sky || l.kind == LightKind::Bounce) && !scene.binds_ambient)
+            d_.warning(l.span, fmt::format("the {} light '{}' has no effect: no material has an ambient light colour `C_A` "
+                                           "(the stdlib's pbr material has; see docs/look.md)",
+                                           l.kind == LightKind::Sky ? "sky" : "bounce", l.name));
+    }
     if (fx.shadows != Shadows::None) {
-        if (s_.lights.empty())
-            d_.warning(fx.shadows_span, "shadows have no effect: the scene has no [[lights]] (shadows are cast toward each "
-                                        "light's position); add a [[lights]] table with a position");
+        if (!shading_lights)
+            d_.warning(fx.shadows_span, "shadows have no effect: the scene has no point light or sun (shadows are cast toward "
+                                        "each light's position or direction); add a [[lights]] table with a position");
         else if (!scene.has_shade_light)
             d_.warning(fx.shadows_span, "shadows have no effect: no material is lit by the lights (none has the light's "
                                         "position `P_L` as a parameter)");
@@ -180,7 +188,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     const RenderDesc& render = s_.render;
     const EffectsDesc& fx = s_.effects;
     int max_steps = opts_.max_steps.value_or(render.max_steps);
-    bool lights = !s_.lights.empty();
+    bool lights = scene.lights > 0;
     double focal = 1.0 / std::tan(s_.camera.fov * M_PI / 360.0);
     TemplateArgs ta;
     auto& V = ta.values;
@@ -204,7 +212,12 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     V["FOG_COLOR"] = vec3_literal(fx.fog_color.value_or(render.background));
     V["BOUNCES"] = std::to_string(fx.reflections + (fx.refraction ? 2 : 0));
     V["AA"] = std::to_string(fx.antialias);
-    V["LIGHTS"] = std::to_string(s_.lights.size());
+    V["LIGHTS"] = std::to_string(scene.lights);
+    V["POINT_LIGHTS"] = std::to_string(scene.point_lights);
+    if (scene.lights > scene.point_lights) F.insert("SUNS");
+    V["ZENITH"] = vec3_literal(render.zenith);
+    V["GROUND"] = vec3_literal(render.has_ground ? render.ground : render.background);
+    if (render.sky_gradient) F.insert("SKY");
     V["DECLARATIONS"] = code.declarations;
     V["FUNCTIONS"] = code.functions;
     V["INSTANCES"] = std::to_string(scene.instances);
@@ -268,6 +281,22 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     if (fx.refraction && scene.has_transmission) F.insert("REFRACTION");
     if (F.count("REFLECTIONS") || F.count("REFRACTION")) F.insert("BOUNCES");
     if (fx.antialias > 1) F.insert("AA");
+    // The thesis's look (I♥IQ documents, modules alone) reflects by k_r alone; scenes get Fresnel: more
+    // reflection at grazing angles, and glass that reflects as it refracts.
+    if (F.count("BOUNCES") && !s_.thesis_look) {
+        F.insert("FRESNEL");
+        if (F.count("REFRACTION")) F.insert("FRESNEL_GLANCE");
+        if (scene.has_reflectivity) F.insert("REFLECTIVITY");
+    }
+    // The output transform: exposure, tone map, sRGB (not for the debug views, which show values).
+    V["EXPOSURE"] = glsl::float_literal(render.exposure);
+    if (render.debug == DebugView::None) {
+        if (render.exposure != 1) F.insert("EXPOSURE");
+        if (render.tonemap == RenderDesc::Tonemap::ACES) F.insert("TONEMAP_ACES");
+        if (render.tonemap == RenderDesc::Tonemap::Reinhard) F.insert("TONEMAP_REINHARD");
+        if (s_.srgb()) F.insert("SRGB");
+        if (F.count("EXPOSURE") || F.count("TONEMAP_ACES") || F.count("TONEMAP_REINHARD") || F.count("SRGB")) F.insert("OUTPUT");
+    }
     static const char* debug_flags[] = {"", "DEBUG_NORMALS", "DEBUG_STEPS", "DEBUG_DEPTH"};
     if (render.debug != DebugView::None) F.insert(debug_flags[int(render.debug)]);
     // The mouse orbit is the shader's on Shadertoy only: every other target takes the host's camera (the html
@@ -292,6 +321,8 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     j["inputs"] = nlohmann::ordered_json::array({"iResolution"});
     if (reads[0]) j["inputs"].push_back("iTime");
     if (reads[1] || (s_.camera.orbit && opts_.target == Target::Shadertoy)) j["inputs"].push_back("iMouse");
+    // How the shader encodes its colour: "srgb" (colours it takes are linear) or "linear" (I♥IQ's documents).
+    j["output"] = s_.srgb() ? "srgb" : "linear";
     if (opts_.target != Target::Shadertoy) j["camera"] = camera_json(s_.camera, camera());
     if (opts_.target == Target::SPIRV || opts_.target == Target::HLSL) {
         // The template's IqcInputs block (std140, set 0, binding 0): what the host writes every frame.
@@ -382,6 +413,7 @@ void SceneCompiler::set_model(const SceneIR& scene) {
     model->render = s_.render;
     model->init();
     res_.model = std::move(model);
+    res_.blends = !s_.blends.empty();
 }
 
 // A function grown past the IR's size limit (ir::SizeLimit, from planning, lowering or a pass) is the
@@ -420,7 +452,12 @@ CompileResult SceneCompiler::run_checked() {
         bo.instrument = opts_.instrument || opts_.bench;
         for (const auto& p : plans) {
             bo.comments[p.shape->ast.name] = "shape " + p.shape->ast.name;
-            if (p.material) bo.comments[p.material->ast.name] = "material " + p.material->ast.name;
+            if (p.material) {
+                const std::string& m = p.material->ast.name;
+                bo.comments[m] = "material " + m;
+                bo.comments[m + ".ambient"] = "material " + m + ": the terms of C that read no light (iqc_shade)";
+                bo.comments[m + ".light"] = "material " + m + ": the terms of C that read the light (iqc_shade_light)";
+            }
             bo.comments[p.name + ".transform"] = "transform of " + p.name;
         }
         exact_ = exact_distances(plans);

@@ -75,6 +75,7 @@ struct CompileResult {
     std::string meta;      // JSON describing every parameter (instance, module, role, uniform, bounds, ...)
     std::vector<std::pair<std::string, double>> pass_ms;  // wall time per phase, for --time-passes
     std::shared_ptr<const SceneModel> model;  // the scene in double precision (when the compile succeeded)
+    bool blends = false;                      // the scene has [[blends]] (I♥IQ's per-instance march cannot draw them)
     // webgl2/glsl330: what a host sets before drawing (every uniform's default, uniform blocks, data texture).
     ShaderInputs inputs;
 };

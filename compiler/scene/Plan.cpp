@@ -17,14 +17,16 @@ namespace iqc {
 
 using namespace conventions;
 
-bool InstancePlan::lit_by(int param, bool scene_has_lights) const {
-    if (!material || !scene_has_lights || param < 0) return false;
+bool InstancePlan::lit_by(int param, bool shading, bool ambient) const {
+    if (!material || param < 0) return false;
     const ParamInfo& p = material->params[size_t(param)];
-    return (p.name == kLightPosition || p.name == kLightColor) && p.type == Type::vector(3);
+    if (p.type != Type::vector(3)) return false;
+    if (p.name == kLightPosition || p.name == kLightColor) return shading;
+    return p.name == kAmbientColor && ambient;
 }
 
-bool InstancePlan::per_light(bool scene_has_lights) const {
-    return material && lit_by(material->find_param(kLightPosition), scene_has_lights);
+bool InstancePlan::per_light(bool shading) const {
+    return material && lit_by(material->find_param(kLightPosition), shading);
 }
 
 namespace {
@@ -277,6 +279,29 @@ bool plan_instances(const SceneDesc& scene, ModuleLibrary& lib, SourceManager& s
         }
         planner.plan(inst, p);
     }
+    // Blends name instances: each at most once, in one blend.
+    std::map<std::string, size_t> by_name;
+    std::vector<std::string> names;
+    for (size_t i = 0; i < plans.size(); ++i) {
+        by_name[plans[i].name] = i;
+        names.push_back(plans[i].name);
+    }
+    std::map<size_t, Span> blended;
+    for (size_t b = 0; b < scene.blends.size(); ++b)
+        for (const auto& [name, span] : scene.blends[b].shapes) {
+            auto it = by_name.find(name);
+            if (it == by_name.end()) {
+                auto& e = d.error(span, fmt::format("no instance is named '{}'", name));
+                if (auto s = did_you_mean(name, names)) Diagnostics::note(e, span, fmt::format("did you mean '{}'?", *s));
+                continue;
+            }
+            if (auto [at, fresh] = blended.emplace(it->second, span); !fresh) {
+                auto& e = d.error(span, fmt::format("'{}' is already blended", name));
+                Diagnostics::note(e, at->second, "here");
+                continue;
+            }
+            plans[it->second].blend = int(b);
+        }
     return d.error_count() == before;
 }
 

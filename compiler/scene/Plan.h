@@ -21,6 +21,7 @@ namespace iqc {
 namespace conventions {
 inline constexpr const char* kLightPosition = "P_L";
 inline constexpr const char* kLightColor = "C_L";
+inline constexpr const char* kAmbientColor = "C_A";  // indirect light: the scene's sky and bounce lights
 inline constexpr const char* kReflectivity = "k_r";
 inline constexpr const char* kTransmission = "k_t";
 inline constexpr const char* kRefractiveIndex = "η";
@@ -42,14 +43,16 @@ struct InstancePlan {
     double scale = 1;                    // 1 / Lipschitz factor of the world -> object map
     std::string transform_comment;       // the transform as written, one line, with its parameters' values
     bool has_transform = false;
+    int blend = -1;                      // the [[blends]] entry it is part of, or -1
     bool transform_uses_inputs = false;  // reads `time` or `mouse`
 
-    // The material parameters a scene light binds (P_L, C_L of ℝ³), when the scene has lights.
-    bool lit_by(int param, bool scene_has_lights) const;
-    bool per_light(bool scene_has_lights) const;  // the material is evaluated once per light
+    // The material parameters the scene's lights bind (ℝ³ each): P_L and C_L when it has point lights or suns
+    // (`shading`), C_A when it has sky or bounce lights (`ambient`).
+    bool lit_by(int param, bool shading, bool ambient = false) const;
+    bool per_light(bool shading) const;  // the material's light terms are evaluated once per light
 };
 
-// Plans every instance of the scene; returns false after reporting errors.
+// Plans every instance of the scene (and resolves [[blends]] to them); returns false after reporting errors.
 bool plan_instances(const SceneDesc& scene, ModuleLibrary& lib, SourceManager& sm, Diagnostics& d,
                     std::vector<InstancePlan>& plans);
 

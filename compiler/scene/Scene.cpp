@@ -96,14 +96,15 @@ size_t toml_too_deep(std::string_view t) {
 }
 
 constexpr size_t kMaxLights = 256;
-const std::vector<std::string> kTopKeys = {"title", "include", "modules", "camera", "render", "effects", "lights", "shapes"};
+const std::vector<std::string> kTopKeys = {"title", "include", "modules", "camera", "render", "effects", "lights", "shapes", "blends"};
 const std::vector<std::string> kShapeKeys = {"name", "type", "material", "transform", "shape_params", "material_params", "bound"};
 const std::vector<std::string> kCameraKeys = {"position", "target", "fov", "orbit"};
 const std::vector<std::string> kRenderKeys = {"march", "max_steps", "max_dist", "hit", "hit_mode", "normals",
-                                              "background", "relaxation", "step", "debug"};
+                                              "background", "relaxation", "step", "debug", "output",
+                                              "tonemap", "exposure"};
 const std::vector<std::string> kEffectKeys = {"shadows", "shadow_softness", "ao", "fog", "fog_color", "reflections",
                                               "refraction", "antialias"};
-const std::vector<std::string> kLightKeys = {"name", "position", "color"};
+const std::vector<std::string> kLightKeys = {"name", "type", "position", "direction", "color"};
 
 class SceneReader {
 public:
@@ -118,6 +119,7 @@ public:
     void read_render(const toml::table& root);
     void read_effects(const toml::table& root);
     void read_lights(const toml::table& root);
+    void read_blends(const toml::table& root);
     void read_shapes(const toml::table& root);
     std::optional<InstanceDesc> read_shape(const toml::node& item);
 
@@ -350,6 +352,37 @@ void SceneReader::read(std::string_view text) {
     read_effects(root);
     read_lights(root);
     read_shapes(root);
+    read_blends(root);
+}
+
+// [[blends]]: shapes = ["a", "b", ...] (instance names, resolved when instances are planned), radius = k.
+void SceneReader::read_blends(const toml::table& root) {
+    auto* n = root.get("blends");
+    if (!n) return;
+    if (!n->is_array_of_tables()) {
+        wrong_type(*n, "blends", "an array of tables ([[blends]])");
+        return;
+    }
+    for (auto& item : *n->as_array()) {
+        auto& t = *item.as_table();
+        check_keys(t, {"shapes", "radius"}, " in [[blends]]");
+        BlendDesc b;
+        b.span = span_of(item);
+        if (auto* x = t.get("radius"))
+            if (auto v = get_number(*x, "radius")) {
+                if (*v <= 0) d_.error(span_of(*x), "a blend's 'radius' must be positive (how far the smooth union reaches)");
+                else b.radius = *v;
+            }
+        auto* shapes = t.get("shapes");
+        if (!shapes || !shapes->is_array()) {
+            d_.error(shapes ? span_of(*shapes) : b.span, "a blend needs 'shapes': an array of the names of the instances it joins");
+            continue;
+        }
+        for (auto& e : *shapes->as_array())
+            if (auto v = get_string(e, "shapes")) b.shapes.push_back({*v, span_of(e)});
+        if (b.shapes.size() < 2) d_.error(span_of(*shapes), "a blend joins at least two instances");
+        s_.blends.push_back(std::move(b));
+    }
 }
 
 void SceneReader::read_includes(const toml::table& root) {
@@ -461,7 +494,30 @@ void SceneReader::read_render(const toml::table& root) {
                     if (*v <= 0) d_.error(span_of(*x), "'hit' must be positive");
                     else s_.render.hit = *v;
                 }
-            if (auto* x = t.get("background")) get_vec3(*x, "background", s_.render.background);
+            if (auto* x = t.get("background")) {
+                if (auto* g = x->as_table()) {
+                    // A sky gradient: zenith and horizon (both required), ground (optional).
+                    check_keys(*g, {"zenith", "horizon", "ground"}, " in 'background'");
+                    auto* z = g->get("zenith");
+                    auto* h = g->get("horizon");
+                    if (!z || !h) d_.error(span_of(*x), "a sky-gradient 'background' needs 'zenith' and 'horizon' colours");
+                    if (z) get_vec3(*z, "zenith", s_.render.zenith);
+                    if (h) get_vec3(*h, "horizon", s_.render.background);
+                    if (auto* gr = g->get("ground")) s_.render.has_ground = get_vec3(*gr, "ground", s_.render.ground);
+                    s_.render.sky_gradient = true;
+                } else {
+                    get_vec3(*x, "background", s_.render.background);
+                }
+            }
+            if (auto* x = t.get("output"))
+                if (auto v = get_choice(*x, "output encoding", {"srgb", "linear"})) s_.render.srgb = *v == 0;
+            if (auto* x = t.get("tonemap"))
+                if (auto v = get_choice(*x, "tone map", {"none", "reinhard", "aces"})) s_.render.tonemap = RenderDesc::Tonemap(*v);
+            if (auto* x = t.get("exposure"))
+                if (auto v = get_number(*x, "exposure")) {
+                    if (*v <= 0) d_.error(span_of(*x), "'exposure' must be positive");
+                    else s_.render.exposure = *v;
+                }
             if (auto* x = t.get("march"))
                 if (auto v = get_choice(*x, "march method", {"fixed", "sphere", "relaxed", "auto"})) s_.render.march = March(*v);
             if (auto* x = t.get("normals"))
@@ -552,8 +608,35 @@ void SceneReader::read_lights(const toml::table& root) {
                 l.name = fmt::format("light_{}", s_.lights.size() + 1);
                 if (auto* x = t.get("name"))
                     if (auto v = get_string(*x, "name")) l.name = *v;
-                if (auto* x = t.get("position")) get_vec3(*x, "position", l.position);
-                else d_.error(l.span, "this [[lights]] entry has no 'position'");
+                auto* pos = t.get("position");
+                auto* dir = t.get("direction");
+                // The kind: `type`, else a sun where only a direction is given, else a point light.
+                l.kind = dir && !pos ? LightKind::Sun : LightKind::Point;
+                if (auto* x = t.get("type"))
+                    if (auto v = get_choice(*x, "light type", {"point", "sun", "sky", "bounce"})) l.kind = LightKind(*v);
+                if (pos) get_vec3(*pos, "position", l.position);
+                if (dir && get_vec3(*dir, "direction", l.direction)) {
+                    double n = std::sqrt(l.direction[0] * l.direction[0] + l.direction[1] * l.direction[1] +
+                                         l.direction[2] * l.direction[2]);
+                    if (n < 1e-12) d_.error(span_of(*dir), "a light's 'direction' cannot be the zero vector");
+                    l.has_direction = true;
+                }
+                switch (l.kind) {
+                    case LightKind::Point:
+                        if (!pos) d_.error(l.span, "this [[lights]] entry has no 'position' (a point light; a sun takes a 'direction')");
+                        if (dir) d_.error(span_of(*dir), "a point light has no 'direction' (did you mean type = \"sun\"?)");
+                        break;
+                    case LightKind::Sun:
+                        if (!dir) d_.error(l.span, "this sun has no 'direction' (the direction toward the sun, e.g. [0.6, 0.4, -0.5])");
+                        [[fallthrough]];
+                    case LightKind::Sky:
+                    case LightKind::Bounce:
+                        if (pos) d_.error(span_of(*pos), fmt::format("a {} light has no 'position'", l.kind == LightKind::Sun ? "sun"
+                                                                     : l.kind == LightKind::Sky ? "sky" : "bounce"));
+                        if (l.kind == LightKind::Sky && dir)
+                            d_.error(span_of(*dir), "a sky light has no 'direction' (it shines from the whole upper hemisphere)");
+                        break;
+                }
                 if (auto* x = t.get("color")) get_vec3(*x, "color", l.color);
                 s_.lights.push_back(l);
             }
@@ -728,6 +811,8 @@ bool load_scene(const std::string& path, SourceManager& sm, Diagnostics& d, Scen
     s.path = path;
     s.file = sm.add_from_disk(path, std::move(text));
     std::string ext = fs::path(path).extension().string();
+    // I♥IQ documents and single modules keep the thesis's look (linear output) unless their scene asks for more.
+    s.thesis_look = ext == ".md" || ext == ".iql";
     if (ext == ".md") {
         read_document(sm, d, s);
     } else if (ext == ".iql") {

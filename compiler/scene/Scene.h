@@ -68,6 +68,17 @@ struct RenderDesc {
     bool hit_relative = false;  // hit_mode = "relative": the tolerance grows with distance (hit · t)
     Normals normals = Normals::Tetrahedron;
     std::array<double, 3> background{0.05, 0.05, 0.08};
+    // A sky gradient instead of one colour (`background = { zenith = [...], horizon = [...], ground = [...] }`):
+    // what rays that hit nothing see, reflections and refraction included.
+    bool sky_gradient = false;
+    std::array<double, 3> zenith{0.3, 0.5, 0.85};
+    std::array<double, 3> ground{0.0, 0.0, 0.0};  // below the horizon (default: the horizon colour)
+    bool has_ground = false;
+    // Output transform (docs/look.md): the colour is computed in linear light, then exposed, tone mapped and
+    // encoded. Default: sRGB for TOML scenes, linear (the thesis's look) for I♥IQ documents.
+    std::optional<bool> srgb;
+    enum class Tonemap { None, Reinhard, ACES } tonemap = Tonemap::None;
+    double exposure = 1;
     double relaxation = 1.6;    // ω of the relaxed method
     double step = 0;            // the fixed method's step (0: max_dist / max_steps)
     DebugView debug = DebugView::None;
@@ -85,10 +96,26 @@ struct EffectsDesc {
     Span shadows_span, reflections_span, refraction_span;  // the values as written (warnings)
 };
 
+// A light (docs/look.md): `point` (at `position`) and `sun` (directional: `direction` points toward it) are
+// bound to materials' `P_L`, `C_L` and cast shadows; `sky` (a hemisphere from +y) and `bounce` (a fill from
+// `direction`: light bounced off the ground) are indirect light, bound to materials' `C_A` and darkened by
+// ambient occlusion only.
+enum class LightKind { Point, Sun, Sky, Bounce };
 struct LightDesc {
     std::string name;
+    LightKind kind = LightKind::Point;
     std::array<double, 3> position{0, 0, 0};
+    std::array<double, 3> direction{0, 1, 0};  // sun: toward the sun; bounce: toward where the bounce comes from
+    bool has_direction = false;
     std::array<double, 3> color{1, 1, 1};
+    Span span;
+};
+
+// A smooth union of instances (`[[blends]]`): their distances joined by Quilez's polynomial smooth minimum
+// of radius k, their materials mixed by the same weights.
+struct BlendDesc {
+    std::vector<std::pair<std::string, Span>> shapes;  // instance names as written
+    double radius = 0.25;
     Span span;
 };
 
@@ -102,6 +129,9 @@ struct SceneDesc {
     RenderDesc render;
     EffectsDesc effects;
     std::vector<LightDesc> lights;
+    std::vector<BlendDesc> blends;
+    bool thesis_look = false;  // an I♥IQ document or a module alone: linear output unless [render] output says
+    bool srgb() const { return render.srgb.value_or(!thesis_look); }
 };
 
 // Reads and parses `path` into `out`; reports problems to `diags` (returns false on error).

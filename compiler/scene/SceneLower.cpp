@@ -77,6 +77,7 @@ struct Item {
     std::vector<TreeLevel> tree_globals;
     Field tree_order;
     bool exact = false;  // the shape says `# exact`: skipping far subtrees leaves iqc_scene_unbounded's value as is
+    int blend = -1;      // a single instance in a [[blends]] entry: the scene and the shading see the blend instead
 };
 
 // A group of this many members or more, each with `bound`, is traversed as a bounding-volume hierarchy (fewer:
@@ -97,7 +98,10 @@ public:
     SceneLowering(const SceneDesc& s, const std::vector<InstancePlan>& p, const SceneLowerOptions& o) : s_(s), plans_(p), o_(o) {}
 
     SceneIR run() {
-        lights_ = !s_.lights.empty();
+        for (const auto& l : s_.lights) {
+            lights_ |= l.kind == LightKind::Point || l.kind == LightKind::Sun;
+            ambient_lights_ |= l.kind == LightKind::Sky || l.kind == LightKind::Bounce;
+        }
         m_.constant_parameters = o_.params_constant;
         make_items();
         declare_lights();
@@ -114,12 +118,14 @@ public:
         lipschitz_function();
         if (o_.analytic_normals) gradient_functions();
         shade_functions();
-        if (o_.reflections) out_.has_reflectivity = material_property(ir::names::kReflectivity);
+        // k_r: for mirrors (reflections) and for glass, whose Fresnel reflection it raises (refraction).
+        if (o_.reflections || o_.refraction) out_.has_reflectivity = material_property(ir::names::kReflectivity);
         if (o_.refraction) out_.has_transmission = material_property(ir::names::kTransmission);
         prepare_function();
         if (o_.per_instance) per_instance_functions();
         out_.instances = int(plans_.size());
-        out_.lights = int(s_.lights.size());
+        out_.lights = int(light_pos_.size());
+        out_.point_lights = point_lights_;
         return std::move(out_);
     }
 
@@ -131,9 +137,20 @@ private:
     ir::Module& m_ = out_.module;
     LowerContext ctx_{out_.module, {}, {}};
     std::vector<Item> items_;
-    bool lights_ = false;
+    bool lights_ = false;          // point lights or suns: bound to materials' P_L, C_L
+    bool ambient_lights_ = false;  // sky or bounce lights: bound to materials' C_A
     std::set<std::string> global_names_;
+    // The shading lights' globals, point lights first, then suns (whose "position" global is their direction).
     std::vector<int> light_pos_, light_col_;
+    int point_lights_ = 0;
+    struct AmbientLight {
+        LightKind kind;
+        int color = -1, direction = -1;  // globals (direction: bounce lights)
+    };
+    std::vector<AmbientLight> ambient_;
+    int ambient_fn_ = -1;
+    std::map<std::pair<int, bool>, int> parts_;  // (material function, light part?) -> material_part
+    std::vector<std::vector<size_t>> blend_items_;  // per [[blends]] entry: its members' items, in instance order
     std::string owner_;  // the item being declared (Global::owner)
 
     const InstancePlan& plan(size_t i) const { return plans_[i]; }
@@ -157,7 +174,7 @@ private:
         for (size_t i = 0; i < plans_.size(); ++i) {
             const InstancePlan& p = plan(i);
             out_.headers[p.name] = p.desc->type + (p.material ? " with " + p.desc->material : std::string());
-            if (o_.per_instance || runtime_transform(p)) {
+            if (o_.per_instance || runtime_transform(p) || p.blend >= 0) {
                 items_.push_back(single(i));
                 continue;
             }
@@ -196,6 +213,52 @@ private:
             id += int(it.members.size());
             if (!it.group) it.name = plan(it.members[0]).name;
         }
+        // Blends (not in I♥IQ's per-instance architecture, whose march takes each instance alone).
+        if (!o_.per_instance) {
+            blend_items_.assign(s_.blends.size(), {});
+            for (size_t i = 0; i < items_.size(); ++i)
+                if (!items_[i].group && plan(items_[i].members[0]).blend >= 0) {
+                    items_[i].blend = plan(items_[i].members[0]).blend;
+                    blend_items_[size_t(items_[i].blend)].push_back(i);
+                }
+        }
+    }
+
+    // A blend's distance at p and each member's weight: the members' distances folded by Quilez's polynomial
+    // smooth minimum ("smooth minimum", 2013): h = clamp(1/2 + (d_i − d)/(2k), 0, 1), d ← mix(d_i, d, h) −
+    // k·h·(1 − h), the weights so far times h and the new member's 1 − h. Its gradient is h∇d + (1 − h)∇d_i, a
+    // convex combination: 1-Lipschitz members give a 1-Lipschitz blend. `counted`: the members' distance
+    // functions return (d, shapes evaluated) and so does this (a vec2); `weights`: filled when given.
+    ValueId blend_distance(Builder& b, int blend, ValueId p, bool bounded, bool counted, std::vector<ValueId>* weights) {
+        const auto& members = blend_items_[size_t(blend)];
+        ValueId k = b.scalar(s_.blends[size_t(blend)].radius);
+        ValueId d = ValueId(-1), count = ValueId(-1);
+        for (size_t m = 0; m < members.size(); ++m) {
+            const Item& it = items_[members[m]];
+            ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {p});
+            ValueId di = counted ? b.op(Op::Extract, {call}, 0) : call;
+            di = b.named(di, it.name);
+            if (counted) {
+                ValueId c = b.op(Op::Extract, {call}, 1);
+                count = count == ValueId(-1) ? c : b.op(Op::Add, {count, c});
+            }
+            if (m == 0) {
+                d = di;
+                if (weights) weights->push_back(b.scalar(1));
+                continue;
+            }
+            ValueId h = b.builtin("clamp", {b.op(Op::Add, {b.scalar(0.5), b.op(Op::Div, {b.op(Op::Sub, {di, d}), b.op(Op::Mul, {b.scalar(2), k})})}),
+                                            b.scalar(0), b.scalar(1)});
+            h = b.named(h, "h");
+            ValueId one_minus = b.op(Op::Sub, {b.scalar(1), h});
+            d = b.op(Op::Sub, {b.builtin("mix", {di, d, h}), b.op(Op::Mul, {b.op(Op::Mul, {k, h}), one_minus})});
+            if (weights) {
+                for (ValueId& w : *weights) w = b.op(Op::Mul, {w, h});
+                weights->push_back(one_minus);
+            }
+        }
+        d = b.named(d, "blend");
+        return counted ? b.construct(Type::vector(2), {d, count}) : d;
     }
 
     // The group's bounding-volume hierarchy from its members' `bound` spheres in world space. The members keep their
@@ -268,22 +331,86 @@ private:
     }
 
     void declare_lights() {
+        auto declare = [&](const LightDesc& l, const char* what, const char* kind, const std::array<double, 3>& v, const char* doc) {
+            Global g;
+            g.name = unique_name(l.name + "_" + what);
+            g.kind = Global::Kind::Parameter;
+            g.type = Type::vector(3);
+            g.value = {v[0], v[1], v[2]};
+            g.bounds.input = false;
+            g.comment = fmt::format("{} ({}) {}", l.name, kind, std::string(what) == "color" ? "colour" : what);
+            g.owner = l.name;
+            g.params.push_back({l.name, kind, "light", what, doc});
+            m_.globals.push_back(std::move(g));
+            return int(m_.globals.size() - 1);
+        };
+        // A bounce light without a direction comes from opposite the first sun, horizontally (Quilez's outdoor
+        // lighting), else from below (light bounced off the ground).
+        std::array<double, 3> bounce_from{0, -1, 0};
+        for (const auto& l : s_.lights)
+            if (l.kind == LightKind::Sun) {
+                double h = std::hypot(l.direction[0], l.direction[2]);
+                if (h > 1e-6) bounce_from = {-l.direction[0] / h, 0, -l.direction[2] / h};
+                break;
+            }
+        std::vector<std::pair<int, int>> suns;
         for (const auto& l : s_.lights) {
-            for (int which = 0; which < 2; ++which) {
-                const auto& v = which == 0 ? l.position : l.color;
-                Global g;
-                g.name = unique_name(l.name + (which == 0 ? "_position" : "_color"));
-                g.kind = Global::Kind::Parameter;
-                g.type = Type::vector(3);
-                g.value = {v[0], v[1], v[2]};
-                g.bounds.input = false;
-                g.comment = l.name + (which == 0 ? " position" : " colour");
-                g.owner = l.name;
-                g.params.push_back({l.name, "", "light", which == 0 ? "position" : "color", which == 0 ? "light position" : "light colour"});
-                m_.globals.push_back(std::move(g));
-                (which == 0 ? light_pos_ : light_col_).push_back(int(m_.globals.size() - 1));
+            switch (l.kind) {
+                case LightKind::Point:
+                    light_pos_.push_back(declare(l, "position", "point", l.position, "light position"));
+                    light_col_.push_back(declare(l, "color", "point", l.color, "light colour"));
+                    ++point_lights_;
+                    break;
+                case LightKind::Sun: {
+                    int d = declare(l, "direction", "sun", l.direction, "direction toward the sun");
+                    suns.push_back({d, declare(l, "color", "sun", l.color, "sun colour")});
+                    break;
+                }
+                case LightKind::Sky:
+                    ambient_.push_back({l.kind, declare(l, "color", "sky", l.color, "sky light colour"), -1});
+                    break;
+                case LightKind::Bounce: {
+                    int c = declare(l, "color", "bounce", l.color, "bounce light colour");
+                    ambient_.push_back({l.kind, c, declare(l, "direction", "bounce", l.has_direction ? l.direction : bounce_from,
+                                                           "direction the bounce light comes from")});
+                    break;
+                }
             }
         }
+        for (auto [d, c] : suns) {
+            light_pos_.push_back(d);
+            light_col_.push_back(c);
+        }
+    }
+
+    // iqc_ambient_light(N) -> the indirect light reaching a surface with unit normal N: each sky light's colour
+    // times (1 + N_y)/2 (a hemisphere above, fully seen by an up-facing surface), each bounce light's times
+    // max(0, N·d̂) (Quilez, "outdoors lighting"). Materials bind it as `C_A`; ambient occlusion darkens it.
+    int ambient_function() {
+        if (ambient_fn_ >= 0) return ambient_fn_;
+        ir::Function f;
+        f.name = "iqc_ambient_light";
+        f.glsl_name = f.name;
+        f.inline_hint = true;
+        Builder b(m_, f);
+        ValueId N = b.param("N", Type::vector(3));
+        ValueId sum = ValueId(-1);
+        for (const AmbientLight& a : ambient_) {
+            ValueId w;
+            if (a.kind == LightKind::Sky) {
+                w = b.op(Op::Add, {b.scalar(0.5), b.op(Op::Mul, {b.scalar(0.5), b.op(Op::Extract, {N}, 1)})});
+            } else {
+                ValueId g = b.global(a.direction);  // a unit direction (a slider may make it zero: guarded)
+                ValueId d = b.op(Op::Div, {g, b.builtin("max", {b.builtin("length", {g}), b.scalar(1e-9)})});
+                w = b.builtin("max", {b.scalar(0), b.op(Op::Dot, {N, d})});
+            }
+            ValueId term = b.op(Op::Mul, {w, b.global(a.color)});
+            sum = sum == ValueId(-1) ? term : b.op(Op::Add, {sum, term});
+        }
+        f.result = b.named(sum, "C_A");
+        m_.functions.push_back(std::move(f));
+        ambient_fn_ = int(m_.functions.size() - 1);
+        return ambient_fn_;
     }
 
     std::string owner_of(const Item& it) {
@@ -354,7 +481,7 @@ private:
             fields.assign(mod.params.size(), {});
             for (size_t k = 0; k < mod.params.size(); ++k) {
                 if (std::find(skip.begin(), skip.end(), int(k)) != skip.end()) continue;
-                if (&mod == first.material && first.lit_by(int(k), lights_)) continue;
+                if (&mod == first.material && first.lit_by(int(k), lights_, ambient_lights_)) continue;
                 std::vector<std::vector<double>> vals;
                 for (size_t mi : it.members) vals.push_back((plan(mi).*values)[k]);
                 fields[k] = parameter_field(it, mod, role, k, vals);
@@ -529,10 +656,16 @@ private:
                 res = group_loop(b, it, p, res == ValueId(-1) ? b.constant(res_t, empty) : res, bounded);
                 continue;
             }
-            ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {p});
+            ValueId call;
+            if (it.blend >= 0) {  // the blend in place of its first member (its id); the other members are in it
+                if (&items_[blend_items_[size_t(it.blend)][0]] != &it) continue;
+                call = blend_distance(b, it.blend, p, bounded, counted, nullptr);
+            } else {
+                call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {p});
+            }
             ValueId d = counted ? b.op(Op::Extract, {call}, 0) : call;
             std::string source = plan(it.members[0]).has_transform ? plan(it.members[0]).transform_comment : "";
-            d = b.named(d, it.name, source);
+            d = it.blend >= 0 ? d : b.named(d, it.name, source);
             std::vector<ValueId> parts = {d, b.scalar(it.id)};
             if (counted) {
                 ValueId count = b.op(Op::Extract, {call}, 1);
@@ -718,7 +851,8 @@ private:
         for (const Item& it : items_) {
             std::vector<ValueId> args = {p};
             if (it.group) args.push_back(b.op(Op::Sub, {id, b.integer(it.id)}));
-            ValueId d = b.call(it.distance_fn, args);
+            bool blend_first = it.blend >= 0 && &items_[blend_items_[size_t(it.blend)][0]] == &it;
+            ValueId d = blend_first ? blend_distance(b, it.blend, p, true, o_.instrument, nullptr) : b.call(it.distance_fn, args);
             if (o_.instrument) d = b.op(Op::Extract, {d}, 0);
             cases.push_back({it.id, it.id + (long long)it.members.size(), d});
         }
@@ -737,20 +871,47 @@ private:
 
     // ---- materials ----
 
-    // The cases of a dispatch on the instance id: per item, the value `of` gives (or none).
+    // The cases of a dispatch on the instance id: per item, the value `of` gives (or none). A blend is one
+    // case, at its first member's id: with the point `p`, its members' values weighted as blend_distance
+    // weights them (a member without a value counts as `fallback`); without p, its first member's value.
     template <class F>
-    std::vector<std::tuple<long long, long long, ValueId>> cases(Builder& b, ValueId id, F of) {
+    std::vector<std::tuple<long long, long long, ValueId>> cases(Builder& b, ValueId id, F of, ValueId p = ValueId(-1),
+                                                                 ValueId fallback = ValueId(-1)) {
         std::vector<std::tuple<long long, long long, ValueId>> out;
         for (const Item& it : items_) {
             ValueId k = it.group ? b.op(Op::Sub, {id, b.integer(it.id)}) : ValueId(-1);
-            ValueId v = of(it, k);
+            ValueId v = ValueId(-1);
+            if (it.blend >= 0 && p != ValueId(-1)) {
+                const auto& members = blend_items_[size_t(it.blend)];
+                if (&items_[members[0]] != &it) continue;
+                std::vector<ValueId> vs;
+                bool any = false;
+                for (size_t m : members) {
+                    vs.push_back(of(items_[m], ValueId(-1)));
+                    any |= vs.back() != ValueId(-1);
+                }
+                if (!any) continue;
+                std::vector<ValueId> w;
+                blend_distance(b, it.blend, p, true, o_.instrument, &w);
+                for (size_t m = 0; m < vs.size(); ++m) {
+                    ValueId term = b.op(Op::Mul, {w[m], vs[m] == ValueId(-1) ? fallback : vs[m]});
+                    v = m == 0 ? term : b.op(Op::Add, {v, term});
+                }
+                v = b.named(v, "blended");
+            } else {
+                if (it.blend >= 0 && &items_[blend_items_[size_t(it.blend)][0]] != &it) continue;
+                v = of(it, k);
+            }
             if (v != ValueId(-1)) out.push_back({it.id, it.id + (long long)it.members.size(), v});
         }
         return out;
     }
 
     void shade_functions() {
-        // iqc_shade(id, p, N, eye): materials without lights; the default material shows the normal.
+        // iqc_shade(id, p, N, eye): each material's light-independent part (ambient, emission, the indirect
+        // light C_A): the whole colour of a material no light binds; of one lit once per light, the terms of its
+        // colour's sum that read neither P_L nor C_L (material_part). Ambient occlusion darkens this part
+        // only, a shadow only its light's part. The default material shows the normal.
         {
             ir::Function f;
             f.name = ir::names::kShade;
@@ -760,13 +921,22 @@ private:
             ValueId id = b.param("id", Type::integer());
             ValueId p = b.param("p", Type::vector(3)), N = b.param("N", Type::vector(3)), eye = b.param("eye", Type::vector(3));
             ValueId zero = b.constant(Type::vector(3), {0, 0, 0});
+            ValueId normal_colour = b.op(Op::Add, {b.constant(Type::vector(3), {0.5, 0.5, 0.5}), b.op(Op::Mul, {b.scalar(0.5), N})});
+            ValueId CA = ValueId(-1);
+            for (const Item& it : items_) out_.binds_ambient |= binds_ambient(plan(it.members[0]));
+            auto ambient = [&]() {
+                if (CA == ValueId(-1) && ambient_lights_) CA = b.call(ambient_function(), {N});
+                return CA;
+            };
             auto cs = cases(b, id, [&](const Item& it, ValueId k) -> ValueId {
                 const InstancePlan& first = plan(it.members[0]);
                 if (!first.material) return ValueId(-1);
-                if (first.per_light(lights_)) return zero;  // lit once per light: iqc_shade_light
-                return material_call(b, it, k, p, N, eye, ValueId(-1), ValueId(-1));
-            });
-            ValueId normal_colour = b.op(Op::Add, {b.constant(Type::vector(3), {0.5, 0.5, 0.5}), b.op(Op::Mul, {b.scalar(0.5), N})});
+                bool lit = first.per_light(lights_);
+                int fn = lit ? material_part(*first.material, false) : -1;
+                if (lit && fn < 0) return zero;  // every term reads the light: iqc_shade_light
+                return material_call(b, it, k, p, N, eye, lit ? zero : ValueId(-1), lit ? zero : ValueId(-1), fn,
+                                     binds_ambient(first) ? ambient() : ValueId(-1));
+            }, p, normal_colour);
             f.result = b.named(b.switch_(id, normal_colour, std::move(cs)), "c");
             m_.functions.push_back(std::move(f));
         }
@@ -783,10 +953,15 @@ private:
             ValueId id = b.param("id", Type::integer());
             ValueId p = b.param("p", Type::vector(3)), N = b.param("N", Type::vector(3)), eye = b.param("eye", Type::vector(3));
             ValueId PL = b.param("P_L", Type::vector(3)), CL = b.param("C_L", Type::vector(3));
+            ValueId CA = ValueId(-1);
             auto cs = cases(b, id, [&](const Item& it, ValueId k) -> ValueId {
-                if (!plan(it.members[0]).per_light(lights_)) return ValueId(-1);
-                return material_call(b, it, k, p, N, eye, PL, CL);
-            });
+                const InstancePlan& first = plan(it.members[0]);
+                if (!first.per_light(lights_)) return ValueId(-1);
+                int fn = material_part(*first.material, true);
+                if (fn < 0) return ValueId(-1);  // no term reads the light
+                if (binds_ambient(first) && CA == ValueId(-1)) CA = b.call(ambient_function(), {N});
+                return material_call(b, it, k, p, N, eye, PL, CL, fn, binds_ambient(first) ? CA : ValueId(-1));
+            }, p, b.constant(Type::vector(3), {0, 0, 0}));
             f.result = b.named(b.switch_(id, b.constant(Type::vector(3), {0, 0, 0}), std::move(cs)), "c");
             m_.functions.push_back(std::move(f));
         }
@@ -805,7 +980,14 @@ private:
         }
     }
 
-    ValueId material_call(Builder& b, const Item& it, ValueId k, ValueId p, ValueId N, ValueId eye, ValueId PL, ValueId CL) {
+    bool binds_ambient(const InstancePlan& first) const {
+        return first.material && first.lit_by(first.material->find_param(kAmbientColor), lights_, ambient_lights_);
+    }
+
+    // A call of the item's material (or of one part of it, `fn`) with the renderer's bindings: the roles, the
+    // light (P_L, C_L) where given, the indirect light C_A where given.
+    ValueId material_call(Builder& b, const Item& it, ValueId k, ValueId p, ValueId N, ValueId eye, ValueId PL, ValueId CL,
+                          int fn = -1, ValueId CA = ValueId(-1)) {
         const InstancePlan& first = plan(it.members[0]);
         const CheckedModule& mat = *first.material;
         std::map<int, ValueId> bound = {{mat.roles[0], p}, {mat.roles[1], N}, {mat.roles[2], eye}};
@@ -813,7 +995,65 @@ private:
             bound[mat.find_param(kLightPosition)] = PL;
             if (int c = mat.find_param(kLightColor); first.lit_by(c, lights_)) bound[c] = CL;
         }
-        return b.call(lower_module_cached(mat, ctx_), module_args(b, mat, it.material_params, bound, k));
+        if (CA != ValueId(-1)) bound[mat.find_param(kAmbientColor)] = CA;
+        return b.call(fn >= 0 ? fn : lower_module_cached(mat, ctx_), module_args(b, mat, it.material_params, bound, k));
+    }
+
+    // One part of a lit material's colour C: its additive terms (C's sum, through +, − and copies) that read
+    // the light (P_L or C_L: `light`), or those that do not (the ambient part). Exact for every material affine
+    // in the light (C = A + f(P_L)∘C_L): a shadow scales the light's terms, not the ambient ones. A colour that
+    // is not a sum is one term. Returns the function computing that part (the material's own when every term
+    // is in it), or -1 when no term is.
+    int material_part(const CheckedModule& mat, bool light) {
+        int fn = lower_module_cached(mat, ctx_);
+        auto key = std::make_pair(fn, light);
+        if (auto c = parts_.find(key); c != parts_.end()) return c->second;
+        ir::Function g = m_.functions[size_t(fn)];
+        std::vector<char> reads(g.body.size(), 0);
+        int pl = mat.find_param(kLightPosition), cl = mat.find_param(kLightColor);
+        for (size_t i = 0; i < g.body.size(); ++i) {
+            const ir::Instr& in = g.body[i];
+            if (in.op == Op::Param) reads[i] = in.aux == pl || in.aux == cl;
+            for (ValueId a : in.args) reads[i] |= reads[a];
+        }
+        std::vector<std::pair<ValueId, bool>> terms;  // (value, negated)
+        std::vector<std::pair<ValueId, bool>> todo = {{g.result, false}};
+        while (!todo.empty()) {
+            auto [v, neg] = todo.back();
+            todo.pop_back();
+            const ir::Instr& in = g.body[v];
+            if (in.type == g.result_type() && (in.op == Op::Add || in.op == Op::Sub) &&
+                g.body[in.args[0]].type == in.type && g.body[in.args[1]].type == in.type) {
+                todo.push_back({in.args[1], in.op == Op::Sub ? !neg : neg});
+                todo.push_back({in.args[0], neg});
+            } else if ((in.op == Op::Neg || in.op == Op::Copy) && in.type == g.result_type()) {
+                todo.push_back({in.args[0], in.op == Op::Neg ? !neg : neg});
+            } else {
+                terms.push_back({v, neg});
+            }
+        }
+        std::vector<std::pair<ValueId, bool>> chosen;
+        for (const auto& t : terms)
+            if (bool(reads[t.first]) == light) chosen.push_back(t);
+        int out = -1;
+        if (chosen.size() == terms.size()) {
+            out = fn;
+        } else if (!chosen.empty()) {
+            g.name += light ? ".light" : ".ambient";
+            g.glsl_name += light ? "_light" : "_ambient";
+            g.entry = false;
+            Builder b(m_, g);
+            ValueId sum = ValueId(-1);
+            for (auto [v, neg] : chosen) {
+                if (sum == ValueId(-1)) sum = neg ? b.op(Op::Neg, {v}) : v;
+                else sum = b.op(neg ? Op::Sub : Op::Add, {sum, v});
+            }
+            g.result = sum;
+            m_.functions.push_back(std::move(g));
+            out = int(m_.functions.size() - 1);
+        }
+        parts_[key] = out;
+        return out;
     }
 
     // iqc_reflectivity(id) -> k_r as ℝ³, or iqc_transmission(id) -> (k_t, η); false when no material has it.

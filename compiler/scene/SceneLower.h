@@ -41,10 +41,12 @@ struct SceneIR {
     ir::Module module;
     std::map<std::string, std::string> headers;  // instance -> "torus with phong" (declaration comments)
     int instances = 0;
-    int lights = 0;
+    int lights = 0;        // point lights and suns (iqc_light_position/colour), point lights first
+    int point_lights = 0;  // the first this many are point lights, the rest suns
     bool any_bound = false;
     bool has_prepare = false;
     bool has_shade_light = false;   // some material is evaluated once per light
+    bool binds_ambient = false;     // some material reads the sky and bounce lights (C_A)
     bool has_reflectivity = false;
     bool has_transmission = false;
     std::vector<std::string> group_notes;  // "torus with lambert: 1000 instances in one loop"

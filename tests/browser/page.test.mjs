@@ -219,7 +219,7 @@ await threeMatchesPage("400 rings (data texture)", path.join(tmp, "rings_400.iq"
 // one cutting into it, seen through a camera of the page's own (not the scene's): each hides what is behind it.
 {
   const input = path.join(tmp, "occlusion.iq");
-  fs.writeFileSync(input, '[camera]\nposition = [0, 0, -4]\ntarget = [0, 0, 0]\n[render]\nbackground = [0.1, 0.2, 0.9]\n' +
+  fs.writeFileSync(input, '[camera]\nposition = [0, 0, -4]\ntarget = [0, 0, 0]\n[render]\noutput = "linear"\nbackground = [0.1, 0.2, 0.9]\n' +
                           '[[lights]]\nposition = [-3, 4, -5]\n[[shapes]]\ntype = "sphere"\nmaterial = "lambert"\n');
   const page = await browser.newPage({ viewport: { width: 320, height: 240 } });
   const errors = [];

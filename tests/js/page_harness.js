@@ -75,11 +75,21 @@ if (sliders.length) {
   step(32);
   moved = { uniform: s.dataset.uniform, component: Number(s.dataset.component), max: Number(s.max) };
 }
+// Pick mid grey in the first colour picker: the next frame sends what the page makes of it.
+let picked = null;
+if (colours.length) {
+  const c = colours[0];
+  c.value = "#808080";
+  c.fire("input");
+  step(48);
+  const frame = calls[calls.length - 1] || [];
+  picked = { key: c.dataset.colour, frame };
+}
 const labels = [];
 const walkLabels = e => { if (e.tag === "label" || e.tag === "summary" || e.tag === "legend") labels.push(e.textContent); e.children.forEach(walkLabels); };
 walkLabels(byId.params);
 console.log(JSON.stringify({
   title: document.title, heading: byId.title.textContent, error: sandbox.window.iqcError || byId.error.textContent || null,
-  sliders: sliders.length, colours: colours.length, intensities: intensities.length, frames: calls.length, first: calls[0] || [], last: calls[calls.length - 1] || [], moved, labels,
+  picked, sliders: sliders.length, colours: colours.length, intensities: intensities.length, frames: calls.length, first: calls[0] || [], last: calls[calls.length - 1] || [], moved, labels,
   fragment_shader_chars: (calls.sources || [""])[1] ? calls.sources[1].length : 0,
 }));

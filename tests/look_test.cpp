@@ -1,0 +1,257 @@
+// The lighting model (docs/look.md): a shadow darkens only its own light's part of a material, ambient
+// occlusion only the light-independent part; suns, sky and bounce lights; the sky-gradient background; the
+// output transform; Fresnel on mirrors and glass; the scene's new keys' error paths and warnings.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "TestUtil.h"
+#include "render/Render.h"
+
+using namespace iqc;
+using namespace iqc::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+render::Image render_scene(const std::string& name, const std::string& text, int w = 96, int h = 54) {
+    Compiled c = compile_text(name, text);
+    INFO(name << "\n" << c.diagnostics);
+    REQUIRE(c.result.exit_code == 0);
+    render::RenderOptions o;
+    o.width = w;
+    o.height = h;
+    auto r = render::render_shadertoy(c.result.code, o);
+    INFO(r.error);
+    REQUIRE(r.ok);
+    return r.image;
+}
+
+double max_abs_diff(const render::Image& a, const render::Image& b) {
+    double m = 0;
+    for (size_t i = 0; i < a.rgba.size(); ++i) m = std::max(m, double(std::fabs(a.rgba[i] - b.rgba[i])));
+    return m;
+}
+
+// A Lambert material with an ambient term: C = C_L∘k_d max(0, L̂⋅N̂) + k_a.
+const std::string kLambert = R"(
+[modules]
+matte = """
+material
+C = `C_L`∘`k_d`max(0, L̂⋅N̂) + `k_a`
+L̂ = normalize(`P_L` - p)
+where
+p ∈ ℝ³
+N̂ ∈ ℝ³
+I ∈ ℝ³
+`P_L` ∈ ℝ³: light position
+`C_L` ∈ ℝ³: light colour
+`k_d` ∈ [0,1]x[0,1]x[0,1] default = (0.6, 0.6, 0.6): diffuse colour
+`k_a` ∈ [0,1]x[0,1]x[0,1] default = (0.1, 0.05, 0.02): ambient colour
+"""
+)";
+
+// A ground plane y = 0 and a ball of radius 1 at height `ball_y`, seen from (0, 6, -6) looking at the
+// origin: the centre pixel sees the ground at the origin, straight below the ball.
+std::string ground_and_ball(const std::string& material, double ball_y, const std::string& ground_params = "",
+                            const std::string& ball_params = "") {
+    return "[camera]\nposition = [0, 6, -6]\ntarget = [0, 0, 0]\nfov = 40\n"
+           "[[shapes]]\nname = \"ground\"\ntype = \"plane\"\nshape_params = { h = 0 }\nmaterial = \"" +
+           material + "\"\n" + ground_params +
+           "\n[[shapes]]\nname = \"ball\"\ntype = \"sphere\"\nmaterial = \"" + material + "\"\n" +
+           "transform = \"T((0, " + std::to_string(ball_y) + ", 0))\"\n" + ball_params + "\n";
+}
+
+}  // namespace
+
+TEST_CASE("a shadow darkens only its own light's part: the ambient term stays", "[look][render]") {
+    // A light straight above the ball: the ground at the origin is in its shadow.
+    std::string base = kLambert + "[render]\noutput = \"linear\"\n[[lights]]\nposition = [0, 10, 0]\n" +
+                       ground_and_ball("matte", 2.5);
+    render::Image lit = render_scene("shadow_off.iq", base);
+    render::Image shadowed = render_scene("shadow_on.iq", base + "[effects]\nshadows = \"hard\"\n");
+    const float* off = lit.pixel(48, 27);
+    const float* on = shadowed.pixel(48, 27);
+    // Without the shadow: ambient plus the light's full term (facing it: 0.6 + 0.1).
+    CHECK(off[0] == Approx(0.7).margin(0.02));
+    // In the shadow: exactly the ambient term (0.1, 0.05, 0.02), not black (before: the ambient term was
+    // part of the light's term and the shadow took it too).
+    CHECK(on[0] == Approx(0.1).margin(0.005));
+    CHECK(on[1] == Approx(0.05).margin(0.005));
+    CHECK(on[2] == Approx(0.02).margin(0.005));
+    // Two lights: the ambient term is added once, not once per light.
+    render::Image two = render_scene("two_lights.iq", kLambert + "[render]\noutput = \"linear\"\n"
+                                                      "[[lights]]\nposition = [0, 10, 0]\ncolor = [0, 0, 0]\n"
+                                                      "[[lights]]\nposition = [0, 10, 0]\ncolor = [0, 0, 0]\n" +
+                                                      ground_and_ball("matte", 2.5));
+    CHECK(two.pixel(48, 27)[0] == Approx(0.1).margin(0.005));
+}
+
+TEST_CASE("ambient occlusion darkens only the light-independent part", "[look][render]") {
+    // The ball rests on the ground: occlusion around the contact.
+    std::string lights = "[render]\noutput = \"linear\"\n[[lights]]\nposition = [3, 8, -4]\n";
+    std::string no_ambient = "material_params = { k_a = [0, 0, 0] }";
+    std::string scene = kLambert + lights + ground_and_ball("matte", 1.0, no_ambient, no_ambient);
+    render::Image plain = render_scene("ao_off.iq", scene);
+    render::Image ao = render_scene("ao_on.iq", scene + "[effects]\nao = true\n");
+    // Direct light only: ambient occlusion changes nothing (before: it darkened the direct light too).
+    CHECK(max_abs_diff(plain, ao) < 1e-4);
+    // With an ambient term, it darkens that term near the contact.
+    std::string bright = "material_params = { k_a = [0.5, 0.5, 0.5] }";
+    std::string with_ambient = kLambert + lights + ground_and_ball("matte", 1.0, bright, bright);
+    render::Image amb = render_scene("ao_amb_off.iq", with_ambient);
+    render::Image amb_ao = render_scene("ao_amb_on.iq", with_ambient + "[effects]\nao = true\n");
+    CHECK(max_abs_diff(amb, amb_ao) > 0.02);
+    for (size_t i = 0; i < amb.rgba.size(); i += 4)
+        CHECK(amb_ao.rgba[i] >= amb.rgba[i] - 0.5f - 1e-4f);  // never more than the ambient term (0.5) darker
+}
+
+TEST_CASE("shadowed ground lit by sky and bounce is never pure black", "[look][render]") {
+    const std::string lights =
+        "[render]\nbackground = { zenith = [0.2, 0.35, 0.7], horizon = [0.6, 0.7, 0.85] }\n"
+        "[[lights]]\nname = \"sun\"\ndirection = [0, 1, 0]\ncolor = [1.5, 1.4, 1.2]\n"
+        "[[lights]]\ntype = \"sky\"\ncolor = [0.3, 0.4, 0.6]\n"
+        "[[lights]]\ntype = \"bounce\"\ncolor = [0.2, 0.15, 0.1]\n";
+    const std::string pbr = "material_params = { k_d = [0.3, 0.3, 0.3] }";
+    std::string scene = lights + ground_and_ball("pbr", 2.5, pbr, pbr);
+    render::Image sunlit = render_scene("outdoor_noshadow.iq", scene);
+    render::Image img = render_scene("outdoor.iq", scene + "[effects]\nshadows = \"soft\"\nao = true\n");
+    // The sun straight above: the ground below the ball is in its shadow ...
+    CHECK(img.pixel(48, 27)[0] < sunlit.pixel(48, 27)[0] - 0.2f);
+    // ... and every pixel (the shadow, the ball's underside, the sky) keeps some light in every channel.
+    float darkest = 1;
+    for (size_t i = 0; i < img.rgba.size(); i += 4)
+        for (int c = 0; c < 3; ++c) darkest = std::min(darkest, img.rgba[i + size_t(c)]);
+    CHECK(darkest > 0.08f);
+    // The sky is what lights the shadow: without sky and bounce lights it is much darker.
+    std::string sun_only = "[[lights]]\nname = \"sun\"\ndirection = [0, 1, 0]\ncolor = [1.5, 1.4, 1.2]\n";
+    render::Image dark = render_scene("sun_only.iq", sun_only + ground_and_ball("pbr", 2.5, pbr, pbr) +
+                                                         "[effects]\nshadows = \"soft\"\nao = true\n");
+    CHECK(dark.pixel(48, 27)[2] < img.pixel(48, 27)[2] - 0.15f);
+}
+
+TEST_CASE("a sun lights every point from one direction, a point light from its position", "[look][render]") {
+    // A sun straight above lights the flat ground the same everywhere (N⋅L = 1); a point light above the
+    // origin lights the ground less away from it.
+    std::string matte = kLambert + "[render]\noutput = \"linear\"\n[camera]\nposition = [0, 6, -6]\ntarget = [0, 0, 0]\n"
+                                   "[[shapes]]\ntype = \"plane\"\nshape_params = { h = 0 }\nmaterial = \"matte\"\n"
+                                   "material_params = { k_a = [0, 0, 0] }\n";
+    render::Image sun = render_scene("sun.iq", matte + "[[lights]]\ntype = \"sun\"\ndirection = [0, 2, 0]\n");
+    render::Image point = render_scene("point.iq", matte + "[[lights]]\nposition = [0, 1, 0]\n");
+    CHECK(sun.pixel(48, 27)[0] == Approx(0.6).margin(0.005));
+    CHECK(sun.pixel(48, 50)[0] == Approx(0.6).margin(0.005));
+    CHECK(point.pixel(48, 50)[0] < point.pixel(48, 27)[0] - 0.05f);
+}
+
+TEST_CASE("the background can be a sky gradient, and the output is sRGB-encoded unless linear is asked for", "[look][render]") {
+    std::string cam = "[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\nfov = 90\n"
+                      "[[shapes]]\ntype = \"sphere\"\ntransform = \"T((0, 0, 1000))\"\n";
+    render::Image grad = render_scene("grad.iq", cam + "[render]\noutput = \"linear\"\nmax_dist = 50\n"
+                                                       "background = { zenith = [0, 0, 1], horizon = [1, 0, 0], ground = [0, 1, 0] }\n");
+    // Looking at the horizon: the horizon's colour at the centre row; toward the zenith above, the ground below.
+    CHECK(grad.pixel(48, 27)[0] > 0.8f);
+    CHECK(grad.pixel(48, 0)[2] > 0.6f);
+    CHECK(grad.pixel(48, 0)[0] < grad.pixel(48, 27)[0]);
+    CHECK(grad.pixel(48, 53)[1] > 0.6f);
+    // One colour, 0.2 linear: sRGB encodes it as 0.4845 (a TOML scene's default), linear keeps 0.2.
+    std::string flat = cam + "[render]\nmax_dist = 50\nbackground = [0.2, 0.2, 0.2]\n";
+    CHECK(render_scene("srgb.iq", flat).pixel(10, 10)[0] == Approx(0.4845).margin(0.004));
+    CHECK(render_scene("linear.iq", flat + "output = \"linear\"\n").pixel(10, 10)[0] == Approx(0.2).margin(0.004));
+    // Tone maps and exposure: ACES maps 0.2·2 to 0.4·(2.51·0.4 + 0.03)/(0.4·(2.43·0.4 + 0.59) + 0.14).
+    double x = 0.4, aces = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14);
+    CHECK(render_scene("aces.iq", flat + "output = \"linear\"\ntonemap = \"aces\"\nexposure = 2\n").pixel(10, 10)[0] ==
+          Approx(aces).margin(0.004));
+    CHECK(render_scene("reinhard.iq", flat + "output = \"linear\"\ntonemap = \"reinhard\"\n").pixel(10, 10)[0] ==
+          Approx(0.2 / 1.2).margin(0.004));
+}
+
+TEST_CASE("I♥IQ documents keep the thesis's linear output", "[look]") {
+    Compiled doc = compile_path(std::filesystem::path(IQC_SOURCE_DIR) / "examples" / "two_tori.md");
+    REQUIRE(doc.result.exit_code == 0);
+    CHECK_THAT(doc.result.code, !Catch::Contains("iqc_output"));
+    Compiled scene = compile_path(std::filesystem::path(IQC_SOURCE_DIR) / "examples" / "gallery.iq");
+    REQUIRE(scene.result.exit_code == 0);
+    CHECK_THAT(scene.result.code, Catch::Contains("1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055"));
+}
+
+TEST_CASE("glass reflects by Fresnel at grazing angles, raised by its k_r", "[look][render]") {
+    // A wide glass slab seen from above; the sky is red at the zenith and black at and below the horizon, so
+    // any red on the slab is reflected sky (what the slab passes on reaches the black below it).
+    auto scene = [](double k_r) {
+        return "[camera]\nposition = [0, 2, -4]\ntarget = [0, 0, 2]\nfov = 60\n"
+               "[render]\noutput = \"linear\"\nmax_dist = 60\n"
+               "background = { zenith = [1, 0, 0], horizon = [0, 0, 0], ground = [0, 0, 0] }\n"
+               "[effects]\nrefraction = true\n"
+               "[[lights]]\nposition = [0, 5, -5]\ncolor = [0, 0, 0]\n"
+               "[[shapes]]\ntype = \"box\"\nshape_params = { b = [20, 0.05, 20] }\nmaterial = \"glass\"\n"
+               "material_params = { k_r = " + std::to_string(k_r) + ", k_t = [1, 1, 1] }\n";
+    };
+    render::Image none = render_scene("glass0.iq", scene(0), 96, 96);
+    render::Image some = render_scene("glass9.iq", scene(0.9), 96, 96);
+    // Row 31 sees the slab about 7° below the horizon (Schlick: R ≈ 0.55 of a sky at √sin 7° ≈ 0.35 red),
+    // row 90 about 45° below (R ≈ 0.04 of 0.84 red).
+    const float grazing = none.pixel(48, 31)[0], steep = none.pixel(48, 90)[0];
+    CHECK(grazing == Approx(0.19).margin(0.05));
+    CHECK(steep < 0.06f);
+    CHECK(grazing > steep + 0.1f);
+    // k_r = 0.9 raises the reflection at every angle (before: k_r had no effect while refraction was on).
+    CHECK(some.pixel(48, 90)[0] > 0.6f);
+    CHECK(some.pixel(48, 31)[0] > grazing);
+}
+
+TEST_CASE("light and background error paths are located", "[look][scene]") {
+    auto err = [](const std::string& name, const std::string& text) {
+        RunResult r = run_iqc(write_temp(name, "[[shapes]]\ntype = \"sphere\"\n" + text).string());
+        CHECK(r.exit_code == 1);
+        return r.err;
+    };
+    CHECK_THAT(err("sun.iq", "[[lights]]\ntype = \"sun\"\n"), Catch::Contains("sun.iq:3:1: error: this sun has no 'direction'"));
+    CHECK_THAT(err("pointdir.iq", "[[lights]]\nposition = [0, 1, 0]\ndirection = [0, 1, 0]\n"),
+               Catch::Contains("pointdir.iq:5:13: error: a point light has no 'direction' (did you mean type = \"sun\"?)"));
+    CHECK_THAT(err("skypos.iq", "[[lights]]\ntype = \"sky\"\nposition = [0, 1, 0]\n"),
+               Catch::Contains("skypos.iq:5:12: error: a sky light has no 'position'"));
+    CHECK_THAT(err("skydir.iq", "[[lights]]\ntype = \"sky\"\ndirection = [0, 1, 0]\n"),
+               Catch::Contains("skydir.iq:5:13: error: a sky light has no 'direction'"));
+    CHECK_THAT(err("zero.iq", "[[lights]]\ndirection = [0, 0, 0]\n"),
+               Catch::Contains("zero.iq:4:13: error: a light's 'direction' cannot be the zero vector"));
+    std::string kind = err("kind.iq", "[[lights]]\ntype = \"skye\"\n");
+    CHECK_THAT(kind, Catch::Contains("kind.iq:4:8: error: unknown light type 'skye': choose one of point, sun, sky, bounce"));
+    CHECK_THAT(kind, Catch::Contains("did you mean 'sky'?"));
+    CHECK_THAT(err("grad.iq", "[render]\nbackground = { zenith = [0, 0, 1] }\n"),
+               Catch::Contains("grad.iq:4:14: error: a sky-gradient 'background' needs 'zenith' and 'horizon' colours"));
+    CHECK_THAT(err("gradkey.iq", "[render]\nbackground = { zenith = [0, 0, 1], horizon = [1, 1, 1], groud = [0, 0, 0] }\n"),
+               Catch::Contains("error: unknown field 'groud' in 'background'"));
+    CHECK_THAT(err("out.iq", "[render]\noutput = \"gamma\"\n"),
+               Catch::Contains("out.iq:4:10: error: unknown output encoding 'gamma': choose one of srgb, linear"));
+    CHECK_THAT(err("tone.iq", "[render]\ntonemap = \"filmic\"\n"),
+               Catch::Contains("error: unknown tone map 'filmic': choose one of none, reinhard, aces"));
+    CHECK_THAT(err("exp.iq", "[render]\nexposure = 0\n"), Catch::Contains("exp.iq:4:12: error: 'exposure' must be positive"));
+}
+
+TEST_CASE("sky and bounce lights no material reads are a located warning, and --meta lists every light", "[look][scene]") {
+    std::string text = "[[shapes]]\ntype = \"sphere\"\nmaterial = \"phong\"\n"
+                       "[[lights]]\nname = \"key\"\ndirection = [1, 1, 0]\n"
+                       "[[lights]]\nname = \"fill\"\ntype = \"sky\"\ncolor = [0.2, 0.3, 0.5]\n";
+    Compiled c = compile_text("idle_sky.iq", text);
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("idle_sky.iq:7:1: warning: the sky light 'fill' has no effect: no material has an "
+                                              "ambient light colour `C_A`"));
+    // With pbr it binds: no warning; the meta lists the sun's direction and the sky's colour.
+    std::string pbr = text;
+    pbr.replace(pbr.find("phong"), 5, "pbr");
+    fs::path in = write_temp("bound_sky.iq", pbr);
+    fs::path meta = temp_dir() / "bound_sky.json";
+    RunResult r = run_iqc(in.string() + " --target webgl2 -o " + (temp_dir() / "bound_sky.frag").string() + " --meta " + meta.string());
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.err, !Catch::Contains("has no effect"));
+    auto j = nlohmann::json::parse(read_text(meta));
+    REQUIRE(j["lights"].size() == 2);
+    CHECK(j["lights"][0]["name"] == "key");
+    CHECK(j["lights"][0]["type"] == "sun");
+    CHECK(j["lights"][0]["direction"] == "key_direction");
+    CHECK(j["lights"][1]["type"] == "sky");
+    CHECK(j["lights"][1]["color"] == "fill_color");
+    CHECK_THAT(read_text(temp_dir() / "bound_sky.frag"), Catch::Contains("uniform vec3 key_direction;"));
+}
