@@ -6,6 +6,8 @@
 #include <chrono>
 
 #include "TestUtil.h"
+#include "render/Png.h"
+#include "render/Render.h"
 #include "ir/Pipeline.h"
 
 using namespace iqc::test;
@@ -291,4 +293,30 @@ TEST_CASE("iqc render makes the output's folder, and says so when it cannot, and
     RunResult bad = run_iqc("render " + scene + " --size 32x18 -o " + (file / "sub" / "a.png").string());
     CHECK(bad.exit_code == 1);
     CHECK_THAT(bad.err, Catch::Contains("iqc: error: cannot create the folder '" + (file / "sub").string() + "' for the PNG:"));
+}
+
+TEST_CASE("iqc render draws a Shadertoy shader as it is", "[cli][render]") {
+    // A hand-written reference beside iqc's output: mainImage, as pasted into Shadertoy.
+    auto frag = write_temp("hand.frag", "void mainImage(out vec4 fragColor, in vec2 fragCoord) {\n"
+                                        "    fragColor = vec4(fragCoord.x < 0.5 * iResolution.x ? 1.0 : 0.0, 0.25, 0.0, 1.0);\n}\n");
+    auto png = temp_dir() / "hand.png";
+    RunResult r = run_iqc("render " + frag.string() + " -o " + png.string() + " --size 32x16");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    iqc::render::Image img;
+    REQUIRE(iqc::render::read_png(png.string(), img, nullptr));
+    CHECK(img.width == 32);
+    CHECK(img.pixel(4, 8)[0] > 0.99f);
+    CHECK(img.pixel(28, 8)[0] < 0.01f);
+    CHECK(img.pixel(28, 8)[1] == Approx(0.25).margin(0.01));
+    // The driver's errors count the file's own lines; a scene's options are refused.
+    auto bad = write_temp("bad.frag", "// a comment\nvoid mainImage(out vec4 c, in vec2 f) { c = vec4(undeclared); }\n");
+    RunResult e = run_iqc("render " + bad.string() + " -o " + (temp_dir() / "bad.png").string());
+    CHECK(e.exit_code == 1);
+    CHECK_THAT(e.err, Catch::Contains("rendering failed"));
+    CHECK_THAT(e.err, Catch::Contains("2("));
+    CHECK_THAT(e.err, Catch::Contains("undeclared"));
+    RunResult s = run_iqc("render " + frag.string() + " -o " + png.string() + " --stats");
+    CHECK(s.exit_code == 2);
+    CHECK_THAT(s.err, Catch::Contains("--stats and --target need a scene"));
 }

@@ -421,7 +421,9 @@ static int run(int argc, char** argv) {
     float r_time = 0, r_fps = 30;
     int r_frames = 1;
     bool r_stats = false;
-    render->add_option("input", r_input, "scene (.iq), document (.md) or shape module (.iql)")->required();
+    render->add_option("input", r_input, "scene (.iq), document (.md) or shape module (.iql); or a Shadertoy shader (.frag, .glsl: "
+                                         "mainImage, as pasted into Shadertoy) to render as it is, e.g. one written by hand")
+        ->required();
     render->add_option("-o,--output", r_output, "the PNG to write (with --frames: numbered, out_0000.png, ...)")->required();
     render->add_option("--size", r_size, "image size WxH (default 640x360)");
     render->add_option("--time", r_time, "iTime in seconds (default 0)");
@@ -591,6 +593,25 @@ static int run(int argc, char** argv) {
                     return 2;
                 }
             }
+    }
+    if (render->parsed()) {
+        // A Shadertoy shader as it is (a hand-written reference beside iqc's): rendered with no compile.
+        std::string ext = std::filesystem::path(r_input).extension().string();
+        if (ext == ".frag" || ext == ".glsl") {
+            if (r_stats || r_target != "shadertoy") {
+                std::fprintf(stderr, "iqc: error: a Shadertoy shader (%s) is rendered as it is: --stats and --target need a scene\n",
+                             printable(r_input).c_str());
+                return 2;
+            }
+            std::string code, err;
+            if (!iqc::read_source_file(r_input, 0, code, err)) {
+                std::fprintf(stderr, "iqc: error: cannot read '%s': %s\n", printable(r_input).c_str(), err.c_str());
+                return 1;
+            }
+            code = "#line 1\n" + code;  // the driver's messages count the file's own lines
+            return render_command(code, iqc::ShaderInputs{}, false, r_output, r_size, r_time, r_frames, r_fps, false, quiet,
+                                  [] { return iqc::CompileResult{}; });
+        }
     }
     if (!depfile.empty() && (render->parsed() || output.empty() || output == "-")) {
         std::fprintf(stderr, "iqc: error: --depfile needs an output file (-o FILE) to name in its rule\n");
