@@ -4,6 +4,7 @@
 #
 #   scripts/look-pictures.sh            # uses ./build/iqc
 #   IQC=path/to/iqc SIZE=320x180 scripts/look-pictures.sh
+#   TIMES=7 scripts/look-pictures.sh   # also the median frame time of 7 renders per picture
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -78,9 +79,17 @@ GRADIENT='background = { zenith = [0.12, 0.28, 0.65], horizon = [0.55, 0.64, 0.8
 
 picture() {  # picture NAME RENDER-LINES EFFECTS-LINES LIGHTS
   { base "$2"; printf '\n[effects]\n%s\n\n%s\n' "$3" "$4"; } > "$TMP/$1.iq"
-  local line
+  local line times=() k
   line="$("$IQC" render "$TMP/$1.iq" -o "$OUT/$1.png" --size "$SIZE" 2>&1 | tail -1)"
-  echo "$1: ${line#*llvmpipe}"  # the shader compile and frame times iqc render measured
+  # TIMES=N: the median frame time of N more renders (what the term costs on this machine's renderer).
+  for ((k = 0; k < ${TIMES:-0}; k++)); do
+    times+=("$("$IQC" render "$TMP/$1.iq" -o "$TMP/t.png" --size "$SIZE" 2>&1 | tail -1 | sed -E 's/.*frame ([0-9.]+) ms.*/\1/')")
+  done
+  if [ ${#times[@]} -gt 0 ]; then
+    echo "$1: median frame $(printf '%s\n' "${times[@]}" | sort -n | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}') ms of ${#times[@]}"
+  else
+    echo "$1: ${line#*llvmpipe}"  # the shader compile and frame times iqc render measured
+  fi
 }
 picture 1_sun        "$LINEAR"   ""                                      "$SUN"
 picture 2_shadow     "$LINEAR"   'shadows = "soft"'                      "$SUN"
