@@ -666,6 +666,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
         if (id < 0) {
 {{#if BOUNCES}}
             col += throughput * {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}};
+            throughput = vec3(0.0);
             break;
 {{#else}}
             return {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}};
@@ -739,9 +740,13 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
         rd = reflect(rd, N);
 {{#else}}
         col += throughput * c;
+        throughput = vec3(0.0);
         break;
 {{/if}}
     }
+    // Bounces used up with light still carried (a row of glass balls, mirrors facing each other): the last ray
+    // sees the background beyond, not black.
+    col += throughput * {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}};
     return col;
 {{#else}}
         return c;

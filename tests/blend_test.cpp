@@ -94,3 +94,16 @@ TEST_CASE("blend error paths are located", "[blend][scene]") {
     CHECK_THAT(err("blend_key.iq", "[[blends]]\nshapes = [\"left\", \"right\"]\nradious = 1\n"),
                Catch::Contains("error: unknown field 'radious' in [[blends]]"));
 }
+
+TEST_CASE("a blend member's bound is not used, with a located warning", "[blend][scene]") {
+    std::string text = two_balls("[[blends]]\nshapes = [\"left\", \"right\"]\nradius = 0.5\n");
+    text.replace(text.find("material = \"emissive\"\n"), 0, "bound = 1.5\n");
+    Compiled c = compile_text("blend_bound.iq", text);
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("blend_bound.iq:12:9: warning: `bound` is not used for 'left': it is part of a blend"));
+    render::Image with = render_scene("blend_bound2.iq", text);
+    render::Image without = render_scene("blend_nobound.iq", two_balls("[[blends]]\nshapes = [\"left\", \"right\"]\nradius = 0.5\n"));
+    double m = 0;
+    for (size_t i = 0; i < with.rgba.size(); ++i) m = std::max(m, double(std::fabs(with.rgba[i] - without.rgba[i])));
+    CHECK(m < 1e-4);
+}

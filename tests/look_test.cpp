@@ -255,3 +255,63 @@ TEST_CASE("sky and bounce lights no material reads are a located warning, and --
     CHECK(j["lights"][1]["color"] == "fill_color");
     CHECK_THAT(read_text(temp_dir() / "bound_sky.frag"), Catch::Contains("uniform vec3 key_direction;"));
 }
+
+TEST_CASE("the stdlib pbr material has no NaN where the light is behind the eye", "[look][render]") {
+    // V̂ = L̂: the Fresnel term's (1 - V̂⋅Ĥ)⁵ with V̂⋅Ĥ rounded just past 1 was pow of a negative base (NaN).
+    std::string scene = "[camera]\nposition = [0, 1.5, -5]\ntarget = [0, 0, 0]\n[[lights]]\nposition = [0, 1.5, -5]\n"
+                        "[[shapes]]\ntype = \"plane\"\nmaterial = \"pbr\"\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"pbr\"\n";
+    render::Image img = render_scene("pbr_eye_light.iq", scene, 160, 90);
+    int nan = 0;
+    for (float v : img.rgba) nan += !std::isfinite(v);
+    CHECK(nan == 0);
+    Compiled c = compile_text("pbr_eye_light2.iq", scene);
+    CHECK_THAT(c.result.code, !Catch::Contains(", 5.0)"));  // (1 - v)⁵ multiplied out, not pow(…, 5.0)
+}
+
+TEST_CASE("a scene whose lights are all sky or bounce has no direct light", "[look][render]") {
+    // The material's light terms are left out: its P_L and C_L defaults are not a hidden, unshadowed light.
+    std::string base = "[render]\noutput = \"linear\"\n[camera]\nposition = [0, 6, -6]\ntarget = [0, 0, 0]\n"
+                       "[[shapes]]\ntype = \"plane\"\nshape_params = { h = 0 }\nmaterial = \"pbr\"\n"
+                       "material_params = { k_d = [0.5, 0.5, 0.5], rho = 1 }\n[[lights]]\ntype = \"sky\"\ncolor = [0.4, 0.4, 0.4]\n";
+    render::Image sky = render_scene("sky_only.iq", base);
+    render::Image dark_sun = render_scene("sky_dark_sun.iq", base + "[[lights]]\ndirection = [0, 1, 0]\ncolor = [0, 0, 0]\n");
+    CHECK(max_abs_diff(sky, dark_sun) < 1e-4);
+    Compiled c = compile_text("sky_only2.iq", base);
+    CHECK_THAT(c.result.code, !Catch::Contains("material_P_L"));
+}
+
+TEST_CASE("a colour that scales or multiplies a sum still splits into light and ambient terms", "[look][render]") {
+    // C = 0.5(C_L∘k_d max(0, L̂⋅N̂) + k_a): in the shadow, exactly 0.5·k_a.
+    std::string half = R"(
+[modules]
+half = """
+material
+C = 0.5(`C_L`∘`k_d`max(0, L̂⋅N̂) + `k_a`)
+L̂ = normalize(`P_L` - p)
+where
+p ∈ ℝ³
+N̂ ∈ ℝ³
+I ∈ ℝ³
+`P_L` ∈ ℝ³: light position
+`C_L` ∈ ℝ³: light colour
+`k_d` ∈ [0,1]x[0,1]x[0,1] default = (0.6, 0.6, 0.6): diffuse colour
+`k_a` ∈ [0,1]x[0,1]x[0,1] default = (0.2, 0.1, 0.04): ambient colour
+"""
+)";
+    render::Image img = render_scene("half.iq", half + "[render]\noutput = \"linear\"\n[effects]\nshadows = \"hard\"\n"
+                                                       "[[lights]]\nposition = [0, 10, 0]\n" + ground_and_ball("half", 2.5));
+    CHECK(img.pixel(48, 27)[0] == Approx(0.1).margin(0.005));
+    CHECK(img.pixel(48, 27)[1] == Approx(0.05).margin(0.005));
+}
+
+TEST_CASE("a ray that uses up its bounces sees the background beyond, not black", "[look][render]") {
+    // Two glass balls in a row (η = 1: no bending) before a white background; with no reflections the ray has
+    // two bounces, used up inside the second ball.
+    std::string scene = "[camera]\nposition = [0, 0, -6]\ntarget = [0, 0, 0]\nfov = 30\n"
+                        "[render]\noutput = \"linear\"\nbackground = [1, 1, 1]\n[effects]\nrefraction = true\n"
+                        "[[shapes]]\ntype = \"sphere\"\nmaterial = \"glass\"\nmaterial_params = { k_t = [1, 1, 1], eta = 1, k_r = 0 }\n"
+                        "[[shapes]]\ntype = \"sphere\"\ntransform = \"T((0, 0, 3))\"\nmaterial = \"glass\"\n"
+                        "material_params = { k_t = [1, 1, 1], eta = 1, k_r = 0 }\n";
+    render::Image img = render_scene("glass_row.iq", scene);
+    CHECK(img.pixel(48, 27)[0] > 0.9f);
+}

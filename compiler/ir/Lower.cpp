@@ -123,13 +123,21 @@ struct Env {
         return n;
     }
 
+    // x^c. A whole constant exponent up to 16 in size is multiplied out (repeated squaring: x⁵ = (x²)²·x):
+    // exact for a negative base, which GLSL's pow leaves undefined (NaN on most GPUs) even for whole exponents —
+    // (1 - v)⁵ with v a dot product of unit vectors that rounding lifts just past 1 (Schlick's Fresnel) was NaN.
     ValueId power(ValueId base, const Expr& ex, Span span) {
         auto c = const_eval(ex);
-        if (c && c->size() == 1 && std::fabs((*c)[0]) <= 4 && (*c)[0] == std::floor((*c)[0])) {
+        if (c && c->size() == 1 && std::fabs((*c)[0]) <= 16 && (*c)[0] == std::floor((*c)[0])) {
             int n = int((*c)[0]);
             if (n == 0) return f.scalar(1.0);
-            ValueId r = base;
-            for (int i = 1; i < std::abs(n); ++i) r = emit(Op::Mul, Type::scalar(), {r, base}, 0, span);
+            ValueId r = ValueId(-1), square = base;
+            for (int k = std::abs(n);;) {
+                if (k & 1) r = r == ValueId(-1) ? square : emit(Op::Mul, Type::scalar(), {r, square}, 0, span);
+                k >>= 1;
+                if (!k) break;
+                square = emit(Op::Mul, Type::scalar(), {square, square}, 0, span);
+            }
             if (n < 0) r = emit(Op::Div, Type::scalar(), {f.scalar(1.0), r}, 0, span);
             return r;
         }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <tuple>
 #include <fmt/format.h>
@@ -98,6 +99,7 @@ public:
     SceneLowering(const SceneDesc& s, const std::vector<InstancePlan>& p, const SceneLowerOptions& o) : s_(s), plans_(p), o_(o) {}
 
     SceneIR run() {
+        bind_lights_ = !s_.lights.empty();
         for (const auto& l : s_.lights) {
             lights_ |= l.kind == LightKind::Point || l.kind == LightKind::Sun;
             ambient_lights_ |= l.kind == LightKind::Sky || l.kind == LightKind::Bounce;
@@ -138,6 +140,7 @@ private:
     LowerContext ctx_{out_.module, {}, {}};
     std::vector<Item> items_;
     bool lights_ = false;          // point lights or suns: bound to materials' P_L, C_L
+    bool bind_lights_ = false;     // the scene has [[lights]]: P_L and C_L are the lights' (none: no direct light)
     bool ambient_lights_ = false;  // sky or bounce lights: bound to materials' C_A
     std::set<std::string> global_names_;
     // The shading lights' globals, point lights first, then suns (whose "position" global is their direction).
@@ -233,6 +236,7 @@ private:
         const auto& members = blend_items_[size_t(blend)];
         ValueId k = b.scalar(s_.blends[size_t(blend)].radius);
         ValueId d = ValueId(-1), count = ValueId(-1);
+        std::vector<ValueId> hs;  // member m's h at hs[m - 1]
         for (size_t m = 0; m < members.size(); ++m) {
             const Item& it = items_[members[m]];
             ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {p});
@@ -244,7 +248,6 @@ private:
             }
             if (m == 0) {
                 d = di;
-                if (weights) weights->push_back(b.scalar(1));
                 continue;
             }
             ValueId h = b.builtin("clamp", {b.op(Op::Add, {b.scalar(0.5), b.op(Op::Div, {b.op(Op::Sub, {di, d}), b.op(Op::Mul, {b.scalar(2), k})})}),
@@ -252,10 +255,19 @@ private:
             h = b.named(h, "h");
             ValueId one_minus = b.op(Op::Sub, {b.scalar(1), h});
             d = b.op(Op::Sub, {b.builtin("mix", {di, d, h}), b.op(Op::Mul, {b.op(Op::Mul, {k, h}), one_minus})});
-            if (weights) {
-                for (ValueId& w : *weights) w = b.op(Op::Mul, {w, h});
-                weights->push_back(one_minus);
+            hs.push_back(h);
+        }
+        if (weights) {
+            // Member i's weight: (1 − h_i)·h_(i+1)·…·h_(n−1) (the first's: every h), as running products from the
+            // last member back: linear in the members.
+            weights->assign(members.size(), ValueId(-1));
+            ValueId suffix = ValueId(-1);
+            for (size_t m = members.size(); m-- > 1;) {
+                ValueId one_minus = b.op(Op::Sub, {b.scalar(1), hs[m - 1]});
+                (*weights)[m] = suffix == ValueId(-1) ? one_minus : b.op(Op::Mul, {one_minus, suffix});
+                suffix = suffix == ValueId(-1) ? hs[m - 1] : b.op(Op::Mul, {hs[m - 1], suffix});
             }
+            (*weights)[0] = suffix;
         }
         d = b.named(d, "blend");
         return counted ? b.construct(Type::vector(2), {d, count}) : d;
@@ -443,7 +455,12 @@ private:
             if (!no_offset) it.offset = constant_field(it, "offset", Type::vector(3), off, identity ? what : "");
             if (!unit) it.scale = constant_field(it, "scale", Type::scalar(), sc, "1 / Lipschitz factor: keeps distances conservative");
         }
-        if (first.desc->bound > 0) {
+        if (first.desc->bound > 0 && first.blend >= 0) {
+            // A blend reads its members' distances up to its radius away: a bound sphere's distance there is only
+            // a lower bound and would change the blended shape (a crease where the sphere switches off).
+            out_.warnings.push_back({first.desc->bound_span, fmt::format("`bound` is not used for '{}': it is part of a blend, which "
+                                                                         "reads its true distance", first.name)});
+        } else if (first.desc->bound > 0) {
             it.bound = constant_field(it, "bound", Type::scalar(), R, "`bound`: radius of the bounding sphere");
             out_.any_bound = true;
         }
@@ -481,7 +498,7 @@ private:
             fields.assign(mod.params.size(), {});
             for (size_t k = 0; k < mod.params.size(); ++k) {
                 if (std::find(skip.begin(), skip.end(), int(k)) != skip.end()) continue;
-                if (&mod == first.material && first.lit_by(int(k), lights_, ambient_lights_)) continue;
+                if (&mod == first.material && first.lit_by(int(k), bind_lights_, ambient_lights_)) continue;
                 std::vector<std::vector<double>> vals;
                 for (size_t mi : it.members) vals.push_back((plan(mi).*values)[k]);
                 fields[k] = parameter_field(it, mod, role, k, vals);
@@ -884,6 +901,18 @@ private:
             if (it.blend >= 0 && p != ValueId(-1)) {
                 const auto& members = blend_items_[size_t(it.blend)];
                 if (&items_[members[0]] != &it) continue;
+                // One material with the same values throughout: the weights sum to 1, the first member's value is it.
+                bool alike = true;
+                for (size_t m : members) {
+                    const InstancePlan& a = plan(items_[m].members[0]);
+                    const InstancePlan& z = plan(it.members[0]);
+                    alike &= a.material == z.material && a.material_values == z.material_values;
+                }
+                if (alike) {
+                    v = of(it, k);
+                    if (v != ValueId(-1)) out.push_back({it.id, it.id + 1, v});
+                    continue;
+                }
                 std::vector<ValueId> vs;
                 bool any = false;
                 for (size_t m : members) {
@@ -931,7 +960,7 @@ private:
             auto cs = cases(b, id, [&](const Item& it, ValueId k) -> ValueId {
                 const InstancePlan& first = plan(it.members[0]);
                 if (!first.material) return ValueId(-1);
-                bool lit = first.per_light(lights_);
+                bool lit = first.per_light(bind_lights_);
                 int fn = lit ? material_part(*first.material, false) : -1;
                 if (lit && fn < 0) return zero;  // every term reads the light: iqc_shade_light
                 return material_call(b, it, k, p, N, eye, lit ? zero : ValueId(-1), lit ? zero : ValueId(-1), fn,
@@ -941,8 +970,8 @@ private:
             m_.functions.push_back(std::move(f));
         }
         bool any = false;
-        for (const Item& it : items_) any |= plan(it.members[0]).per_light(lights_);
-        if (!any) return;
+        for (const Item& it : items_) any |= plan(it.members[0]).per_light(bind_lights_);
+        if (!any || !lights_) return;  // no point light or sun: a lit material shows its light-independent part only
         out_.has_shade_light = true;
         {
             ir::Function f;
@@ -956,7 +985,7 @@ private:
             ValueId CA = ValueId(-1);
             auto cs = cases(b, id, [&](const Item& it, ValueId k) -> ValueId {
                 const InstancePlan& first = plan(it.members[0]);
-                if (!first.per_light(lights_)) return ValueId(-1);
+                if (!first.per_light(bind_lights_)) return ValueId(-1);
                 int fn = material_part(*first.material, true);
                 if (fn < 0) return ValueId(-1);  // no term reads the light
                 if (binds_ambient(first) && CA == ValueId(-1)) CA = b.call(ambient_function(), {N});
@@ -981,7 +1010,7 @@ private:
     }
 
     bool binds_ambient(const InstancePlan& first) const {
-        return first.material && first.lit_by(first.material->find_param(kAmbientColor), lights_, ambient_lights_);
+        return first.material && first.lit_by(first.material->find_param(kAmbientColor), bind_lights_, ambient_lights_);
     }
 
     // A call of the item's material (or of one part of it, `fn`) with the renderer's bindings: the roles, the
@@ -993,7 +1022,7 @@ private:
         std::map<int, ValueId> bound = {{mat.roles[0], p}, {mat.roles[1], N}, {mat.roles[2], eye}};
         if (PL != ValueId(-1)) {
             bound[mat.find_param(kLightPosition)] = PL;
-            if (int c = mat.find_param(kLightColor); first.lit_by(c, lights_)) bound[c] = CL;
+            if (int c = mat.find_param(kLightColor); first.lit_by(c, bind_lights_)) bound[c] = CL;
         }
         if (CA != ValueId(-1)) bound[mat.find_param(kAmbientColor)] = CA;
         return b.call(fn >= 0 ? fn : lower_module_cached(mat, ctx_), module_args(b, mat, it.material_params, bound, k));
@@ -1016,22 +1045,47 @@ private:
             if (in.op == Op::Param) reads[i] = in.aux == pl || in.aux == cl;
             for (ValueId a : in.args) reads[i] |= reads[a];
         }
-        std::vector<std::pair<ValueId, bool>> terms;  // (value, negated)
-        std::vector<std::pair<ValueId, bool>> todo = {{g.result, false}};
-        while (!todo.empty()) {
-            auto [v, neg] = todo.back();
-            todo.pop_back();
-            const ir::Instr& in = g.body[v];
-            if (in.type == g.result_type() && (in.op == Op::Add || in.op == Op::Sub) &&
-                g.body[in.args[0]].type == in.type && g.body[in.args[1]].type == in.type) {
-                todo.push_back({in.args[1], in.op == Op::Sub ? !neg : neg});
-                todo.push_back({in.args[0], neg});
-            } else if ((in.op == Op::Neg || in.op == Op::Copy) && in.type == g.result_type()) {
-                todo.push_back({in.args[0], in.op == Op::Neg ? !neg : neg});
-            } else {
-                terms.push_back({v, neg});
+        // The terms, distributing products and quotients over sums where that separates light terms from the
+        // rest: 0.5(C_L∘x + k_a) → 0.5(C_L∘x) + 0.5k_a, (C_L∘x + k_a)∘(C_A + k_d) → four products. New products
+        // are appended to the copy g (used only when the part is a new function); at most 64 terms.
+        Builder tb(m_, g);
+        std::function<std::vector<std::pair<ValueId, bool>>(ValueId, int)> expand = [&](ValueId v, int depth) {
+            std::vector<std::pair<ValueId, bool>> one = {{v, false}};
+            const ir::Instr in = g.body[v];  // a copy: g.body grows below
+            if (depth > 16) return one;
+            auto same = [&](ValueId a) { return g.body[a].type == in.type; };
+            if ((in.op == Op::Add || in.op == Op::Sub) && same(in.args[0]) && same(in.args[1])) {
+                auto a = expand(in.args[0], depth + 1), b = expand(in.args[1], depth + 1);
+                for (auto& t : b) a.push_back({t.first, in.op == Op::Sub ? !t.second : t.second});
+                return a.size() > 64 ? one : a;
             }
-        }
+            if ((in.op == Op::Neg || in.op == Op::Copy) && same(in.args[0])) {
+                auto a = expand(in.args[0], depth + 1);
+                if (in.op == Op::Neg)
+                    for (auto& t : a) t.second = !t.second;
+                return a;
+            }
+            if (!reads[v] || !(in.op == Op::Mul || in.op == Op::Hadamard || in.op == Op::Div)) return one;
+            auto a = expand(in.args[0], depth + 1);
+            auto b = in.op == Op::Div ? one : expand(in.args[1], depth + 1);
+            if (in.op == Op::Div) b = {{in.args[1], false}};
+            if (a.size() * b.size() > 64 || a.size() * b.size() == 1) return one;
+            bool separates = false;
+            for (auto& x : a)
+                for (auto& y : b) separates |= !reads[x.first] && !reads[y.first];
+            if (!separates) return one;
+            std::vector<std::pair<ValueId, bool>> out;
+            for (auto& x : a)
+                for (auto& y : b) {
+                    ValueId prod = tb.op(in.op, {x.first, y.first});
+                    reads.resize(g.body.size(), 0);
+                    reads[prod] = reads[x.first] || reads[y.first];
+                    out.push_back({prod, x.second != y.second});
+                }
+            return out;
+        };
+        std::vector<std::pair<ValueId, bool>> terms = expand(g.result, 0);
+        reads.resize(g.body.size(), 0);
         std::vector<std::pair<ValueId, bool>> chosen;
         for (const auto& t : terms)
             if (bool(reads[t.first]) == light) chosen.push_back(t);
@@ -1039,6 +1093,7 @@ private:
         if (chosen.size() == terms.size()) {
             out = fn;
         } else if (!chosen.empty()) {
+            reads.resize(g.body.size(), 0);
             g.name += light ? ".light" : ".ambient";
             g.glsl_name += light ? "_light" : "_ambient";
             g.entry = false;
