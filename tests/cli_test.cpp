@@ -320,3 +320,23 @@ TEST_CASE("iqc render draws a Shadertoy shader as it is", "[cli][render]") {
     CHECK(s.exit_code == 2);
     CHECK_THAT(s.err, Catch::Contains("--stats and --target need a scene"));
 }
+
+TEST_CASE("the hand-written references in bench/handwritten render without NaN", "[cli][render]") {
+    // Shadertoy shaders written by hand for the examples (issue 15's blind ranking, issue 17's comparison).
+    int n = 0;
+    for (const auto& e : std::filesystem::directory_iterator(std::filesystem::path(IQC_SOURCE_DIR) / "bench" / "handwritten")) {
+        if (e.path().extension() != ".frag") continue;
+        INFO(e.path().string());
+        iqc::render::RenderOptions o;
+        o.width = 96;
+        o.height = 54;
+        auto r = iqc::render::render_shadertoy(read_text(e.path()), o);
+        INFO(r.error);
+        REQUIRE(r.ok);
+        int nan = 0;
+        for (float v : r.image.rgba) nan += !std::isfinite(v);
+        CHECK(nan == 0);
+        ++n;
+    }
+    CHECK(n >= 5);
+}
