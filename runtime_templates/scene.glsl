@@ -571,9 +571,25 @@ float iqc_ao(vec3 p, vec3 N) {
 
 {{#if SKY}}
 // What a ray that hits nothing sees: the horizon's colour blended into the zenith's by √(rd_y), into the
-// ground's below the horizon.
+// ground's below the horizon{{#if SUN_DISC}}; each sun as a disc about half a degree across with a glow around it, in its
+// colour (after Quilez's skies){{/if}}.
 vec3 iqc_background(vec3 rd) {
+{{#if SUN_DISC}}
+    vec3 col = rd.y >= 0.0 ? mix(IQC_BACKGROUND, IQC_ZENITH, sqrt(rd.y)) : mix(IQC_BACKGROUND, IQC_GROUND, sqrt(-rd.y));
+    for (int l = IQC_POINT_LIGHTS; l < IQC_LIGHTS; l++) {
+        float s = max(dot(rd, normalize(iqc_light_position(l))), 0.0);
+        float s8 = s * s;
+        s8 *= s8;
+        s8 *= s8;
+        float s64 = s8 * s8;
+        s64 *= s64;
+        s64 *= s64;
+        col += iqc_light_color(l) * (0.05 * s8 + 0.25 * s64 + 4.0 * smoothstep(0.99996, 0.99999, s));
+    }
+    return col;
+{{#else}}
     return rd.y >= 0.0 ? mix(IQC_BACKGROUND, IQC_ZENITH, sqrt(rd.y)) : mix(IQC_BACKGROUND, IQC_GROUND, sqrt(-rd.y));
+{{/if}}
 }
 
 {{/if}}

@@ -134,3 +134,19 @@ TEST_CASE("a literal outside the 32-bit float range is a located error", "[diag]
     Evaluated ok = eval_module("y = 1e-30 + 3e38 - 3e38\n");
     CHECK(ok.ok);
 }
+
+TEST_CASE("a recurrence's first element cannot read itself, the result or a later sequence", "[diag]") {
+    // Found by the ir fuzzer (tests/fuzz/ir/first_element_reads_itself.iql): these lowered to a missing value,
+    // an internal error (exit 3).
+    CHECK_THAT(errors_of("y = d_2\nd_1 = min(d_1, 0) + 1\nd_(k+1) = d_k + 1 for k ∈ 1..1\n"),
+               Catch::Contains("test.iql:2:11: error: 'd_1' cannot read d_1: a first element cannot read itself or the recurrence's result"));
+    CHECK_THAT(errors_of("y = d_2\nd_1 = d_2 + 1\nd_(k+1) = d_k + 1 for k ∈ 1..1\n"),
+               Catch::Contains("test.iql:2:7: error: 'd_1' cannot read a later element"));
+    CHECK_THAT(errors_of("y = d_2 + e_2\nd_1 = e_1\ne_1 = 1\nd_(k+1) = d_k + 1 for k ∈ 1..1\ne_(k+1) = e_k + 1 for k ∈ 1..1\n"),
+               Catch::Contains("test.iql:2:7: error: 'd_1' cannot read e_1: first elements are computed in the order of the "
+                               "recurrences, and e's comes after d's; write e's recurrence first"));
+    // In that order it is fine.
+    Evaluated ok = eval_module("y = d_2 + e_2\ne_1 = 1\nd_1 = e_1 + 1\ne_(k+1) = e_k + 1 for k ∈ 1..1\nd_(k+1) = d_k + 1 for k ∈ 1..1\n");
+    INFO(ok.diagnostics);
+    CHECK(ok.ok);
+}

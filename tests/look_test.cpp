@@ -315,3 +315,21 @@ TEST_CASE("a ray that uses up its bounces sees the background beyond, not black"
     render::Image img = render_scene("glass_row.iq", scene);
     CHECK(img.pixel(48, 27)[0] > 0.9f);
 }
+
+TEST_CASE("a sky background shows each sun as a disc with a glow", "[look][render]") {
+    std::string scene = "[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\nfov = 60\n"
+                        "[render]\noutput = \"linear\"\nbackground = { zenith = [0.1, 0.1, 0.2], horizon = [0.2, 0.2, 0.2] }\n"
+                        "[[lights]]\ndirection = [0, 0, 1]\ncolor = [1, 0.8, 0.6]\n"
+                        "[[shapes]]\ntype = \"sphere\"\ntransform = \"T((0, 100, 0))\"\nmaterial = \"lambert\"\n";
+    render::Image img = render_scene("sun_disc.iq", scene, 97, 55);
+    // The centre pixel (an odd size: its ray is the axis) looks straight at the sun: its disc, brighter than
+    // 1 before the clamp.
+    CHECK(img.pixel(48, 27)[0] > 0.99f);
+    // Away from it, the sky plus a glow that fades with the angle.
+    CHECK(img.pixel(60, 27)[0] > img.pixel(90, 27)[0]);
+    CHECK(img.pixel(90, 27)[0] < 0.5f);
+    // Without a sun (a point light), the sky is the gradient alone.
+    std::string point = scene;
+    point.replace(point.find("direction = [0, 0, 1]"), 21, "position = [0, 0, 10]");
+    CHECK(render_scene("no_sun_disc.iq", point, 97, 55).pixel(48, 27)[0] == Approx(0.2).margin(0.01));
+}

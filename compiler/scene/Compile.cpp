@@ -281,6 +281,8 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     if (fx.refraction && scene.has_transmission) F.insert("REFRACTION");
     if (F.count("REFLECTIONS") || F.count("REFRACTION")) F.insert("BOUNCES");
     if (fx.antialias > 1) F.insert("AA");
+    // A sky shows each sun (needs the lights' functions: some material is lit).
+    if (F.count("SKY") && F.count("SUNS") && F.count("SHADE_LIGHT")) F.insert("SUN_DISC");
     // The thesis's look (I♥IQ documents, modules alone) reflects by k_r alone; scenes get Fresnel: more
     // reflection at grazing angles, and glass that reflects as it refracts.
     if (F.count("BOUNCES") && !s_.thesis_look) {

@@ -190,6 +190,10 @@ private:
     // Binds the symbols of `ts` from a value's type; false (and an error at `where`) on a conflict.
     bool bind_sizes(const TypeSpec& ts, const Type& t, const std::string& name, Span where);
     const LoopGroup* loop_ = nullptr;  // the recurrence group whose bodies are being checked
+    // The group whose first elements are being checked, and which of its sequences: a first element may read
+    // the first elements of the group's earlier sequences only (the others are not known yet).
+    const LoopGroup* init_group_ = nullptr;
+    size_t init_at_ = 0;
     std::map<std::string, const Stmt*> seq_leader_;  // sequence name -> its group's leader
     std::vector<std::pair<std::string, int>> sums_;  // enclosing ∑ indices and their ranges
     int depth_ = 0;          // nesting of check() (limits::kMaxNesting)
@@ -1919,11 +1923,14 @@ void Checker::check_group(const LoopGroup& g) {
             d_.error(g.leader->range_hi->span, fmt::format("the end of a recurrence's range must be a whole number or a "
                                                            "ℤ parameter, but '{}' is {}", g.hi_name, t.str()));
     }
-    for (int si : g.sequences) {
-        Sequence& seq = m_.sequences[size_t(si)];
+    init_group_ = &g;
+    for (size_t k = 0; k < g.sequences.size(); ++k) {
+        Sequence& seq = m_.sequences[size_t(g.sequences[k])];
+        init_at_ = k;
         seq.type = check(*seq.init->value);
         if (seq.type.is_scalar()) seq.type = Type::scalar();
     }
+    init_group_ = nullptr;
     loop_ = &g;
     for (int si : g.sequences) {
         Sequence& seq = m_.sequences[size_t(si)];
@@ -1947,6 +1954,25 @@ Type Checker::check_sequence_index(Expr& e) {
         return {};
     }
     const Expr& ix = *e.indices[0].expr;
+    // Inside the group's first elements: only the earlier sequences' first elements exist yet (d_1 = d_1 + 1,
+    // or a first element reading the recurrence's result, would be its own cause).
+    if (init_group_ == &g) {
+        size_t at = size_t(std::find(g.sequences.begin(), g.sequences.end(), si) - g.sequences.begin());
+        auto c0 = const_eval(ix);
+        bool first = c0 && c0->size() == 1 && (*c0)[0] == g.lo;
+        const Sequence& cur = m_.sequences[size_t(g.sequences[init_at_])];
+        if (!first || at == init_at_) {
+            d_.error(e.span, fmt::format("'{}_{}' cannot read {}: a first element cannot read itself or the recurrence's "
+                                         "result", cur.name, g.lo, first ? seq.name + "_" + std::to_string(g.lo) : "a later element"));
+            return {};
+        }
+        if (at > init_at_) {
+            d_.error(e.span, fmt::format("'{}_{}' cannot read {}_{}: first elements are computed in the order of the "
+                                         "recurrences, and {}'s comes after {}'s; write {}'s recurrence first",
+                                         cur.name, g.lo, seq.name, g.lo, seq.name, cur.name, seq.name));
+            return {};
+        }
+    }
     // A local function's body cannot read a module's sequence (its elements are not among the values a
     // local function captures): pass the element as an argument.
     if (scope_ && scope_->fn && loop_ != &g) {
