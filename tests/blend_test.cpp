@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "SceneRender.h"
 #include "TestUtil.h"
 #include "render/Render.h"
 
@@ -11,19 +12,6 @@ using namespace iqc;
 using namespace iqc::test;
 
 namespace {
-
-render::Image render_scene(const std::string& name, const std::string& text, int w = 96, int h = 54) {
-    Compiled c = compile_text(name, text);
-    INFO(name << "\n" << c.diagnostics);
-    REQUIRE(c.result.exit_code == 0);
-    render::RenderOptions o;
-    o.width = w;
-    o.height = h;
-    auto r = render::render_shadertoy(c.result.code, o);
-    INFO(r.error);
-    REQUIRE(r.ok);
-    return r.image;
-}
 
 // Two spheres side by side, red and blue (an emissive material: the colour is the material's alone),
 // apart by 0.1 at their closest; `extra` adds tables.
@@ -103,7 +91,5 @@ TEST_CASE("a blend member's bound is not used, with a located warning", "[blend]
     CHECK_THAT(c.diagnostics, Catch::Contains("blend_bound.iq:12:9: warning: `bound` is not used for 'left': it is part of a blend"));
     render::Image with = render_scene("blend_bound2.iq", text);
     render::Image without = render_scene("blend_nobound.iq", two_balls("[[blends]]\nshapes = [\"left\", \"right\"]\nradius = 0.5\n"));
-    double m = 0;
-    for (size_t i = 0; i < with.rgba.size(); ++i) m = std::max(m, double(std::fabs(with.rgba[i] - without.rgba[i])));
-    CHECK(m < 1e-4);
+    CHECK(max_abs_diff(with, without) < 1e-4);
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "SceneRender.h"
 #include "TestUtil.h"
 #include "render/Render.h"
 
@@ -15,25 +16,6 @@ using namespace iqc::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-render::Image render_scene(const std::string& name, const std::string& text, int w = 96, int h = 54) {
-    Compiled c = compile_text(name, text);
-    INFO(name << "\n" << c.diagnostics);
-    REQUIRE(c.result.exit_code == 0);
-    render::RenderOptions o;
-    o.width = w;
-    o.height = h;
-    auto r = render::render_shadertoy(c.result.code, o);
-    INFO(r.error);
-    REQUIRE(r.ok);
-    return r.image;
-}
-
-double max_abs_diff(const render::Image& a, const render::Image& b) {
-    double m = 0;
-    for (size_t i = 0; i < a.rgba.size(); ++i) m = std::max(m, double(std::fabs(a.rgba[i] - b.rgba[i])));
-    return m;
-}
 
 // A Lambert material with an ambient term: C = C_L∘k_d max(0, L̂⋅N̂) + k_a.
 const std::string kLambert = R"(
