@@ -11,6 +11,8 @@
 #include <spirv_glsl.hpp>
 
 #include "TestUtil.h"
+#include "glsl/Spirv.h"
+#include "glsl/Wgsl.h"
 #include "render/Png.h"
 
 using namespace iqc;
@@ -299,4 +301,167 @@ TEST_CASE("threejs: plain parameters past WebGL2's uniform vectors go into the d
     CHECK(differing_pixels(a.image, b.image) <= W * H / 200);
     RunResult r = run_iqc(in.string() + " --target threejs -o " + (temp_dir() / "three_spheres_120.mjs").string());
     CHECK(r.exit_code == 0);
+}
+
+// ---- wgsl (issue 14): SPIR-V -> WGSL. Tint validates (node + Dawn's null backend); the browser test
+// tests/browser/wgsl.test.mjs draws every example with Chromium's WebGPU and compares with iqc render.
+
+namespace {
+
+// Tint's verdict on WGSL files (tests/browser/wgsl-validate.mjs): "" when every file is accepted.
+std::string tint_errors(const std::vector<fs::path>& files) {
+    std::string cmd = "node '" + (fs::path(IQC_SOURCE_DIR) / "tests/browser/wgsl-validate.mjs").string() + "'";
+    for (const auto& f : files) cmd += " '" + f.string() + "'";
+    std::string out;
+    int rc = shell(cmd, &out);
+    return rc == 0 ? "" : out.empty() ? "wgsl-validate failed to run" : out;
+}
+
+std::string wgsl_of(const std::string& vulkan_glsl) {
+    glsl::SpirvResult spv = glsl::compile_vulkan_fragment(vulkan_glsl);
+    INFO(spv.log);
+    REQUIRE(spv.ok);
+    glsl::WgslResult w = glsl::spirv_to_wgsl(spv.words);
+    INFO(w.log);
+    REQUIRE(w.ok);
+    return w.text;
+}
+
+// A Vulkan GLSL shader that uses what the translation must handle beyond the examples: every structured
+// construct glslang writes (for/while/do-while loops, break, continue, switch, early return, discard,
+// short-circuit && and || and ?: (OpPhi)), std140 strides WGSL does not have (mat2 and mat3x2 columns, float
+// and vec2 arrays at 16 bytes), inverse of 2x2/3x3/4x4, integer and bit operations, derivatives, texelFetch.
+const char* kConstructs = R"(#version 450
+layout(std140, set = 0, binding = 0) uniform Inputs { mat2 m2; float f[4]; vec2 v2[3]; mat3x2 m32; int n; vec3 c; mat2 ms[2]; } u;
+layout(set = 0, binding = 1) uniform sampler2D data;
+layout(location = 0) out vec4 colour;
+float g(inout float x, float y) { x += y; return x * y; }
+float first_over(float limit) {
+    for (int i = 0; ; ++i) {
+        if (float(i) * 0.5 > limit) return float(i);
+        if (i > 100) break;
+    }
+    return -1.0;
+}
+void main() {
+    vec4 acc = vec4(0.0);
+    for (int i = 0; i < u.n; ++i) {
+        if (i == 2) continue;
+        if (acc.x > 10.0) break;
+        acc.x += u.f[i] + u.v2[i % 3].y;
+        for (int j = 0; j < 3; j++) { if (j == i) break; acc.z += 1.0; }
+    }
+    int k = 0;
+    do { k += 3; } while (k < 10);
+    while (k > 20) k -= 5;
+    switch (k) { case 1: acc.y = 1.0; break; case 12: case 13: acc.y = 2.0; break; default: acc.y = 3.0; }
+    bool b = (acc.x > 1.0 && acc.y < 5.0) || u.c.z > 0.0;
+    float t = b ? sin(acc.x) : g(acc.w, acc.y);
+    vec2 w = u.m2 * vec2(1.0, 2.0) + u.m32 * vec3(1.0) + u.ms[1][0];
+    mat2 i2 = inverse(u.m2);
+    mat3 i3 = inverse(mat3(u.c, u.c.yzx, vec3(1.0)));
+    mat4 i4 = inverse(mat4(2.0));
+    vec4 tex = texelFetch(data, ivec2(k, 0), 0);
+    float x = 1.0;
+    float r = g(x, t) + first_over(t);
+    uint bits = (uint(k) << 2u) | 1u;
+    int s = -k >> 1;
+    float dd = dFdx(t) + fwidth(w.x);
+    if (gl_FragCoord.x < 0.0) discard;
+    colour = vec4(acc.xy, w) + tex + vec4(i2[0], i3[1].xy) + i4[2] + vec4(r, float(bits), float(s), dd) +
+             vec4(mod(t, 0.3), isnan(t) ? 1.0 : 0.0, float(u.n % 3), float(bits ^ 5u));
+}
+)";
+
+}  // namespace
+
+TEST_CASE("wgsl: every example's WGSL passes Tint, with --meta's layout and the header", "[engine-targets][wgsl]") {
+    std::vector<fs::path> files;
+    for (const auto& input : example_inputs()) {
+        INFO(input.string());
+        fs::path out = temp_dir() / ("wgsl_" + input.stem().string() + ".wgsl");
+        fs::path meta = temp_dir() / ("wgsl_" + input.stem().string() + ".json");
+        RunResult r = run_iqc(input.string() + " --target wgsl -q -o " + out.string() + " --meta " + meta.string());
+        INFO(r.err);
+        REQUIRE(r.exit_code == 0);
+        std::string text = read_text(out);
+        CHECK_THAT(text, Catch::Contains("(wgsl): Vulkan GLSL compiled to SPIR-V, translated to WGSL."));
+        CHECK_THAT(text, Catch::Contains("@fragment\nfn fs_main(@builtin(position) "));
+        CHECK_THAT(text, Catch::Contains("@vertex\nfn vs_main(@builtin(vertex_index) i: u32)"));
+        CHECK_THAT(text, Catch::Contains("@group(0) @binding(0) var<uniform> IqcInputs_data: IqcInputs;"));
+        CHECK_THAT(text, Catch::Contains("@builtin(frag_depth) gl_FragDepth: f32"));
+        auto j = nlohmann::json::parse(read_text(meta));
+        CHECK(j["target"] == "wgsl");
+        CHECK(j["inputs_block"]["binding"] == 0);
+        for (const auto& b : j["blocks"])
+            CHECK_THAT(text, Catch::Contains(fmt::format("@group(0) @binding({}) var<uniform> {}_data: {};", int(b["binding"]),
+                                                         std::string(b["name"]), std::string(b["name"]))));
+        files.push_back(out);
+    }
+    REQUIRE(files.size() >= 9);
+    CHECK(tint_errors(files).empty());
+}
+
+TEST_CASE("wgsl: control flow, std140 strides, inverses and integer operations translate to WGSL Tint accepts",
+          "[engine-targets][wgsl]") {
+    std::string w = wgsl_of(kConstructs);
+    // structure: loops with continuing blocks, break if, switch with a shared case, phis as variables
+    CHECK_THAT(w, Catch::Contains("loop {"));
+    CHECK_THAT(w, Catch::Contains("continuing {"));
+    CHECK_THAT(w, Catch::Contains("break if "));
+    CHECK_THAT(w, Catch::Contains("case 12i, 13i: {"));
+    CHECK_THAT(w, Catch::Contains("discard;"));
+    CHECK_THAT(w, Catch::Contains("var phi: bool;"));
+    // std140 kept: mat2 columns and float/vec2 elements at 16 bytes
+    CHECK_THAT(w, Catch::Contains("@size(16) v: vec2<f32>,"));
+    CHECK_THAT(w, Catch::Contains("@size(16) v: f32,"));
+    CHECK_THAT(w, Catch::Contains("m2: array<iqc_stride16_"));
+    CHECK_THAT(w, Catch::Contains("fn iqc_inverse2(m: mat2x2<f32>)"));
+    CHECK_THAT(w, Catch::Contains("fn iqc_inverse3(m: mat3x3<f32>)"));
+    CHECK_THAT(w, Catch::Contains("fn iqc_inverse4(m: mat4x4<f32>)"));
+    CHECK_THAT(w, Catch::Contains("textureLoad("));
+    CHECK_THAT(w, Catch::Contains("diagnostic(off, derivative_uniformity);"));
+    CHECK(wgsl_of(kConstructs) == w);  // deterministic
+    auto f = write_temp("constructs.wgsl", w);
+    INFO(w);
+    CHECK(tint_errors({f}).empty());
+}
+
+TEST_CASE("wgsl: names that are WGSL keywords or reserved words are renamed", "[engine-targets][wgsl]") {
+    std::string w = wgsl_of(R"(#version 450
+layout(location = 0) out vec4 colour;
+float override(float target) { float loop = target * 2.0; float let = loop; return let; }
+void main() { float fn = 1.0; float match = override(fn); colour = vec4(match); }
+)");
+    CHECK_THAT(w, Catch::Contains("fn override_("));
+    CHECK_THAT(w, Catch::Contains("target_"));
+    CHECK_THAT(w, Catch::Contains("loop_"));
+    CHECK_THAT(w, Catch::Contains("let_"));
+    CHECK_THAT(w, Catch::Contains("fn_"));
+    auto f = write_temp("keywords.wgsl", w);
+    CHECK(tint_errors({f}).empty());
+}
+
+TEST_CASE("wgsl: SPIR-V the translation does not know is an error, not WGSL", "[engine-targets][wgsl]") {
+    // an implicit-LOD sample (a sampler WGSL would need next to the texture) is not translated
+    glsl::SpirvResult spv = glsl::compile_vulkan_fragment(R"(#version 450
+layout(set = 0, binding = 0) uniform sampler2D t;
+layout(location = 0) out vec4 colour;
+void main() { colour = texture(t, gl_FragCoord.xy); }
+)");
+    REQUIRE(spv.ok);
+    glsl::WgslResult w = glsl::spirv_to_wgsl(spv.words);
+    CHECK_FALSE(w.ok);
+    CHECK_THAT(w.log, Catch::StartsWith("SPIR-V to WGSL: opcode 87"));
+    CHECK(w.text.empty());
+    CHECK_FALSE(glsl::spirv_to_wgsl({1, 2, 3}).ok);  // not a module
+    // and through the driver: exit 3, the bug message, nothing written
+    auto in = fs::path(IQC_SOURCE_DIR) / "examples" / "two_tori.md";
+    auto out = temp_dir() / "fault.wgsl";
+    fs::remove(out);
+    RunResult r = run_iqc(in.string() + " --target wgsl --inject-fault wgsl -o " + out.string());
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("internal compiler error: the shader's SPIR-V could not be translated to WGSL"));
+    CHECK_THAT(r.err, Catch::Contains("SPIR-V to WGSL: opcode 106 at module scope"));
+    CHECK_FALSE(fs::exists(out));
 }

@@ -1,8 +1,8 @@
 // Golden tests: every example and every input under golden/ compiles, for every target, to exactly the
 // expected shader, byte for byte, and the expected file itself passes glslang (Shadertoy's wrapper for
 // shadertoy; ES 3.00 for webgl2; core 3.30 for glsl330; for the examples also Vulkan GLSL 4.50 to SPIR-V and
-// SPIRV-Tools for spirv, whose golden is the Vulkan GLSL the module is compiled from, and glslang's HLSL front
-// end for hlsl).
+// SPIRV-Tools for spirv, whose golden is the Vulkan GLSL the module is compiled from, glslang's HLSL front
+// end for hlsl, and Tint in Dawn for Node for wgsl: tests/browser/wgsl-validate.mjs).
 //
 // Inputs: examples/<name>.{md,iq}  ->  golden/examples/<name>.<target>.expected
 //         golden/<area>/<name>.{md,iq,iql} -> golden/<area>/<name>.<target>.expected
@@ -42,7 +42,7 @@ std::vector<GoldenCase> golden_cases() {
         for (Target t : kTargets)
             cases.push_back({input, dir / (input.stem().string() + "." + target_name(t) + ".expected"), t});
         if (engines)  // the SPIR-V target's Vulkan GLSL (the module is its compilation) and the HLSL
-            for (Target t : {Target::SPIRV, Target::HLSL})
+            for (Target t : {Target::SPIRV, Target::HLSL, Target::WGSL})
                 cases.push_back({input, dir / (input.stem().string() + "." + target_name(t) + ".expected"), t});
     };
     for (auto& e : fs::directory_iterator(root / "examples"))
@@ -104,6 +104,18 @@ TEST_CASE("golden: every example compiles to its expected shader", "[golden]") {
                     break;
                 }
                 case Target::HLSL: v = glsl::validate_hlsl_fragment(expected); break;
+                case Target::WGSL: {
+                    // Tint (Dawn for Node, tests/browser/wgsl-validate.mjs): no WGSL compiler runs in-process
+                    std::string cmd = "node '" + (fs::path(IQC_SOURCE_DIR) / "tests/browser/wgsl-validate.mjs").string() +
+                                      "' '" + c.expected.string() + "' 2>&1";
+                    if (FILE* p = popen(cmd.c_str(), "r")) {
+                        char buf[4096];
+                        size_t n;
+                        while ((n = fread(buf, 1, sizeof buf, p)) > 0) v.log.append(buf, n);
+                        v.ok = pclose(p) == 0 && v.log.rfind("ok ", 0) == 0;
+                    }
+                    break;
+                }
             }
             INFO(v.log);
             CHECK(v.ok);

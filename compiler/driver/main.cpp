@@ -377,11 +377,12 @@ static int run(int argc, char** argv) {
                    "header: the webgl2 shader as a constant and a constexpr table of its parameters), spirv (a SPIR-V "
                    "binary for Vulkan, needs -o: Vulkan GLSL 4.50 compiled by glslang and validated by SPIRV-Tools; "
                    "inputs, camera and parameters in std140 uniform blocks at set 0, layout in --meta), hlsl (Shader Model "
-                   "5.0, cross-compiled from that SPIR-V by SPIRV-Cross and re-checked by glslang), threejs (an ES module: "
+                   "5.0, cross-compiled from that SPIR-V by SPIRV-Cross and re-checked by glslang), wgsl (WebGPU: that SPIR-V "
+                   "translated to WGSL, entry points vs_main and fs_main, the same blocks at @group(0)), threejs (an ES module: "
                    "createMesh(camera) gives a three.js mesh that raymarches the scene through a PerspectiveCamera and "
                    "writes depth, so it and other meshes occlude each other). Every target but shadertoy takes the "
                    "camera as uniforms and writes depth (docs/engines.md)")
-        ->check(CLI::IsMember({"shadertoy", "webgl2", "glsl330", "html", "cpp", "spirv", "hlsl", "threejs"}));
+        ->check(CLI::IsMember({"shadertoy", "webgl2", "glsl330", "html", "cpp", "spirv", "hlsl", "wgsl", "threejs"}));
     std::string meta;
     app.add_option("--meta", meta, "also write a JSON description of every parameter (instance, module, role, "
                                    "uniform or constant name, type, bounds, default, description)");
@@ -399,7 +400,7 @@ static int run(int argc, char** argv) {
                        "print the IR to standard error: after the last pass, or with =after-PASS after that pass (=after-lower: "
                        "before the first). Passes, in order: " + passes_list)
             ->expected(0, 1);
-    app.add_option("--inject-fault", inject_fault, "testing the internal-error path: fail in this pass, or 'glslang'")
+    app.add_option("--inject-fault", inject_fault, "testing the internal-error path: fail in this pass, or 'glslang', or 'wgsl'")
         ->group("");
     bool verify_ir = false;
     app.add_flag("--verify-ir", verify_ir, "verify the IR before and after every pass (a fault is an internal error naming the pass)");
@@ -640,6 +641,7 @@ static int run(int argc, char** argv) {
                   : target == "glsl330"                                      ? iqc::Target::GLSL330
                   : target == "spirv"                                        ? iqc::Target::SPIRV
                   : target == "hlsl"                                         ? iqc::Target::HLSL
+                  : target == "wgsl"                                         ? iqc::Target::WGSL
                   : target == "threejs"                                      ? iqc::Target::ThreeJS
                                                                              : iqc::Target::Shadertoy;
     if (target == "spirv" && !render->parsed() && (output.empty() || output == "-")) {

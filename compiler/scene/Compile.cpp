@@ -9,6 +9,7 @@
 #include "glsl/Emit.h"
 #include "glsl/ShadertoyWrapper.h"
 #include "glsl/Spirv.h"
+#include "glsl/Wgsl.h"
 #include "glsl/Validate.h"
 #include "ir/Pipeline.h"
 #include "resources/Embedded.h"
@@ -97,7 +98,7 @@ private:
     Normals normals() const { return opts_.normals.value_or(s_.render.normals); }
     double hit() const { return opts_.hit.value_or(s_.render.hit); }
     std::vector<ShaderInputs::Uniform> camera() const {
-        return camera_uniforms(s_.camera, s_.render.max_dist, opts_.target == Target::SPIRV || opts_.target == Target::HLSL);
+        return camera_uniforms(s_.camera, s_.render.max_dist, through_spirv(opts_.target));
     }
     // `bound`: ten hit tolerances (at the farthest distance for a relative tolerance), and at least 0.1: a
     // march never stops on a bounding sphere, and the shape is evaluated wherever a hit is possible.
@@ -227,7 +228,8 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         case Target::ThreeJS: F.insert("WEBGL2"); break;
         case Target::GLSL330: F.insert("GLSL330"); break;
         case Target::SPIRV:
-        case Target::HLSL: F.insert("VULKAN"); break;
+        case Target::HLSL:
+        case Target::WGSL: F.insert("VULKAN"); break;
     }
     // Depth for compositing with meshes: every uniform target's colour build (not the probes).
     if (opts_.target != Target::Shadertoy && !opts_.instrument && !opts_.geometry && !opts_.ids && !opts_.bench) F.insert("DEPTH");
@@ -326,7 +328,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     // How the shader encodes its colour: "srgb" (colours it takes are linear) or "linear" (I♥IQ's documents).
     j["output"] = s_.srgb() ? "srgb" : "linear";
     if (opts_.target != Target::Shadertoy) j["camera"] = camera_json(s_.camera, camera());
-    if (opts_.target == Target::SPIRV || opts_.target == Target::HLSL) {
+    if (through_spirv(opts_.target)) {
         // The template's IqcInputs block (std140, set 0, binding 0): what the host writes every frame.
         nlohmann::ordered_json members = nlohmann::ordered_json::array();
         auto member = [&](const char* name, const char* type, int offset) {
@@ -449,7 +451,7 @@ CompileResult SceneCompiler::run_checked() {
         if (d_.error_count() != before) return std::move(res_);
         BackendOptions bo;
         bo.constants = opts_.target == Target::Shadertoy;
-        bo.vulkan = opts_.target == Target::SPIRV || opts_.target == Target::HLSL;
+        bo.vulkan = through_spirv(opts_.target);
         bo.blocks = opts_.target != Target::ThreeJS;
         bo.instrument = opts_.instrument || opts_.bench;
         for (const auto& p : plans) {
@@ -475,7 +477,8 @@ CompileResult SceneCompiler::run_checked() {
             case Target::ThreeJS: v = glsl::validate_fragment(shader, glsl::Profile::Es300); break;
             case Target::GLSL330: v = glsl::validate_fragment(shader, glsl::Profile::Core330); break;
             case Target::SPIRV:
-            case Target::HLSL: {
+            case Target::HLSL:
+            case Target::WGSL: {
                 glsl::SpirvResult spv = glsl::compile_vulkan_fragment(shader);
                 v.ok = spv.ok;
                 v.log = spv.log;
@@ -486,7 +489,7 @@ CompileResult SceneCompiler::run_checked() {
         lap("glslang validation");
         if (!v.ok) {
             res_.exit_code = 3;
-            res_.internal = internal_error_message(opts_.target == Target::SPIRV || opts_.target == Target::HLSL
+            res_.internal = internal_error_message(through_spirv(opts_.target)
                                                        ? "glslang or SPIRV-Tools rejected the generated Vulkan shader"
                                                        : "glslang rejected the generated shader") +
                             ":\n" + v.log;
@@ -508,6 +511,27 @@ CompileResult SceneCompiler::run_checked() {
                      " (hlsl): Vulkan GLSL compiled to SPIR-V, cross-compiled by SPIRV-Cross.\n// Inputs: cbuffer IqcInputs "
                      "(b0), the parameters' cbuffers (b1...), layout in --meta (docs/engines.md). Do not edit: regenerate "
                      "with iqc.\n" + h.text;
+        }
+        if (opts_.target == Target::WGSL) {
+            // the fault test: an opcode the translation does not know (OpImageQueryLevels) appended to the module
+            if (opts_.inject_fault == "wgsl" && res_.spirv.size() > 5) {
+                uint32_t id = res_.spirv[3]++;
+                res_.spirv.insert(res_.spirv.end(), {(4u << 16) | 106u, 1u, id, 3u});
+            }
+            glsl::WgslResult w = glsl::spirv_to_wgsl(res_.spirv);
+            lap("SPIR-V to WGSL");
+            res_.spirv.clear();
+            if (!w.ok) {
+                res_.exit_code = 3;
+                res_.internal = internal_error_message("the shader's SPIR-V could not be translated to WGSL") + ":\n" + w.log;
+                return std::move(res_);
+            }
+            shader = "// " + glsl::comment_text(s_.title) + "\n// Generated by iqc " IQC_VERSION " from " +
+                     glsl::comment_text(std::filesystem::path(s_.path).filename().string()) +
+                     " (wgsl): Vulkan GLSL compiled to SPIR-V, translated to WGSL.\n// Entry points: vs_main (a full-screen "
+                     "triangle, 3 vertices) and fs_main. Inputs: IqcInputs (@group(0) @binding(0)), the parameters' uniform "
+                     "blocks (@binding(1)...), std140 layout in --meta (docs/engines.md). Do not edit: regenerate with iqc.\n" +
+                     w.text;
         }
         res_.code = std::move(shader);
         res_.inputs = std::move(code.inputs);
@@ -531,6 +555,7 @@ const char* target_name(Target t) {
         case Target::GLSL330: return "glsl330";
         case Target::SPIRV: return "spirv";
         case Target::HLSL: return "hlsl";
+        case Target::WGSL: return "wgsl";
         case Target::ThreeJS: return "threejs";
     }
     return "?";

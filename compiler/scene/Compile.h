@@ -26,11 +26,15 @@ namespace iqc {
 
 // Shadertoy: mainImage, parameters as constants. WebGL2 (GLSL ES 3.00), GLSL330 (desktop core): uniforms, the
 // camera as uniforms, gl_FragDepth. SPIRV: Vulkan GLSL 4.50 (uniform blocks at set 0) compiled to SPIR-V and
-// validated; HLSL: that SPIR-V cross-compiled to Shader Model 5.0 and re-checked.
+// validated; HLSL: that SPIR-V cross-compiled to Shader Model 5.0 and re-checked; WGSL: that SPIR-V
+// translated to WebGPU's shading language (glsl/Wgsl.h).
 // ThreeJS: the WebGL2 shader without uniform blocks (per-instance data in the data texture), for three.js.
-enum class Target { Shadertoy, WebGL2, GLSL330, SPIRV, HLSL, ThreeJS };
+enum class Target { Shadertoy, WebGL2, GLSL330, SPIRV, HLSL, ThreeJS, WGSL };
 
 const char* target_name(Target t);
+
+// The targets built from the Vulkan GLSL's SPIR-V (one layout: blocks at set 0, `--meta` "inputs_block").
+inline bool through_spirv(Target t) { return t == Target::SPIRV || t == Target::HLSL || t == Target::WGSL; }
 
 struct CompileOptions {
     Target target = Target::Shadertoy;
