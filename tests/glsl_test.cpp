@@ -20,6 +20,10 @@ TEST_CASE("math names become readable GLSL identifiers", "[glsl]") {
     CHECK(identifier("2x") == "v2x");
     CHECK(identifier("gl_x") == "v_gl_x");
     CHECK(identifier("a__b") == "a_b");
+    // the runtime's prefixes: refused with every suffix, so a user name never keeps them (the ir fuzzer
+    // found `IQC_…` looping forever in Namer::unique; tests/fuzz/scene/iqc_prefixed_names.iql)
+    CHECK(identifier("iqc_t") == "v_iqc_t");
+    CHECK(identifier("IQC_a") == "v_IQC_a");
 }
 
 TEST_CASE("the namer avoids GLSL keywords, built-ins and names already taken", "[glsl]") {
@@ -32,6 +36,8 @@ TEST_CASE("the namer avoids GLSL keywords, built-ins and names already taken", "
     CHECK(inner.unique("x") == "x_3");
     CHECK(is_reserved("mainImage"));
     CHECK(is_reserved("iqc_scene"));
+    CHECK(n.unique("iqc_scene") == "v_iqc_scene");
+    CHECK(n.unique("IQC_FOG") == "v_IQC_FOG");
 }
 
 TEST_CASE("float literals always have a point", "[glsl]") {

@@ -78,7 +78,9 @@ std::string identifier(const std::string& math) {
     if (clean[0] == '_') clean = "v" + clean;
     // gl_ names are the language's; GL_ names are predefined macros (GL_ES, GL_FRAGMENT_PRECISION_HIGH) and
     // reserved for future ones: a macro would replace the identifier.
-    if (clean.rfind("gl_", 0) == 0 || clean.rfind("GL_", 0) == 0) clean = "v_" + clean;
+    // iqc_ and IQC_ are the runtime's: a user name with that start would be refused with every suffix.
+    if (clean.rfind("gl_", 0) == 0 || clean.rfind("GL_", 0) == 0 || clean.rfind("iqc_", 0) == 0 || clean.rfind("IQC_", 0) == 0)
+        clean = "v_" + clean;
     // At most kMaxIdentifier characters (glslang refuses names past 1,024, and nobody reads a longer one): a
     // longer name keeps its start and ends in a hash of the whole (FNV-1a), so different names stay apart.
     if (clean.size() > kMaxIdentifier) {
