@@ -465,3 +465,38 @@ void main() { colour = texture(t, gl_FragCoord.xy); }
     CHECK_THAT(r.err, Catch::Contains("SPIR-V to WGSL: opcode 106 at module scope"));
     CHECK_FALSE(fs::exists(out));
 }
+
+TEST_CASE("wgsl: a Shadertoy shader (.frag) translates to WGSL; its errors are located; other targets need a scene",
+          "[engine-targets][wgsl][cli]") {
+    auto ok = write_temp("toy.frag", "void mainImage(out vec4 c, in vec2 p) {\n    c = vec4(p / iResolution.xy, 0.5 + 0.5 * sin(iTime), 1.0);\n}\n");
+    auto out = temp_dir() / "toy.wgsl", meta = temp_dir() / "toy.json";
+    RunResult r = run_iqc(ok.string() + " --target wgsl -o " + out.string() + " --meta " + meta.string());
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    std::string text = read_text(out);
+    CHECK_THAT(text, Catch::StartsWith("// toy.frag: a Shadertoy shader translated to WGSL by iqc"));
+    CHECK_THAT(text, Catch::Contains("@group(0) @binding(0) var<uniform> ShadertoyInputs_data: ShadertoyInputs;"));
+    auto j = nlohmann::json::parse(read_text(meta));
+    CHECK(j["inputs_block"]["bytes"] == 64);
+    CHECK(j["inputs_block"]["members"][5]["name"] == "iMouse");
+    CHECK(j["inputs_block"]["members"][5]["offset"] == 32);
+    CHECK(tint_errors({out}).empty());
+    // a GLSL error: the file's own line, the message, the line shown; exit 1, nothing written
+    auto bad = write_temp("bad.frag", "void mainImage(out vec4 c, in vec2 p) {\n    c = vec4(undeclared_thing);\n}\n");
+    fs::remove(temp_dir() / "bad.wgsl");
+    RunResult e = run_iqc(bad.string() + " --target wgsl -o " + (temp_dir() / "bad.wgsl").string());
+    CHECK(e.exit_code == 1);
+    CHECK_THAT(e.err, Catch::Contains(bad.string() + ":2: error: 'undeclared_thing' : undeclared identifier"));
+    CHECK_THAT(e.err, Catch::Contains("    c = vec4(undeclared_thing);"));
+    CHECK_FALSE(fs::exists(temp_dir() / "bad.wgsl"));
+    // Shadertoy's textures are not declared: said so
+    auto tex = write_temp("tex.frag", "void mainImage(out vec4 c, in vec2 p) { c = texture(iChannel0, p); }\n");
+    RunResult t = run_iqc(tex.string() + " --target wgsl -o -");
+    CHECK(t.exit_code == 1);
+    CHECK_THAT(t.err, Catch::Contains("tex.frag:1: error: 'iChannel0' : undeclared identifier"));
+    CHECK_THAT(t.err, Catch::Contains("iChannel textures are not declared"));
+    // another target: a usage error
+    RunResult u = run_iqc(ok.string() + " --target webgl2 -o -");
+    CHECK(u.exit_code == 2);
+    CHECK_THAT(u.err, Catch::Contains("is translated only with --target wgsl"));
+}

@@ -19,11 +19,15 @@
 #include <fstream>
 #include <filesystem>
 #include <iterator>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <iostream>
 
 #include "render/Png.h"
 #include "render/Render.h"
 #include "glsl/ShadertoyWrapper.h"
+#include "glsl/Names.h"
+#include "glsl/Wgsl.h"
 #include "bench/Bench.h"
 #include "driver/Serve.h"
 #include "scene/Page.h"
@@ -368,7 +372,8 @@ static int run(int argc, char** argv) {
     app.require_subcommand(0, 1);
     std::string input, output, target = "shadertoy", dump_ir_spec, inject_fault;
     bool time = false;
-    app.add_option("input", input, "scene (.iq), document (.md) or shape module (.iql)");
+    app.add_option("input", input, "scene (.iq), document (.md) or shape module (.iql); with --target wgsl also a Shadertoy "
+                                   "shader (.frag, .glsl: mainImage), translated as it is");
     app.add_option("-o,--output", output, "where to write the shader (default: standard output)");
     app.add_option("--target", target,
                    "output kind: shadertoy (default: mainImage, parameters as constants), webgl2 (GLSL ES 3.00 with a "
@@ -612,6 +617,88 @@ static int run(int argc, char** argv) {
             code = "#line 1\n" + code;  // the driver's messages count the file's own lines
             return render_command(code, iqc::ShaderInputs{}, false, r_output, r_size, r_time, r_frames, r_fps, false, quiet,
                                   [] { return iqc::CompileResult{}; });
+        }
+    }
+    if (!render->parsed()) {
+        // A Shadertoy shader (a .frag a user pasted into shadertoy.com): translated to WGSL as it is.
+        std::string ext = std::filesystem::path(input).extension().string();
+        if (ext == ".frag" || ext == ".glsl") {
+            if (target != "wgsl") {
+                std::fprintf(stderr, "iqc: error: a Shadertoy shader (%s) is translated only with --target wgsl, or drawn "
+                                     "with `iqc render`; the other targets need a scene (.iq, .md, .iql)\n",
+                             printable(input).c_str());
+                return 2;
+            }
+            if (!depfile.empty()) {
+                std::fprintf(stderr, "iqc: error: --depfile needs a scene\n");
+                return 2;
+            }
+            std::string code, err;
+            if (!iqc::read_source_file(input, 0, code, err)) {
+                std::fprintf(stderr, "iqc: error: cannot read '%s': %s\n", printable(input).c_str(), err.c_str());
+                return 1;
+            }
+            iqc::glsl::ShadertoyWgsl w = iqc::glsl::shadertoy_to_wgsl(code);
+            if (w.user_error) {
+                // glslang's "ERROR: iqc:LINE: message" lines, as FILE:LINE: error: message and the line
+                std::vector<std::string> lines;
+                for (size_t at = 0; at <= code.size();) {
+                    size_t nl = code.find('\n', at);
+                    lines.push_back(code.substr(at, nl == std::string::npos ? std::string::npos : nl - at));
+                    if (nl == std::string::npos) break;
+                    at = nl + 1;
+                }
+                std::istringstream log(w.log);
+                std::string l;
+                int errors = 0;
+                while (std::getline(log, l)) {
+                    const std::string head = "ERROR: iqc:";
+                    if (l.rfind(head, 0) != 0) continue;
+                    size_t colon = l.find(':', head.size());
+                    int line = std::atoi(l.substr(head.size(), colon - head.size()).c_str());
+                    std::string message = colon == std::string::npos ? l : l.substr(colon + 1);
+                    while (!message.empty() && message[0] == ' ') message.erase(0, 1);
+                    if (message.find("compilation terminated") != std::string::npos) continue;
+                    ++errors;
+                    std::string shown = line >= 1 && size_t(line) <= lines.size() ? lines[size_t(line) - 1] : "";
+                    put(stderr, fmt::format("{}:{}: error: {}\n", input, line, message) + (shown.empty() ? "" : "  " + shown + "\n"));
+                }
+                if (errors == 0) put(stderr, "iqc: error: glslang rejected " + input + ":\n" + w.log);
+                if (code.find("iChannel") != std::string::npos)
+                    std::fprintf(stderr, "iqc: note: Shadertoy's iChannel textures are not declared in the WGSL translation\n");
+                return 1;
+            }
+            if (!w.ok) {
+                put(stderr, "iqc: internal compiler error: the shader's SPIR-V could not be translated to WGSL (this is a bug "
+                            "in iqc; nothing was written):\n" + w.log + "\n");
+                return 3;
+            }
+            std::string name = std::filesystem::path(input).filename().string();
+            std::string text = "// " + iqc::glsl::comment_text(name) + ": a Shadertoy shader translated to WGSL by iqc " IQC_VERSION
+                               " (Vulkan GLSL, SPIR-V, WGSL).\n// Entry points: vs_main (a full-screen triangle, 3 vertices) "
+                               "and fs_main. Inputs: ShadertoyInputs (@group(0) @binding(0), std140: iResolution 0, iTime 12, "
+                               "iTimeDelta 16, iFrameRate 20, iFrame 24, iMouse 32, iDate 48; 64 bytes).\n" + w.text;
+            nlohmann::ordered_json j;
+            j["title"] = name;
+            j["target"] = "wgsl";
+            nlohmann::ordered_json members = nlohmann::ordered_json::array();
+            for (const auto& in : iqc::glsl::kShadertoyInputs)
+                members.push_back({{"name", in.name}, {"type", in.type}, {"offset", in.offset}});
+            j["inputs_block"] = {{"name", "ShadertoyInputs"}, {"set", 0}, {"binding", 0},
+                                 {"bytes", iqc::glsl::kShadertoyInputsBytes}, {"members", members}};
+            j["blocks"] = nlohmann::ordered_json::array();
+            j["texture"] = nullptr;
+            OutputSet outs;
+            size_t shader_out = outs.add(output, text);
+            size_t meta_out = meta.empty() ? 0 : outs.add(meta, j.dump(2) + "\n");
+            int rc = outs.commit();
+            if (rc == 0 && !quiet) {
+                if (!meta.empty() && meta != "-")
+                    std::fprintf(stderr, outs.changed(meta_out) ? "iqc: wrote %s\n" : "iqc: %s is unchanged\n", meta.c_str());
+                if (!output.empty() && output != "-")
+                    std::fprintf(stderr, outs.changed(shader_out) ? "iqc: wrote %s\n" : "iqc: %s is unchanged\n", output.c_str());
+            }
+            return rc;
         }
     }
     if (!depfile.empty() && (render->parsed() || output.empty() || output == "-")) {

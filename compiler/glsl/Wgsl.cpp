@@ -4,6 +4,8 @@
 #define SPV_ENABLE_UTILITY_CODE
 #include "glsl/Wgsl.h"
 
+#include "glsl/Spirv.h"
+
 #include <spirv_cross/GLSL.std.450.h>
 #include <spirv_cross/spirv.hpp>
 
@@ -1654,6 +1656,33 @@ WgslResult spirv_to_wgsl(const std::vector<uint32_t>& words) {
     } catch (const std::exception& e) {
         r.log = std::string("SPIR-V to WGSL: ") + e.what();
     }
+    return r;
+}
+
+ShadertoyWgsl shadertoy_to_wgsl(const std::string& code) {
+    ShadertoyWgsl r;
+    std::string src =
+        "#version 450\n"
+        "layout(std140, set = 0, binding = 0) uniform ShadertoyInputs {\n"
+        "    vec3 iResolution; float iTime; float iTimeDelta; float iFrameRate; int iFrame; vec4 iMouse; vec4 iDate;\n"
+        "};\n"
+        "layout(location = 0) out vec4 iqc_fragColor;\n"
+        "#line 1\n" + code +
+        "\nvoid main() {\n"
+        "    vec4 color = vec4(0.0, 0.0, 0.0, 1.0);\n"
+        "    mainImage(color, vec2(gl_FragCoord.x, iResolution.y - gl_FragCoord.y));\n"
+        "    iqc_fragColor = vec4(color.rgb, 1.0);\n"
+        "}\n";
+    SpirvResult spv = compile_vulkan_fragment(src);
+    if (!spv.ok) {
+        r.user_error = true;
+        r.log = spv.log;
+        return r;
+    }
+    WgslResult w = spirv_to_wgsl(spv.words);
+    r.ok = w.ok;
+    r.log = w.log;
+    r.text = w.text;
     return r;
 }
 

@@ -33,4 +33,29 @@ struct WgslResult {
 // compile_vulkan_fragment). Deterministic: the same words give the same text.
 WgslResult spirv_to_wgsl(const std::vector<uint32_t>& words);
 
+// A Shadertoy shader (`mainImage(out vec4, in vec2)`, GLSL ES 3.00 as pasted into shadertoy.com) as WGSL:
+// compiled as Vulkan GLSL 4.50 with Shadertoy's inputs in the std140 block `ShadertoyInputs` at @group(0)
+// @binding(0) (kShadertoyInputs: iResolution 0, iTime 12, iTimeDelta 16, iFrameRate 20, iFrame 24, iMouse 32,
+// iDate 48; 64 bytes), fragCoord with Shadertoy's origin (bottom left), alpha 1; then spirv_to_wgsl.
+// iChannel textures are not declared. `user_error`: glslang rejected the shader (its messages, lines of the
+// shader's own file, in `log`); otherwise a failure is the translation's (a bug: exit 3).
+struct ShadertoyWgsl {
+    bool ok = false;
+    bool user_error = false;
+    std::string log;
+    std::string text;
+};
+ShadertoyWgsl shadertoy_to_wgsl(const std::string& code);
+
+struct ShadertoyInput {
+    const char* name;
+    const char* type;  // float, int, vec3, vec4
+    int offset;
+};
+inline constexpr ShadertoyInput kShadertoyInputs[] = {
+    {"iResolution", "vec3", 0}, {"iTime", "float", 12}, {"iTimeDelta", "float", 16}, {"iFrameRate", "float", 20},
+    {"iFrame", "int", 24},      {"iMouse", "vec4", 32},  {"iDate", "vec4", 48},
+};
+inline constexpr int kShadertoyInputsBytes = 64;
+
 }  // namespace iqc::glsl

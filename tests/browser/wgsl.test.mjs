@@ -1,11 +1,13 @@
 // The wgsl target (run by ctest). Usage: node wgsl.test.mjs IQC_BINARY SOURCE_DIR [INPUT...]
 // (with INPUTs: those scenes instead of the examples and ring scenes; IQC_WGSL_DUMP=DIR keeps both pictures)
 //  1. Tint (Dawn for Node, null backend: tests/browser/wgsl-validate.mjs) accepts the --target wgsl output of
-//     every example and of ring scenes whose instances fill a uniform block (100) and the data texture (400):
-//     the module compiles and its vs_main/fs_main make a render pipeline.
+//     every example, of ring scenes whose instances fill a uniform block (100) and the data texture (400), of
+//     the hand-written Shadertoy references (bench/handwritten/) and of tests/wgsl/semantics.frag: the module
+//     compiles and its vs_main/fs_main make a render pipeline.
 //  2. Chromium's WebGPU (Dawn on SwiftShader's Vulkan) draws each of them from the WGSL and --meta alone (the
 //     blocks' bytes, the data texture, the camera's defaults): the same picture as `iqc render --target webgl2`
-//     (Mesa's llvmpipe), within a small tolerance (two rasterisers, two float implementations).
+//     (Mesa's llvmpipe), within a small tolerance (two rasterisers, two float implementations); the
+//     self-checking shader is green (each of its checks runs one construct of the translation).
 import { chromium } from "playwright-core";
 import { execFileSync, spawnSync } from "node:child_process";
 import fs from "node:fs";
@@ -19,6 +21,13 @@ const check = (ok, what) => { console.log((ok ? "ok   " : "FAIL ") + what); if (
 
 const inputs = only.length ? only.map(f => path.resolve(f)) : fs.readdirSync(path.join(src, "examples"))
   .filter(f => /\.(md|iq)$/.test(f)).sort().map(f => path.join(src, "examples", f));
+if (!only.length) {
+  // Shadertoy shaders nobody generated: the hand-written references, and a self-checking shader that is green
+  // when every construct computes what it should (tests/wgsl/semantics.frag)
+  for (const f of fs.readdirSync(path.join(src, "bench/handwritten")).filter(f => f.endsWith(".frag")).sort())
+    inputs.push(path.join(src, "bench/handwritten", f));
+  inputs.push(path.join(src, "tests/wgsl/semantics.frag"));
+}
 for (const n of only.length ? [] : [100, 400]) {
   const scene = path.join(tmp, `rings_${n}.iq`);
   fs.writeFileSync(scene, execFileSync("bash", [path.join(src, "bench/rings.sh"), String(n), "irregular"]));
@@ -29,8 +38,9 @@ const W = 96, H = 64;
 const cases = inputs.map(input => {
   const base = path.join(tmp, path.basename(input));
   execFileSync(iqc, [input, "--target", "wgsl", "-o", base + ".wgsl", "--meta", base + ".json", "-q"], { stdio: "pipe" });
-  execFileSync(iqc, ["render", input, "--target", "webgl2", "--size", `${W}x${H}`, "-o", base + ".png", "-q"], { stdio: "pipe" });
-  return { name: path.basename(input), wgsl: base + ".wgsl", meta: base + ".json", png: base + ".png" };
+  const frag = /\.(frag|glsl)$/.test(input);  // a Shadertoy shader: drawn as it is
+  execFileSync(iqc, ["render", input, ...(frag ? [] : ["--target", "webgl2"]), "--size", `${W}x${H}`, "-o", base + ".png", "-q"], { stdio: "pipe" });
+  return { name: path.basename(input), wgsl: base + ".wgsl", meta: base + ".json", png: base + ".png", frag };
 });
 
 // 1. Tint
@@ -78,7 +88,8 @@ async function drawWgsl(code, meta, W, H) {
   const ib = meta.inputs_block;
   const inputs = new ArrayBuffer(pad16(ib.bytes));
   const f32 = new Float32Array(inputs), i32 = new Int32Array(inputs);
-  const values = { ...meta.camera.defaults, iResolution: [W, H, 1], iTime: 0, iMouse: [0, 0, 0, 0], iFrame: 0 };
+  const values = { ...(meta.camera ? meta.camera.defaults : {}), iResolution: [W, H, 1], iTime: 0, iTimeDelta: 0,
+                   iFrameRate: 0, iMouse: [0, 0, 0, 0], iFrame: 0, iDate: [0, 0, 0, 0] };
   for (const m of ib.members) {
     const v = [].concat(values[m.name] ?? []);
     if (m.type === "mat3" || m.type === "mat4") {
@@ -177,6 +188,11 @@ for (const c of cases) {
   check(ref.length === got.px.length && mean < 3 && off <= W * H * 0.02 &&
         colours.size >= Math.min(10, refColours.size),
         `${c.name}: the same picture as iqc render (mean difference ${mean.toFixed(2)} of 255, ${off} of ${W * H} pixels off by more than 24, ${colours.size} colours)`);
+  if (c.name === "semantics.frag") {
+    const green = got.px.every((v, i) => v === [0, 255, 0, 255][i % 4]);
+    check(green, `semantics.frag: every construct computes its answer under WebGPU (first pixel ${got.px.slice(0, 4)}; blue = the failing check)`);
+  }
+  if (c.frag) continue;
   // depth: written (not the cleared 0.5) somewhere, and in [0, 1]
   const written = got.depths.filter(d => d !== 0.5).length;
   check(written > 0 && got.depths.every(d => d >= 0 && d <= 1), `${c.name}: fs_main writes depth in [0, 1] (${written} pixels)`);
