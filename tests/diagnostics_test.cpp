@@ -92,6 +92,12 @@ TEST_CASE("GLSL's size limit is a located error", "[diag]") {
                                          "```scene\n[[shapes]]\ntype = \"blob\"\n```\n");
     CHECK(c.result.exit_code == 1);
     CHECK_THAT(c.diagnostics, Catch::Contains("five.md:4:1: error: cannot generate GLSL: ℝ⁵ is larger than GLSL's largest vector (vec4)"));
+    // a parameter GLSL cannot hold: at its declaration (it was at the file's start; a wgsl trial)
+    Compiled p = compile_text("ten.iq", "[modules]\nbig = \"\"\"\nshape\nD = ‖p‖ - 0.5 - 0.01w_7\nwhere\np ∈ ℝ³\n"
+                                        "w ∈ ℝ^10 default = (1,2,3,4,5,6,7,8,9,10)\n\"\"\"\n[[shapes]]\ntype = \"big\"\n");
+    CHECK(p.result.exit_code == 1);
+    CHECK_THAT(p.diagnostics, Catch::Contains("ten.iq:7:1: error: cannot generate GLSL: ℝ¹⁰ is larger than GLSL's largest vector (vec4)"));
+    CHECK_THAT(p.diagnostics, Catch::Contains("  w ∈ ℝ^10 default"));
 }
 
 TEST_CASE("imports from module files beside the input, and import cycles", "[diag]") {

@@ -500,3 +500,42 @@ TEST_CASE("wgsl: a Shadertoy shader (.frag) translates to WGSL; its errors are l
     CHECK(u.exit_code == 2);
     CHECK_THAT(u.err, Catch::Contains("is translated only with --target wgsl"));
 }
+
+TEST_CASE("plain parameters past 11 uniform blocks go into the data texture: no 13th block, no empty texture",
+          "[engine-targets][wgsl][instancing]") {
+    // 75 instances of a shape with 40 mat4 parameters, each instance moved by a slider (so none share a
+    // table): 3,000 mat4 = 192 KB of plain parameters, more than 11 blocks of 16 KiB hold (a trial found
+    // 13 blocks, past WebGL2's and WebGPU's 12 per stage, and a 0x0 texture in --meta).
+    std::string sum, params;
+    for (int k = 0; k < 40; ++k) {
+        sum += fmt::format("{}`a{}`", k ? " + " : "", k);
+        params += fmt::format("`a{}` ∈ ℝ^(4×4) default = [1 0 0 0; 0 1 0 0; 0 0 1 0; 0 0 0 1]\n", k);
+    }
+    std::string scene = "[modules]\nheavy = \"\"\"\nshape\nD = ‖p‖ - 0.3 - 0.001((" + sum + ")(1, 0, 0, 0))_1\nwhere\np ∈ ℝ³\n" +
+                        params + "\"\"\"\n[camera]\nposition = [0, 15, -30]\n";
+    for (int i = 0; i < 75; ++i)
+        scene += fmt::format("[[shapes]]\ntype = \"heavy\"\ntransform = \"\"\"\nT(X)\nwhere\nX ∈ ℝ³ default = ({}, 0, {})\"\"\"\n",
+                             i % 10 - 5, i / 10);
+    auto in = write_temp("many_blocks.iq", scene);
+    for (const char* target : {"webgl2", "wgsl"}) {
+        INFO(target);
+        auto out = temp_dir() / (std::string("many_blocks.") + target), meta = temp_dir() / (std::string("many_blocks_") + target + ".json");
+        RunResult r = run_iqc(in.string() + " --target " + target + " -q -o " + out.string() + " --meta " + meta.string());
+        INFO(r.err);
+        REQUIRE(r.exit_code == 0);
+        auto j = nlohmann::json::parse(read_text(meta));
+        CHECK(j["blocks"].size() <= 11);
+        REQUIRE(j["texture"].is_object());
+        CHECK(int(j["texture"]["width"]) > 0);
+        CHECK(int(j["texture"]["height"]) > 0);
+        if (std::string(target) == "wgsl") CHECK(tint_errors({out}).empty());
+    }
+    // a scene whose arrays alone need the texture: every plain parameter keeps its block, the texture is not empty
+    auto rings = temp_dir() / "rings_400_blocks.iq";
+    REQUIRE(shell("bash '" + std::string(IQC_SOURCE_DIR) + "/bench/rings.sh' 400 irregular > '" + rings.string() + "'") == 0);
+    RunResult r = run_iqc(rings.string() + " --target wgsl -q -o " + (temp_dir() / "r400.wgsl").string() + " --meta " +
+                          (temp_dir() / "r400.json").string());
+    REQUIRE(r.exit_code == 0);
+    auto j = nlohmann::json::parse(read_text(temp_dir() / "r400.json"));
+    CHECK(int(j["texture"]["height"]) > 0);
+}

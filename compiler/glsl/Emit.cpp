@@ -690,9 +690,13 @@ struct FunctionEmitter {
         std::vector<std::string> params;
         for (size_t i = 0; i < f.params.size(); ++i) {
             std::string pn = locals.unique(f.params[i].name);
-            params.push_back(fmt::format("{} {}{}", type_of(f.params[i].type, {}), pn, array_suffix(f.params[i].type)));
+            Span where;  // the parameter's declaration, for a type GLSL lacks (ℝ¹⁰)
             for (size_t k = 0; k < f.body.size(); ++k)
-                if (f.body[k].op == Op::Param && f.body[k].aux == int(i)) var[k] = pn;
+                if (f.body[k].op == Op::Param && f.body[k].aux == int(i)) {
+                    var[k] = pn;
+                    where = f.body[k].span;
+                }
+            params.push_back(fmt::format("{} {}{}", type_of(f.params[i].type, where), pn, array_suffix(f.params[i].type)));
         }
         return params;
     }

@@ -705,7 +705,7 @@ struct Env {
     }
 };
 
-ValueId add_param(ir::Function& f, const std::string& name, Type t);
+ValueId add_param(ir::Function& f, const std::string& name, Type t, Span span = {});
 
 // Recurrences z_(k+1) = f(z_k) for k ∈ lo..hi become one Loop whose body is a function of its own.
 void Env::lower_group(const LoopGroup& g) {
@@ -764,13 +764,14 @@ void Env::lower_group(const LoopGroup& g) {
     }
 }
 
-ValueId add_param(ir::Function& f, const std::string& name, Type t) {
+ValueId add_param(ir::Function& f, const std::string& name, Type t, Span span) {
     f.params.push_back({name, t});
     Instr in;
     in.op = Op::Param;
     in.type = t;
     in.aux = int(f.params.size() - 1);
     in.name = name;
+    in.span = span;
     return f.add(std::move(in));
 }
 
@@ -850,7 +851,7 @@ int lower_module_unchecked(const CheckedModule& m, const std::string& name, cons
     int idx = int(ctx.module.functions.size());
     ctx.module.functions.emplace_back();
     Env env{m, ctx, fn};
-    for (auto& p : m.params) env.params.push_back(add_param(fn, p.name, p.type));
+    for (auto& p : m.params) env.params.push_back(add_param(fn, p.name, p.type, p.span));
     fn.param_bounds = parameter_bounds(m);
     ValueId result = 0;
     bool have_result = false;

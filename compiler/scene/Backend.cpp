@@ -159,8 +159,27 @@ struct Layout {
             if (blocks > kMaxBlocks) texture = true;
         }
         if (texture) {
-            pack_texture(data);
-            pack_blocks(block_members);
+            // Plain parameters keep blocks while kMaxBlocks hold them; the rest go into the data texture with
+            // the arrays (a trial's 300 instances of ten mat4 sliders made 13 blocks: past WebGL2's and
+            // WebGPU's 12 per stage). No texture when nothing goes there.
+            std::vector<size_t> in_blocks, in_texture = data;
+            int blocks = 0, used = kMaxBlockBytes;
+            for (size_t i : block_members) {
+                int align = std140_align(m.globals[i].type), size = std140_size(m.globals[i].type);
+                int at = (used + align - 1) / align * align;
+                if (at + size > kMaxBlockBytes) {
+                    if (blocks == kMaxBlocks) {
+                        in_texture.push_back(i);
+                        continue;
+                    }
+                    ++blocks;
+                    at = 0;
+                }
+                used = at + size;
+                in_blocks.push_back(i);
+            }
+            if (!in_texture.empty()) pack_texture(in_texture);
+            pack_blocks(in_blocks);
         } else {
             pack_blocks(arrays);
         }
