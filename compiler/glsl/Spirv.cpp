@@ -13,6 +13,26 @@
 namespace iqc::glsl {
 
 
+namespace {
+
+// The module without OpSourceContinued, OpSource, OpSourceExtension, OpName, OpMemberName, OpString, OpLine,
+// OpNoLine and OpModuleProcessed (debug instructions: the SPIR-V specification, §3.32.2).
+std::vector<uint32_t> without_debug_instructions(const std::vector<uint32_t>& words) {
+    if (words.size() < 5) return words;
+    std::vector<uint32_t> out(words.begin(), words.begin() + 5);
+    out.reserve(words.size());
+    for (size_t at = 5; at < words.size();) {
+        uint32_t count = words[at] >> 16, op = words[at] & 0xffff;
+        if (count == 0 || at + count > words.size()) return words;  // malformed: the validator says so
+        bool debug = (op >= 2 && op <= 8) || op == 317 || op == 330;
+        if (!debug) out.insert(out.end(), words.begin() + long(at), words.begin() + long(at + count));
+        at += count;
+    }
+    return out;
+}
+
+}  // namespace
+
 SpirvResult compile_vulkan_fragment(const std::string& source) {
     SpirvResult r;
     {
@@ -46,6 +66,15 @@ SpirvResult compile_vulkan_fragment(const std::string& source) {
     tools.SetMessageConsumer([&](spv_message_level_t, const char*, const spv_position_t& at, const char* message) {
         messages += "SPIR-V word " + std::to_string(at.index) + ": " + message + "\n";
     });
+    // SPIRV-Tools' validator spends most of its time on the debug names when there are thousands (a scene of
+    // 200 instances with slider transforms: 3.1 s with its 8,000 OpName/OpMemberName, 0.2 s without; 3,000
+    // instances did not finish in minutes): the module is validated without its debug instructions, which
+    // change nothing the rules check, and again with them only to word the messages when it fails.
+    if (tools.Validate(without_debug_instructions(r.words))) {
+        r.ok = true;
+        return r;
+    }
+    messages.clear();
     if (!tools.Validate(r.words)) {
         r.log = messages.empty() ? "SPIRV-Tools rejected the module" : messages;
         r.words.clear();

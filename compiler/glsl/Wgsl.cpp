@@ -87,13 +87,17 @@ public:
         if (s[0] >= '0' && s[0] <= '9') s = "v" + s;
         if (reserved_words().count(s)) s += "_";
         std::string name = s;
-        for (int k = 2; used_.count(name); ++k) name = s + "_" + std::to_string(k);
+        // suffixes go on from where this base's last one stopped: thousands of `param`s cost linear time
+        int& next = next_[s];
+        if (next == 0) next = 2;
+        while (used_.count(name)) name = s + "_" + std::to_string(next++);
         used_.insert(name);
         return name;
     }
 
 private:
     std::unordered_set<std::string> used_;
+    std::unordered_map<std::string, int> next_;
 };
 
 struct Insn {
@@ -566,7 +570,7 @@ private:
             case spv::OpUndef: return constant(id);
             default: break;
         }
-        if (ptrs_.count(id)) fail("a pointer used as a value");
+        if (ptr(id)) fail("a pointer used as a value");
         fail("value %" + std::to_string(id) + " used before its definition");
     }
 
@@ -591,6 +595,14 @@ private:
     uint32_t type_of_value(uint32_t id) const {
         const Insn& d = def(id);
         return d.type;
+    }
+
+    // A pointer id: the function's own (variables, parameters, access chains) or a module-scope variable.
+    const Ptr* ptr(uint32_t id) const {
+        auto it = ptrs_.find(id);
+        if (it != ptrs_.end()) return &it->second;
+        auto jt = global_ptrs_.find(id);
+        return jt == global_ptrs_.end() ? nullptr : &jt->second;
     }
 
     std::string load(const Ptr& p) { return load_rep(p.ref, p.pointee, p.mstride, p.laid_out); }
@@ -691,7 +703,7 @@ private:
     }
 
     void find_reachable(const Function& f) {
-        reachable_.clear();
+        reachable_ = {};
         std::vector<uint32_t> todo{f.blocks.at(0).label};
         while (!todo.empty()) {
             uint32_t l = todo.back();
@@ -714,8 +726,10 @@ private:
         cur_ = &f;
         body_.clear();
         depth_ = 1;
-        hoisted_.clear();
-        phi_in_.clear();
+        // fresh containers, not clear(): clearing keeps (and wipes) every bucket a large function grew, per
+        // function — quadratic in a module of thousands of functions
+        hoisted_ = {};
+        phi_in_ = {};
         if (f.blocks.empty()) fail("function without a body");
         for (const Block& b : f.blocks)
             if (b.term == SIZE_MAX) fail("block without a terminator");
@@ -745,7 +759,21 @@ private:
 
         // Which values another block reads (function-scope vars) and the phis' incoming edges.
         std::unordered_map<uint32_t, uint32_t> def_block;
-        std::unordered_map<uint32_t, std::set<uint32_t>> use_blocks;
+        // Per id: the one block that reads it, or `many` (constant time per use: a function of thousands of
+        // blocks reads the same globals in each).
+        struct Uses {
+            uint32_t block = 0;
+            bool many = false;
+            void add(uint32_t b) {
+                if (!block) block = b;
+                else if (block != b) many = true;
+            }
+            void add(const Uses& o) {
+                if (o.block) add(o.block);
+                many |= o.many;
+            }
+        };
+        std::unordered_map<uint32_t, Uses> use_blocks;
         std::vector<size_t> chains;
         for (const Block& b : f.blocks) {
             std::vector<size_t> all = b.body;
@@ -753,14 +781,14 @@ private:
             for (size_t i : all) {
                 const Insn& in = insns_[i];
                 if (in.result) def_block[in.result] = b.label;
-                for (uint32_t id : reads(in)) use_blocks[id].insert(b.label);
+                for (uint32_t id : reads(in)) use_blocks[id].add(b.label);
                 if (in.op == spv::OpAccessChain || in.op == spv::OpInBoundsAccessChain || in.op == spv::OpCopyObject ||
                     in.op == spv::OpLoad || in.op == spv::OpImage || in.op == spv::OpSampledImage)
                     chains.push_back(i);
                 if (in.op == spv::OpPhi)
                     for (size_t k = 0; k + 1 < in.ops.size(); k += 2) {
                         phi_in_[in.ops[k + 1]].push_back({in.result, in.ops[k]});
-                        use_blocks[in.ops[k]].insert(in.ops[k + 1]);
+                        use_blocks[in.ops[k]].add(in.ops[k + 1]);
                     }
             }
         }
@@ -768,8 +796,8 @@ private:
         for (auto it = chains.rbegin(); it != chains.rend(); ++it) {
             const Insn& in = insns_[*it];
             if (storable(in.type)) continue;
-            auto uses = use_blocks[in.result];
-            for (uint32_t id : reads(in)) use_blocks[id].insert(uses.begin(), uses.end());
+            Uses uses = use_blocks[in.result];
+            for (uint32_t id : reads(in)) use_blocks[id].add(uses);
         }
         std::string decls;
         for (const Block& b : f.blocks) {
@@ -787,8 +815,8 @@ private:
                 }
                 if (!in.result || !storable(in.type) || in.op == spv::OpAccessChain) continue;
                 bool phi = in.op == spv::OpPhi;
-                bool cross = false;
-                for (uint32_t u : use_blocks[in.result]) cross |= u != b.label;
+                const Uses& u = use_blocks[in.result];
+                bool cross = u.many || (u.block && u.block != b.label);
                 if (phi || cross) {
                     std::string n = phi ? fresh(in.result, "phi") : temp(in.result);
                     decls += "    var " + n + ": " + value_type(in.type) + ";\n";
@@ -1156,7 +1184,9 @@ private:
             case spv::OpPhi: return;       // set on the incoming edges
             case spv::OpAccessChain:
             case spv::OpInBoundsAccessChain: {
-                Ptr p = ptrs_.at(in.ops[0]);
+                const Ptr* base = ptr(in.ops[0]);
+                if (!base) fail("access chain from an unknown pointer");
+                Ptr p = *base;
                 for (size_t k = 1; k < in.ops.size(); ++k) {
                     uint32_t idx = in.ops[k];
                     const Insn& d = def(p.pointee);
@@ -1196,24 +1226,24 @@ private:
                 return;
             }
             case spv::OpLoad: {
-                auto it = ptrs_.find(in.ops[0]);
-                if (it == ptrs_.end()) fail("load through an unknown pointer");
+                const Ptr* it = ptr(in.ops[0]);
+                if (!it) fail("load through an unknown pointer");
                 if (!storable(in.type)) {
-                    value_[in.result] = it->second.ref;  // a texture: used by name
+                    value_[in.result] = it->ref;  // a texture: used by name
                     return;
                 }
-                define(in, load(it->second));
+                define(in, load(*it));
                 return;
             }
             case spv::OpStore: {
-                auto it = ptrs_.find(in.ops[0]);
-                if (it == ptrs_.end()) fail("store through an unknown pointer");
-                if (it->second.laid_out) fail("store into a uniform block");
-                line(it->second.ref + " = " + E(in.ops[1]) + ";");
+                const Ptr* it = ptr(in.ops[0]);
+                if (!it) fail("store through an unknown pointer");
+                if (it->laid_out) fail("store into a uniform block");
+                line(it->ref + " = " + E(in.ops[1]) + ";");
                 return;
             }
             case spv::OpCopyObject:
-                if (ptrs_.count(in.ops[0])) ptrs_[in.result] = ptrs_[in.ops[0]];
+                if (const Ptr* q = ptr(in.ops[0])) ptrs_[in.result] = *q;
                 else define(in, E(in.ops[0]));
                 return;
             case spv::OpImage:
@@ -1230,8 +1260,8 @@ private:
             case spv::OpFunctionCall: {
                 std::string s = fn_name(in.ops[0]) + "(";
                 for (size_t k = 1; k < in.ops.size(); ++k) {
-                    auto it = ptrs_.find(in.ops[k]);
-                    s += (k > 1 ? ", " : "") + (it != ptrs_.end() ? it->second.pointer : E(in.ops[k]));
+                    const Ptr* q = ptr(in.ops[k]);
+                    s += (k > 1 ? ", " : "") + (q ? q->pointer : E(in.ops[k]));
                 }
                 s += ")";
                 if (def(in.type).op == spv::OpTypeVoid) line(s + ";");
@@ -1611,8 +1641,8 @@ public:
 
 private:
     void ptrs_base() {
-        ptrs_ = global_ptrs_;
-        value_.clear();
+        ptrs_ = {};
+        value_ = {};
     }
 
     const std::vector<uint32_t>& w_;
