@@ -203,16 +203,7 @@ private:
                 case spv::OpEntryPoint:
                     if (entry_) fail("more than one entry point");
                     if (i.ops[0] != spv::ExecutionModelFragment) fail("not a fragment shader");
-                    entry_ = i.ops[1];
-                    {
-                        // skip the name (a literal string), then the interface ids
-                        size_t n = 2;
-                        while (n < i.ops.size()) {
-                            uint32_t word = i.ops[n++];
-                            if ((word >> 24) == 0 || (word & 0xff) == 0 || ((word >> 8) & 0xff) == 0 || ((word >> 16) & 0xff) == 0) break;
-                        }
-                        interface_.assign(i.ops.begin() + long(n), i.ops.end());
-                    }
+                    entry_ = i.ops[1];  // its interface: the Input/Output variables (global_vars)
                     break;
                 case spv::OpExecutionMode:
                     if (i.ops[1] != spv::ExecutionModeOriginUpperLeft && i.ops[1] != spv::ExecutionModeDepthReplacing)
@@ -242,7 +233,6 @@ private:
                     blk = &fn->blocks.back();
                     blk->label = i.result;
                     fn->index[i.result] = fn->blocks.size() - 1;
-                    block_of_label_fn_[i.result] = functions_.size() - 1;
                     break;
                 case spv::OpSelectionMerge:
                 case spv::OpLoopMerge:
@@ -585,7 +575,6 @@ private:
         const Insn& s = def(scalar_of(t));
         return s.op == spv::OpTypeInt && s.ops[1];
     }
-    bool is_int(uint32_t t) const { return def(scalar_of(t)).op == spv::OpTypeInt; }
     // Operand id as an integer of the given signedness (bitcast when its type has the other one).
     std::string as_int(uint32_t id, bool is_signed) {
         uint32_t t = type_of_value(id);
@@ -651,7 +640,6 @@ private:
         uint32_t brk = 0;           // `break` target (loop or switch merge)
         uint32_t loop_merge = 0;    // innermost loop's merge
         uint32_t cont = 0;          // innermost loop's continue target
-        bool in_switch = false;     // `break` leaves a switch, not the loop
         bool continuing = false;    // inside a continuing block
         uint32_t header = 0;        // the loop header a continuing block branches back to
     };
@@ -898,67 +886,69 @@ private:
                 label = next;
                 continue;
             }
-            switch (t.op) {
-                case spv::OpReturn: line("return;"); return;
-                case spv::OpReturnValue: line("return " + E(t.ops[0]) + ";"); return;
-                case spv::OpKill: line("discard;"); return;
-                case spv::OpUnreachable: return;
-                case spv::OpBranch: {
-                    uint32_t next = 0;
-                    if (!jump(t.ops[0], ctx, next)) return;
-                    label = next;
-                    continue;
-                }
-                case spv::OpBranchConditional: {
-                    std::string cond = E(t.ops[0]);
-                    uint32_t a = t.ops[1], c = t.ops[2];
-                    if (ctx.continuing && (a == ctx.header || c == ctx.header)) {
-                        // the back edge of a loop: `break if` ends the continuing block
-                        uint32_t other = a == ctx.header ? c : a;
-                        if (other != ctx.loop_merge) fail("continuing block branches elsewhere than its loop");
-                        line(a == ctx.header ? "break if !(" + cond + ");" : "break if " + cond + ";");
-                        return;
-                    }
-                    if (a == c) {
-                        label = a;
-                        continue;
-                    }
-                    bool exit_a = exits(a, ctx), exit_c = exits(c, ctx);
-                    if (exit_a && exit_c) {
-                        line("if " + cond + " {");
-                        ++depth_;
-                        uint32_t dummy = 0;
-                        jump(a, ctx, dummy);
-                        --depth_;
-                        line("} else {");
-                        ++depth_;
-                        jump(c, ctx, dummy);
-                        --depth_;
-                        line("}");
-                        return;
-                    }
-                    if (!exit_a && !exit_c) fail("a conditional branch without a merge that leaves no construct");
-                    uint32_t out = exit_a ? a : c, stay = exit_a ? c : a;
-                    std::string when = exit_a ? cond : "!(" + cond + ")";
-                    if (out == ctx.stop) {
-                        // leaving the construct silently: the rest runs only on the other edge
-                        line("if " + (exit_a ? "!(" + cond + ")" : cond) + " {");
-                        nested(stay, ctx);
-                        line("}");
-                        return;
-                    }
-                    line("if " + when + " {");
-                    ++depth_;
-                    uint32_t dummy = 0;
-                    jump(out, ctx, dummy);
-                    --depth_;
-                    line("}");
-                    label = stay;
-                    continue;
-                }
-                default: fail("terminator " + std::to_string(int(t.op)));
-            }
+            uint32_t next = 0;
+            if (!branch(t, ctx, next)) return;
+            label = next;
         }
+    }
+
+    // A terminator without a merge: writes what leaves (return, discard, break, continue, `break if`, an if
+    // around either) and returns false when the sequence ends, or returns true with `next` set where it goes on.
+    bool branch(const Insn& t, const Ctx& ctx, uint32_t& next) {
+        switch (t.op) {
+            case spv::OpReturn: line("return;"); return false;
+            case spv::OpReturnValue: line("return " + E(t.ops[0]) + ";"); return false;
+            case spv::OpKill: line("discard;"); return false;
+            case spv::OpUnreachable: return false;
+            case spv::OpBranch: return jump(t.ops[0], ctx, next);
+            case spv::OpBranchConditional: {
+                std::string cond = E(t.ops[0]);
+                uint32_t a = t.ops[1], c = t.ops[2];
+                if (ctx.continuing && (a == ctx.header || c == ctx.header)) {
+                    // the back edge of a loop: `break if` ends the continuing block
+                    uint32_t other = a == ctx.header ? c : a;
+                    if (other != ctx.loop_merge) fail("continuing block branches elsewhere than its loop");
+                    line(a == ctx.header ? "break if !(" + cond + ");" : "break if " + cond + ";");
+                    return false;
+                }
+                if (a == c) {
+                    next = a;
+                    return true;
+                }
+                bool exit_a = exits(a, ctx), exit_c = exits(c, ctx);
+                if (exit_a && exit_c) {
+                    line("if " + cond + " {");
+                    leave(a, ctx);
+                    line("} else {");
+                    leave(c, ctx);
+                    line("}");
+                    return false;
+                }
+                if (!exit_a && !exit_c) fail("a conditional branch without a merge that leaves no construct");
+                uint32_t out = exit_a ? a : c, stay = exit_a ? c : a;
+                if (out == ctx.stop) {
+                    // leaving the construct silently: the rest runs only on the other edge
+                    line("if " + (exit_a ? "!(" + cond + ")" : cond) + " {");
+                    nested(stay, ctx);
+                    line("}");
+                    return false;
+                }
+                line("if " + (exit_a ? cond : "!(" + cond + ")") + " {");
+                leave(out, ctx);
+                line("}");
+                next = stay;
+                return true;
+            }
+            default: fail("terminator " + std::to_string(int(t.op)));
+        }
+    }
+
+    // The statement that leaves for `target` (break, continue, or nothing at the construct's end), one level in.
+    void leave(uint32_t target, const Ctx& ctx) {
+        ++depth_;
+        uint32_t unused = 0;
+        jump(target, ctx, unused);
+        --depth_;
     }
 
     void nested(uint32_t label, const Ctx& ctx) {
@@ -1006,72 +996,37 @@ private:
         in.cont = c;
         const Insn& t = insns_[header.term];
         phis_for(header.label);
+        Ctx cc;  // the continue construct: it ends at the back edge to the header
+        cc.continuing = true;
+        cc.header = header.label;
+        cc.loop_merge = m;
+        cc.stop = header.label;
+        uint32_t next = 0;
         if (c == header.label) {
-            // a single-block loop: the header is its own continue target
-            --depth_;
-            line("    continuing {");
-            depth_ += 2;
-            Ctx cc;
-            cc.continuing = true;
-            cc.header = header.label;
-            cc.loop_merge = m;
-            cc.stop = header.label;
-            if (t.op != spv::OpBranchConditional) fail("single-block loop without a conditional back edge");
-            std::string cond = E(t.ops[0]);
-            line(t.ops[1] == header.label ? "break if !(" + cond + ");" : "break if " + cond + ";");
-            depth_ -= 2;
-            line("    }");
-            line("}");
-            return;
-        }
-        // the header's terminator, then the body up to the continue target
-        emit_terminator_in_loop(header, t, in);
-        if (reachable_.count(c)) {
+            // a single-block loop: the header is its own continue target, its terminator the back edge
             line("continuing {");
             ++depth_;
-            Ctx cc;
-            cc.continuing = true;
-            cc.header = header.label;
-            cc.loop_merge = m;
-            cc.stop = header.label;
-            seq(c, cc);
+            branch(t, cc, next);
             --depth_;
             line("}");
+        } else {
+            // the header's terminator, then the body up to the continue target
+            if (branch(t, in, next)) seq(next, in);
+            if (reachable_.count(c)) {
+                line("continuing {");
+                ++depth_;
+                seq(c, cc);
+                --depth_;
+                line("}");
+            }
         }
         --depth_;
         line("}");
     }
 
-    void emit_terminator_in_loop(const Block& header, const Insn& t, const Ctx& in) {
-        switch (t.op) {
-            case spv::OpBranch: {
-                uint32_t next = 0;
-                if (jump(t.ops[0], in, next)) seq(next, in);
-                break;
-            }
-            case spv::OpBranchConditional: {
-                std::string cond = E(t.ops[0]);
-                uint32_t a = t.ops[1], c = t.ops[2];
-                bool exit_a = exits(a, in), exit_c = exits(c, in);
-                if (exit_a == exit_c) fail("loop header's conditional branch");
-                uint32_t out = exit_a ? a : c, stay = exit_a ? c : a;
-                line("if " + (exit_a ? cond : "!(" + cond + ")") + " {");
-                ++depth_;
-                uint32_t dummy = 0;
-                jump(out, in, dummy);
-                --depth_;
-                line("}");
-                seq(stay, in);
-                break;
-            }
-            default: fail("loop header terminator " + std::to_string(int(t.op)) + " in block %" + std::to_string(header.label));
-        }
-    }
-
     void switch_(const Insn& t, const Ctx& inner, uint32_t m) {
         Ctx sc = inner;
         sc.brk = m;
-        sc.in_switch = true;
         std::string sel = E(t.ops[0]);
         bool is_signed = is_signed_int(type_of_value(t.ops[0]));
         std::map<uint32_t, std::vector<std::string>> cases;  // label -> literals
@@ -1650,13 +1605,11 @@ private:
     std::vector<Insn> insns_;
     std::vector<size_t> def_;
     std::vector<Function> functions_;
-    std::unordered_map<uint32_t, size_t> block_of_label_fn_;
     std::unordered_map<uint32_t, std::string> names_;
     std::map<std::pair<uint32_t, uint32_t>, std::string> member_debug_;
     std::unordered_map<uint32_t, std::map<uint32_t, uint32_t>> deco_;
     std::map<std::pair<uint32_t, uint32_t>, std::map<uint32_t, uint32_t>> mdeco_;
     uint32_t glsl_set_ = 0, entry_ = 0;
-    std::vector<uint32_t> interface_;
     Namer namer_;
     std::unordered_map<uint32_t, std::string> struct_names_;
     std::unordered_map<uint32_t, std::vector<std::string>> member_names_;
