@@ -56,16 +56,20 @@ std::vector<GoldenCase> golden_cases() {
     return cases;
 }
 
+// Runs a shell command; its standard output and error in `out`; true when it exits 0.
+bool capture(const std::string& cmd, std::string& out) {
+    FILE* p = popen((cmd + " 2>&1").c_str(), "r");
+    if (!p) return false;
+    char buf[4096];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+    return pclose(p) == 0;
+}
+
 std::string unified_diff(const fs::path& expected, const std::string& actual) {
     auto tmp = write_temp("actual.frag", actual);
-    std::string cmd = "diff -u '" + expected.string() + "' '" + tmp.string() + "' 2>&1";
     std::string out;
-    if (FILE* p = popen(cmd.c_str(), "r")) {
-        char buf[4096];
-        size_t n;
-        while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-        pclose(p);
-    }
+    capture("diff -u '" + expected.string() + "' '" + tmp.string() + "'", out);
     return out;
 }
 
@@ -106,14 +110,9 @@ TEST_CASE("golden: every example compiles to its expected shader", "[golden]") {
                 case Target::HLSL: v = glsl::validate_hlsl_fragment(expected); break;
                 case Target::WGSL: {
                     // Tint (Dawn for Node, tests/browser/wgsl-validate.mjs): no WGSL compiler runs in-process
-                    std::string cmd = "node '" + (fs::path(IQC_SOURCE_DIR) / "tests/browser/wgsl-validate.mjs").string() +
-                                      "' '" + c.expected.string() + "' 2>&1";
-                    if (FILE* p = popen(cmd.c_str(), "r")) {
-                        char buf[4096];
-                        size_t n;
-                        while ((n = fread(buf, 1, sizeof buf, p)) > 0) v.log.append(buf, n);
-                        v.ok = pclose(p) == 0 && v.log.rfind("ok ", 0) == 0;
-                    }
+                    v.ok = capture("node '" + (fs::path(IQC_SOURCE_DIR) / "tests/browser/wgsl-validate.mjs").string() + "' '" +
+                                       c.expected.string() + "'", v.log) &&
+                           v.log.rfind("ok ", 0) == 0;
                     break;
                 }
             }

@@ -619,6 +619,10 @@ static int run(int argc, char** argv) {
                                   [] { return iqc::CompileResult{}; });
         }
     }
+    auto report = [&](const std::string& path, bool changed) {
+        if (!quiet && !path.empty() && path != "-")
+            std::fprintf(stderr, changed ? "iqc: wrote %s\n" : "iqc: %s is unchanged\n", path.c_str());
+    };
     if (!render->parsed()) {
         // A Shadertoy shader (a .frag a user pasted into shadertoy.com): translated to WGSL as it is.
         std::string ext = std::filesystem::path(input).extension().string();
@@ -692,11 +696,9 @@ static int run(int argc, char** argv) {
             size_t shader_out = outs.add(output, text);
             size_t meta_out = meta.empty() ? 0 : outs.add(meta, j.dump(2) + "\n");
             int rc = outs.commit();
-            if (rc == 0 && !quiet) {
-                if (!meta.empty() && meta != "-")
-                    std::fprintf(stderr, outs.changed(meta_out) ? "iqc: wrote %s\n" : "iqc: %s is unchanged\n", meta.c_str());
-                if (!output.empty() && output != "-")
-                    std::fprintf(stderr, outs.changed(shader_out) ? "iqc: wrote %s\n" : "iqc: %s is unchanged\n", output.c_str());
+            if (rc == 0) {
+                if (!meta.empty()) report(meta, outs.changed(meta_out));
+                report(output, outs.changed(shader_out));
             }
             return rc;
         }
@@ -793,10 +795,6 @@ static int run(int argc, char** argv) {
         for (uint32_t w : r.spirv)
             for (int b = 0; b < 4; ++b) r.code.push_back(char((w >> (8 * b)) & 0xFF));
     }
-    auto report = [&](const std::string& path, bool changed) {
-        if (!quiet && !path.empty() && path != "-")
-            std::fprintf(stderr, changed ? "iqc: wrote %s\n" : "iqc: %s is unchanged\n", path.c_str());
-    };
     // The depfile's text first: a path it cannot express stops the compile before any output is written.
     std::string dep_text;
     if (!depfile.empty()) {
