@@ -78,6 +78,20 @@ TEST_CASE("a shape without D and a material without C", "[cli]") {
     CHECK_THAT(m.err, Catch::Contains("no_c.md:12:1: error: material 'flat' does not assign 'C' (its RGB colour)"));
 }
 
+TEST_CASE("a shape or material with a bare expression is an error located at the expression", "[cli][diag]") {
+    // The fuzzer's find: a shape's bare ℝ³ expression replaced D as its value (internal error, exit 3).
+    RunResult r = compile_doc("bare_shape.md", "❤: blob\n```iheartla\nshape\nq\nq = a\nD = ‖q‖\nwhere\np ∈ ℝ³\na ∈ ℝ³\n```\n"
+                                               "```scene\n[[shapes]]\ntype = \"blob\"\n```\n");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("bare_shape.md:4:1: error: a shape has no bare value: its value is what it assigns to 'D' "
+                                      "(write D = …)\n  q\n  ^"));
+    RunResult m = compile_doc("bare_material.md", std::string(kTorus) +
+                                                      "❤: flat\n```iheartla\nmaterial\nC = (1, 0, 0)\nN + I\nwhere\np ∈ ℝ³\nN ∈ ℝ³\nI ∈ ℝ³\n```\n"
+                                                      "```scene\n[[shapes]]\ntype = \"torus\"\nmaterial = \"flat\"\n```\n");
+    CHECK(m.exit_code == 1);
+    CHECK_THAT(m.err, Catch::Contains("bare_material.md:14:1: error: a material has no bare value"));
+}
+
 TEST_CASE("an undefined name inside a module of a document", "[cli]") {
     RunResult r = compile_doc("undefined.md", "❤: ball\n```iheartla\nshape\nD = ‖p‖ - radius\nwhere\np ∈ ℝ³\n```\n"
                                               "```scene\n[[shapes]]\ntype = \"ball\"\n```\n");

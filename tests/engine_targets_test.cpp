@@ -466,7 +466,7 @@ void main() { colour = texture(t, gl_FragCoord.xy); }
     CHECK_FALSE(fs::exists(out));
 }
 
-TEST_CASE("wgsl: a Shadertoy shader (.frag) translates to WGSL; its errors are located; other targets need a scene",
+TEST_CASE("wgsl: a Shadertoy shader (.frag) translates to WGSL: its errors are located, other targets need a scene",
           "[engine-targets][wgsl][cli]") {
     auto ok = write_temp("toy.frag", "void mainImage(out vec4 c, in vec2 p) {\n    c = vec4(p / iResolution.xy, 0.5 + 0.5 * sin(iTime), 1.0);\n}\n");
     auto out = temp_dir() / "toy.wgsl", meta = temp_dir() / "toy.json";

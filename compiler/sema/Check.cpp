@@ -2073,6 +2073,10 @@ void Checker::run() {
     if (m_.ast.kind == ModuleKind::Shape || m_.ast.kind == ModuleKind::Material) {
         const char* out = m_.ast.kind == ModuleKind::Shape ? "D" : "C";
         m_.primary = out;
+        // A shape's value is D and a material's is C: a bare expression would be computed and never used.
+        if (m_.ret)
+            d_.error(m_.ret->span, fmt::format("a {} has no bare value: its value is what it assigns to '{}' (write {} = …)",
+                                               m_.ast.kind == ModuleKind::Shape ? "shape" : "material", out, out));
         // The renderer binds a shape's query point and a material's surface point, normal and eye: by their
         // conventional names where the module uses them, otherwise the first parameters not yet bound, in
         // order. They must be ℝ³. These are the only rules (CheckedModule::roles; the scene compiler uses them).
