@@ -26,11 +26,11 @@ const std::vector<std::pair<std::string, std::vector<std::string>>> kEffects = {
     {"orbit_camera", {"iMouse.x > 0.0", "yaw"}},
     {"march_fixed", {"IQC_FIXED_STEP", "bisection"}},
     {"march_relaxed", {"IQC_RELAXATION", "Keinert"}},
-    {"march_auto", {"Bán & Valasek", "2.0 * d / (1.0 - m)"}},
+    {"march_auto", {"Bán & Valasek", "step_len = d * (1.0 + g * (1.0 + m) / (1.0 - m))"}},
     {"normals_central", {"Normal by central differences"}},
     {"normals_forward", {"Normal by forward differences"}},
     {"normals_analytic", {"derived by iqc (forward-mode differentiation)", "vec3 iqc_gradient(vec3 p, int id) {",
-                          "if (id == 1) g = p / max(length(p), 1.0e-30);", "iqc_tetrahedron_gradient"}},
+                          "if (id == 1) g = p / max(length(p), 1.0e-30);", "int taps = dot(g, g) < 1.0e-24 ? 4 : 0;"}},
     {"hit_relative", {"IQC_HIT * max(t, 1.0e-3)"}},
 };
 

@@ -10,6 +10,7 @@
 #include "ir/passes/Fold.h"
 #include "ir/passes/Inline.h"
 #include "ir/passes/Lipschitz.h"
+#include "ir/passes/MergeCalls.h"
 #include "ir/passes/Stable.h"
 #include "ir/passes/Tables.h"
 #include "source/Internal.h"
@@ -72,6 +73,8 @@ const std::vector<Pass>& passes() {
          [](Module& m, const PipelineOptions& o, PipelineResult& r) { r.range_issues = analyze_ranges(m, o.guard_ranges); }},
         {{"gradient", "analytic normals: forward-mode differentiation of the scene distance"},
          [](Module& m, const PipelineOptions&, PipelineResult& r) { gradient(m, r); }},
+        {{"calls", "calls to one function from several cases of a switch: one call on switched arguments"},
+         [](Module& m, const PipelineOptions&, PipelineResult&) { merge_switch_calls(m); }},
         {{"simplify", "fold and CSE again"},
          [](Module& m, const PipelineOptions&, PipelineResult&) {
              fold_all(m);

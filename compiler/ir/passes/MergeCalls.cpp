@@ -1,0 +1,96 @@
+#include "ir/passes/MergeCalls.h"
+
+#include <map>
+#include <tuple>
+
+#include "ir/Builder.h"
+
+namespace iqc::ir {
+
+int merge_switch_calls(Module& m) {
+    int merged = 0;
+    for (Function& f : m.functions) {
+        // Only functions with a switch of two distinct calls to one function are rebuilt.
+        bool any = false;
+        for (const Instr& in : f.body) {
+            if (in.op != Op::Switch) continue;
+            std::map<int, ValueId> first_call;
+            for (size_t k = 2; k < in.args.size(); ++k) {
+                const Instr& v = f.body[in.args[k]];
+                if (v.op != Op::Call) continue;
+                auto [it, fresh] = first_call.emplace(v.aux, in.args[k]);
+                any |= !fresh && it->second != in.args[k];
+            }
+        }
+        if (!any) continue;
+        std::vector<Instr> old = std::move(f.body);
+        f.body.clear();
+        f.body.reserve(old.size());
+        std::vector<ValueId> map(old.size());
+        Builder b(m, f);
+        for (size_t i = 0; i < old.size(); ++i) {
+            const Instr& in = old[i];
+            if (in.op == Op::Switch) {
+                // The cases' calls grouped by callee, in case order.
+                int n = switch_cases(in);
+                std::map<int, std::vector<int>> groups;
+                for (int k = 0; k < n; ++k) {
+                    const Instr& v = old[in.args[size_t(k) + 2]];
+                    if (v.op == Op::Call) groups[v.aux].push_back(k);
+                }
+                std::vector<ValueId> value(static_cast<size_t>(n));
+                for (int k = 0; k < n; ++k) value[size_t(k)] = map[in.args[size_t(k) + 2]];
+                bool changed = false;
+                for (const auto& [callee, cases] : groups) {
+                    bool distinct = false;  // two cases may share one call already
+                    for (int k : cases) distinct |= in.args[size_t(k) + 2] != in.args[size_t(cases[0]) + 2];
+                    if (!distinct) continue;
+                    const Instr& first = old[in.args[size_t(cases[0]) + 2]];
+                    std::vector<ValueId> args;
+                    for (size_t a = 0; a < first.args.size(); ++a) {
+                        bool same = true;
+                        for (int k : cases) same &= old[in.args[size_t(k) + 2]].args[a] == first.args[a];
+                        if (same) {
+                            args.push_back(map[first.args[a]]);
+                            continue;
+                        }
+                        std::vector<std::tuple<long long, long long, ValueId>> arg_cases;
+                        // The first case's argument is the default (outside these cases the value is not used),
+                        // so the cases that pass it need no case of their own.
+                        for (int k : cases)
+                            if (map[old[in.args[size_t(k) + 2]].args[a]] != map[first.args[a]])
+                                arg_cases.push_back({(long long)in.data[size_t(2 * k)], (long long)in.data[size_t(2 * k + 1)],
+                                                     map[old[in.args[size_t(k) + 2]].args[a]]});
+                        args.push_back(b.switch_(map[in.args[0]], map[first.args[a]], std::move(arg_cases)));
+                    }
+                    ValueId call = b.call(callee, std::move(args));
+                    f.body[call].name = first.name;
+                    f.body[call].source = first.source;
+                    f.body[call].span = first.span;
+                    for (int k : cases) value[size_t(k)] = call;
+                    merged += int(cases.size()) - 1;
+                    changed = true;
+                }
+                if (changed) {
+                    std::vector<std::tuple<long long, long long, ValueId>> cs;
+                    for (int k = 0; k < n; ++k)
+                        cs.push_back({(long long)in.data[size_t(2 * k)], (long long)in.data[size_t(2 * k + 1)], value[size_t(k)]});
+                    ValueId s = b.switch_(map[in.args[0]], map[in.args[1]], std::move(cs));
+                    f.body[s].name = in.name;
+                    f.body[s].source = in.source;
+                    f.body[s].span = in.span;
+                    map[i] = s;
+                    continue;
+                }
+            }
+            Instr copy = in;
+            for (ValueId& a : copy.args) a = map[a];
+            map[i] = f.add(std::move(copy));
+        }
+        f.result = map[f.result];
+        for (auto& [name, v] : f.outputs) v = map[v];
+    }
+    return merged;
+}
+
+}  // namespace iqc::ir
