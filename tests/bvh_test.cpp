@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 
 #include "scene/Bvh.h"
+#include "ir/Parse.h"
+#include "ir/Support.h"
 
 using namespace iqc;
 
@@ -136,4 +138,63 @@ TEST_CASE("the bounds tree is deterministic", "[bvh]") {
     CHECK(a.order == b.order);
     REQUIRE(a.levels.size() == b.levels.size());
     for (size_t l = 0; l < a.levels.size(); ++l) CHECK(a.levels[l].first == b.levels[l].first);
+}
+
+TEST_CASE("a shape's extent by interval arithmetic: a ball that contains the solid, tight to a few percent", "[bvh]") {
+    // The IR of a sphere of radius r, a torus (R, r) and a box of half-sides b, and a plane (unbounded).
+    const char* text = R"(function ball(p: ℝ³, r: ℝ) -> ℝ {
+  %0 = ℝ³ Param #0 p  ; p
+  %1 = ℝ Param #1 r  ; r
+  %2 = ℝ Builtin length %0
+  %3 = ℝ Sub %2, %1
+  return %3
+}
+function torus(p: ℝ³, t: ℝ²) -> ℝ {
+  %0 = ℝ³ Param #0 p  ; p
+  %1 = ℝ² Param #1 t  ; t
+  %2 = ℝ Extract [0] %0
+  %3 = ℝ Extract [2] %0
+  %4 = ℝ² Construct %2, %3
+  %5 = ℝ Builtin length %4
+  %6 = ℝ Extract [0] %1
+  %7 = ℝ Sub %5, %6
+  %8 = ℝ Extract [1] %0
+  %9 = ℝ² Construct %7, %8
+  %10 = ℝ Builtin length %9
+  %11 = ℝ Extract [1] %1
+  %12 = ℝ Sub %10, %11
+  return %12
+}
+function plane(p: ℝ³) -> ℝ {
+  %0 = ℝ³ Param #0 p  ; p
+  %1 = ℝ Extract [1] %0
+  %2 = ℝ Const 1
+  %3 = ℝ Add %1, %2
+  return %3
+}
+)";
+    ir::Module m;
+    std::string error;
+    INFO(error);
+    REQUIRE(ir::parse_module(text, m, error));
+    using V = std::vector<std::vector<ir::Interval>>;
+    auto ball = ir::support_radius(m, 0, 0, V{{}, {{1, 1}}});
+    REQUIRE(ball);
+    CHECK(*ball >= 1.0);
+    CHECK(*ball <= 1.1);
+    // A slider's range: the radius that holds for every value of it.
+    auto ranged = ir::support_radius(m, 0, 0, V{{}, {{0.5, 2}}});
+    REQUIRE(ranged);
+    CHECK(*ranged >= 2.0);
+    CHECK(*ranged <= 2.2);
+    auto torus = ir::support_radius(m, 1, 0, V{{}, {{0.3, 0.3}, {0.08, 0.08}}});
+    REQUIRE(torus);
+    CHECK(*torus >= 0.38);
+    CHECK(*torus <= 0.38 * 1.15);
+    CHECK_FALSE(ir::support_radius(m, 2, 0, V{{}}));  // a plane: the solid reaches the search cube's faces
+    CHECK_FALSE(ir::support_radius(m, 0, 0, V{{}, {{-INFINITY, INFINITY}}}));  // an unbounded radius
+    // A negative radius: no point where the distance can be ≤ 0, nothing to bound.
+    CHECK_FALSE(ir::support_radius(m, 0, 0, V{{}, {{-1, -1}}}));
+    // The answer does not depend on the order of evaluation: the same twice.
+    CHECK(ir::support_radius(m, 1, 0, V{{}, {{0.3, 0.3}, {0.08, 0.08}}}) == torus);
 }

@@ -89,19 +89,31 @@ TEST_CASE("1000 rings are one loop and one case of each dispatch on every target
         INFO(target_name(t) << "\n" << c.diagnostics);
         REQUIRE(c.result.exit_code == 0);  // glslang accepted it
         const std::string& code = c.result.code;
-        // One loop, 16 instances per trip (llvmpipe's limit of 65,535 loop iterations per pixel): the shape is
-        // called from 16 places whatever the count.
-        CHECK(count(code, "for (int k0 = 0; k0 <= 999; k0 += 16) {  // ring_lambert: 1000 instances (unrolled by 16)") == 1);
-        CHECK(count(code, "ring(q, ") == 16);
-        // One branch for all of them, in the light-independent part and the light's part of the material.
-        CHECK(count(code, "if (id >= 1 && id < 1001) c = lambert_ambient(") == 1);
-        CHECK(count(code, "if (id >= 1 && id < 1001) c = lambert_light(") == 1);
+        if (t == Target::Shadertoy) {
+            // Constant parameters: a bound derived from the ring (ir/Support.h), hence a hierarchy, whose last
+            // level is one member loop calling the shape once.
+            CHECK(count(code, "ring_lambert: 1000 instances, a bounding-box hierarchy of 3 levels") == 1);
+            CHECK(count(code, "ring(q, ") == 1);
+        } else {
+            // Sliders: the ring's extent over its slider range (up to (2, 2): 4 units on a grid of 1) would make
+            // spheres that overlap too much to skip anything, so no bound is derived. One loop, 16 instances per
+            // trip (llvmpipe's limit of 65,535 loop iterations per pixel): the shape is called from 16 places
+            // whatever the count.
+            CHECK(count(code, "for (int k0 = 0; k0 <= 999; k0 += 16) {  // ring_lambert: 1000 instances (unrolled by 16)") == 1);
+            CHECK(count(code, "ring(q, ") == 16);
+            CHECK_THAT(code, !Catch::Contains("derived from the shape"));
+        }
+        // One call of each part of the material (the light-independent part and the light's part) for the
+        // rings and the ground, which share it: its k_d switched by the id (the calls pass).
+        CHECK(count(code, "if (id >= 0 && id < 1001) {") == 2);
+        CHECK(count(code, "c = lambert_ambient(") == 1);
+        CHECK(count(code, "c = lambert_light(") == 1);
         CHECK(count(code, "if (id ==") < 5);
     }
-    // Shadertoy: the grid's offsets are arithmetic on k (a lattice), and a value every ring shares is one
-    // constant.
+    // Shadertoy: the grid's offsets are arithmetic on the member's index (a lattice, listed in the
+    // hierarchy's leaf order), and a value every ring shares is one constant.
     Compiled st = compile_path(path);
-    CHECK_THAT(st.result.code, Catch::Contains("vec3 q = p + vec3(5.0 - float(k % 10), 0.7 - (0.5 * float(k / 100)), 5.0 - float((k / 10) % 10));"));
+    CHECK_THAT(st.result.code, Catch::Contains("vec3 q = p + vec3(5.0 - float(ring_lambert_tree_members["));
     CHECK(count(st.result.code, "const vec2 ring_shape_t = vec2(0.3, 0.08);") == 1);
 }
 
@@ -269,6 +281,52 @@ TEST_CASE("rings with bound are a bounding-volume hierarchy: few shapes per scen
         CHECK(evals > W * H);
         CHECK(shapes / evals <= 16);
     }
+}
+
+TEST_CASE("rings without bound get one derived from the shape: a hierarchy, few shapes per evaluation, the reference's picture",
+          "[instancing][render][bvh]") {
+    // A group of 48 or more instances without `bound` gets the radius interval arithmetic proves contains the
+    // shape (ir/Support.h): the ring's (0.3, 0.08) is within 0.38 of its origin; the derived radius is a
+    // little more. Without it every step evaluated all 1,000 rings.
+    const int W = 64, H = 36;
+    CompileOptions o;
+    o.ids = true;
+    auto path = write_temp("rings_derived.iq", rings_scene(1000, false, 0));
+    Compiled c = compile_path(path, o);
+    INFO(c.diagnostics);
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.result.code, Catch::Contains("ring_lambert: 1000 instances, a bounding-box hierarchy of 3 levels"));
+    CHECK_THAT(c.result.code, Catch::Contains("// radius of the bounding sphere, derived from the shape"));
+    std::string code = c.result.code;
+    size_t at = code.find("const float ring_lambert_bound = ");
+    REQUIRE(at != std::string::npos);
+    double R = std::stod(code.substr(at + std::string("const float ring_lambert_bound = ").size()));
+    CHECK(R >= 0.38);
+    CHECK(R <= 0.38 * 1.15);
+    render::RenderResult r = render_compiled(c.result, W, H);
+    INFO(r.error);
+    REQUIRE(r.ok);
+    Agreement a = against_reference(c.result, r, W, H, 3);
+    CHECK(a.disagree <= a.samples / 50);
+    CHECK(a.rings > a.samples / 8);
+    CompileOptions io;
+    io.instrument = true;
+    Compiled ic = compile_path(path, io);
+    REQUIRE(ic.result.exit_code == 0);
+    render::RenderResult ir = render_compiled(ic.result, W, H);
+    REQUIRE(ir.ok);
+    double evals = 0, shapes = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            evals += ir.image.pixel(x, y)[1];
+            shapes += ir.image.pixel(x, y)[3];
+        }
+    INFO(shapes / evals << " shapes per scene evaluation");
+    CHECK(shapes / evals <= 16);
+    // A group below 48 members keeps its plain loop, and a plane has no extent to derive: no bound.
+    Compiled small = compile_path(write_temp("rings_small.iq", rings_scene(40, false, 0)), CompileOptions{});
+    REQUIRE(small.result.exit_code == 0);
+    CHECK_THAT(small.result.code, !Catch::Contains("derived from the shape"));
 }
 
 TEST_CASE("the hierarchy serves the unbounded scene only for exact shapes", "[instancing]") {

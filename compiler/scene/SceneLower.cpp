@@ -4,6 +4,7 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <optional>
 #include <tuple>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -13,6 +14,7 @@
 #include "scene/Bvh.h"
 #include "ir/Builder.h"
 #include "ir/Lower.h"
+#include "ir/Support.h"
 
 namespace iqc {
 
@@ -72,6 +74,7 @@ struct Item {
     // A group whose members all have `bound`, from kMinTree members: the bounding-volume hierarchy iqc_scene traverses,
     // its node tables per level (centre, radius, first child, child count) and the members in leaf order.
     BoundsTree tree;
+    bool derived_bound = false;  // its members' bound spheres were derived from the shape (no `bound` written)
     struct TreeLevel {
         Field center, half, first, count;
     };
@@ -134,6 +137,7 @@ public:
 private:
     const SceneDesc& s_;
     const std::vector<InstancePlan>& plans_;
+    std::vector<double> derived_bound_ = std::vector<double>(plans_.size(), 0.0);  // per plan; 0: none
     const SceneLowerOptions& o_;
     SceneIR out_;
     ir::Module& m_ = out_.module;
@@ -157,6 +161,49 @@ private:
     std::string owner_;  // the item being declared (Global::owner)
 
     const InstancePlan& plan(size_t i) const { return plans_[i]; }
+    // An instance's bounding-sphere radius: its `bound`, or the one derived for its group (0: none).
+    double bound_of(size_t i) const { return plan(i).desc->bound > 0 ? plan(i).desc->bound : derived_bound_[i]; }
+
+    // A bounding-sphere radius for every member of a group without `bound`: the shape's extent by interval
+    // arithmetic (ir/Support.h) over the hull of the members' parameter values (on targets with sliders, their
+    // slider ranges too), or nothing (an unbounded shape such as a plane; a parameter without a range).
+    std::optional<double> derived_bound(const std::vector<size_t>& members) {
+        const InstancePlan& first = plan(members[0]);
+        int fn = lower_module_cached(*first.shape, ctx_);
+        std::vector<ir::ValueBounds> ranges = parameter_bounds(*first.shape);
+        std::vector<std::vector<ir::Interval>> params(first.shape->params.size());
+        for (size_t i = 0; i < params.size(); ++i) {
+            if (int(i) == first.query) continue;
+            for (size_t mi : members) {
+                const auto& v = plan(mi).shape_values[i];
+                if (params[i].empty()) params[i].assign(v.size(), {INFINITY, -INFINITY});
+                for (size_t c = 0; c < v.size() && c < params[i].size(); ++c)
+                    params[i][c] = ir::iv::hull(params[i][c], {v[c], v[c]});
+            }
+            if (!o_.params_constant) {
+                const ir::ValueBounds& r = ranges[i];
+                if (r.input || r.lo.size() != params[i].size()) return std::nullopt;
+                for (size_t c = 0; c < params[i].size(); ++c) params[i][c] = ir::iv::hull(params[i][c], {r.lo[c], r.hi[c]});
+            }
+        }
+        params[size_t(first.query)].assign(3, {});
+        auto R = ir::support_radius(m_, fn, first.query, std::move(params));
+        if (!R) return R;
+        // Spheres that overlap a lot make a hierarchy that skips little and walks many members per step
+        // (llvmpipe ends a pixel's shader after 65,535 loop iterations): a ring's slider range up to (2, 2) makes
+        // it 4 units wide on a grid of 1. Used only while the spheres fill their box less than twice over.
+        std::vector<BoundingSphere> spheres;
+        double volume = 0;
+        for (size_t mi : members) {
+            spheres.push_back(world_sphere(plan(mi).inv_linear, plan(mi).inv_offset, *R));
+            volume += 4.0 / 3.0 * M_PI * std::pow(spheres.back().radius, 3);
+        }
+        std::vector<BoundingBox> boxes;
+        for (const auto& sp : spheres) boxes.push_back(box_of(sp));
+        BoundingBox all = enclosing_box(boxes);
+        if (volume > 2 * 8 * all.half[0] * all.half[1] * all.half[2]) return std::nullopt;
+        return R;
+    }
     bool runtime_transform(const InstancePlan& p) const {
         return p.has_transform && (p.transform_uses_inputs || (!o_.params_constant && !p.transform->params.empty()));
     }
@@ -196,7 +243,18 @@ private:
             g.group = true;
             std::string shape = plan(members[0]).desc->type, material = plan(members[0]).desc->material;
             g.name = unique_name(material.empty() ? shape : shape + "_" + material);
-            if (std::get<2>(key) && members.size() >= kMinTree && (!o_.params_constant || members.size() <= kMaxTreeInCode)) build_tree(g);
+            bool bounded = std::get<2>(key);
+            if (!bounded && members.size() >= kMinTree && (!o_.params_constant || members.size() <= kMaxTreeInCode) &&
+                !o_.per_instance) {
+                // No `bound` written: the compiler derives one from the shape where it can (ir/Support.h).
+                if (auto R = derived_bound(members)) {
+                    for (size_t mi : members) derived_bound_[mi] = *R;
+                    bounded = true;
+                    out_.group_notes.push_back(fmt::format("{}: `bound = {}` derived from the shape", shape, fmt::format("{:.4g}", *R)));
+                }
+            }
+            g.derived_bound = bounded && !std::get<2>(key);
+            if (bounded && members.size() >= kMinTree && (!o_.params_constant || members.size() <= kMaxTreeInCode)) build_tree(g);
             else if (std::get<2>(key) && members.size() > kMaxTreeInCode)
                 out_.warnings.push_back({plan(members[0]).desc->type_span,
                                          fmt::format("{} instances of '{}' with `bound` are marched in one loop, without a bounding-volume "
@@ -277,7 +335,7 @@ private:
     // order (ids, per-member tables); the hierarchy's leaves list them through a table (Item::tree_order).
     void build_tree(Item& g) {
         std::vector<BoundingSphere> spheres;
-        for (size_t mi : g.members) spheres.push_back(world_sphere(plan(mi).inv_linear, plan(mi).inv_offset, plan(mi).desc->bound));
+        for (size_t mi : g.members) spheres.push_back(world_sphere(plan(mi).inv_linear, plan(mi).inv_offset, bound_of(mi)));
         g.tree = build_bounds_tree(spheres, kTreeBranching);
         g.exact = plan(g.members[0]).shape->exactness == "exact";
     }
@@ -439,7 +497,7 @@ private:
             L.push_back(plan(mi).inv_linear);
             off.push_back(plan(mi).inv_offset);
             sc.push_back({plan(mi).scale});
-            R.push_back({plan(mi).desc->bound});
+            R.push_back({bound_of(mi)});
         }
         if (runtime_transform(first)) {
             declare_runtime_transform(it);
@@ -460,8 +518,10 @@ private:
             // a lower bound and would change the blended shape (a crease where the sphere switches off).
             out_.warnings.push_back({first.desc->bound_span, fmt::format("`bound` is not used for '{}': it is part of a blend, which "
                                                                          "reads its true distance", first.name)});
-        } else if (first.desc->bound > 0) {
-            it.bound = constant_field(it, "bound", Type::scalar(), R, "`bound`: radius of the bounding sphere");
+        } else if (bound_of(it.members[0]) > 0) {
+            it.bound = constant_field(it, "bound", Type::scalar(), R,
+                                      it.derived_bound ? "radius of the bounding sphere, derived from the shape"
+                                                       : "`bound`: radius of the bounding sphere");
             out_.any_bound = true;
         }
         for (size_t l = 0; l < it.tree.levels.size(); ++l) {
@@ -621,11 +681,11 @@ private:
         for (int c = 0; c < 3; ++c) reach += std::fabs(cam.position[size_t(c)] - cam.target[size_t(c)]);  // an orbiting camera
         for (size_t mi : it.members) {
             const InstancePlan& p = plan(mi);
-            if (p.desc->bound > 0 && spec.bounds.size() < 8) spec.bounds.push_back(p.desc->bound);
+            if (bound_of(mi) > 0 && spec.bounds.size() < 8) spec.bounds.push_back(bound_of(mi));
             for (int r = 0; r < 3; ++r) {
                 double lo, hi;
-                if (p.desc->bound > 0) {
-                    double R = p.desc->bound + 2 * o_.bound_margin / std::max(p.scale, 1e-9);
+                if (bound_of(mi) > 0) {
+                    double R = bound_of(mi) + 2 * o_.bound_margin / std::max(p.scale, 1e-9);
                     lo = -R, hi = R;
                     spec.ball = std::max(spec.ball, R);
                 } else {  // q = L p + o for p within `reach` of the camera's target

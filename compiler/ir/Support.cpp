@@ -1,0 +1,118 @@
+#include "ir/Support.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <queue>
+
+namespace iqc::ir {
+
+namespace {
+
+struct Box {
+    std::array<double, 3> lo, hi;
+};
+
+}  // namespace
+
+std::optional<double> support_radius(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
+                                      double reach, int budget) {
+    if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
+    const Function& f = m.functions[size_t(fn)];
+    if (!f.body[f.result].type.is_scalar()) return std::nullopt;
+    // The distance's lowest value over a box.
+    auto lowest = [&](const Box& b) {
+        params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
+        std::vector<Bounds> v = interval_analysis(m, fn, params);
+        const Bounds& r = v[f.result];
+        double lo = r.c.empty() ? -INFINITY : r.c[0].lo;
+        return std::isnan(lo) ? -INFINITY : lo;
+    };
+    // One pass: the boxes of `domain`, split `depth` times where they may hold the solid; false when one
+    // touching the domain's boundary does (when `open`), or the budget runs out.
+    auto pass = [&](const Box& domain, int depth, bool open, std::vector<Box>& kept) {
+        std::vector<std::pair<Box, int>> stack = {{domain, 0}};
+        kept.clear();
+        while (!stack.empty()) {
+            auto [b, level] = stack.back();
+            stack.pop_back();
+            if (--budget < 0) return false;
+            if (lowest(b) > 0) continue;
+            if (level == depth) {
+                if (open)
+                    for (int c = 0; c < 3; ++c)
+                        if (b.lo[size_t(c)] <= domain.lo[size_t(c)] || b.hi[size_t(c)] >= domain.hi[size_t(c)]) return false;
+                kept.push_back(b);
+                continue;
+            }
+            for (int o = 0; o < 8; ++o) {
+                Box c;
+                for (size_t a = 0; a < 3; ++a) {
+                    double mid = 0.5 * (b.lo[a] + b.hi[a]);
+                    bool upper = (o >> a) & 1;
+                    c.lo[a] = upper ? mid : b.lo[a];
+                    c.hi[a] = upper ? b.hi[a] : mid;
+                }
+                stack.push_back({c, level + 1});
+            }
+        }
+        return true;
+    };
+    Box domain{{-reach, -reach, -reach}, {reach, reach, reach}};
+    std::vector<Box> kept;
+    // Coarse: the solid must stay off the boundary of the big cube (levels of 1/64 of it).
+    if (!pass(domain, 6, true, kept)) return std::nullopt;
+    if (kept.empty()) return std::nullopt;  // nothing where the distance can be ≤ 0: no solid to bound
+    // Fine: the hull of what is left, widened by half a cell, split again (four times: each cell is 1/8 of the
+    // last hull, which shrinks to the solid's).
+    for (int round = 0; round < 4; ++round) {
+        Box hull{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+        double cell = 0;
+        for (const Box& b : kept)
+            for (size_t a = 0; a < 3; ++a) {
+                hull.lo[a] = std::min(hull.lo[a], b.lo[a]);
+                hull.hi[a] = std::max(hull.hi[a], b.hi[a]);
+                cell = std::max(cell, b.hi[a] - b.lo[a]);
+            }
+        for (size_t a = 0; a < 3; ++a) {
+            hull.lo[a] -= 0.5 * cell;
+            hull.hi[a] += 0.5 * cell;
+        }
+        std::vector<Box> finer;
+        if (!pass(hull, 3, false, finer)) break;  // keep the coarser answer
+        kept = std::move(finer);
+    }
+    // The radius: the farthest corner of a box left, refined where it is decided (best first: the box with the
+    // farthest corner is split until it is small against the radius, or the budget ends).
+    auto far_corner = [](const Box& b) {
+        double s = 0;
+        for (size_t a = 0; a < 3; ++a) s += std::pow(std::max(std::fabs(b.lo[a]), std::fabs(b.hi[a])), 2);
+        return std::sqrt(s);
+    };
+    auto size = [](const Box& b) { return std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]}); };
+    auto farther = [&](const Box& a, const Box& b) { return far_corner(a) < far_corner(b); };
+    std::priority_queue<Box, std::vector<Box>, decltype(farther)> queue(farther, std::move(kept));
+    double r = 0;
+    while (!queue.empty()) {
+        Box b = queue.top();
+        if (size(b) <= 0.002 * far_corner(b) || budget < 8) {
+            r = far_corner(b);
+            break;
+        }
+        queue.pop();
+        for (int o = 0; o < 8; ++o) {
+            Box c;
+            for (size_t a = 0; a < 3; ++a) {
+                double mid = 0.5 * (b.lo[a] + b.hi[a]);
+                bool upper = (o >> a) & 1;
+                c.lo[a] = upper ? mid : b.lo[a];
+                c.hi[a] = upper ? b.hi[a] : mid;
+            }
+            --budget;
+            if (lowest(c) <= 0) queue.push(c);
+        }
+    }
+    return std::nextafter(r * (1 + 1e-9), INFINITY);
+}
+
+}  // namespace iqc::ir

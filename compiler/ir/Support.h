@@ -1,0 +1,31 @@
+// A shape's extent, derived from its distance function by interval arithmetic: the radius of a ball around
+// the origin of its own space that contains every point where the distance can be ≤ 0 (the solid and its
+// surface). The scene compiler uses it as a `bound` the user did not write, so that a large group of
+// instances gets a bounding-volume hierarchy (scene/Bvh.h).
+//
+// Method: branch and bound over boxes (Moore, "Interval Analysis", 1966; Snyder, "Interval analysis for
+// computer graphics", SIGGRAPH 1992): a box where the interval of the distance lies above 0 holds no point of
+// the solid and is dropped; the others are split into octants, first over a cube of half-side `reach` (a box
+// left on its boundary: unbounded), then a few times over the hull of what is left, and last best first: the
+// box with the farthest corner is split until it is small against that distance. The radius is the farthest
+// corner of a box left, so it contains the solid whatever the overestimation of intervals (which only keeps
+// more boxes, and makes the radius larger).
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "ir/IR.h"
+#include "ir/Intervals.h"
+
+namespace iqc::ir {
+
+// Function `fn` of `m` returns a scalar distance; parameter `query` is the ℝ³ point, the others lie in
+// `params` (one entry per parameter, its components' intervals; the query's entry is ignored). Returns the
+// radius (object-space units, rounded up), or nothing when a box touching the cube of half-side `reach` may
+// hold the solid (an unbounded shape, such as a plane, or a distance the intervals cannot bound), or when the
+// work budget (interval evaluations) runs out first.
+std::optional<double> support_radius(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
+                                      double reach = 1024, int budget = 20000);
+
+}  // namespace iqc::ir
