@@ -406,9 +406,27 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 }
 {{/if}}
 
+{{#if NORMALS_FINITE}}
+// A tap of a finite-difference normal: the hit instance's own distance (iqc_distance_of), not the whole
+// scene's — one instance's code instead of every instance's, and the normal of the surface the ray hit where
+// another instance lies within the tap's reach (as the analytic normal is).
+float iqc_normal_tap(vec3 p, int id) {
+{{#if INSTANCE_TAPS}}
+{{#if INSTRUMENT}}
+    iqc_evals++;
+    iqc_shape_evals++;  // one instance, near its surface (no `bound` stands in there)
+{{/if}}
+    return iqc_distance_of(p, id);
+{{#else}}
+    return iqc_scene(p).x;
+{{/if}}
+}
+
+{{/if}}
 {{#if NORMALS_TETRAHEDRON}}
 // Normal by tetrahedron finite differences: four taps k·f(p + h·k) at the corners k of a tetrahedron, in a
-// loop over one copy of the scene function (a loop the compiler cannot unroll: min(iFrame, 0) is always 0).
+// loop over one copy of the distance f (iqc_normal_tap; a loop the compiler cannot unroll: min(iFrame, 0) is
+// always 0).
 // Where the four cancel (faces aligned with the tetrahedron) the same loop goes on with central differences
 // along the axes, the taps ±e·f(p ± h·e): a loop runs only while some pixel needs it, where an if's body
 // would run for every pixel on a SIMD renderer such as llvmpipe. The corners and axes are computed from the
@@ -424,20 +442,20 @@ vec3 iqc_normal(vec3 p, float t, int id) {
         int a = (i - 4) >> 1;
         vec3 k = i < 4 ? 2.0 * vec3(ivec3((i + 3) >> 1, i >> 1, i) & 1) - 1.0
                        : (1.0 - 2.0 * float(i & 1)) * vec3(equal(ivec3(a), ivec3(0, 1, 2)));
-        n += k * iqc_scene(p + h * k).x;
+        n += k * iqc_normal_tap(p + h * k, id);
     }
     return dot(n, n) > 0.0 ? normalize(n) : vec3(0.0, 1.0, 0.0);
 }
 {{/if}}
 {{#if NORMALS_CENTRAL}}
-// Normal by central differences: six taps in a loop over one copy of the scene function.
+// Normal by central differences: six taps in a loop over one copy of the distance (iqc_normal_tap).
 vec3 iqc_normal(vec3 p, float t, int id) {
     float h = {{NORMAL_STEP}};
     vec3 n = vec3(0.0);
     for (int i = min(iFrame, 0); i < 3; i++) {
         vec3 e = vec3(0.0);
         e[i] = h;
-        n[i] = iqc_scene(p + e).x - iqc_scene(p - e).x;
+        n[i] = iqc_normal_tap(p + e, id) - iqc_normal_tap(p - e, id);
     }
     return dot(n, n) > 0.0 ? normalize(n) : vec3(0.0, 1.0, 0.0);  // a flat field: no direction
 }
@@ -446,12 +464,12 @@ vec3 iqc_normal(vec3 p, float t, int id) {
 // Normal by forward differences: four taps (the point and one step along each axis).
 vec3 iqc_normal(vec3 p, float t, int id) {
     float h = {{NORMAL_STEP}};
-    float d0 = iqc_scene(p).x;
+    float d0 = iqc_normal_tap(p, id);
     vec3 n = vec3(0.0);
     for (int i = min(iFrame, 0); i < 3; i++) {
         vec3 e = vec3(0.0);
         e[i] = h;
-        n[i] = iqc_scene(p + e).x - d0;
+        n[i] = iqc_normal_tap(p + e, id) - d0;
     }
     return dot(n, n) > 0.0 ? normalize(n) : vec3(0.0, 1.0, 0.0);  // a flat field: no direction
 }

@@ -263,7 +263,10 @@ TEST_CASE("`bound` skips the shape outside its bounding sphere: same picture, sa
     double shape_plain = mean_channel(sp, 3), shape_bound = mean_channel(sb, 3);
     double evals_plain = mean_channel(sp, 1);
     INFO("shape evaluations per pixel: " << shape_plain << " without bound, " << shape_bound << " with");
-    CHECK(shape_plain == Approx(2 * evals_plain).epsilon(1e-6));  // two instances, both evaluated every time
+    // Two instances, both evaluated at every step of a march; a normal's taps (4 per hit pixel, counted as
+    // evaluations) evaluate the hit instance only.
+    CHECK(shape_plain <= 2 * evals_plain + 1e-6);
+    CHECK(shape_plain >= 1.9 * evals_plain);
     CHECK(shape_bound < 0.8 * shape_plain);
 }
 

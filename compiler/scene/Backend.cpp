@@ -75,6 +75,7 @@ const char* entry_comment(const std::string& name) {
     static const std::map<std::string, const char*> c = {
         {ir::names::kScene, "Distance to the nearest surface (x) and that instance's id (y)."},
         {ir::names::kGradient, "The gradient of instance `id`'s distance at p, derived by iqc (forward-mode differentiation)."},
+        {ir::names::kDistanceOf, "Instance `id`'s own distance at p (what a finite-difference normal takes its taps of)."},
         {ir::names::kShade, "Colour of instance `id` at surface point p, unit normal N, seen from eye, that no light's shadow darkens."},
         {ir::names::kShadeLight, "Instance `id`'s colour from one light at P_L with colour C_L (the runtime adds one per light, times its shadow)."},
         {ir::names::kLightPosition, "Position of light l (a sun's: the direction toward it)."},

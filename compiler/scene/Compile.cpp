@@ -121,6 +121,7 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     SceneLowerOptions lo;
     lo.params_constant = opts_.target == Target::Shadertoy;
     lo.analytic_normals = normals() == Normals::Analytic && !opts_.per_instance;
+    lo.instance_normals = normals() != Normals::Analytic && !opts_.per_instance;
     lo.instrument = opts_.instrument || opts_.bench;
     lo.per_instance = opts_.per_instance;
     lo.reflections = s_.effects.reflections > 0;
@@ -245,6 +246,8 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     if (!opts_.per_instance && march() != March::Fixed) F.insert("STEP_CAP_CONE");
     static const char* normal_flags[] = {"NORMALS_CENTRAL", "NORMALS_FORWARD", "NORMALS_TETRAHEDRON", "NORMALS_ANALYTIC"};
     F.insert(normal_flags[int(opts_.per_instance && normals() == Normals::Analytic ? Normals::Tetrahedron : normals())]);
+    if (opts_.per_instance || normals() != Normals::Analytic) F.insert("NORMALS_FINITE");
+    if (!opts_.per_instance && normals() != Normals::Analytic) F.insert("INSTANCE_TAPS");
     if (render.hit_relative) F.insert("HIT_RELATIVE");
     {
         // Float spacing far from the origin (FAR): twice the ulp at the largest coordinate the camera reaches

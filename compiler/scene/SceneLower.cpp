@@ -121,7 +121,7 @@ public:
             scene_function(false);
         }
         lipschitz_function();
-        if (o_.analytic_normals) gradient_functions();
+        if (o_.analytic_normals || o_.instance_normals) gradient_functions();
         shade_functions();
         // k_r: for mirrors (reflections) and for glass, whose Fresnel reflection it raises (refraction).
         if (o_.reflections || o_.refraction) out_.has_reflectivity = material_property(ir::names::kReflectivity);
@@ -915,8 +915,9 @@ private:
         return outer.named(outer.construct(Type::vector(width), out), "res");
     }
 
-    // iqc_distance_of(p, id): the instance's own distance (what the analytic normal differentiates), and the
-    // placeholder iqc_gradient that the gradient pass replaces.
+    // iqc_distance_of(p, id): the instance's own distance (what the analytic normal differentiates, and what
+    // finite-difference normals take their taps of), and, for analytic normals, the placeholder iqc_gradient
+    // that the gradient pass replaces.
     void gradient_functions() {
         ir::Function f;
         f.name = ir::names::kDistanceOf;
@@ -934,7 +935,9 @@ private:
             cases.push_back({it.id, it.id + (long long)it.members.size(), d});
         }
         f.result = b.switch_(id, b.scalar(2 * o_.max_dist), std::move(cases));
+        f.entry = !o_.analytic_normals;  // finite-difference normals call it; the gradient pass reads it
         m_.functions.push_back(std::move(f));
+        if (!o_.analytic_normals) return;
         ir::Function g;
         g.name = ir::names::kGradient;
         g.glsl_name = g.name;

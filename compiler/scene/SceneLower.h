@@ -27,6 +27,7 @@ namespace iqc {
 struct SceneLowerOptions {
     bool params_constant = true;     // parameters are constants (Shadertoy); else uniforms (sliders)
     bool analytic_normals = false;   // iqc_distance_of + a placeholder iqc_gradient (the gradient pass fills it)
+    bool instance_normals = false;   // iqc_distance_of for finite-difference normals (taps of the hit instance)
     bool instrument = false;         // iqc_scene returns a third component: shapes evaluated in this call
     bool per_instance = false;       // I♥IQ's architecture for the benchmark: no groups, per-instance functions
     bool reflections = false;        // the scene reads k_r
