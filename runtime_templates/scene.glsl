@@ -221,8 +221,7 @@ float iqc_max_singular(mat3 L) {
 // angles; a ray that only passed near a surface on its way is not a hit).
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20;
-    int best_id = -1, last_id = -1;
-    bool closing = true;
+    float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
     id = -1;
     steps = 0;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -233,15 +232,19 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float e = iqc_eps(t);
         float dn = iqc_nearness(h);
         if (dn < e) { id = int(h.y); return t; }
-        if (dn / e < best) { best = dn / e; best_t = t; best_id = int(h.y); }
-        closing = dn <= last;
+{{#if EPS_CONSTANT}}
+        if (dn < best) { best = dn; best_t = t; best_id = h.y; }  // in tolerances at the end (a constant tolerance)
+{{#else}}
+        if (dn / e < best) { best = dn / e; best_t = t; best_id = h.y; }
+{{/if}}
+        prev = last;
         last = dn;
         last_t = t;
-        last_id = int(h.y);
+        last_id = h.y;
         t += d;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    return iqc_at_step_cap(best, best_t, best_id, last, last_t, last_id, closing, id);
+    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
 {{#if MARCH_RELAXED}}
@@ -251,8 +254,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, omega = IQC_RELAXATION, t_prev = 0.0, r_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
-    int best_id = -1, last_id = -1;
-    bool closing = true;
+    float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
     id = -1;
     steps = 0;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -269,11 +271,15 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float e = iqc_eps(t);
         float dn = iqc_nearness(h);
         if (dn < e) { id = int(h.y); return t; }
-        if (dn / e < best) { best = dn / e; best_t = t; best_id = int(h.y); }
-        closing = dn <= last;
+{{#if EPS_CONSTANT}}
+        if (dn < best) { best = dn; best_t = t; best_id = h.y; }  // in tolerances at the end (a constant tolerance)
+{{#else}}
+        if (dn / e < best) { best = dn / e; best_t = t; best_id = h.y; }
+{{/if}}
+        prev = last;
         last = dn;
         last_t = t;
-        last_id = int(h.y);
+        last_id = h.y;
         t_prev = t;
         r_prev = abs(d);
         step_len = omega * d;
@@ -281,7 +287,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         t += step_len;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    return iqc_at_step_cap(best, best_t, best_id, last, last_t, last_id, closing, id);
+    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
 {{#if MARCH_AUTO}}
@@ -297,8 +303,8 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, m = -1.0, g = 0.95, t_prev = 0.0, r_prev = 0.0, d_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
-    int best_id = -1, last_id = -1;
-    bool closing = true, retried = false;
+    float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
+    bool retried = false;
     id = -1;
     steps = 0;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -324,11 +330,15 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float e = iqc_eps(t);
         float dn = iqc_nearness(h);
         if (dn < e) { id = int(h.y); return t; }
-        if (dn / e < best) { best = dn / e; best_t = t; best_id = int(h.y); }
-        closing = dn <= last;
+{{#if EPS_CONSTANT}}
+        if (dn < best) { best = dn; best_t = t; best_id = h.y; }  // in tolerances at the end (a constant tolerance)
+{{#else}}
+        if (dn / e < best) { best = dn / e; best_t = t; best_id = h.y; }
+{{/if}}
+        prev = last;
         last = dn;
         last_t = t;
-        last_id = int(h.y);
+        last_id = h.y;
         if (step_len > 0.0) m = mix(clamp((d - d_prev) / step_len, -1.0, 0.8), m, 0.3);
         retried = false;
         t_prev = t;
@@ -339,7 +349,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         t += step_len;
         if (t > IQC_MAX_DIST) return -1.0;
     }
-    return iqc_at_step_cap(best, best_t, best_id, last, last_t, last_id, closing, id);
+    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
 {{#if PER_INSTANCE}}

@@ -265,6 +265,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         bool far = render.hit_relative ? 4 * std::max(spacing0, 2.4e-7) > 0.25 * hit()
                                        : 4 * (spacing0 + 2.4e-7 * render.max_dist) > 0.25 * hit();
         if (far) F.insert("FAR");
+        if (!far && !render.hit_relative) F.insert("EPS_CONSTANT");  // iqc_eps(t) is IQC_HIT: no division per step
         V["NORMAL_STEP"] = far ? "iqc_normal_step(t)" : "0.5 * iqc_eps(t)";
     }
     // Some instance's distance is divided by a Lipschitz factor: the hit test multiplies it back.
