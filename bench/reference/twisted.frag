@@ -1,0 +1,95 @@
+// Twisted box, the scene of bench/twisted.iq: a 1 x 3 x 1 box twisted about y by 1.2 radians per unit
+// of height. Written by hand as the same-picture reference for bench/handwritten.sh, which times iqc's
+// shader for the scene against it; to be a fair baseline it draws the same pixels, so it makes the same
+// algorithm choices as iqc:
+//  - Lipschitz factor 2, the scene's `# lipschitz: 2` (the twist stretches distances up to twice):
+//    map() returns half the box distance, a safe sphere-tracing step.
+//  - hit when the field itself (twice the step) is under 0.001, not the halved step (a surface thicker
+//    by a tolerance).
+//  - sphere tracing from the eye, at most 128 steps, far plane 100. A few rays grazing the twisted edges
+//    run out of steps; like iqc, such a ray still hits if it was closing in within its pixel's cone, or
+//    came within 10 tolerances and stalled there (without this, about 20 edge pixels change).
+//    The eye is outside the shape, so there is no inside-start case to handle.
+//  - tetrahedron normals, offset 0.0005 (half the tolerance); colour 0.5 + 0.5 n (n facing the eye) on a
+//    (0.05, 0.05, 0.08) background, sRGB-encoded; eye (0, 1, -5), 60 degree vertical field of view.
+
+#define ZERO min(iFrame, 0)
+
+float sdBox(vec3 p, vec3 b)
+{
+    vec3 q = abs(p) - b;
+    return length(max(q, 0.0)) + min(max(q.x, max(q.y, q.z)), 0.0);
+}
+
+float map(vec3 p)
+{
+    // twist about y
+    float c = cos(1.2*p.y);
+    float s = sin(1.2*p.y);
+    vec3 q = vec3(c*p.x - s*p.z, p.y, s*p.x + c*p.z);
+    return 0.5*sdBox(q, vec3(0.5, 1.5, 0.5));  // Lipschitz 2: a safe step
+}
+
+float raymarch(vec3 ro, vec3 rd)
+{
+    float t = 0.0;
+    float dm = 1e20, tm = 0.0;  // closest approach
+    float dl = 1e20, tl = 0.0;  // last sample
+    float dp = 1e20;            // the one before it
+    for (int i = 0; i < 128 && t <= 100.0; i++)
+    {
+        float h = map(ro + t*rd);
+        dp = dl; dl = abs(2.0*h); tl = t;  // the field itself
+        if (dl < 0.001) break;
+        if (dl < dm) { dm = dl; tm = t; }
+        t += h;
+    }
+    if (dl < 0.001) return tl;
+    if (t > 100.0) return -1.0;
+    // out of steps: closing in within the pixel's cone, or stalled near a silhouette
+    float px = iResolution.y*1.7320508;
+    if (dl <= dp && dl < tl/px) return tl;
+    if (dm < 0.01 && tl - tm <= max(0.01, tm/px)) return tm;
+    return -1.0;
+}
+
+// tetrahedron normal (Quilez), one map() in a loop the compiler keeps rolled
+vec3 calcNormal(vec3 p)
+{
+    vec3 n = vec3(0.0);
+    for (int i = ZERO; i < 4; i++)
+    {
+        vec3 e = 2.0*vec3((((i + 3) >> 1) & 1), ((i >> 1) & 1), (i & 1)) - 1.0;
+        n += e*map(p + 0.0005*e);
+    }
+    return normalize(n);
+}
+
+vec3 render(vec3 ro, vec3 rd)
+{
+    float t = raymarch(ro, rd);
+    if (t < 0.0) return vec3(0.05, 0.05, 0.08);
+    vec3 n = calcNormal(ro + t*rd);
+    if (dot(n, rd) > 0.0) n = -n;
+    return 0.5 + 0.5*n;
+}
+
+vec3 toSRGB(vec3 c)
+{
+    c = clamp(c, 0.0, 1.0);
+    return mix(12.92*c, 1.055*pow(c, vec3(1.0/2.4)) - 0.055, step(0.0031308, c));
+}
+
+void mainImage(out vec4 fragColor, in vec2 fragCoord)
+{
+    vec2 p = (2.0*fragCoord - iResolution.xy)/iResolution.y;
+
+    // camera looking at the origin (world up +y), focal length 1/tan(30 deg)
+    vec3 ro = vec3(0.0, 1.0, -5.0);
+    vec3 ww = normalize(-ro);
+    vec3 uu = normalize(cross(vec3(0.0, 1.0, 0.0), ww));
+    vec3 vv = cross(ww, uu);
+    vec3 rd = normalize(mat3(uu, vv, ww)*vec3(p, 1.7320508));
+
+    fragColor = vec4(toSRGB(render(ro, rd)), 1.0);
+}
