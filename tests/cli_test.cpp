@@ -335,6 +335,39 @@ TEST_CASE("iqc render draws a Shadertoy shader as it is", "[cli][render]") {
     CHECK_THAT(s.err, Catch::Contains("--stats and --target need a scene"));
 }
 
+TEST_CASE("every bench scene's hand-written reference draws iqc's picture (50 dB or more)", "[cli][render][handwritten]") {
+    // bench/handwritten.sh times iqc against bench/reference/X.frag: a comparison only while both draw the same
+    // picture. A change to iqc's pictures of the bench scenes fails here until the references follow it.
+    namespace fs = std::filesystem;
+    fs::path root = IQC_SOURCE_DIR;
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(root / "bench" / "reference")) {
+        if (e.path().extension() != ".frag") continue;
+        fs::path scene = root / "bench" / (e.path().stem().string() + ".iq");
+        INFO(e.path().string());
+        REQUIRE(fs::exists(scene));
+        auto a = temp_dir() / ("ref_iqc_" + e.path().stem().string() + ".png");
+        auto b = temp_dir() / ("ref_hand_" + e.path().stem().string() + ".png");
+        REQUIRE(run_iqc("render " + scene.string() + " --size 160x90 -q -o " + a.string()).exit_code == 0);
+        REQUIRE(run_iqc("render " + e.path().string() + " --size 160x90 -q -o " + b.string()).exit_code == 0);
+        iqc::render::Image ia, ib;
+        REQUIRE(iqc::render::read_png(a.string(), ia, nullptr));
+        REQUIRE(iqc::render::read_png(b.string(), ib, nullptr));
+        REQUIRE(ia.rgba.size() == ib.rgba.size());
+        double se = 0;  // over the 8-bit channels, as ImageMagick's PSNR
+        for (size_t i = 0; i < ia.rgba.size(); ++i) {
+            double d = std::round(ia.rgba[i] * 255.0) - std::round(ib.rgba[i] * 255.0);
+            se += d * d;
+        }
+        double mse = se / double(ia.rgba.size()) / (255.0 * 255.0);
+        double psnr = mse == 0 ? 1e9 : 10 * std::log10(1 / mse);
+        INFO("PSNR " << psnr << " dB");
+        CHECK(psnr >= 50);
+        ++n;
+    }
+    CHECK(n >= 8);
+}
+
 TEST_CASE("the hand-written references in bench/handwritten render without NaN", "[cli][render]") {
     // Shadertoy shaders written by hand for the examples (issue 15's blind ranking, issue 17's comparison).
     int n = 0;
