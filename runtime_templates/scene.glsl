@@ -71,6 +71,10 @@ const vec3 IQC_CAMERA_POSITION = {{CAMERA_POSITION}};
 const vec3 IQC_CAMERA_TARGET = {{CAMERA_TARGET}};
 const float IQC_CAMERA_FOCAL = {{CAMERA_FOCAL}};  // 1 / tan(fov / 2)
 {{/if}}
+{{#if SCENE_BOX}}
+const vec3 IQC_BOX_LO = {{BOX_LO}};  // the scene's box (±1e30: unbounded on that side)
+const vec3 IQC_BOX_HI = {{BOX_HI}};
+{{/if}}
 {{#if MARCH_FIXED}}
 const float IQC_FIXED_STEP = {{FIXED_STEP}};
 {{/if}}
@@ -215,6 +219,21 @@ float iqc_max_singular(mat3 L) {
 }
 
 {{/if}}
+{{#if SCENE_BOX}}
+// How far a march along the ray goes: to where it leaves the scene's box (the slab method, Kay & Kajiya 1986),
+// at most IQC_MAX_DIST; -1 where it never meets the box. Outside the box the compiler proved, by interval
+// arithmetic on each instance's shape, that every instance's distance exceeds the `bound` margin (ten hit
+// tolerances, at least 0.1): no sample there is a hit or the step cap's closest approach, so a ray that misses
+// the box is background without a step, and one that leaves it stops there instead of marching on.
+float iqc_far(vec3 ro, vec3 rd) {
+    vec3 m = 1.0 / rd;
+    vec3 a = (IQC_BOX_LO - ro) * m, b = (IQC_BOX_HI - ro) * m;
+    vec3 n = min(a, b), f = max(a, b);
+    float t_in = max(max(n.x, n.y), n.z), t_out = min(min(f.x, f.y), f.z);
+    return t_in > t_out || t_out < 0.0 ? -1.0 : min(t_out, IQC_MAX_DIST);
+}
+
+{{/if}}
 {{#if MARCH_SPHERE}}
 // Sphere tracing (Hart 1996): step by the distance bound. Starting inside a shape (a negative distance)
 // it marches to that shape's inner wall. At the step cap, iqc_at_step_cap decides (no holes at grazing
@@ -224,6 +243,10 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
     id = -1;
     steps = 0;
+{{#if SCENE_BOX}}
+    float t_far = iqc_far(ro, rd);
+    if (t_far < 0.0) return -1.0;
+{{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
         vec2 h = iqc_scene(ro + t * rd);
         steps++;
@@ -242,7 +265,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         last_t = t;
         last_id = h.y;
         t += d;
-        if (t > IQC_MAX_DIST) return -1.0;
+        if (t > {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) return -1.0;
     }
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
@@ -257,6 +280,10 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
     id = -1;
     steps = 0;
+{{#if SCENE_BOX}}
+    float t_far = iqc_far(ro, rd);
+    if (t_far < 0.0) return -1.0;
+{{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
         vec2 h = iqc_scene(ro + t * rd);
         steps++;
@@ -285,7 +312,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         step_len = omega * d;
         omega = IQC_RELAXATION;
         t += step_len;
-        if (t > IQC_MAX_DIST) return -1.0;
+        if (t > {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) return -1.0;
     }
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
@@ -307,6 +334,10 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     bool retried = false;
     id = -1;
     steps = 0;
+{{#if SCENE_BOX}}
+    float t_far = iqc_far(ro, rd);
+    if (t_far < 0.0) return -1.0;
+{{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
         vec2 h = iqc_scene(ro + t * rd);
         steps++;
@@ -347,7 +378,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         g = min(g + 0.01, 0.95);
         step_len = d * (1.0 + g * (1.0 + m) / (1.0 - m));
         t += step_len;
-        if (t > IQC_MAX_DIST) return -1.0;
+        if (t > {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) return -1.0;
     }
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
@@ -391,12 +422,16 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float t = 0.0, s = 1.0;
     id = -1;
     steps = 0;
+{{#if SCENE_BOX}}
+    float t_far = iqc_far(ro, rd);
+    if (t_far < 0.0) return -1.0;
+{{/if}}
     vec2 h = iqc_scene(ro);
     steps++;
     if (h.x < 0.0) s = -1.0;
     for (int i = 1; i < IQC_MAX_STEPS; i++) {
         float t_next = t + IQC_FIXED_STEP;
-        if (t_next > IQC_MAX_DIST) return -1.0;
+        if (t_next > {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) return -1.0;
         vec2 h_next = iqc_scene(ro + t_next * rd);
         steps++;
         if (s * {{#if HIT_SCALE}}iqc_value(h_next){{#else}}h_next.x{{/if}} < iqc_eps(t_next)) {
@@ -528,6 +563,9 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
     vec3 to_light = light - ro;
     float t_max = length(to_light);
     vec3 rd = to_light / t_max;
+{{#if SCENE_BOX}}
+    t_max = min(t_max, iqc_far(ro, rd));  // beyond the scene's box nothing is near enough to occlude
+{{/if}}
     float t = 0.0, last = -1.0;
     bool leaving = true;
     for (int i = 0; i < IQC_MAX_STEPS; i++) {

@@ -78,7 +78,8 @@ TEST_CASE("iqc bench: columns, rows, reproducibility and the direction of every 
             if (column != "frame_ms") CHECK(rows[i].at(column) == rows_b[i].at(column));
     for (const auto& r : rows) {
         CHECK(num(r, "frame_ms") > 0.0);
-        CHECK(num(r, "evals_per_pixel_mean") >= 1.0);
+        // Most rays evaluate the scene; a ray that misses the scene's box evaluates it no time.
+        CHECK(num(r, "evals_per_pixel_mean") > 0.5);
         CHECK(num(r, "psnr_db") <= 100.0);
     }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
+#include <map>
 
 #include "sema/Builtins.h"
 
@@ -47,6 +48,24 @@ std::string text(Interval a) {
     return fmt::format("[{}, {}]", n(a.lo), n(a.hi));
 }
 
+
+Interval periodic(Interval a, bool is_sin) {
+    if (!(a.hi - a.lo < 2 * M_PI) || std::isinf(a.lo) || std::isinf(a.hi)) return {-1, 1};
+    auto fn = [&](double v) { return is_sin ? std::sin(v) : std::cos(v); };
+    Interval out{std::min(fn(a.lo), fn(a.hi)), std::max(fn(a.lo), fn(a.hi))};
+    double shift = is_sin ? M_PI / 2 : 0;  // sin peaks at π/2 + kπ, cos at kπ
+    // At most two extrema lie in an interval shorter than 2π. Counted, not stepped by c += π: far out (|a| ≳ 1e16)
+    // adding π no longer changes c, and a stepped loop never ended.
+    double first = std::ceil((a.lo - shift) / M_PI) * M_PI + shift;
+    for (int i = 0; i < 3; ++i) {
+        double c = first + i * M_PI;
+        if (c > a.hi) break;
+        out.lo = std::min(out.lo, fn(c));
+        out.hi = std::max(out.hi, fn(c));
+    }
+    return out;
+}
+
 }  // namespace iv
 
 double Bounds::norm_from_components() const {
@@ -89,18 +108,6 @@ Bounds finish(Bounds b) {
 
 Interval comp(const Bounds& b, size_t k) { return b.c.size() == 1 ? b.c[0] : b.c[k]; }
 
-Interval periodic(Interval a, bool is_sin) {
-    if (!(a.hi - a.lo < 2 * M_PI) || std::isinf(a.lo) || std::isinf(a.hi)) return {-1, 1};
-    auto fn = [&](double v) { return is_sin ? std::sin(v) : std::cos(v); };
-    Interval out{std::min(fn(a.lo), fn(a.hi)), std::max(fn(a.lo), fn(a.hi))};
-    double shift = is_sin ? M_PI / 2 : 0;  // sin peaks at π/2 + kπ, cos at kπ
-    for (double c = std::ceil((a.lo - shift) / M_PI) * M_PI + shift; c <= a.hi; c += M_PI) {
-        out.lo = std::min(out.lo, fn(c));
-        out.hi = std::max(out.hi, fn(c));
-    }
-    return out;
-}
-
 Interval monotone(Interval a, double (*f)(double)) { return {f(a.lo), f(a.hi)}; }
 
 Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
@@ -111,7 +118,7 @@ Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
         for (size_t k = 0; k < comps; ++k) x.c[k] = fn(k);
     };
     auto arg = [&](size_t i, size_t k) { return comp(*a[i], k); };
-    if (n == "sin" || n == "cos") each([&](size_t k) { return periodic(arg(0, k), n == "sin"); });
+    if (n == "sin" || n == "cos") each([&](size_t k) { return iv::periodic(arg(0, k), n == "sin"); });
     else if (n == "tan")
         each([&](size_t k) {
             Interval v = arg(0, k);
@@ -405,12 +412,17 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
 }
 
 std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params,
-                                      const IntervalHook& hook) {
+                                      const IntervalHook& hook, int loop_trips, long* work) {
     const Function& f = m.functions[size_t(fn)];
     std::vector<Bounds> r(f.body.size());
+    std::map<size_t, std::vector<Bounds>> loop_states;  // a Loop's final states (read by Member)
     for (size_t i = 0; i < f.body.size(); ++i) {
         if (i > 0 && hook && !hook(i - 1, r)) return r;
         const Instr& in = f.body[i];
+        if (work && --*work < 0) {  // the budget is spent: this value and the rest are unbounded
+            for (size_t j = i; j < f.body.size(); ++j) r[j] = f.body[j].op == Op::Loop ? Bounds{} : unknown(f.body[j].type);
+            return r;
+        }
         if (in.op == Op::Param) {
             r[i] = unknown(in.type);
             if (size_t(in.aux) < params.size() && params[size_t(in.aux)].size() == r[i].c.size()) r[i].c = params[size_t(in.aux)];
@@ -452,8 +464,35 @@ std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector
         if (in.op == Op::Call) {
             std::vector<std::vector<Interval>> args;
             for (ValueId a : in.args) args.push_back(r[a].c);
-            auto callee = interval_analysis(m, in.aux, args);
+            auto callee = interval_analysis(m, in.aux, args, {}, loop_trips, work);
             r[i] = callee[m.functions[size_t(in.aux)].result];
+            continue;
+        }
+        if (in.op == Op::Loop) {
+            // The body once per iteration, on the states' bounds so far: k = lo..hi for a constant hi.
+            const Function& body = m.functions[size_t(in.aux)];
+            size_t states = body.outputs.size();
+            std::vector<Bounds> s;
+            const Interval hi = r[in.args[0]].c.empty() ? Interval{} : r[in.args[0]].c[0];
+            double first = in.data.empty() ? 0 : in.data[0];
+            double last = std::floor(hi.lo + 0.5);
+            bool run = loop_trips > 0 && hi.lo == hi.hi && std::isfinite(hi.lo) && last - first + 1 <= loop_trips &&
+                       in.args.size() >= states + 1;
+            for (size_t j = 0; j < states; ++j) s.push_back(run ? r[in.args[j + 1]] : unknown(body.body[body.outputs[j].second].type));
+            for (double k = first; run && k <= last; k += 1) {
+                std::vector<std::vector<Interval>> args = {{{k, k}}};
+                for (size_t j = 0; j < states; ++j) args.push_back(s[j].c);
+                for (size_t c = states + 1; c < in.args.size(); ++c) args.push_back(r[in.args[c]].c);
+                auto v = interval_analysis(m, in.aux, args, {}, loop_trips, work);
+                for (size_t j = 0; j < states; ++j) s[j] = v[body.outputs[j].second];
+            }
+            loop_states[i] = std::move(s);
+            r[i] = Bounds{};
+            continue;
+        }
+        if (in.op == Op::Member) {
+            auto it = loop_states.find(in.args[0]);
+            r[i] = it != loop_states.end() && size_t(in.aux) < it->second.size() ? it->second[size_t(in.aux)] : unknown(in.type);
             continue;
         }
         std::vector<const Bounds*> a;

@@ -33,6 +33,7 @@ Interval sqr(Interval a);                // x², never negative
 Interval div(Interval a, Interval b);    // unbounded when b holds 0
 bool contains_zero(Interval a);
 double magnitude(Interval a);            // max |x|
+Interval periodic(Interval a, bool is_sin);  // sin (or cos) over a: exact on spans shorter than 2π, else [-1, 1]
 std::string text(Interval a);            // "[0, 2]", "[-∞, 1]"
 }  // namespace iv
 
@@ -55,9 +56,15 @@ struct Bounds {
 // `hook`, when given, is called with each value index i of `fn` itself (not of its callees) right after the
 // rule for value i, in order, with every value so far; it may narrow values up to i in place (what a case
 // split knows, ir/passes/Lipschitz.cpp); returning false stops the analysis there (later values unknown).
+//
+// `loop_trips` > 0 analyses a Loop whose trip count is a constant of at most that many iterations by running
+// its body's analysis once per iteration (the states' bounds carried from one to the next); other loops, and
+// every loop when 0 (the default: the passes' analyses), are unbounded. `work`, when given, is a budget of
+// instructions (those of callees and loop bodies included) decremented as they are analysed: once it is spent,
+// every value not yet analysed is unbounded.
 using IntervalHook = std::function<bool(size_t, std::vector<Bounds>&)>;
 std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params,
-                                      const IntervalHook& hook = {});
+                                      const IntervalHook& hook = {}, int loop_trips = 0, long* work = nullptr);
 
 // Whether `a k b` holds for every a, b in the intervals (1), for none (0), or is undecided (-1).
 int decided(CompareKind k, Interval a, Interval b);

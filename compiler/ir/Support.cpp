@@ -115,4 +115,98 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
     return std::nextafter(r * (1 + 1e-9), INFINITY);
 }
 
+std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
+                                      double level, int per_proof, int loop_trips, long work) {
+    if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
+    const Function& f = m.functions[size_t(fn)];
+    const Type& rt = f.body[f.result].type;
+    if (!rt.is_scalar() && !rt.is_vector()) return std::nullopt;  // a scene's (distance, id): the first component
+    // The distance's interval over a box (its first component; [-∞, ∞] where unknown or NaN).
+    auto range = [&](const Box& b) {
+        params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
+        std::vector<Bounds> v = interval_analysis(m, fn, params, {}, loop_trips, &work);
+        const Bounds& r = v[f.result];
+        Interval x = r.c.empty() ? Interval{} : r.c[0];
+        if (std::isnan(x.lo)) x.lo = -INFINITY;
+        if (std::isnan(x.hi)) x.hi = INFINITY;
+        return x;
+    };
+    // A point inside an interval, and its halves (an unbounded side grows geometrically).
+    auto centre = [](double lo, double hi) {
+        if (std::isinf(lo) && std::isinf(hi)) return 0.0;
+        if (std::isinf(hi)) return lo + std::max(1.0, std::fabs(lo));
+        if (std::isinf(lo)) return hi - std::max(1.0, std::fabs(hi));
+        return 0.5 * (lo + hi);
+    };
+    // Whether no point of `b` has a distance ≤ level (false: not proven, or a point found that has).
+    auto free_of = [&](const Box& start) {
+        std::vector<Box> stack = {start};
+        int left = per_proof;
+        while (!stack.empty()) {
+            if (work <= 0) return false;
+            Box b = stack.back();
+            stack.pop_back();
+            if (range(b).lo > level) continue;
+            if (--left < 0) return false;
+            Box c;
+            for (size_t a = 0; a < 3; ++a) c.lo[a] = c.hi[a] = centre(b.lo[a], b.hi[a]);
+            if (range(c).hi <= level) return false;
+            // Split the widest side (an unbounded one first) at its centre.
+            size_t w = 0;
+            double widest = -1;
+            for (size_t a = 0; a < 3; ++a) {
+                double len = b.hi[a] - b.lo[a];
+                if (len > widest) widest = len, w = a;
+            }
+            if (!(widest > 0)) return false;
+            Box lo = b, hi = b;
+            lo.hi[w] = hi.lo[w] = c.lo[w];
+            stack.push_back(lo);
+            stack.push_back(hi);
+        }
+        return true;
+    };
+    constexpr double R = 1048576.0;  // 2^20: beyond this, a side is unbounded
+    SupportBox out;
+    bool any = false;
+    for (size_t a = 0; a < 3; ++a)
+        for (int side = 0; side < 2; ++side) {
+            bool upper = side == 1;
+            // The half-space beyond the plane c on this side.
+            auto beyond = [&](double c) {
+                Box b{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
+                if (upper) b.lo[a] = c;
+                else b.hi[a] = c;
+                return free_of(b);
+            };
+            double& edge = upper ? out.hi[a] : out.lo[a];
+            edge = upper ? INFINITY : -INFINITY;
+            if (!beyond(upper ? R : -R)) continue;
+            // A plane that is not proven (in) and one that is (out): planes ±1, ±2, ±4, … from 0 outward (or
+            // inward, where the half-space beyond 0 is already free), then bisection to 1e-3 of the scale.
+            double sgn = upper ? 1 : -1, in = NAN, out_c = NAN;
+            if (beyond(0)) {
+                out_c = 0;
+                for (double c = 1; c <= R && std::isnan(in); c *= 2) (beyond(-sgn * c) ? out_c : in) = -sgn * c;
+                if (std::isnan(in)) {  // free on both sides: nothing is ≤ level anywhere
+                    edge = -sgn * R;
+                    any = true;
+                    continue;
+                }
+            } else {
+                in = 0;
+                for (double c = 1; c <= R && std::isnan(out_c); c *= 2) (beyond(sgn * c) ? out_c : in) = sgn * c;
+                if (std::isnan(out_c)) out_c = sgn * R;
+            }
+            while (std::fabs(out_c - in) > 1e-3 * std::max(1.0, std::fabs(out_c))) {
+                double mid = 0.5 * (in + out_c);
+                (beyond(mid) ? out_c : in) = mid;
+            }
+            edge = out_c;
+            any = true;
+        }
+    if (!any) return std::nullopt;
+    return out;
+}
+
 }  // namespace iqc::ir

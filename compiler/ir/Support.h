@@ -12,6 +12,7 @@
 // more boxes, and makes the radius larger).
 #pragma once
 
+#include <array>
 #include <optional>
 #include <vector>
 
@@ -27,5 +28,18 @@ namespace iqc::ir {
 // work budget (interval evaluations) runs out first.
 std::optional<double> support_radius(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
                                       double reach = 1024, int budget = 20000);
+
+// An axis-aligned box that contains every point where the distance can be ≤ `level`, found side by side:
+// each side is the nearest plane c such that the half-space beyond it (x_a ≥ c, or ≤) is proven free of
+// such points (bisection on c; a proof splits the half-space into boxes, up to `per_proof` of them, and
+// gives up at once where a box's centre lies in the set). A side no plane within 2²⁰ units closes is ±∞.
+// Loops of constant trip count up to `loop_trips` are analysed (interval_analysis). `work` bounds the
+// instructions analysed in all (about 10 ms per million): once spent, the sides not yet closed are ±∞. Same
+// function conventions as support_radius. Returns nothing when every side is ±∞ (no box to clip rays to).
+struct SupportBox {
+    std::array<double, 3> lo, hi;  // world (or object) units; ±∞ where unbounded
+};
+std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
+                                      double level, int per_proof = 48, int loop_trips = 16, long work = 1500000);
 
 }  // namespace iqc::ir

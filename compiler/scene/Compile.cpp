@@ -239,6 +239,19 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         for (int k = 0; k < 3; ++k) r2 += std::pow(s_.camera.position[size_t(k)] - s_.camera.target[size_t(k)], 2);
         V["ORBIT_RADIUS"] = glsl::float_literal(std::sqrt(r2));
     }
+    V["BOX_LO"] = V["BOX_HI"] = "";
+    // The scene's box (SceneIR::box): rays are clipped to it.
+    if (const auto& box = scene.box; box && !opts_.per_instance) {
+        // ±∞ sides as ±1e30: the slab test's products stay ±∞ or finite (never 0·∞ unless a ray starts on a plane).
+        auto side = [](const std::array<double, 3>& v, double inf) {
+            std::array<double, 3> w = v;
+            for (double& x : w) x = std::isinf(x) ? std::copysign(inf, x) : x;
+            return w;
+        };
+        V["BOX_LO"] = vec3_literal(side(box->first, 1e30));
+        V["BOX_HI"] = vec3_literal(side(box->second, 1e30));
+        F.insert("SCENE_BOX");
+    }
     static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO"};
     F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march())]);
     if (opts_.per_instance) F.insert("LIPSCHITZ");

@@ -109,6 +109,7 @@ public:
         }
         m_.constant_parameters = o_.params_constant;
         make_items();
+        if (!o_.per_instance) scene_box();
         declare_lights();
         for (Item& it : items_) declare_item(it);
         for (Item& it : items_) it.distance_fn = item_distance(it, true);
@@ -167,9 +168,11 @@ private:
     // A bounding-sphere radius for every member of a group without `bound`: the shape's extent by interval
     // arithmetic (ir/Support.h) over the hull of the members' parameter values (on targets with sliders, their
     // slider ranges too), or nothing (an unbounded shape such as a plane; a parameter without a range).
-    std::optional<double> derived_bound(const std::vector<size_t>& members) {
+    // The intervals of a shape's parameters over the members of a group (their values' hull; on targets with
+    // sliders, their slider ranges too); the query point's entry is left unbounded. Nothing when a parameter
+    // has no range on a slider target (an input).
+    std::optional<std::vector<std::vector<ir::Interval>>> shape_intervals(const std::vector<size_t>& members) {
         const InstancePlan& first = plan(members[0]);
-        int fn = lower_module_cached(*first.shape, ctx_);
         std::vector<ir::ValueBounds> ranges = parameter_bounds(*first.shape);
         std::vector<std::vector<ir::Interval>> params(first.shape->params.size());
         for (size_t i = 0; i < params.size(); ++i) {
@@ -187,7 +190,15 @@ private:
             }
         }
         params[size_t(first.query)].assign(3, {});
-        auto R = ir::support_radius(m_, fn, first.query, std::move(params));
+        return params;
+    }
+
+    std::optional<double> derived_bound(const std::vector<size_t>& members) {
+        const InstancePlan& first = plan(members[0]);
+        int fn = lower_module_cached(*first.shape, ctx_);
+        auto params = shape_intervals(members);
+        if (!params) return std::nullopt;
+        auto R = ir::support_radius(m_, fn, first.query, std::move(*params));
         if (!R) return R;
         // Spheres that overlap a lot make a hierarchy that skips little and walks many members per step
         // (llvmpipe ends a pixel's shader after 65,535 loop iterations): a ring's slider range up to (2, 2) makes
@@ -203,6 +214,82 @@ private:
         BoundingBox all = enclosing_box(boxes);
         if (volume > 2 * 8 * all.half[0] * all.half[1] * all.half[2]) return std::nullopt;
         return R;
+    }
+    // The scene's box (SceneIR::box): the union of every instance's world box, where its nearness (its
+    // distance in world units, before any Lipschitz division: what the hit test and the step cap read) can be
+    // within the `bound` margin of 0. An instance with a bound sphere (written or derived): the sphere's box;
+    // else the shape's own box (ir/Support.h's support_box in object space, once per group over its members'
+    // parameters) mapped to the world through its affine transform (an unbounded side stays unbounded where the
+    // map mixes it into a world axis). No box when any instance has none: a transform that moves at run time,
+    // a smooth blend (its members' distances are divided by Lipschitz factors the passes derive later), or a
+    // side unbounded on every axis.
+    void scene_box() {
+        const double inf = INFINITY, tau = o_.bound_margin;
+        std::array<double, 3> lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+        auto add = [&](const std::array<ir::Interval, 3>& w) {
+            for (size_t a = 0; a < 3; ++a) {
+                lo[a] = std::min(lo[a], w[a].lo);
+                hi[a] = std::max(hi[a], w[a].hi);
+            }
+        };
+        // Instances of one shape: analysed together (over their parameters' hull) when many, else each alone.
+        std::map<const CheckedModule*, std::vector<size_t>> kinds;
+        for (size_t i = 0; i < plans_.size(); ++i) {
+            const InstancePlan& p = plan(i);
+            if (runtime_transform(p) || p.blend >= 0) return;
+            if (bound_of(i) > 0) {
+                BoundingBox b = box_of(world_sphere(p.inv_linear, p.inv_offset, bound_of(i)));
+                std::array<ir::Interval, 3> w;
+                for (size_t a = 0; a < 3; ++a) w[a] = {b.center[a] - b.half[a] - tau, b.center[a] + b.half[a] + tau};
+                add(w);
+                continue;
+            }
+            kinds[p.shape].push_back(i);
+        }
+        std::vector<std::vector<size_t>> sets;
+        for (const auto& [shape, members] : kinds) {
+            if (members.size() > 4) sets.push_back(members);
+            else
+                for (size_t mi : members) sets.push_back({mi});
+        }
+        for (const auto& members : sets) {
+            const InstancePlan& first = plan(members[0]);
+            int fn = lower_module_cached(*first.shape, ctx_);
+            auto params = shape_intervals(members);
+            if (!params) return;
+            // The nearness is the object distance times the map's scale: within tau where the object distance is
+            // within tau / scale (the smallest scale of the members).
+            double scale = 1;
+            for (size_t mi : members) scale = std::min(scale, plan(mi).scale);
+            auto box = ir::support_box(m_, fn, first.query, std::move(*params), tau / std::max(scale, 1e-9));
+            if (!box) return;
+            for (size_t mi : members) {
+                const InstancePlan& p = plan(mi);
+                // object = L·world + o, so world = L⁻¹(object − o): each world axis an interval sum over the box.
+                std::array<double, 9> Li{};
+                const auto& L = p.inv_linear;
+                double det = L[0] * (L[4] * L[8] - L[5] * L[7]) - L[1] * (L[3] * L[8] - L[5] * L[6]) + L[2] * (L[3] * L[7] - L[4] * L[6]);
+                if (!(std::fabs(det) > 1e-300)) return;
+                Li = {(L[4] * L[8] - L[5] * L[7]) / det, (L[2] * L[7] - L[1] * L[8]) / det, (L[1] * L[5] - L[2] * L[4]) / det,
+                      (L[5] * L[6] - L[3] * L[8]) / det, (L[0] * L[8] - L[2] * L[6]) / det, (L[2] * L[3] - L[0] * L[5]) / det,
+                      (L[3] * L[7] - L[4] * L[6]) / det, (L[1] * L[6] - L[0] * L[7]) / det, (L[0] * L[4] - L[1] * L[3]) / det};
+                std::array<ir::Interval, 3> w;
+                for (size_t r = 0; r < 3; ++r) {
+                    ir::Interval sum{0, 0};
+                    for (size_t c = 0; c < 3; ++c) {
+                        if (Li[r * 3 + c] == 0) continue;  // an unbounded object axis the map leaves out
+                        ir::Interval x{box->lo[c] - p.inv_offset[c], box->hi[c] - p.inv_offset[c]};
+                        sum = ir::iv::add(sum, ir::iv::mul({Li[r * 3 + c], Li[r * 3 + c]}, x));
+                    }
+                    w[r] = sum;
+                }
+                add(w);
+            }
+        }
+        bool bounded = false;
+        for (size_t a = 0; a < 3; ++a) bounded |= std::isfinite(lo[a]) || std::isfinite(hi[a]);
+        if (!bounded) return;
+        out_.box = {lo, hi};
     }
     bool runtime_transform(const InstancePlan& p) const {
         return p.has_transform && (p.transform_uses_inputs || (!o_.params_constant && !p.transform->params.empty()));

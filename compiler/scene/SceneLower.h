@@ -15,7 +15,9 @@
 // step, up to 8 box tests per node entered instead of one sphere test per member.
 #pragma once
 
+#include <array>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,6 +52,10 @@ struct SceneIR {
     bool binds_ambient = false;     // some material reads the sky and bounce lights (C_A)
     bool has_reflectivity = false;
     bool has_transmission = false;
+    // The box every point where an instance's nearness (its world distance before a Lipschitz division) can be
+    // within the `bound` margin lies in (lo, hi per axis; ±∞ on an unbounded side): rays are clipped to it.
+    // Absent where no side is bounded or the compiler cannot tell (a transform that moves at run time, a blend).
+    std::optional<std::pair<std::array<double, 3>, std::array<double, 3>>> box;
     std::vector<std::string> group_notes;  // "torus with lambert: 1000 instances in one loop"
     std::vector<std::pair<Span, std::string>> warnings;  // what the lowering chose against the scene's wish, located
 };

@@ -85,18 +85,7 @@ struct Analyzer {
         if (n == "sin" || n == "cos") {
             // Exact on an interval: the ends and any extremum (multiples of π/2) inside it.
             bool is_sin = n == "sin";
-            each([&](size_t k) {
-                Interval a = comp(in.args[0], k);
-                if (!(a.hi - a.lo < 2 * M_PI) || std::isinf(a.lo) || std::isinf(a.hi)) return Interval{-1, 1};
-                auto fn = [&](double v) { return is_sin ? std::sin(v) : std::cos(v); };
-                Interval out{std::min(fn(a.lo), fn(a.hi)), std::max(fn(a.lo), fn(a.hi))};
-                double shift = is_sin ? M_PI / 2 : 0;  // sin peaks at π/2 + kπ, cos at kπ
-                for (double c = std::ceil((a.lo - shift) / M_PI) * M_PI + shift; c <= a.hi; c += M_PI) {
-                    out.lo = std::min(out.lo, fn(c));
-                    out.hi = std::max(out.hi, fn(c));
-                }
-                return out;
-            });
+            each([&](size_t k) { return iv::periodic(comp(in.args[0], k), is_sin); });
         } else if (n == "tan") {
             each([&](size_t k) {
                 Interval a = comp(in.args[0], k);

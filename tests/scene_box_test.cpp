@@ -1,0 +1,167 @@
+// The scene's box (SceneIR::box, from ir/Support.h's support_box): rays are clipped to where some instance's
+// distance can come within the `bound` margin (0.1 here) of 0. The box must contain every such point (else
+// pixels go missing), should be near the solid's true extent (else it saves little), and must be absent
+// where the compiler cannot know it; clipping must change no pixel.
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <cmath>
+#include <optional>
+#include <regex>
+
+#include "TestUtil.h"
+
+using namespace iqc;
+using namespace iqc::test;
+
+namespace {
+
+using Vec = std::array<double, 3>;
+
+// The box a shader was compiled with: IQC_BOX_LO / IQC_BOX_HI (vec3(x) or vec3(x, y, z); ±1e30: unbounded).
+std::optional<std::pair<Vec, Vec>> box_of(const std::string& code) {
+    auto read = [&](const char* name) -> std::optional<Vec> {
+        std::smatch m;
+        std::regex re(std::string("const vec3 ") + name + R"( = vec3\(([^)]*)\);)");
+        if (!std::regex_search(code, m, re)) return std::nullopt;
+        std::vector<double> v;
+        std::string s = m[1];
+        for (size_t at = 0; at < s.size();) {
+            size_t comma = s.find(',', at);
+            v.push_back(std::stod(s.substr(at, comma - at)));
+            at = comma == std::string::npos ? s.size() : comma + 1;
+        }
+        if (v.size() == 1) v = {v[0], v[0], v[0]};
+        REQUIRE(v.size() == 3);
+        return Vec{v[0], v[1], v[2]};
+    };
+    auto lo = read("IQC_BOX_LO"), hi = read("IQC_BOX_HI");
+    CHECK(lo.has_value() == hi.has_value());
+    if (!lo || !hi) return std::nullopt;
+    return std::make_pair(*lo, *hi);
+}
+
+std::string bench(const std::string& name) { return std::string(IQC_SOURCE_DIR) + "/bench/" + name; }
+
+const std::string kBall =
+    "[modules]\nball = \"\"\"\nshape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ [0,3] default = 1\n\"\"\"\n"
+    "ground = \"\"\"\nshape\nD = p_2 + 1\nwhere\np ∈ ℝ³\n\"\"\"\n";
+
+}  // namespace
+
+TEST_CASE("the scene's box: a recurrence, a height field, rotated and moved shapes, slider ranges", "[scene][box]") {
+    // The Menger sponge: a recurrence of four steps (intervals carried through the loop) inside |p| <= 1.
+    Compiled sponge = compile_path(bench("fractal.iq"));
+    REQUIRE(sponge.result.exit_code == 0);
+    auto b = box_of(sponge.result.code);
+    REQUIRE(b);
+    for (int a = 0; a < 3; ++a) {
+        CHECK(b->first[a] <= -1.1);
+        CHECK(b->first[a] >= -1.11);
+        CHECK(b->second[a] >= 1.1);
+        CHECK(b->second[a] <= 1.11);
+    }
+    // y = 0.6 sin(3x) sin(3z): a slab below y = 0.6 + 0.1, unbounded elsewhere.
+    Compiled terrain = compile_path(bench("sine_terrain.iq"));
+    REQUIRE(terrain.result.exit_code == 0);
+    b = box_of(terrain.result.code);
+    REQUIRE(b);
+    CHECK(b->second[1] >= 0.7);
+    CHECK(b->second[1] <= 0.71);
+    CHECK(b->first[1] == -1e30);
+    for (int a : {0, 2}) {
+        CHECK(b->first[a] == -1e30);
+        CHECK(b->second[a] == 1e30);
+    }
+    // A ground (y <= -1), a ball at x = -2, a box turned about y, and a torus (0.8, 0.25) turned by 1 radian about x
+    // at x = 2: the top is the torus's, its object box (±1.15, ±0.35, ±1.15 with the margin) turned into the world.
+    Compiled few = compile_path(bench("few_shapes.iq"));
+    REQUIRE(few.result.exit_code == 0);
+    b = box_of(few.result.code);
+    REQUIRE(b);
+    double top = std::sin(1.0) * 1.15 + std::cos(1.0) * 0.35;
+    CHECK(b->second[1] >= top);
+    CHECK(b->second[1] <= top + 0.01);
+    CHECK(b->first[1] == -1e30);
+    // Shadertoy: the ball's radius is its value; webgl2: any value of its slider, up to 3.
+    std::string scene = kBall + "[[shapes]]\ntype = \"ball\"\ntransform = \"T((0, 2, 0))\"\n";
+    Compiled constant = compile_text("box_ball.iq", scene);
+    REQUIRE(constant.result.exit_code == 0);
+    b = box_of(constant.result.code);
+    REQUIRE(b);
+    CHECK(b->first[1] >= 0.89);
+    CHECK(b->first[1] <= 0.9);
+    CHECK(b->second[1] >= 3.1);
+    CHECK(b->second[1] <= 3.11);
+    CompileOptions webgl2;
+    webgl2.target = Target::WebGL2;
+    Compiled slider = compile_path(write_temp("box_ball.iq", scene), webgl2);
+    REQUIRE(slider.result.exit_code == 0);
+    b = box_of(slider.result.code);
+    REQUIRE(b);
+    CHECK(b->first[1] <= 2 - 3.1);
+    CHECK(b->second[1] >= 2 + 3.1);
+    CHECK(b->second[1] <= 2 + 3.11);
+}
+
+TEST_CASE("no box where the compiler cannot know one: a tilted plane, a moving instance, a blend", "[scene][box]") {
+    // A tilted ground reaches every side.
+    Compiled tilted = compile_text("box_tilted.iq", kBall + "[[shapes]]\ntype = \"ground\"\ntransform = \"`R_x`(0.3)\"\n"
+                                                            "[[shapes]]\ntype = \"ball\"\n");
+    REQUIRE(tilted.result.exit_code == 0);
+    CHECK_FALSE(box_of(tilted.result.code));
+    CHECK_THAT(tilted.result.code, !Catch::Contains("iqc_far"));
+    // A ball that moves with time: its box is not known at compile time.
+    Compiled moving = compile_text("box_moving.iq", kBall + "[[shapes]]\ntype = \"ball\"\ntransform = \"T((0, time, 0))\"\n");
+    INFO(moving.diagnostics);
+    REQUIRE(moving.result.exit_code == 0);
+    CHECK_FALSE(box_of(moving.result.code));
+    // A smooth blend of two balls.
+    Compiled blend = compile_text("box_blend.iq", kBall + "[[shapes]]\nname = \"a\"\ntype = \"ball\"\n[[shapes]]\nname = \"b\"\n"
+                                                          "type = \"ball\"\ntransform = \"T((1.5, 0, 0))\"\n"
+                                                          "[[blends]]\nshapes = [\"a\", \"b\"]\nradius = 0.5\n");
+    INFO(blend.diagnostics);
+    REQUIRE(blend.result.exit_code == 0);
+    CHECK_FALSE(box_of(blend.result.code));
+}
+
+TEST_CASE("clipping rays to the box changes no pixel and saves evaluations", "[scene][box][render]") {
+    // The sponge as it is, and with a ball that moves with time far off screen (the scene then has no box; the
+    // ball changes no distance the marches read): the same picture, more evaluations without the box.
+    std::string sponge = read_text(bench("fractal.iq"));
+    std::string unboxed = sponge;
+    unboxed.replace(unboxed.find("[camera]"), 8,
+                    "far = \"\"\"\nshape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n\"\"\"\n\n[camera]");
+    unboxed += "\n[[shapes]]\ntype = \"far\"\ntransform = \"T((0, 1000 + time, 0))\"\n";
+    const int W = 160, H = 90;
+    auto draw = [&](const std::string& name, const std::string& text, bool instrument) {
+        CompileOptions o;
+        o.instrument = instrument;
+        Compiled c = compile_path(write_temp(name, text), o);
+        INFO(c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        render::RenderResult r = render_compiled(c.result, W, H);
+        INFO(r.error);
+        REQUIRE(r.ok);
+        return std::make_pair(c.result.code, r);
+    };
+    auto [boxed_code, boxed] = draw("box_sponge.iq", sponge, false);
+    auto [plain_code, plain] = draw("box_sponge_unboxed.iq", unboxed, false);
+    REQUIRE(box_of(boxed_code));
+    REQUIRE_FALSE(box_of(plain_code));
+    int differ = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            for (int k = 0; k < 3; ++k) differ += boxed.image.pixel(x, y)[k] != plain.image.pixel(x, y)[k];
+    CHECK(differ == 0);
+    auto evals = [&](const render::RenderResult& r) {
+        double e = 0;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) e += r.image.pixel(x, y)[1];
+        return e / (W * H);
+    };
+    double with_box = evals(draw("box_sponge_i.iq", sponge, true).second);
+    double without = evals(draw("box_sponge_unboxed_i.iq", unboxed, true).second);
+    INFO(with_box << " evaluations per pixel with the box, " << without << " without");
+    CHECK(with_box < 0.5 * without);
+}
