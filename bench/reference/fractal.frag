@@ -11,9 +11,9 @@
 //   every step lands on the same float;
 // - tetrahedron normal with taps 0.0005 away (half the hit tolerance), flipped to face the eye;
 // - colour 0.5 + 0.5 n, background (0.05, 0.05, 0.08), exact sRGB encoding.
-// The one thing iqc does not do: the sponge lies inside the box |p| <= 1, so a ray that misses the
-// box is background without marching, and a ray stops once it leaves the box (instead of running
-// on to t = 100). Rays that can hit take exactly iqc's steps.
+// For speed: the sponge lies inside the box |p| <= 1, so a ray that misses the box is background
+// without marching, and a ray stops once it leaves the box (instead of running on to t = 100), as
+// iqc does with the box it derives (±1.1). Rays that can hit take exactly iqc's steps.
 
 float map(vec3 p)
 {

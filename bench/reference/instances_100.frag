@@ -13,9 +13,9 @@
 //  - tetrahedron normals with a 0.0005 offset.
 //  - colour 0.5 + 0.5*n, background (0.05,0.05,0.08), then the exact sRGB transfer function.
 // What is done differently, for speed: each torus fits in a ball of radius 0.4 around its cell's centre,
-// so map() only visits the cells that can hold the nearest torus; rays that miss the grid's bounding box
-// are background without marching, and a ray stops once it leaves the box; the normal taps evaluate only
-// the torus the ray hit.
+// so map() only visits the cells that can hold the nearest torus. Like iqc: rays that miss the grid's
+// bounding box are background without marching, a ray stops once it leaves the box, and the normal taps
+// evaluate only the torus the ray hit.
 
 // the seven tilts 0.4*m, m = 0..6, as (cos, sin): folded at compile time, cheaper than cos() and sin()
 // per torus

@@ -13,9 +13,10 @@
 //   max(10 tolerances, its cone), else background. Every part of this shows in the picture;
 // - tetrahedron normal (taps 0.0005 away) of the divided field, flipped to face the eye;
 // - colour 0.5 + 0.5 n, background (0.05, 0.05, 0.08), exact sRGB encoding.
-// The one thing iqc does not do: the hills stay below y = 0.6, so a ray that stays above that
-// plus the step cap's tolerance up to t = 30 is background without marching (the sky and the
-// band over the horizon, the costliest rays). Rays that can hit take exactly iqc's steps.
+// For speed: the hills stay below y = 0.6, so a ray that stays above that plus the step cap's
+// tolerance up to t = 30 is background without marching (the sky and the band over the horizon, the
+// costliest rays), as iqc does with the slab it derives (y <= 0.7). Rays that can hit take exactly
+// iqc's steps.
 
 float map(vec3 p)
 {

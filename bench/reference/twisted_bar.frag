@@ -16,6 +16,9 @@
 //    inside-start case to handle.
 //  - tetrahedron normals, offset 0.0005 (half the tolerance); colour 0.5 + 0.5 n (n facing the eye) on a
 //    (0.05, 0.05, 0.08) background, sRGB-encoded; eye (0, 0.5, -4), 60 degree vertical field of view.
+// What a hand-writer adds for speed: rays are clipped to a box around the shape (a miss is background
+// without marching, a ray that leaves the box stops), as iqc clips to the box it derives; the hand box is
+// the tighter one where iqc cannot see the shape's extent (through a twist it bounds only y, or takes `bound`).
 
 #define ZERO min(iFrame, 0)
 
@@ -38,11 +41,18 @@ float map(vec3 p)
 
 float raymarch(vec3 ro, vec3 rd)
 {
+    // clip to a box around the twisted bar (half-extents 0.3, 1.5, 0.3: within 0.43 of the y axis) with room for the tolerances: a ray that misses it is background, one that leaves it stops
+    vec3 m = 1.0/rd, n = m*ro, k = abs(m)*vec3(0.55, 1.6, 0.55);
+    vec3 t1 = -n - k, t2 = -n + k;
+    float tN = max(max(t1.x, t1.y), t1.z), tF = min(min(t2.x, t2.y), t2.z);
+    if (tN > tF || tF < 0.0) return -1.0;
+    float tmax = min(tF, 100.0);
+
     float t = 0.0;
     float dm = 1e20, tm = 0.0;  // closest approach
     float dl = 1e20, tl = 0.0;  // last sample
     float dp = 1e20;            // the one before it
-    for (int i = 0; i < 128 && t <= 100.0; i++)
+    for (int i = 0; i < 128 && t <= tmax; i++)
     {
         float h = map(ro + t*rd);
         dp = dl; dl = abs(h*5.6735716); tl = t;  // the field itself
@@ -51,7 +61,7 @@ float raymarch(vec3 ro, vec3 rd)
         t += h;
     }
     if (dl < 0.001) return tl;
-    if (t > 100.0) return -1.0;
+    if (t > tmax) return -1.0;
     // out of steps: closing in within the pixel's cone, or stalled near a silhouette
     float px = iResolution.y*1.7320508;
     if (dl <= dp && dl < tl/px) return tl;
