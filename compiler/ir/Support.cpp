@@ -169,9 +169,19 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
     constexpr double R = 1048576.0;  // 2^20: beyond this, a side is unbounded
     SupportBox out;
     bool any = false;
+    const long total_work = work;
     for (size_t a = 0; a < 3; ++a)
         for (int side = 0; side < 2; ++side) {
             bool upper = side == 1;
+            // Each side gets its share of the budget (an open side spends all of it on trying).
+            long left_total = work;
+            work = std::min(left_total, total_work / 6);
+            struct Restore {
+                long& work;
+                long& left_total;
+                long before;
+                ~Restore() { work = left_total - (before - work); }
+            } restore{work, left_total, work};
             // The half-space beyond the plane c on this side.
             auto beyond = [&](double c) {
                 Box b{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
@@ -195,8 +205,14 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
                 }
             } else {
                 in = 0;
-                for (double c = 1; c <= R && std::isnan(out_c); c *= 2) (beyond(sgn * c) ? out_c : in) = sgn * c;
-                if (std::isnan(out_c)) out_c = sgn * R;
+                // Planes out to 1,024 units (a shape's own space rarely reaches further; beyond, the side stays at
+                // R rather than spending the budget on proofs that keep failing, as over fbm noise).
+                for (double c = 1; c <= 1024 && std::isnan(out_c); c *= 2) (beyond(sgn * c) ? out_c : in) = sgn * c;
+                if (std::isnan(out_c)) {
+                    edge = sgn * R;
+                    any = true;
+                    continue;
+                }
             }
             while (std::fabs(out_c - in) > 1e-3 * std::max(1.0, std::fabs(out_c))) {
                 double mid = 0.5 * (in + out_c);

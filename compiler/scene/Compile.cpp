@@ -103,6 +103,25 @@ private:
     // `bound`: ten hit tolerances (at the farthest distance for a relative tolerance), and at least 0.1: a
     // march never stops on a bounding sphere, and the shape is evaluated wherever a hit is possible.
     double bound_margin() const { return std::max(0.1, 10 * hit() * (s_.render.hit_relative ? s_.render.max_dist : 1.0)); }
+    // Twice the float spacing at the largest coordinate the camera reaches (its position; an orbit keeps its
+    // distance to the target): the FAR tolerance's spacing at t = 0 (iqc_spacing).
+    double spacing0() const {
+        double radius = 0, reach = 0;
+        for (int k = 0; k < 3; ++k) radius += std::pow(s_.camera.position[k] - s_.camera.target[k], 2);
+        radius = std::sqrt(radius);
+        for (int k = 0; k < 3; ++k)
+            reach = std::max(reach, s_.camera.orbit ? std::fabs(s_.camera.target[k]) + radius : std::fabs(s_.camera.position[k]));
+        return 2.4e-7 * reach;
+    }
+    // The scene box's level (SceneLowerOptions::box_level): above every value a sample outside the box could
+    // be accepted at — ten hit tolerances at the farthest distance (the `bound` margin, and the FAR tolerance's
+    // four float spacings), and the step cap's pixel cone at max_dist for images 360 rows tall or more
+    // (iqc render's default; on smaller images a ray that runs out of steps beside a surface may differ).
+    double box_level() const {
+        double focal = 1.0 / std::tan(s_.camera.fov * M_PI / 360.0);
+        double far_tolerance = 4 * (spacing0() + 2.4e-7 * s_.render.max_dist);
+        return std::max({bound_margin(), 10 * far_tolerance, s_.render.max_dist / (360 * focal)});
+    }
 
     SceneIR lower(const std::vector<InstancePlan>& plans);
     bool optimize(SceneIR& scene);
@@ -131,6 +150,7 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     lo.unbounded_scene = (s_.effects.shadows == Shadows::Soft || s_.effects.ao) && !opts_.per_instance;
     lo.max_dist = s_.render.max_dist;
     lo.bound_margin = bound_margin();
+    lo.box_level = box_level();
     return lower_scene(s_, plans, lo);
 }
 
@@ -266,13 +286,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         // Float spacing far from the origin (FAR): twice the ulp at the largest coordinate the camera reaches
         // (its position; an orbit keeps its distance to the target). Emitted only where it can matter: where
         // spacing along the longest ray reaches a quarter of the hit tolerance.
-        double reach = 0;
-        double radius = 0;
-        for (int k = 0; k < 3; ++k) radius += std::pow(s_.camera.position[k] - s_.camera.target[k], 2);
-        radius = std::sqrt(radius);
-        for (int k = 0; k < 3; ++k)
-            reach = std::max(reach, s_.camera.orbit ? std::fabs(s_.camera.target[k]) + radius : std::fabs(s_.camera.position[k]));
-        double spacing0 = 2.4e-7 * reach;
+        double spacing0 = this->spacing0();
         V["SPACING0"] = glsl::float_literal(spacing0);
         // A relative tolerance (hit · t) grows with t as the spacing does: compare at t = 1 and per unit of t.
         bool far = render.hit_relative ? 4 * std::max(spacing0, 2.4e-7) > 0.25 * hit()

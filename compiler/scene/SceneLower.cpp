@@ -224,7 +224,7 @@ private:
     // a smooth blend (its members' distances are divided by Lipschitz factors the passes derive later), or a
     // side unbounded on every axis.
     void scene_box() {
-        const double inf = INFINITY, tau = o_.bound_margin;
+        const double inf = INFINITY, tau = o_.box_level;
         std::array<double, 3> lo{inf, inf, inf}, hi{-inf, -inf, -inf};
         auto add = [&](const std::array<ir::Interval, 3>& w) {
             for (size_t a = 0; a < 3; ++a) {
@@ -238,19 +238,26 @@ private:
             const InstancePlan& p = plan(i);
             if (runtime_transform(p) || p.blend >= 0) return;
             if (bound_of(i) > 0) {
-                BoundingBox b = box_of(world_sphere(p.inv_linear, p.inv_offset, bound_of(i)));
+                // Outside its sphere the instance's nearness is (|q| - R)·scale (q in object space): within tau
+                // inside the object-space ball R + tau/scale, mapped to the world (a non-uniform scale
+                // stretches it more along some axes than the scale says).
+                BoundingBox b = box_of(world_sphere(p.inv_linear, p.inv_offset, bound_of(i) + tau / std::max(p.scale, 1e-9)));
                 std::array<ir::Interval, 3> w;
-                for (size_t a = 0; a < 3; ++a) w[a] = {b.center[a] - b.half[a] - tau, b.center[a] + b.half[a] + tau};
+                for (size_t a = 0; a < 3; ++a) w[a] = {b.center[a] - b.half[a], b.center[a] + b.half[a]};
                 add(w);
                 continue;
             }
             kinds[p.shape].push_back(i);
         }
+        // Analysed once per shape and parameter values (instances that differ only in their transform share
+        // one object box), and once over the hull of all values where more than four values differ.
         std::vector<std::vector<size_t>> sets;
         for (const auto& [shape, members] : kinds) {
-            if (members.size() > 4) sets.push_back(members);
+            std::map<std::vector<std::vector<double>>, std::vector<size_t>> by_values;
+            for (size_t mi : members) by_values[plan(mi).shape_values].push_back(mi);
+            if (by_values.size() > 4) sets.push_back(members);
             else
-                for (size_t mi : members) sets.push_back({mi});
+                for (auto& [values, same] : by_values) sets.push_back(same);
         }
         for (const auto& members : sets) {
             const InstancePlan& first = plan(members[0]);

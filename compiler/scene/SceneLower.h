@@ -37,6 +37,7 @@ struct SceneLowerOptions {
     bool unbounded_scene = false;    // also iqc_scene_unbounded: the scene without `bound` spheres (soft shadows, AO)
     double max_dist = 100;           // the scene distance with nothing in it is twice this
     double bound_margin = 0.1;       // `bound`: the shape is evaluated within this distance of its sphere
+    double box_level = 0.1;          // the scene box holds every point whose nearness can be ≤ this (SceneIR::box)
     int min_group = 4;               // instances of one kind that become a loop
 };
 
@@ -53,7 +54,7 @@ struct SceneIR {
     bool has_reflectivity = false;
     bool has_transmission = false;
     // The box every point where an instance's nearness (its world distance before a Lipschitz division) can be
-    // within the `bound` margin lies in (lo, hi per axis; ±∞ on an unbounded side): rays are clipped to it.
+    // within SceneLowerOptions::box_level lies in (lo, hi per axis; ±∞ on an unbounded side): rays are clipped to it.
     // Absent where no side is bounded or the compiler cannot tell (a transform that moves at run time, a blend).
     std::optional<std::pair<std::array<double, 3>, std::array<double, 3>>> box;
     std::vector<std::string> group_notes;  // "torus with lambert: 1000 instances in one loop"
