@@ -237,3 +237,18 @@ TEST_CASE("the box holds what the hit test accepts: a bound under a non-uniform 
     REQUIRE(box_of(disc.result.code));
     CHECK(differ_without_box(disc.result, 160, 360) == 0);
 }
+
+TEST_CASE("a benchmark build's box covers the largest hit tolerance the sweep gives it", "[scene][box][bench]") {
+    // `iqc bench --hits 0.05,...`: the hit tolerance is a uniform, so the box is grown for the largest one (ten
+    // tolerances: 0.5), not the scene's own.
+    std::string scene = kBall + "[[shapes]]\ntype = \"ball\"\n";
+    CompileOptions o;
+    o.bench = true;
+    o.bench_max_hit = 0.05;
+    Compiled c = compile_path(write_temp("box_bench.iq", scene), o);
+    REQUIRE(c.result.exit_code == 0);
+    auto b = box_of(c.result.code);
+    REQUIRE(b);
+    CHECK(b->second[1] >= 1.5);
+    CHECK(b->second[1] <= 1.51);
+}

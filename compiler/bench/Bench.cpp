@@ -74,6 +74,7 @@ Report run(const Options& o) {
         co.instrument = instrument;
         co.geometry = geometry;
         co.bench = bench;
+        co.bench_max_hit = *std::max_element(o.hits.begin(), o.hits.end());
         co.per_instance = s.method == "per_instance";
         if (auto m = parse_march(s.method)) co.march = m;
         co.normals = parse_normals(s.normals);

@@ -120,7 +120,8 @@ private:
     double box_level() const {
         double focal = 1.0 / std::tan(s_.camera.fov * M_PI / 360.0);
         double far_tolerance = 4 * (spacing0() + 2.4e-7 * s_.render.max_dist);
-        return std::max({bound_margin(), 10 * far_tolerance, s_.render.max_dist / (360 * focal)});
+        double bench = 10 * opts_.bench_max_hit * (s_.render.hit_relative ? s_.render.max_dist : 1.0);
+        return std::max({bound_margin(), bench, 10 * far_tolerance, s_.render.max_dist / (360 * focal)});
     }
 
     SceneIR lower(const std::vector<InstancePlan>& plans);

@@ -65,6 +65,7 @@ struct CompileOptions {
     // Benchmark build: the hit tolerance, the step cap and the output (colour, counts, geometry) are
     // uniforms (IQC_HIT, IQC_MAX_STEPS, iqc_mode), so one program serves a whole sweep.
     bool bench = false;
+    double bench_max_hit = 0;  // `bench`: the largest hit tolerance the build will be given (the scene box covers it)
 };
 
 struct CompileResult {
