@@ -210,32 +210,34 @@ int differ_without_box(const CompileResult& c, int W, int H) {
 TEST_CASE("the box holds what the hit test accepts: a bound under a non-uniform scale, float spacing far out, "
           "the step cap's pixel cone at 360 rows",
           "[scene][box][render]") {
+    // A scene compiles with a box, and draws the same at W x H with the box opened.
+    auto same_without_box = [](const std::string& name, const std::string& text, int W, int H) {
+        Compiled c = compile_text(name, text);
+        INFO(name << "\n" << c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        REQUIRE(box_of(c.result.code));
+        CHECK(differ_without_box(c.result, W, H) == 0);
+    };
     // `bound` in a flattening scale: the hit test reads (|q| - R)·scale, so the object-space ball grows by the
     // margin over the scale before it is mapped (the world sphere plus the margin cut the coin's rim: 4 pixels).
-    Compiled coin = compile_text("box_coin.iq", "[camera]\nposition = [0, 4, -6]\ntarget = [0, 0, 0]\n"
-                                                "[[shapes]]\ntype = \"sphere\"\nbound = 1\ntransform = \"S((3, 0.02, 3))\"\n");
-    REQUIRE(coin.result.exit_code == 0);
-    REQUIRE(box_of(coin.result.code));
-    CHECK(differ_without_box(coin.result, 160, 90) == 0);
+    same_without_box("box_coin.iq", "[camera]\nposition = [0, 4, -6]\ntarget = [0, 0, 0]\n"
+                                    "[[shapes]]\ntype = \"sphere\"\nbound = 1\ntransform = \"S((3, 0.02, 3))\"\n",
+                                    160, 90);
     // A ball 200,000 units out seen through a narrow lens: there the tolerance is four float spacings, 0.19
     // units, not the hit tolerance (the box's margin of 0.1 cut its silhouette: 56 pixels).
-    Compiled far = compile_text("box_far.iq", "[camera]\nposition = [0, 0, 0]\ntarget = [0, 0, 1]\nfov = 0.002\n"
-                                              "[render]\nmax_dist = 400000\n[[shapes]]\ntype = \"sphere\"\n"
-                                              "shape_params = { r = 3 }\ntransform = \"T((0, 0, 200000))\"\n");
-    REQUIRE(far.result.exit_code == 0);
-    REQUIRE(box_of(far.result.code));
-    CHECK(differ_without_box(far.result, 160, 90) == 0);
+    same_without_box("box_far.iq", "[camera]\nposition = [0, 0, 0]\ntarget = [0, 0, 1]\nfov = 0.002\n"
+                                   "[render]\nmax_dist = 400000\n[[shapes]]\ntype = \"sphere\"\n"
+                                   "shape_params = { r = 3 }\ntransform = \"T((0, 0, 200000))\"\n",
+                                   160, 90);
     // A thin disc 40 units wide seen from its rim: rays at the picture's sides run out of steps beside it, where
     // the step cap counts a sample within the pixel's cone (t / (rows · focal)) — wider than the margin at 90
     // rows (2 pixels differ there: docs/scene.md), covered from 360 rows on. The cone reads only the height.
-    Compiled disc = compile_text("box_disc.iq", "[modules]\ndisc = \"\"\"\nshape\nD = max(‖(p_1, p_3)‖ - r, |p_2| - h)\nwhere\n"
-                                                "p ∈ ℝ³\nr ∈ [0,100] default = 40\nh ∈ [0,1] default = 0.05\n\"\"\"\n"
-                                                "[camera]\nposition = [0, 1.0, -38]\ntarget = [0, 0.5, 0]\n"
-                                                "[render]\nmax_dist = 100\n[[shapes]]\ntype = \"disc\"\n"
-                                                "[[shapes]]\ntype = \"sphere\"\ntransform = \"T((0, 1.05, 0))\"\n");
-    REQUIRE(disc.result.exit_code == 0);
-    REQUIRE(box_of(disc.result.code));
-    CHECK(differ_without_box(disc.result, 160, 360) == 0);
+    same_without_box("box_disc.iq", "[modules]\ndisc = \"\"\"\nshape\nD = max(‖(p_1, p_3)‖ - r, |p_2| - h)\nwhere\n"
+                                    "p ∈ ℝ³\nr ∈ [0,100] default = 40\nh ∈ [0,1] default = 0.05\n\"\"\"\n"
+                                    "[camera]\nposition = [0, 1.0, -38]\ntarget = [0, 0.5, 0]\n"
+                                    "[render]\nmax_dist = 100\n[[shapes]]\ntype = \"disc\"\n"
+                                    "[[shapes]]\ntype = \"sphere\"\ntransform = \"T((0, 1.05, 0))\"\n",
+                                    160, 360);
 }
 
 TEST_CASE("a benchmark build's box covers the largest hit tolerance the sweep gives it", "[scene][box][bench]") {
