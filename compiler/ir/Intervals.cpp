@@ -178,6 +178,9 @@ Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
     else if (n == "mix")
         each([&](size_t k) {
             Interval u = arg(0, k), v = arg(1, k), t = arg(2, k);  // u + t(v - u)
+            // A weight within [0, 1] makes a convex combination, between u and v (u + t(v - u) taken apart
+            // forgets that both terms hold the same u: mix([0, 1], [0, 1], t) would be [-1, 2]).
+            if (t.lo >= 0 && t.hi <= 1) return hull(u, v);
             return add(u, mul(t, add(v, neg(u))));
         });
     else if (n == "mod")
