@@ -265,7 +265,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         last_t = t;
         last_id = h.y;
         t += d;
-        if (t > {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) return -1.0;
+        if (t > {{T_FAR}}) return -1.0;
     }
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
@@ -312,11 +312,11 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         step_len = omega * d;
         omega = IQC_RELAXATION;
         t += step_len;
-        if (t > {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) {
+        if (t > {{T_FAR}}) {
             // Past the end only by relaxing: a plain step stays short of it, so the long step is not yet known
             // to be safe. Sample at the end and check there (a failure steps back as anywhere else).
-            if (t_prev + r_prev > {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) return -1.0;
-            t = {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}};
+            if (t_prev + r_prev > {{T_FAR}}) return -1.0;
+            t = {{T_FAR}};
             step_len = t - t_prev;
         }
     }
@@ -384,11 +384,11 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         g = min(g + 0.01, 0.95);
         step_len = d * (1.0 + g * (1.0 + m) / (1.0 - m));
         t += step_len;
-        if (t > {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) {
+        if (t > {{T_FAR}}) {
             // Past the end only by relaxing: a plain step stays short of it, so the long step is not yet known
             // to be safe. Sample at the end and check there (a failure steps back as anywhere else).
-            if (t_prev + r_prev > {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) return -1.0;
-            t = {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}};
+            if (t_prev + r_prev > {{T_FAR}}) return -1.0;
+            t = {{T_FAR}};
             step_len = t - t_prev;
         }
     }
@@ -443,10 +443,10 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     if (h.x < 0.0) s = -1.0;
     for (int i = 1; i < IQC_MAX_STEPS; i++) {
         float t_next = t + IQC_FIXED_STEP;
-        if (t_next > {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) {
+        if (t_next > {{T_FAR}}) {
             // The last step ends at the end, not past it (a surface in that part would be skipped).
-            if (t >= {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}}) return -1.0;
-            t_next = {{#if SCENE_BOX}}t_far{{#else}}IQC_MAX_DIST{{/if}};
+            if (t >= {{T_FAR}}) return -1.0;
+            t_next = {{T_FAR}};
         }
         vec2 h_next = iqc_scene(ro + t_next * rd);
         steps++;

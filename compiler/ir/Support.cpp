@@ -169,57 +169,49 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
     constexpr double R = 1048576.0;  // 2^20: beyond this, a side is unbounded
     SupportBox out;
     bool any = false;
-    const long total_work = work;
+    // One side's edge: the nearest plane c (along axis a, from below or above) beyond which nothing is ≤ level;
+    // ±∞ where the half-space beyond R is not proven free.
+    auto edge_of = [&](size_t a, bool upper) {
+        // The half-space beyond the plane c on this side.
+        auto beyond = [&](double c) {
+            Box b{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
+            if (upper) b.lo[a] = c;
+            else b.hi[a] = c;
+            return free_of(b);
+        };
+        const double sgn = upper ? 1 : -1;
+        if (!beyond(sgn * R)) return sgn * INFINITY;
+        // A plane that is not proven (in) and one that is (out): planes ±1, ±2, ±4, … from 0 outward (or
+        // inward, where the half-space beyond 0 is already free), then bisection to 1e-3 of the scale.
+        double in = NAN, out_c = NAN;
+        if (beyond(0)) {
+            out_c = 0;
+            for (double c = 1; c <= R && std::isnan(in); c *= 2) (beyond(-sgn * c) ? out_c : in) = -sgn * c;
+            if (std::isnan(in)) return -sgn * R;  // free on both sides: nothing is ≤ level anywhere
+        } else {
+            in = 0;
+            // Planes out to 1,024 units (a shape's own space rarely reaches further; beyond, the side stays at
+            // R rather than spending the budget on proofs that keep failing, as over fbm noise).
+            for (double c = 1; c <= 1024 && std::isnan(out_c); c *= 2) (beyond(sgn * c) ? out_c : in) = sgn * c;
+            if (std::isnan(out_c)) return sgn * R;
+        }
+        while (std::fabs(out_c - in) > 1e-3 * std::max(1.0, std::fabs(out_c))) {
+            double mid = 0.5 * (in + out_c);
+            (beyond(mid) ? out_c : in) = mid;
+        }
+        return out_c;
+    };
+    // Each side gets its share of the budget (an open side spends all of it on trying).
+    const long share = work / 6;
+    long left = work;
     for (size_t a = 0; a < 3; ++a)
-        for (int side = 0; side < 2; ++side) {
-            bool upper = side == 1;
-            // Each side gets its share of the budget (an open side spends all of it on trying).
-            long left_total = work;
-            work = std::min(left_total, total_work / 6);
-            struct Restore {
-                long& work;
-                long& left_total;
-                long before;
-                ~Restore() { work = left_total - (before - work); }
-            } restore{work, left_total, work};
-            // The half-space beyond the plane c on this side.
-            auto beyond = [&](double c) {
-                Box b{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
-                if (upper) b.lo[a] = c;
-                else b.hi[a] = c;
-                return free_of(b);
-            };
-            double& edge = upper ? out.hi[a] : out.lo[a];
-            edge = upper ? INFINITY : -INFINITY;
-            if (!beyond(upper ? R : -R)) continue;
-            // A plane that is not proven (in) and one that is (out): planes ±1, ±2, ±4, … from 0 outward (or
-            // inward, where the half-space beyond 0 is already free), then bisection to 1e-3 of the scale.
-            double sgn = upper ? 1 : -1, in = NAN, out_c = NAN;
-            if (beyond(0)) {
-                out_c = 0;
-                for (double c = 1; c <= R && std::isnan(in); c *= 2) (beyond(-sgn * c) ? out_c : in) = -sgn * c;
-                if (std::isnan(in)) {  // free on both sides: nothing is ≤ level anywhere
-                    edge = -sgn * R;
-                    any = true;
-                    continue;
-                }
-            } else {
-                in = 0;
-                // Planes out to 1,024 units (a shape's own space rarely reaches further; beyond, the side stays at
-                // R rather than spending the budget on proofs that keep failing, as over fbm noise).
-                for (double c = 1; c <= 1024 && std::isnan(out_c); c *= 2) (beyond(sgn * c) ? out_c : in) = sgn * c;
-                if (std::isnan(out_c)) {
-                    edge = sgn * R;
-                    any = true;
-                    continue;
-                }
-            }
-            while (std::fabs(out_c - in) > 1e-3 * std::max(1.0, std::fabs(out_c))) {
-                double mid = 0.5 * (in + out_c);
-                (beyond(mid) ? out_c : in) = mid;
-            }
-            edge = out_c;
-            any = true;
+        for (bool upper : {false, true}) {
+            work = std::min(left, share);
+            const long given = work;
+            double e = edge_of(a, upper);
+            left -= given - work;
+            (upper ? out.hi[a] : out.lo[a]) = e;
+            any |= std::isfinite(e);
         }
     if (!any) return std::nullopt;
     return out;

@@ -261,6 +261,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         V["ORBIT_RADIUS"] = glsl::float_literal(std::sqrt(r2));
     }
     V["BOX_LO"] = V["BOX_HI"] = "";
+    V["T_FAR"] = "IQC_MAX_DIST";  // where a march ends: iqc_far's t_far where there is a box
     // The scene's box (SceneIR::box): rays are clipped to it.
     if (const auto& box = scene.box; box && !opts_.per_instance) {
         // ±∞ sides as ±1e30: the slab test's products stay ±∞ or finite (never 0·∞ unless a ray starts on a plane).
@@ -272,6 +273,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         V["BOX_LO"] = vec3_literal(side(box->first, 1e30));
         V["BOX_HI"] = vec3_literal(side(box->second, 1e30));
         F.insert("SCENE_BOX");
+        V["T_FAR"] = "t_far";
     }
     static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO"};
     F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march())]);

@@ -13,6 +13,7 @@
 #include "glsl/Names.h"
 #include "scene/Bvh.h"
 #include "ir/Builder.h"
+#include "ir/Eval.h"
 #include "ir/Lower.h"
 #include "ir/Support.h"
 
@@ -165,9 +166,6 @@ private:
     // An instance's bounding-sphere radius: its `bound`, or the one derived for its group (0: none).
     double bound_of(size_t i) const { return plan(i).desc->bound > 0 ? plan(i).desc->bound : derived_bound_[i]; }
 
-    // A bounding-sphere radius for every member of a group without `bound`: the shape's extent by interval
-    // arithmetic (ir/Support.h) over the hull of the members' parameter values (on targets with sliders, their
-    // slider ranges too), or nothing (an unbounded shape such as a plane; a parameter without a range).
     // The intervals of a shape's parameters over the members of a group (their values' hull; on targets with
     // sliders, their slider ranges too); the query point's entry is left unbounded. Nothing when a parameter
     // has no range on a slider target (an input).
@@ -193,6 +191,9 @@ private:
         return params;
     }
 
+    // A bounding-sphere radius for every member of a group without `bound`: the shape's extent by interval
+    // arithmetic (ir/Support.h) over the hull of the members' parameter values (on targets with sliders, their
+    // slider ranges too), or nothing (an unbounded shape such as a plane; a parameter without a range).
     std::optional<double> derived_bound(const std::vector<size_t>& members) {
         const InstancePlan& first = plan(members[0]);
         int fn = lower_module_cached(*first.shape, ctx_);
@@ -273,13 +274,9 @@ private:
             for (size_t mi : members) {
                 const InstancePlan& p = plan(mi);
                 // object = L·world + o, so world = L⁻¹(object − o): each world axis an interval sum over the box.
-                std::array<double, 9> Li{};
-                const auto& L = p.inv_linear;
-                double det = L[0] * (L[4] * L[8] - L[5] * L[7]) - L[1] * (L[3] * L[8] - L[5] * L[6]) + L[2] * (L[3] * L[7] - L[4] * L[6]);
-                if (!(std::fabs(det) > 1e-300)) return;
-                Li = {(L[4] * L[8] - L[5] * L[7]) / det, (L[2] * L[7] - L[1] * L[8]) / det, (L[1] * L[5] - L[2] * L[4]) / det,
-                      (L[5] * L[6] - L[3] * L[8]) / det, (L[0] * L[8] - L[2] * L[6]) / det, (L[2] * L[3] - L[0] * L[5]) / det,
-                      (L[3] * L[7] - L[4] * L[6]) / det, (L[1] * L[6] - L[0] * L[7]) / det, (L[0] * L[4] - L[1] * L[3]) / det};
+                bool singular = false;
+                std::vector<double> Li = ir::mat_inverse(p.inv_linear, 3, &singular);
+                if (singular) return;
                 std::array<ir::Interval, 3> w;
                 for (size_t r = 0; r < 3; ++r) {
                     ir::Interval sum{0, 0};
