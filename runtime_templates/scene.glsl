@@ -100,6 +100,9 @@ const int IQC_POINT_LIGHTS = {{POINT_LIGHTS}};  // lights from here on are suns 
 {{#if AA}}
 const int IQC_AA = {{AA}};  // samples per pixel side
 {{/if}}
+{{#if FOOTPRINT}}
+float iqc_pixel_cone;  // the width of one pixel's (antialiasing sample's) cone per unit of distance along its ray
+{{/if}}
 
 {{DECLARATIONS}}// ---- the scene (compiled from its IR: modules, then iqc_scene and the functions the runtime calls) ----
 {{FUNCTIONS}}
@@ -691,10 +694,22 @@ vec3 iqc_background(vec3 rd) {
 }
 
 {{/if}}
-// The colour of instance `id` at p: its material's light-independent part (ambient, emission, indirect light){{#if AO}}
+{{#if FOOTPRINT}}
+// The pixel's footprint on a surface of unit normal N that a ray along the unit direction rd hits with a cone of
+// width w (Amanatides 1984): the cone's section is an ellipse, w across the view and w/|N·rd| along it, whose
+// width along world axis i is w·sqrt(1 - N_i² + (rd_i - (rd·N)N_i)² / (N·rd)²) (the stretch capped at 50 near
+// grazing). Materials filter their patterns over it (w_P).
+vec3 iqc_footprint(vec3 N, vec3 rd, float w) {
+    float c = max(abs(dot(N, rd)), 0.02);
+    vec3 u = rd - dot(rd, N) * N;
+    return w * sqrt(max(1.0 - N * N + u * u / (c * c), 0.0));
+}
+
+{{/if}}
+// The colour of instance `id` at p{{#if FOOTPRINT}} (the pixel's footprint there: w){{/if}}: its material's light-independent part (ambient, emission, indirect light){{#if AO}}
 // darkened by ambient occlusion{{/if}}, plus each light's part{{#if SHADOWS}} times that light's shadow{{/if}}.
-vec3 iqc_colour(int id, vec3 p, vec3 N, vec3 eye) {
-    vec3 c = iqc_shade(id, p, N, eye);
+vec3 iqc_colour(int id, vec3 p, vec3 N, vec3 eye{{#if FOOTPRINT}}, vec3 w{{/if}}) {
+    vec3 c = iqc_shade(id, p, N, eye{{#if FOOTPRINT}}, w{{/if}});
 {{#if AO}}
     c *= iqc_ao(p, N);
 {{/if}}
@@ -705,7 +720,7 @@ vec3 iqc_colour(int id, vec3 p, vec3 N, vec3 eye) {
         // A sun: a point along its direction, as far as the march reaches (its shadow ray stops there).
         if (l >= IQC_POINT_LIGHTS) P_L = p + IQC_MAX_DIST * normalize(P_L);
 {{/if}}
-        vec3 c_l = iqc_shade_light(id, p, N, eye, P_L, iqc_light_color(l));
+        vec3 c_l = iqc_shade_light(id, p, N, eye{{#if FOOTPRINT}}, w{{/if}}, P_L, iqc_light_color(l));
 {{#if SHADOWS}}
         if (dot(c_l, c_l) > 0.0) c_l *= iqc_shadow(p, N, P_L);  // no shadow ray where the light adds nothing
 {{/if}}
@@ -728,8 +743,8 @@ vec3 iqc_bounce_origin(vec3 p, vec3 N, float side) {
 
 {{#if FRESNEL_GLANCE}}
 // What a ray reflected off a glass surface sees: its first hit, shaded without further bounces, or the
-// background.
-vec3 iqc_glance(vec3 p, vec3 N, vec3 rd) {
+// background{{#if FOOTPRINT}} (`travelled`: the path's length up to p, for the pixel's cone){{/if}}.
+vec3 iqc_glance(vec3 p, vec3 N, vec3 rd{{#if FOOTPRINT}}, float travelled{{/if}}) {
     vec3 ro = iqc_bounce_origin(p, N, 1.0);
     int id, steps;
     float t = iqc_march(ro, rd, id, steps);
@@ -737,7 +752,7 @@ vec3 iqc_glance(vec3 p, vec3 N, vec3 rd) {
     vec3 q = ro + t * rd;
     vec3 Nq = iqc_normal(q, t, id);
     if (dot(Nq, rd) > 0.0) Nq = -Nq;
-    vec3 c = iqc_colour(id, q, Nq, ro);
+    vec3 c = iqc_colour(id, q, Nq, ro{{#if FOOTPRINT}}, iqc_footprint(Nq, rd, iqc_pixel_cone * (travelled + t)){{/if}});
 {{#if FOG}}
     c = mix(c, IQC_FOG_COLOR, 1.0 - exp(-IQC_FOG * t));
 {{/if}}
@@ -765,6 +780,9 @@ float iqc_depth = 1.0;     // its normalized device depth (1: nothing hit)
 // The colour seen along a ray{{#if BOUNCES}}, following reflections and refractions{{/if}}.
 vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#if BOUNCES}}
+{{#if FOOTPRINT}}
+    float travelled = 0.0;  // the path's length before this ray's origin (the pixel's cone widens along all of it)
+{{/if}}
     vec3 col = vec3(0.0);
     vec3 throughput = vec3(1.0);
     for (int bounce = 0; bounce <= IQC_BOUNCES; bounce++) {
@@ -801,7 +819,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#if DEBUG_DEPTH}}
         return vec3(1.0 - t / IQC_MAX_DIST);
 {{/if}}
-        vec3 c = iqc_colour(id, p, N, ro);
+        vec3 c = iqc_colour(id, p, N, ro{{#if FOOTPRINT}}, iqc_footprint(N, rd, iqc_pixel_cone * ({{#if BOUNCES}}travelled + {{/if}}t)){{/if}});
 {{#if FOG}}
         c = mix(c, IQC_FOG_COLOR, 1.0 - exp(-IQC_FOG * t));
 {{/if}}
@@ -820,7 +838,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#else}}
             vec3 R = iqc_fresnel(vec3(r0 * r0), -dot(rd, N));
 {{/if}}
-            col += throughput * kt.rgb * R * iqc_glance(p, N, reflect(rd, N));
+            col += throughput * kt.rgb * R * iqc_glance(p, N, reflect(rd, N){{#if FOOTPRINT}}, travelled + t{{/if}});
             throughput *= kt.rgb * (1.0 - R);
 {{#else}}
             throughput *= kt.rgb;
@@ -830,6 +848,9 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
             int id2, steps2;
             vec3 ro2 = iqc_bounce_origin(p, N, -1.0);
             float t2 = iqc_march(ro2, inside, id2, steps2);
+{{#if FOOTPRINT}}
+            travelled += t + max(t2, 0.0);
+{{/if}}
             if (id2 < 0) { ro = ro2; rd = inside; continue; }
             vec3 p2 = ro2 + t2 * inside;
             vec3 N2 = iqc_normal(p2, t2, id2);
@@ -852,6 +873,9 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
         if (max(throughput.x, max(throughput.y, throughput.z)) < 1.0e-3) break;
         ro = iqc_bounce_origin(p, N, 1.0);
         rd = reflect(rd, N);
+{{#if FOOTPRINT}}
+        travelled += t;
+{{/if}}
 {{#else}}
         col += throughput * c;
         throughput = vec3(0.0);
@@ -869,8 +893,10 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#if OUTPUT}}
 
 // The output transform (docs/look.md): linear light{{#if EXPOSURE}} times the exposure{{/if}}{{#if TONEMAP_ACES}}, tone mapped by Narkowicz's
-// fit of the ACES curve (2015){{/if}}{{#if TONEMAP_REINHARD}}, tone mapped by Reinhard's c/(1 + c) (2002){{/if}}{{#if SRGB}}, encoded with the sRGB transfer function (IEC 61966-2-1){{/if}}.
-vec3 iqc_output(vec3 c) {
+// fit of the ACES curve (2015){{/if}}{{#if TONEMAP_REINHARD}}, tone mapped by Reinhard's c/(1 + c) (2002){{/if}}{{#if SRGB}}, encoded with the sRGB transfer function (IEC 61966-2-1){{/if}}{{#if CONTRAST}},
+// a share of the smoothstep contrast curve c²(3 - 2c){{/if}}{{#if VIGNETTE}}, darkened toward the corners (q: the pixel's place in [0, 1]²) by a
+// vignette of (16·x(1 - x)·y(1 - y))^¼ (after Quilez){{/if}}.
+vec3 iqc_output(vec3 c{{#if VIGNETTE}}, vec2 q{{/if}}) {
 {{#if EXPOSURE}}
     c *= {{EXPOSURE}};
 {{/if}}
@@ -885,6 +911,13 @@ vec3 iqc_output(vec3 c) {
 {{#if SRGB}}
     c = clamp(c, 0.0, 1.0);
     c = mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+{{/if}}
+{{#if CONTRAST}}
+    c = clamp(c, 0.0, 1.0);
+    c = mix(c, c * c * (3.0 - 2.0 * c), {{CONTRAST}});
+{{/if}}
+{{#if VIGNETTE}}
+    c *= 1.0 - {{VIGNETTE}} * (1.0 - pow(max(16.0 * q.x * q.y * (1.0 - q.x) * (1.0 - q.y), 0.0), 0.25));
 {{/if}}
     return c;
 }
@@ -942,6 +975,9 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
         return;
     }
 {{/if}}
+{{#if FOOTPRINT}}
+    iqc_pixel_cone = 2.0 / (iResolution.y * focal{{#if AA}} * float(IQC_AA){{/if}});  // a pixel spans 2 / height in uv{{#if AA}}, a sample 1 / IQC_AA of it{{/if}}
+{{/if}}
 {{#if AA}}
     vec3 col = vec3(0.0);
     for (int i = 0; i < IQC_AA; i++)
@@ -965,7 +1001,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
 {{#if INSTRUMENT}}
 {{#if BENCH}}
     if (iqc_mode == 0) {
-        fragColor = vec4(clamp({{#if OUTPUT}}iqc_output(col){{#else}}col{{/if}}, 0.0, 1.0), 1.0);
+        fragColor = vec4(clamp({{#if OUTPUT}}iqc_output(col{{#if VIGNETTE}}, fragCoord / iResolution.xy{{/if}}){{#else}}col{{/if}}, 0.0, 1.0), 1.0);
         return;
     }
 {{/if}}
@@ -975,7 +1011,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     float flags = (bad ? 1.0 : 0.0) + (iqc_bad_distances > 0 ? 2.0 : 0.0);
     fragColor = vec4(float(iqc_primary_steps), float(iqc_evals), flags, float(iqc_shape_evals));
 {{#else}}
-    fragColor = vec4(clamp({{#if OUTPUT}}iqc_output(col){{#else}}col{{/if}}, 0.0, 1.0), 1.0);
+    fragColor = vec4(clamp({{#if OUTPUT}}iqc_output(col{{#if VIGNETTE}}, fragCoord / iResolution.xy{{/if}}){{#else}}col{{/if}}, 0.0, 1.0), 1.0);
 {{/if}}
 }
 {{#if !SHADERTOY}}

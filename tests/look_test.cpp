@@ -149,6 +149,27 @@ TEST_CASE("the background can be a sky gradient, and the output is sRGB-encoded 
           Approx(0.2 / 1.2).margin(0.004));
 }
 
+TEST_CASE("contrast and vignette grade the encoded colour", "[look][render]") {
+    std::string flat = "[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\nfov = 90\n"
+                       "[[shapes]]\ntype = \"sphere\"\ntransform = \"T((0, 0, 1000))\"\n"
+                       "[render]\nmax_dist = 50\nbackground = [0.2, 0.2, 0.2]\noutput = \"linear\"\n";
+    // Contrast: 0.2 → 0.2²(3 - 0.4) = 0.104 at 1, halfway at 0.5; mid grey stays.
+    CHECK(render_scene("contrast.iq", flat + "contrast = 1\n").pixel(10, 10)[0] == Approx(0.104).margin(0.003));
+    CHECK(render_scene("contrast5.iq", flat + "contrast = 0.5\n").pixel(10, 10)[0] == Approx(0.152).margin(0.003));
+    // Vignette 0.5 on a 96×54 picture: the centre keeps 0.2, the top-left pixel (x = 0.5/96, y = 0.5/54 of the
+    // way across) is 0.2·(1 - 0.5·(1 - (16·x(1 - x)·y(1 - y))^¼)).
+    render::Image v = render_scene("vignette.iq", flat + "vignette = 0.5\n");
+    CHECK(v.pixel(48, 27)[0] == Approx(0.2).margin(0.002));
+    double x = 0.5 / 96, y = 0.5 / 54, corner = 0.2 * (1 - 0.5 * (1 - std::pow(16 * x * (1 - x) * y * (1 - y), 0.25)));
+    CHECK(v.pixel(0, 0)[0] == Approx(corner).margin(0.003));
+    CHECK(v.pixel(95, 53)[0] == Approx(corner).margin(0.003));
+    CHECK(v.pixel(0, 0)[0] < 0.13f);
+    // Off by default: no code for them.
+    Compiled plain = compile_text("plain_grade.iq", flat);
+    CHECK(plain.result.code.find("vignette") == std::string::npos);
+    CHECK(plain.result.code.find("contrast") == std::string::npos);
+}
+
 TEST_CASE("I♥IQ documents keep the thesis's linear output", "[look]") {
     Compiled doc = compile_path(std::filesystem::path(IQC_SOURCE_DIR) / "examples" / "two_tori.md");
     REQUIRE(doc.result.exit_code == 0);
@@ -210,6 +231,9 @@ TEST_CASE("light and background error paths are located", "[look][scene]") {
     CHECK_THAT(err("tone.iq", "[render]\ntonemap = \"filmic\"\n"),
                Catch::Contains("error: unknown tone map 'filmic': choose one of none, reinhard, aces"));
     CHECK_THAT(err("exp.iq", "[render]\nexposure = 0\n"), Catch::Contains("exp.iq:4:12: error: 'exposure' must be positive"));
+    CHECK_THAT(err("vig.iq", "[render]\nvignette = 1.5\n"), Catch::Contains("vig.iq:4:12: error: 'vignette' must be in [0, 1]"));
+    CHECK_THAT(err("con.iq", "[render]\ncontrast = -0.1\n"), Catch::Contains("con.iq:4:12: error: 'contrast' must be in [0, 1]"));
+    CHECK_THAT(err("vigs.iq", "[render]\nvignette = \"yes\"\n"), Catch::Contains("vigs.iq:4:12: error:"));
 }
 
 TEST_CASE("sky and bounce lights no material reads are a located warning, and --meta lists every light", "[look][scene]") {

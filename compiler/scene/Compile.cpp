@@ -302,6 +302,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     if (int lf = scene.module.find(ir::names::kLipschitz); !opts_.per_instance && lf >= 0 && scene.module.functions[size_t(lf)].entry)
         F.insert("HIT_SCALE");
     if (scene.has_shade_light) F.insert("SHADE_LIGHT");
+    if (scene.binds_footprint) F.insert("FOOTPRINT");  // some material filters by the pixel's footprint w_P
     if (fx.shadows != Shadows::None && lights && scene.has_shade_light) {
         F.insert("SHADOWS");
         F.insert(fx.shadows == Shadows::Hard ? "SHADOWS_HARD" : "SHADOWS_SOFT");
@@ -328,12 +329,18 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     }
     // The output transform: exposure, tone map, sRGB (not for the debug views, which show values).
     V["EXPOSURE"] = glsl::float_literal(render.exposure);
+    V["VIGNETTE"] = glsl::float_literal(render.vignette);
+    V["CONTRAST"] = glsl::float_literal(render.contrast);
     if (render.debug == DebugView::None) {
         if (render.exposure != 1) F.insert("EXPOSURE");
+        if (render.vignette > 0) F.insert("VIGNETTE");
+        if (render.contrast > 0) F.insert("CONTRAST");
         if (render.tonemap == RenderDesc::Tonemap::ACES) F.insert("TONEMAP_ACES");
         if (render.tonemap == RenderDesc::Tonemap::Reinhard) F.insert("TONEMAP_REINHARD");
         if (s_.srgb()) F.insert("SRGB");
-        if (F.count("EXPOSURE") || F.count("TONEMAP_ACES") || F.count("TONEMAP_REINHARD") || F.count("SRGB")) F.insert("OUTPUT");
+        if (F.count("EXPOSURE") || F.count("TONEMAP_ACES") || F.count("TONEMAP_REINHARD") || F.count("SRGB") || F.count("VIGNETTE") ||
+            F.count("CONTRAST"))
+            F.insert("OUTPUT");
     }
     static const char* debug_flags[] = {"", "DEBUG_NORMALS", "DEBUG_STEPS", "DEBUG_DEPTH"};
     if (render.debug != DebugView::None) F.insert(debug_flags[int(render.debug)]);

@@ -25,6 +25,12 @@ bool InstancePlan::lit_by(int param, bool shading, bool ambient) const {
     return p.name == kAmbientColor && ambient;
 }
 
+bool InstancePlan::binds_footprint() const {
+    if (!material) return false;
+    int k = material->find_param(kFootprint);
+    return k >= 0 && material->params[size_t(k)].type == Type::vector(3);
+}
+
 bool InstancePlan::per_light(bool shading) const {
     return material && lit_by(material->find_param(kLightPosition), shading);
 }

@@ -22,6 +22,9 @@ namespace conventions {
 inline constexpr const char* kLightPosition = "P_L";
 inline constexpr const char* kLightColor = "C_L";
 inline constexpr const char* kAmbientColor = "C_A";  // indirect light: the scene's sky and bounce lights
+// The pixel's footprint at the surface point: the width, along each world axis, of the box that the cone of one
+// pixel (one antialiasing sample) covers on the surface there (ℝ³, world units), for filtering patterns.
+inline constexpr const char* kFootprint = "w_P";
 inline constexpr const char* kReflectivity = "k_r";
 inline constexpr const char* kTransmission = "k_t";
 inline constexpr const char* kRefractiveIndex = "η";
@@ -50,6 +53,7 @@ struct InstancePlan {
     // (`shading`), C_A when it has sky or bounce lights (`ambient`).
     bool lit_by(int param, bool shading, bool ambient = false) const;
     bool per_light(bool shading) const;  // the material's light terms are evaluated once per light
+    bool binds_footprint() const;        // the material has the footprint parameter w_P ∈ ℝ³ (the renderer sets it)
 };
 
 // Plans every instance of the scene (and resolves [[blends]] to them); returns false after reporting errors.

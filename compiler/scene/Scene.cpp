@@ -101,7 +101,7 @@ const std::vector<std::string> kShapeKeys = {"name", "type", "material", "transf
 const std::vector<std::string> kCameraKeys = {"position", "target", "fov", "orbit"};
 const std::vector<std::string> kRenderKeys = {"march", "max_steps", "max_dist", "hit", "hit_mode", "normals",
                                               "background", "relaxation", "step", "debug", "output",
-                                              "tonemap", "exposure"};
+                                              "tonemap", "exposure", "vignette", "contrast"};
 const std::vector<std::string> kEffectKeys = {"shadows", "shadow_softness", "ao", "fog", "fog_color", "reflections",
                                               "refraction", "antialias"};
 const std::vector<std::string> kLightKeys = {"name", "type", "position", "direction", "color"};
@@ -518,6 +518,12 @@ void SceneReader::read_render(const toml::table& root) {
                     if (*v <= 0) d_.error(span_of(*x), "'exposure' must be positive");
                     else s_.render.exposure = *v;
                 }
+            for (auto [key, out] : {std::pair{"vignette", &s_.render.vignette}, std::pair{"contrast", &s_.render.contrast}})
+                if (auto* x = t.get(key))
+                    if (auto v = get_number(*x, key)) {
+                        if (*v < 0 || *v > 1) d_.error(span_of(*x), fmt::format("'{}' must be in [0, 1]", key));
+                        else *out = *v;
+                    }
             if (auto* x = t.get("march"))
                 if (auto v = get_choice(*x, "march method", {"fixed", "sphere", "relaxed", "auto"})) s_.render.march = March(*v);
             if (auto* x = t.get("normals"))

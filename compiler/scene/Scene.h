@@ -79,6 +79,10 @@ struct RenderDesc {
     std::optional<bool> srgb;
     enum class Tonemap { None, Reinhard, ACES } tonemap = Tonemap::None;
     double exposure = 1;
+    // Grading after the encoding (0: off): a vignette darkening the corners by this share, and a contrast
+    // S-curve mixed in by this share (both in [0, 1]).
+    double vignette = 0;
+    double contrast = 0;
     double relaxation = 1.6;    // ω of the relaxed method
     double step = 0;            // the fixed method's step (0: max_dist / max_steps)
     DebugView debug = DebugView::None;

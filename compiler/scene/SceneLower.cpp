@@ -650,6 +650,7 @@ private:
             for (size_t k = 0; k < mod.params.size(); ++k) {
                 if (std::find(skip.begin(), skip.end(), int(k)) != skip.end()) continue;
                 if (&mod == first.material && first.lit_by(int(k), bind_lights_, ambient_lights_)) continue;
+                if (&mod == first.material && first.binds_footprint() && int(k) == mod.find_param(kFootprint)) continue;
                 std::vector<std::vector<double>> vals;
                 for (size_t mi : it.members) vals.push_back((plan(mi).*values)[k]);
                 fields[k] = parameter_field(it, mod, role, k, vals);
@@ -1091,10 +1092,12 @@ private:
     }
 
     void shade_functions() {
-        // iqc_shade(id, p, N, eye): each material's light-independent part (ambient, emission, the indirect
+        // iqc_shade(id, p, N, eye[, w_P]): each material's light-independent part (ambient, emission, the indirect
         // light C_A): the whole colour of a material no light binds; of one lit once per light, the terms of its
         // colour's sum that read neither P_L nor C_L (material_part). Ambient occlusion darkens this part
-        // only, a shadow only its light's part. The default material shows the normal.
+        // only, a shadow only its light's part. The default material shows the normal. The pixel's footprint
+        // w_P is a parameter only when some material reads it.
+        for (const Item& it : items_) out_.binds_footprint |= plan(it.members[0]).binds_footprint();
         {
             ir::Function f;
             f.name = ir::names::kShade;
@@ -1103,6 +1106,7 @@ private:
             Builder b(m_, f);
             ValueId id = b.param("id", Type::integer());
             ValueId p = b.param("p", Type::vector(3)), N = b.param("N", Type::vector(3)), eye = b.param("eye", Type::vector(3));
+            ValueId W = out_.binds_footprint ? b.param(kFootprint, Type::vector(3)) : ValueId(-1);
             ValueId zero = b.constant(Type::vector(3), {0, 0, 0});
             ValueId normal_colour = b.op(Op::Add, {b.constant(Type::vector(3), {0.5, 0.5, 0.5}), b.op(Op::Mul, {b.scalar(0.5), N})});
             ValueId CA = ValueId(-1);
@@ -1118,7 +1122,7 @@ private:
                 int fn = lit ? material_part(*first.material, false) : -1;
                 if (lit && fn < 0) return zero;  // every term reads the light: iqc_shade_light
                 return material_call(b, it, k, p, N, eye, lit ? zero : ValueId(-1), lit ? zero : ValueId(-1), fn,
-                                     binds_ambient(first) ? ambient() : ValueId(-1));
+                                     binds_ambient(first) ? ambient() : ValueId(-1), W);
             }, p, normal_colour);
             f.result = b.named(b.switch_(id, normal_colour, std::move(cs)), "c");
             m_.functions.push_back(std::move(f));
@@ -1135,6 +1139,7 @@ private:
             Builder b(m_, f);
             ValueId id = b.param("id", Type::integer());
             ValueId p = b.param("p", Type::vector(3)), N = b.param("N", Type::vector(3)), eye = b.param("eye", Type::vector(3));
+            ValueId W = out_.binds_footprint ? b.param(kFootprint, Type::vector(3)) : ValueId(-1);
             ValueId PL = b.param("P_L", Type::vector(3)), CL = b.param("C_L", Type::vector(3));
             ValueId CA = ValueId(-1);
             auto cs = cases(b, id, [&](const Item& it, ValueId k) -> ValueId {
@@ -1143,7 +1148,7 @@ private:
                 int fn = material_part(*first.material, true);
                 if (fn < 0) return ValueId(-1);  // no term reads the light
                 if (binds_ambient(first) && CA == ValueId(-1)) CA = b.call(ambient_function(), {N});
-                return material_call(b, it, k, p, N, eye, PL, CL, fn, binds_ambient(first) ? CA : ValueId(-1));
+                return material_call(b, it, k, p, N, eye, PL, CL, fn, binds_ambient(first) ? CA : ValueId(-1), W);
             }, p, b.constant(Type::vector(3), {0, 0, 0}));
             f.result = b.named(b.switch_(id, b.constant(Type::vector(3), {0, 0, 0}), std::move(cs)), "c");
             m_.functions.push_back(std::move(f));
@@ -1168,9 +1173,9 @@ private:
     }
 
     // A call of the item's material (or of one part of it, `fn`) with the renderer's bindings: the roles, the
-    // light (P_L, C_L) where given, the indirect light C_A where given.
+    // light (P_L, C_L) where given, the indirect light C_A and the pixel's footprint W where given.
     ValueId material_call(Builder& b, const Item& it, ValueId k, ValueId p, ValueId N, ValueId eye, ValueId PL, ValueId CL,
-                          int fn = -1, ValueId CA = ValueId(-1)) {
+                          int fn = -1, ValueId CA = ValueId(-1), ValueId W = ValueId(-1)) {
         const InstancePlan& first = plan(it.members[0]);
         const CheckedModule& mat = *first.material;
         std::map<int, ValueId> bound = {{mat.roles[0], p}, {mat.roles[1], N}, {mat.roles[2], eye}};
@@ -1179,6 +1184,7 @@ private:
             if (int c = mat.find_param(kLightColor); first.lit_by(c, bind_lights_)) bound[c] = CL;
         }
         if (CA != ValueId(-1)) bound[mat.find_param(kAmbientColor)] = CA;
+        if (W != ValueId(-1) && first.binds_footprint()) bound[mat.find_param(kFootprint)] = W;
         return b.call(fn >= 0 ? fn : lower_module_cached(mat, ctx_), module_args(b, mat, it.material_params, bound, k));
     }
 

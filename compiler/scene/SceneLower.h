@@ -51,6 +51,7 @@ struct SceneIR {
     bool has_prepare = false;
     bool has_shade_light = false;   // some material is evaluated once per light
     bool binds_ambient = false;     // some material reads the sky and bounce lights (C_A)
+    bool binds_footprint = false;   // some material reads the pixel's footprint w_P: iqc_shade(_light) take it after eye
     bool has_reflectivity = false;
     bool has_transmission = false;
     // The box every point where an instance's nearness (its world distance before a Lipschitz division) can be
