@@ -913,7 +913,9 @@ vec3 iqc_output(vec3 c{{#if VIGNETTE}}, vec2 q{{/if}}) {
     c = mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
 {{/if}}
 {{#if CONTRAST}}
+{{#if !SRGB}}
     c = clamp(c, 0.0, 1.0);
+{{/if}}
     c = mix(c, c * c * (3.0 - 2.0 * c), {{CONTRAST}});
 {{/if}}
 {{#if VIGNETTE}}
