@@ -85,11 +85,12 @@ TEST_CASE("a material's w_P is the width of the pixel's cone on the surface alon
     CHECK(s[0] == Approx(10 * wx).epsilon(0.002));
     CHECK(s[2] == Approx(10 * wz).epsilon(0.002));
     CHECK(s[2] / s[0] == Approx(std::sqrt(2.0)).epsilon(0.05));
-    // Antialiasing: each of the 3×3 samples covers a third of the pixel (the average of their footprints).
+    // Antialiasing: each of the 3×3 samples filters over a whole pixel (together, a two-pixel tent): the
+    // average of their footprints is the pixel's.
     render::Image aa = render_scene("fp_aa.iq", kShowFootprint + "[camera]\nposition = [0, 1, 0]\ntarget = [0, 0, 0]\nfov = 90\n"
                                                                  "[effects]\nantialias = 3\n");
     expected(1, 0, wx, wz);
-    CHECK(aa.pixel(48, 27)[0] == Approx(10 * wx / 3).epsilon(0.01));
+    CHECK(aa.pixel(48, 27)[0] == Approx(10 * wx).epsilon(0.01));
 }
 
 TEST_CASE("the stdlib checker blends distant cells to their average instead of aliasing", "[look][footprint][render]") {
