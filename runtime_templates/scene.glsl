@@ -671,9 +671,28 @@ float iqc_ao(vec3 p, vec3 N) {
 {{/if}}
 
 {{#if SKY}}
+{{#if STARS}}
+// A star field: the directions cut into cells about 0.2° across (a pixel at 270 rows and a 50° view); a share of
+// the cells, chosen by the PCG3D hash of the cell (Jarzynski and Olano 2020), holds a star of random brightness
+// at a random place in it, fading toward the horizon.
+vec3 iqc_stars(vec3 rd) {
+    vec3 q = rd * 300.0;
+    vec3 cell = floor(q);
+    uvec3 v = uvec3(ivec3(cell) + 1024) * 1664525u + 1013904223u;
+    v.x += v.y * v.z; v.y += v.z * v.x; v.z += v.x * v.y;
+    v ^= v >> 16u;
+    v.x += v.y * v.z; v.y += v.z * v.x; v.z += v.x * v.y;
+    vec3 h = vec3(v) * (1.0 / 4294967296.0);
+    if (h.x > {{STARS}}) return vec3(0.0);
+    vec3 at = cell + 0.25 + 0.5 * fract(h.zxy * 7.0);
+    float r = length(q - at);
+    return vec3(0.9, 0.95, 1.0) * (h.y * h.y * 3.0 * (1.0 - smoothstep(0.0, 0.35, r)) * smoothstep(0.0, 0.25, rd.y));
+}
+
+{{/if}}
 // What a ray that hits nothing sees: the horizon's colour blended into the zenith's by √(rd_y), into the
 // ground's below the horizon{{#if SUN_DISC}}; each sun as a disc about half a degree across with a glow around it, in its
-// colour (after Quilez's skies){{/if}}.
+// colour (after Quilez's skies){{/if}}{{#if STARS}}; stars above{{/if}}.
 vec3 iqc_background(vec3 rd) {
 {{#if SUN_DISC}}
     vec3 col = rd.y >= 0.0 ? mix(IQC_BACKGROUND, IQC_ZENITH, sqrt(rd.y)) : mix(IQC_BACKGROUND, IQC_GROUND, sqrt(-rd.y));
@@ -687,9 +706,16 @@ vec3 iqc_background(vec3 rd) {
         s64 *= s64;
         col += iqc_light_color(l) * (0.05 * s8 + 0.25 * s64 + 4.0 * smoothstep(0.99996, 0.99999, s));
     }
+{{#if STARS}}
+    col += iqc_stars(rd);
+{{/if}}
     return col;
 {{#else}}
+{{#if STARS}}
+    return (rd.y >= 0.0 ? mix(IQC_BACKGROUND, IQC_ZENITH, sqrt(rd.y)) : mix(IQC_BACKGROUND, IQC_GROUND, sqrt(-rd.y))) + iqc_stars(rd);
+{{#else}}
     return rd.y >= 0.0 ? mix(IQC_BACKGROUND, IQC_ZENITH, sqrt(rd.y)) : mix(IQC_BACKGROUND, IQC_GROUND, sqrt(-rd.y));
+{{/if}}
 {{/if}}
 }
 
@@ -771,6 +797,32 @@ vec3 iqc_fresnel(vec3 F0, float cos_i) {
 
 {{/if}}
 {{/if}}
+{{#if GLOW}}
+float iqc_primary_t = 0.0;  // where the primary ray ended: its hit, or the march's end (the glows gather up to it)
+
+// Light a ray gathers by passing near a glowing instance (after Quilez's glowing shapes): its closest approach d
+// to the instance before t_end, sampled by marching the instance's own distance at half steps (the nearest
+// sample is within about 3% of d: full steps would band the glow into rings), as colour · exp(-d / radius).
+// A ray that meets the instance gathers the whole colour.
+vec3 iqc_glow(vec3 ro, vec3 rd, float t_end, int id, vec3 colour, float radius) {
+    float t = 0.0, d_min = 1.0e20;
+    for (int i = min(iFrame, 0); i < 48; i++) {
+        if (t > t_end) break;
+        float d = iqc_distance_of(ro + t * rd, id);
+        d_min = min(d_min, d);
+        if (d < 1.0e-4 * (1.0 + t)) break;
+        t += 0.5 * d;
+    }
+    return colour * exp(-max(d_min, 0.0) / radius);
+}
+
+// The glows of the scene's glowing instances that a primary ray from ro along rd gathers before t_end.
+vec3 iqc_glows(vec3 ro, vec3 rd, float t_end) {
+    vec3 g = vec3(0.0);
+{{GLOWS}}    return g;
+}
+
+{{/if}}
 {{#if DEPTH}}
 float iqc_hit_t = 1.0e30;  // the nearest primary hit of this pixel's rays (distance along the ray, point)
 vec3 iqc_hit_point;
@@ -789,6 +841,9 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{/if}}
         int id, steps;
         float t = iqc_march(ro, rd, id, steps);
+{{#if GLOW}}
+        {{#if BOUNCES}}if (bounce == 0) {{/if}}iqc_primary_t = id < 0 ? IQC_MAX_DIST : t;
+{{/if}}
 {{#if INSTRUMENT}}
         if (iqc_primary_steps < 0) iqc_primary_steps = steps;
 {{/if}}
@@ -988,12 +1043,23 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
         for (int j = 0; j < IQC_AA; j++) {
             vec2 offset = (vec2(float(i), float(j)) + 0.5) / float(IQC_AA) - 0.5;
             vec2 uv = (2.0 * (fragCoord + offset) - iResolution.xy) / iResolution.y;
+{{#if GLOW}}
+            vec3 rd = normalize(basis * vec3(uv, focal));
+            col += iqc_trace(eye, rd);
+            col += iqc_glows(eye, rd, iqc_primary_t);
+{{#else}}
             col += iqc_trace(eye, normalize(basis * vec3(uv, focal)));
+{{/if}}
         }
     col /= float(IQC_AA * IQC_AA);
 {{#else}}
     vec2 uv = (2.0 * fragCoord - iResolution.xy) / iResolution.y;
+{{#if GLOW}}
+    vec3 rd = normalize(basis * vec3(uv, focal));
+    vec3 col = iqc_trace(eye, rd) + iqc_glows(eye, rd, iqc_primary_t);
+{{#else}}
     vec3 col = iqc_trace(eye, normalize(basis * vec3(uv, focal)));
+{{/if}}
 {{/if}}
 {{#if DEPTH}}
     if (iqc_hit_t < 1.0e30) {

@@ -339,3 +339,63 @@ TEST_CASE("a sky background shows each sun as a disc with a glow", "[look][rende
     point.replace(point.find("direction = [0, 0, 1]"), 21, "position = [0, 0, 10]");
     CHECK(render_scene("no_sun_disc.iq", point, 97, 55).pixel(48, 27)[0] == Approx(0.2).margin(0.01));
 }
+
+TEST_CASE("a glowing instance lights the rays that pass near it, not those behind an occluder", "[look][render]") {
+    // A ball of radius 0.5 at the origin glowing red (radius 0.2) on a black background, from (0, 0, -5), fov 90.
+    std::string ball = "[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\nfov = 90\n"
+                       "[render]\noutput = \"linear\"\nbackground = [0, 0, 0]\n"
+                       "[[shapes]]\nname = \"ball\"\ntype = \"sphere\"\nshape_params = { r = 0.5 }\n"
+                       "material = \"emissive\"\nmaterial_params = { k_e = [0, 0, 0] }\n";
+    render::Image glow = render_scene("glow.iq", ball + "glow = [1, 0, 0]\nglow_radius = 0.2\n");
+    // Pixel (51, 27) of 96×54: its ray passes the ball's surface at d = 5|uv|/sqrt(1 + |uv|²) - 0.5 and
+    // gathers exp(-d / 0.2) of red (the nearest sample of the closest approach is within a few per cent).
+    const double u = (2 * 51.5 - 96) / 54.0, v = (2 * 26.5 - 54) / 54.0;
+    const double d = 5 * std::hypot(u, v) / std::sqrt(1 + u * u + v * v) - 0.5;
+    CHECK(glow.pixel(51, 27)[0] == Approx(std::exp(-d / 0.2)).epsilon(0.05));
+    CHECK(glow.pixel(51, 27)[1] == Approx(0).margin(1e-6));
+    // Farther out it fades; at the corner almost nothing.
+    CHECK(glow.pixel(60, 27)[0] < glow.pixel(51, 27)[0]);
+    CHECK(glow.pixel(0, 0)[0] < 1e-3f);
+    // A wall in front of the ball: the primary ray ends there, and gathers no glow from behind it.
+    render::Image hidden = render_scene("glow_hidden.iq", ball + "glow = [1, 0, 0]\nglow_radius = 0.2\n"
+                                        "[[shapes]]\ntype = \"box\"\nshape_params = { b = [3, 3, 0.1] }\ntransform = \"T((0, 0, -2))\"\n"
+                                        "material = \"emissive\"\nmaterial_params = { k_e = [0, 0, 0] }\n");
+    CHECK(hidden.pixel(51, 27)[0] < 1e-3f);
+    // Without glow nothing of it is in the shader.
+    Compiled plain = compile_text("no_glow.iq", ball);
+    REQUIRE(plain.result.exit_code == 0);
+    CHECK(plain.result.code.find("iqc_glow") == std::string::npos);
+}
+
+TEST_CASE("a night sky can have stars above the horizon", "[look][render]") {
+    std::string sky = "[camera]\nposition = [0, 0, 0]\ntarget = [0, 0.5, 1]\nfov = 90\n"
+                      "[[shapes]]\ntype = \"sphere\"\ntransform = \"T((0, 0, 1000))\"\n"
+                      "[render]\noutput = \"linear\"\nmax_dist = 50\n";
+    auto bright = [](const render::Image& im, int y0, int y1) {
+        int n = 0;
+        for (int y = y0; y < y1; ++y)
+            for (int x = 0; x < im.width; ++x) n += im.pixel(x, y)[0] > 0.05f;
+        return n;
+    };
+    render::Image stars = render_scene("stars.iq", sky + "background = { zenith = [0, 0, 0], horizon = [0, 0, 0], stars = 1 }\n", 192, 108);
+    render::Image none = render_scene("nostars.iq", sky + "background = { zenith = [0, 0, 0], horizon = [0, 0, 0] }\n", 192, 108);
+    CHECK(bright(stars, 0, 40) > 5);     // well above the horizon
+    CHECK(bright(none, 0, 108) == 0);
+    CHECK(bright(stars, 80, 108) == 0);  // below the horizon (row ~75): none
+    Compiled plain = compile_text("nostars2.iq", sky + "background = { zenith = [0, 0, 0], horizon = [0, 0, 0] }\n");
+    CHECK(plain.result.code.find("iqc_stars") == std::string::npos);
+}
+
+TEST_CASE("glow and stars error paths are located", "[look][scene]") {
+    auto err = [](const std::string& name, const std::string& text) {
+        RunResult r = run_iqc(write_temp(name, "[[shapes]]\ntype = \"sphere\"\n" + text).string());
+        CHECK(r.exit_code == 1);
+        return r.err;
+    };
+    CHECK_THAT(err("glowneg.iq", "glow = [1, -1, 0]\n"), Catch::Contains("glowneg.iq:3:8: error: 'glow' is a colour: its components cannot be negative"));
+    CHECK_THAT(err("glowr.iq", "glow = [1, 1, 0]\nglow_radius = 0\n"), Catch::Contains("glowr.iq:4:15: error: 'glow_radius' must be positive, not 0"));
+    CHECK_THAT(err("glowr2.iq", "glow_radius = 0.5\n"), Catch::Contains("glowr2.iq:3:15: error: 'glow_radius' without 'glow'"));
+    CHECK_THAT(err("glow2.iq", "glow = [1, 1]\n"), Catch::Contains("glow2.iq:3:8: error:"));
+    CHECK_THAT(err("stars.iq", "[render]\nbackground = { zenith = [0, 0, 1], horizon = [1, 1, 1], stars = 2 }\n"),
+               Catch::Contains("stars.iq:4:65: error: 'stars' (how many stars) must be in [0, 1]"));
+}

@@ -142,6 +142,7 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     lo.params_constant = opts_.target == Target::Shadertoy;
     lo.analytic_normals = normals() == Normals::Analytic && !opts_.per_instance;
     lo.instance_normals = normals() != Normals::Analytic && !opts_.per_instance;
+    for (const InstanceDesc& in : s_.instances) lo.distance_of |= in.glow && !opts_.per_instance;
     lo.instrument = opts_.instrument || opts_.bench;
     lo.per_instance = opts_.per_instance;
     lo.reflections = s_.effects.reflections > 0;
@@ -241,6 +242,8 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     V["ZENITH"] = vec3_literal(render.zenith);
     V["GROUND"] = vec3_literal(render.has_ground ? render.ground : render.background);
     if (render.sky_gradient) F.insert("SKY");
+    if (render.sky_gradient && render.stars > 0) F.insert("STARS");
+    V["STARS"] = glsl::float_literal(0.03 * render.stars);
     V["DECLARATIONS"] = code.declarations;
     V["FUNCTIONS"] = code.functions;
     V["INSTANCES"] = std::to_string(scene.instances);
@@ -303,6 +306,22 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         F.insert("HIT_SCALE");
     if (scene.has_shade_light) F.insert("SHADE_LIGHT");
     if (scene.binds_footprint) F.insert("FOOTPRINT");  // some material filters by the pixel's footprint w_P
+    // Glows: one call per glowing instance (its id, colour and radius), summed along the primary ray.
+    V["GLOWS"] = "";
+    if (!opts_.per_instance && render.debug == DebugView::None) {
+        std::string glows;
+        for (size_t i = 0; i < s_.instances.size(); ++i) {
+            const InstanceDesc& in = s_.instances[i];
+            if (!in.glow) continue;
+            glows += fmt::format("    g += iqc_glow(ro, rd, t_end, {}, {}, {});  // {}\n", scene.instance_ids[i],
+                                 vec3_literal(*in.glow), glsl::float_literal(in.glow_radius),
+                                 glsl::comment_text(in.name.empty() ? in.type : in.name));
+        }
+        if (!glows.empty()) {
+            F.insert("GLOW");
+            V["GLOWS"] = glows;
+        }
+    }
     if (fx.shadows != Shadows::None && lights && scene.has_shade_light) {
         F.insert("SHADOWS");
         F.insert(fx.shadows == Shadows::Hard ? "SHADOWS_HARD" : "SHADOWS_SOFT");

@@ -97,7 +97,8 @@ size_t toml_too_deep(std::string_view t) {
 
 constexpr size_t kMaxLights = 256;
 const std::vector<std::string> kTopKeys = {"title", "include", "modules", "camera", "render", "effects", "lights", "shapes", "blends"};
-const std::vector<std::string> kShapeKeys = {"name", "type", "material", "transform", "shape_params", "material_params", "bound"};
+const std::vector<std::string> kShapeKeys = {"name", "type", "material", "transform", "shape_params", "material_params", "bound",
+                                             "glow", "glow_radius"};
 const std::vector<std::string> kCameraKeys = {"position", "target", "fov", "orbit"};
 const std::vector<std::string> kRenderKeys = {"march", "max_steps", "max_dist", "hit", "hit_mode", "normals",
                                               "background", "relaxation", "step", "debug", "output",
@@ -497,13 +498,18 @@ void SceneReader::read_render(const toml::table& root) {
             if (auto* x = t.get("background")) {
                 if (auto* g = x->as_table()) {
                     // A sky gradient: zenith and horizon (both required), ground (optional).
-                    check_keys(*g, {"zenith", "horizon", "ground"}, " in 'background'");
+                    check_keys(*g, {"zenith", "horizon", "ground", "stars"}, " in 'background'");
                     auto* z = g->get("zenith");
                     auto* h = g->get("horizon");
                     if (!z || !h) d_.error(span_of(*x), "a sky-gradient 'background' needs 'zenith' and 'horizon' colours");
                     if (z) get_vec3(*z, "zenith", s_.render.zenith);
                     if (h) get_vec3(*h, "horizon", s_.render.background);
                     if (auto* gr = g->get("ground")) s_.render.has_ground = get_vec3(*gr, "ground", s_.render.ground);
+                    if (auto* st = g->get("stars"))
+                        if (auto v = get_number(*st, "stars")) {
+                            if (*v < 0 || *v > 1) d_.error(span_of(*st), "'stars' (how many stars) must be in [0, 1]");
+                            else s_.render.stars = *v;
+                        }
                     s_.render.sky_gradient = true;
                 } else {
                     get_vec3(*x, "background", s_.render.background);
@@ -710,6 +716,26 @@ std::optional<InstanceDesc> SceneReader::read_shape(const toml::node& item) {
                 inst.bound = *v;
                 inst.bound_span = span_of(*x);
             }
+        }
+    if (auto* x = t.get("glow")) {
+        std::array<double, 3> c{};
+        if (get_vec3(*x, "glow", c)) {
+            if (c[0] < 0 || c[1] < 0 || c[2] < 0)
+                d_.error(span_of(*x), "'glow' is a colour: its components cannot be negative");
+            else {
+                inst.glow = c;
+                inst.glow_span = span_of(*x);
+            }
+        }
+    }
+    if (auto* x = t.get("glow_radius"))
+        if (auto v = get_number(*x, "glow_radius")) {
+            if (!(*v > 0) || !std::isfinite(*v))
+                d_.error(span_of(*x), fmt::format("'glow_radius' must be positive, not {}", *v));
+            else if (!t.get("glow"))
+                d_.error(span_of(*x), "'glow_radius' without 'glow': give the glow's colour, glow = [r, g, b]");
+            else
+                inst.glow_radius = *v;
         }
     if (inst.type.empty()) return std::nullopt;
     return inst;

@@ -44,6 +44,11 @@ struct InstanceDesc {
     std::vector<ParamOverride> shape_params, material_params;
     double bound = 0;  // object-space bounding sphere radius at the origin (`bound = R`); 0: none
     Span bound_span;
+    // A glow around the instance (`glow = [r, g, b]`, linear colour; `glow_radius`, world units): light the
+    // primary ray gathers by passing near it (docs/look.md). No glow: nothing of it is computed.
+    std::optional<std::array<double, 3>> glow;
+    double glow_radius = 0.2;
+    Span glow_span;
     Span span;
 };
 
@@ -74,6 +79,7 @@ struct RenderDesc {
     std::array<double, 3> zenith{0.3, 0.5, 0.85};
     std::array<double, 3> ground{0.0, 0.0, 0.0};  // below the horizon (default: the horizon colour)
     bool has_ground = false;
+    double stars = 0;  // a night sky's star field above the horizon (`stars` in the gradient), in [0, 1]: 0 none
     // Output transform (docs/look.md): the colour is computed in linear light, then exposed, tone mapped and
     // encoded. Default: sRGB for TOML scenes, linear (the thesis's look) for I♥IQ documents.
     std::optional<bool> srgb;

@@ -123,7 +123,7 @@ public:
             scene_function(false);
         }
         lipschitz_function();
-        if (o_.analytic_normals || o_.instance_normals) gradient_functions();
+        if (o_.analytic_normals || o_.instance_normals || o_.distance_of) gradient_functions();
         shade_functions();
         // k_r: for mirrors (reflections) and for glass, whose Fresnel reflection it raises (refraction).
         if (o_.reflections || o_.refraction) out_.has_reflectivity = material_property(ir::names::kReflectivity);
@@ -131,6 +131,9 @@ public:
         prepare_function();
         if (o_.per_instance) per_instance_functions();
         out_.instances = int(plans_.size());
+        out_.instance_ids.assign(plans_.size(), -1);
+        for (const Item& it : items_)
+            for (size_t m = 0; m < it.members.size(); ++m) out_.instance_ids[it.members[m]] = it.id + int(m);
         out_.lights = int(light_pos_.size());
         out_.point_lights = point_lights_;
         return std::move(out_);
@@ -1027,7 +1030,7 @@ private:
             cases.push_back({it.id, it.id + (long long)it.members.size(), d});
         }
         f.result = b.switch_(id, b.scalar(2 * o_.max_dist), std::move(cases));
-        f.entry = !o_.analytic_normals;  // finite-difference normals call it; the gradient pass reads it
+        f.entry = !o_.analytic_normals || o_.distance_of;  // finite-difference normals and glows call it; the gradient pass reads it
         m_.functions.push_back(std::move(f));
         if (!o_.analytic_normals) return;
         ir::Function g;

@@ -30,6 +30,7 @@ struct SceneLowerOptions {
     bool params_constant = true;     // parameters are constants (Shadertoy); else uniforms (sliders)
     bool analytic_normals = false;   // iqc_distance_of + a placeholder iqc_gradient (the gradient pass fills it)
     bool instance_normals = false;   // iqc_distance_of for finite-difference normals (taps of the hit instance)
+    bool distance_of = false;        // iqc_distance_of for the runtime whatever the normals (glows march it)
     bool instrument = false;         // iqc_scene returns a third component: shapes evaluated in this call
     bool per_instance = false;       // I♥IQ's architecture for the benchmark: no groups, per-instance functions
     bool reflections = false;        // the scene reads k_r
@@ -59,6 +60,7 @@ struct SceneIR {
     // Absent where no side is bounded or the compiler cannot tell (a transform that moves at run time, a blend).
     std::optional<std::pair<std::array<double, 3>, std::array<double, 3>>> box;
     std::vector<std::string> group_notes;  // "torus with lambert: 1000 instances in one loop"
+    std::vector<int> instance_ids;         // per plan: the id iqc_scene returns for it (and iqc_distance_of takes)
     std::vector<std::pair<Span, std::string>> warnings;  // what the lowering chose against the scene's wish, located
 };
 
