@@ -101,7 +101,7 @@ const int IQC_POINT_LIGHTS = {{POINT_LIGHTS}};  // lights from here on are suns 
 const int IQC_AA = {{AA}};  // samples per pixel side
 {{/if}}
 {{#if FOOTPRINT}}
-float iqc_pixel_cone;  // the width of one pixel's cone per unit of distance along its ray
+float iqc_pixel_cone;  // the width of the pixel's filter cone per unit of distance along its ray
 {{/if}}
 
 {{DECLARATIONS}}// ---- the scene (compiled from its IR: modules, then iqc_scene and the functions the runtime calls) ----
@@ -1033,9 +1033,10 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     }
 {{/if}}
 {{#if FOOTPRINT}}
-    // A pixel spans 2 / height in uv. {{#if AA}}Each sample filters over a whole pixel: with the samples spread over the pixel,
-    // a two-pixel tent, which passes less of what a pixel cannot show than a one-pixel box does.{{#else}}A one-pixel box.{{/if}}
-    iqc_pixel_cone = 2.0 / (iResolution.y * focal);
+    // A pixel spans 2 / height in uv, an angle of that over |(uv, focal)| across its ray. {{#if AA}}Each sample filters over a
+    // whole pixel: with the samples spread over the pixel, a two-pixel tent{{#else}}The filter is two pixels wide{{/if}}, which passes less of
+    // what a pixel cannot show than a one-pixel box does.
+    iqc_pixel_cone = {{#if AA}}2.0{{#else}}4.0{{/if}} / (iResolution.y * length(vec3((2.0 * fragCoord - iResolution.xy) / iResolution.y, focal)));
 {{/if}}
 {{#if AA}}
     vec3 col = vec3(0.0);

@@ -90,6 +90,8 @@ struct Planner {
     SourceManager& sm;
     Diagnostics& d;
 
+    std::set<const CheckedModule*> warned_footprint_;
+
     bool apply_overrides(const std::vector<ParamOverride>& ovs, const CheckedModule& m, const char* role,
                          const std::vector<int>& bound, std::vector<std::vector<double>>& values) {
         bool ok = true;
@@ -243,7 +245,18 @@ struct Planner {
             plan.material = module(inst.material, inst.material_span, ast::ModuleKind::Material);
             if (!plan.material) return false;
             for (auto& p : plan.material->params) plan.material_values.push_back(p.value);
-            ok &= apply_overrides(inst.material_params, *plan.material, "material", plan.material->roles, plan.material_values);
+            // The footprint w_P (ℝ³) is the renderer's, like p, N̂ and I; under another type it is an ordinary
+            // parameter, which a writer of w_P most likely did not mean: a warning.
+            std::vector<int> bound = plan.material->roles;
+            if (int fp = plan.material->find_param(kFootprint); fp >= 0) {
+                const ParamInfo& w = plan.material->params[size_t(fp)];
+                if (w.type == Type::vector(3)) bound.push_back(fp);
+                else if (warned_footprint_.insert(plan.material).second)
+                    d.warning(inst.material_span, fmt::format("material '{}' has a parameter '{}' of type {}: the renderer binds "
+                                                              "the pixel's footprint only to a '{}' in ℝ³, so this one is an "
+                                                              "ordinary parameter", inst.material, kFootprint, w.type.str(), kFootprint));
+            }
+            ok &= apply_overrides(inst.material_params, *plan.material, "material", bound, plan.material_values);
         } else if (!inst.material_params.empty()) {
             d.error(inst.material_params.front().span, "'material_params' needs a 'material'");
             ok = false;
