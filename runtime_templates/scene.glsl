@@ -85,8 +85,19 @@ const float IQC_RELAXATION = {{RELAXATION}};  // over-relaxation factor ω
 const float IQC_SHADOW_K = {{SHADOW_K}};  // penumbra sharpness
 {{/if}}
 {{#if FOG}}
-const float IQC_FOG = {{FOG}};  // density: colour → fog colour as 1 - exp(-density · distance)
+const float IQC_FOG = {{FOG}};  // density: colour → fog colour as 1 - exp(-{{#if FOG_EXP2}}(density · distance)²{{#else}}density · distance{{/if}})
 const vec3 IQC_FOG_COLOR = {{FOG_COLOR}};
+
+// Fog: the colour seen at distance t fades to the fog colour by 1 - exp(-{{#if FOG_EXP2}}(density·t)²) (OpenGL's GL_EXP2: clear near,
+// thick far){{#else}}density·t){{/if}}.
+vec3 iqc_fog(vec3 c, float t) {
+{{#if FOG_EXP2}}
+    float x = IQC_FOG * t;
+    return mix(c, IQC_FOG_COLOR, 1.0 - exp(-x * x));
+{{#else}}
+    return mix(c, IQC_FOG_COLOR, 1.0 - exp(-IQC_FOG * t));
+{{/if}}
+}
 {{/if}}
 {{#if BOUNCES}}
 const int IQC_BOUNCES = {{BOUNCES}};
@@ -658,13 +669,13 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
 {{/if}}
 {{#if AO}}
 // Ambient occlusion: how much the scene distance falls short of the distance along the normal, at five
-// heights, weighted by 1/2, 1/4, …
+// heights, weighted by 0.95ⁱ (after Quilez's: a cavity's far walls count nearly as much as its near ones)
 float iqc_ao(vec3 p, vec3 N) {
     float occ = 0.0, w = 1.0;
     for (int i = min(iFrame, 0); i < 5; i++) {
         float h = 0.01 + 0.12 * float(i) / 4.0;
         occ += (h - iqc_scene_effects(p + h * N).y) * w;
-        w *= 0.5;
+        w *= 0.95;
     }
     return clamp(1.0 - 3.0 * occ, 0.0, 1.0);
 }
@@ -767,6 +778,25 @@ vec3 iqc_bounce_origin(vec3 p, vec3 N, float side) {
     return q + N * (side * 4.0 * max(iqc_eps(0.0), 1.0e-6 * (1.0 + length(q))));
 }
 
+{{#if GLINTS}}
+// What a reflected or refracted ray from ro along rd sees of the point lights, which are not surfaces: each as
+// a glint, colour · 3 cos²⁵⁶ of the angle between the ray and the light's direction (about 5° across: a
+// slightly rough mirror's highlight), unless the ray's hit at t_hit (-1: none) is nearer than the light.
+vec3 iqc_glints(vec3 ro, vec3 rd, float t_hit) {
+    vec3 g = vec3(0.0);
+    for (int l = 0; l < {{#if SUNS}}IQC_POINT_LIGHTS{{#else}}IQC_LIGHTS{{/if}}; l++) {
+        vec3 to = iqc_light_position(l) - ro;
+        float d = length(to);
+        if (t_hit >= 0.0 && t_hit < d) continue;
+        float s = max(dot(rd, to) / max(d, 1.0e-6), 0.0);
+        s *= s; s *= s; s *= s; s *= s;
+        s *= s; s *= s; s *= s; s *= s;  // s²⁵⁶
+        g += 3.0 * s * iqc_light_color(l);
+    }
+    return g;
+}
+
+{{/if}}
 {{#if FRESNEL_GLANCE}}
 // What a ray reflected off a glass surface sees: its first hit, shaded without further bounces, or the
 // background{{#if FOOTPRINT}} (`travelled`: the path's length up to p, for the pixel's cone){{/if}}.
@@ -774,15 +804,20 @@ vec3 iqc_glance(vec3 p, vec3 N, vec3 rd{{#if FOOTPRINT}}, float travelled{{/if}}
     vec3 ro = iqc_bounce_origin(p, N, 1.0);
     int id, steps;
     float t = iqc_march(ro, rd, id, steps);
+{{#if GLINTS}}
+    vec3 glint = iqc_glints(ro, rd, id < 0 ? -1.0 : t);
+    if (id < 0) return {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}} + glint;
+{{#else}}
     if (id < 0) return {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}};
+{{/if}}
     vec3 q = ro + t * rd;
     vec3 Nq = iqc_normal(q, t, id);
     if (dot(Nq, rd) > 0.0) Nq = -Nq;
     vec3 c = iqc_colour(id, q, Nq, ro{{#if FOOTPRINT}}, iqc_footprint(Nq, rd, iqc_pixel_cone * (travelled + t)){{/if}});
 {{#if FOG}}
-    c = mix(c, IQC_FOG_COLOR, 1.0 - exp(-IQC_FOG * t));
+    c = iqc_fog(c, t);
 {{/if}}
-    return c;
+    return c{{#if GLINTS}} + glint{{/if}};
 }
 
 {{/if}}
@@ -844,6 +879,9 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#if GLOW}}
         {{#if BOUNCES}}if (bounce == 0) {{/if}}iqc_primary_t = id < 0 ? IQC_MAX_DIST : t;
 {{/if}}
+{{#if GLINTS}}
+        if (bounce > 0) col += throughput * iqc_glints(ro, rd, id < 0 ? -1.0 : t);  // the lights, in a mirror or through glass
+{{/if}}
 {{#if INSTRUMENT}}
         if (iqc_primary_steps < 0) iqc_primary_steps = steps;
 {{/if}}
@@ -876,7 +914,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{/if}}
         vec3 c = iqc_colour(id, p, N, ro{{#if FOOTPRINT}}, iqc_footprint(N, rd, iqc_pixel_cone * ({{#if BOUNCES}}travelled + {{/if}}t)){{/if}});
 {{#if FOG}}
-        c = mix(c, IQC_FOG_COLOR, 1.0 - exp(-IQC_FOG * t));
+        c = iqc_fog(c, t);
 {{/if}}
 {{#if BOUNCES}}
 {{#if REFRACTION}}

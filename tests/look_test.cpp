@@ -399,3 +399,36 @@ TEST_CASE("glow and stars error paths are located", "[look][scene]") {
     CHECK_THAT(err("stars.iq", "[render]\nbackground = { zenith = [0, 0, 1], horizon = [1, 1, 1], stars = 2 }\n"),
                Catch::Contains("stars.iq:4:65: error: 'stars' (how many stars) must be in [0, 1]"));
 }
+
+TEST_CASE("fog_mode exp2 keeps the near scene clearer than exp", "[look][render]") {
+    // A black wall 5 units away in white fog of density 0.1: exp gives 1 - e^-0.5, exp2 1 - e^-0.25.
+    std::string wall = "[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\nfov = 40\n"
+                       "[render]\noutput = \"linear\"\nbackground = [1, 1, 1]\n"
+                       "[[shapes]]\ntype = \"box\"\nshape_params = { b = [10, 10, 0.01] }\n"
+                       "material = \"emissive\"\nmaterial_params = { k_e = [0, 0, 0] }\n"
+                       "[effects]\nfog = 0.1\nfog_color = [1, 1, 1]\n";
+    CHECK(render_scene("fog_exp.iq", wall).pixel(48, 27)[0] == Approx(1 - std::exp(-0.5)).margin(0.005));
+    CHECK(render_scene("fog_exp2.iq", wall + "fog_mode = \"exp2\"\n").pixel(48, 27)[0] == Approx(1 - std::exp(-0.25)).margin(0.005));
+    RunResult bad = run_iqc(write_temp("fog_bad.iq", wall + "fog_mode = \"linear\"\n").string());
+    CHECK(bad.exit_code == 1);
+    CHECK_THAT(bad.err, Catch::Contains("fog_bad.iq:16:12: error: unknown fog mode 'linear': choose one of exp, exp2"));
+}
+
+TEST_CASE("a mirror shows a point light as a glint, unless something is in the way", "[look][render]") {
+    // A perfect mirror floor (k_r = 1: its own colour counts for nothing) under a light at (0, 4, 0); from
+    // (0, 2, -2) the light's image (0, -4, 0) is seen through the floor at (0, 0, -4/3), the centre pixel.
+    std::string scene = "[camera]\nposition = [0, 2, -2]\ntarget = [0, 0, -1.3333333]\nfov = 40\n"
+                        "[render]\noutput = \"linear\"\nbackground = [0, 0, 0]\nmax_dist = 40\n"
+                        "[effects]\nreflections = 1\n"
+                        "[[lights]]\nposition = [0, 4, 0]\ncolor = [1, 1, 1]\n"
+                        "[[shapes]]\ntype = \"plane\"\nshape_params = { h = 0 }\nmaterial = \"mirror\"\n"
+                        "material_params = { k_r = 1, k_d = [0, 0, 0] }\n";
+    render::Image glint = render_scene("glint.iq", scene);
+    CHECK(glint.pixel(48, 27)[0] > 0.95f);  // 3 × the light's colour, clamped
+    CHECK(glint.pixel(48, 2)[0] < 0.05f);   // 18° away from the light's image: nothing
+    // A dark ball on the reflected ray, between the floor and the light: no glint.
+    render::Image blocked = render_scene("glint_blocked.iq", scene + "[[shapes]]\ntype = \"sphere\"\nshape_params = { r = 0.3 }\n"
+                                                                     "transform = \"T((0, 2, -0.6666667))\"\nmaterial = \"emissive\"\n"
+                                                                     "material_params = { k_e = [0, 0, 0] }\n");
+    CHECK(blocked.pixel(48, 27)[0] < 0.02f);
+}

@@ -333,6 +333,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         if (scene.module.find(ir::names::kSceneUnbounded) >= 0) F.insert("SCENE_UNBOUNDED");
     }
     if (fx.fog > 0) F.insert("FOG");
+    if (fx.fog > 0 && fx.fog_exp2) F.insert("FOG_EXP2");
     if (fx.reflections > 0 && scene.has_reflectivity) F.insert("REFLECTIONS");
     if (fx.refraction && scene.has_transmission) F.insert("REFRACTION");
     if (F.count("REFLECTIONS") || F.count("REFRACTION")) F.insert("BOUNCES");
@@ -345,6 +346,8 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         F.insert("FRESNEL");
         if (F.count("REFRACTION")) F.insert("FRESNEL_GLANCE");
         if (scene.has_reflectivity) F.insert("REFLECTIVITY");
+        // Mirrors and glass show the point lights (a sun is in the sky already, where there is one).
+        if (F.count("SHADE_LIGHT") && scene.point_lights > 0) F.insert("GLINTS");
     }
     // The output transform: exposure, tone map, sRGB (not for the debug views, which show values).
     V["EXPOSURE"] = glsl::float_literal(render.exposure);

@@ -103,7 +103,7 @@ const std::vector<std::string> kCameraKeys = {"position", "target", "fov", "orbi
 const std::vector<std::string> kRenderKeys = {"march", "max_steps", "max_dist", "hit", "hit_mode", "normals",
                                               "background", "relaxation", "step", "debug", "output",
                                               "tonemap", "exposure", "vignette", "contrast"};
-const std::vector<std::string> kEffectKeys = {"shadows", "shadow_softness", "ao", "fog", "fog_color", "reflections",
+const std::vector<std::string> kEffectKeys = {"shadows", "shadow_softness", "ao", "fog", "fog_color", "fog_mode", "reflections",
                                               "refraction", "antialias"};
 const std::vector<std::string> kLightKeys = {"name", "type", "position", "direction", "color"};
 
@@ -581,6 +581,8 @@ void SceneReader::read_effects(const toml::table& root) {
                     else e.fog = *v;
                 }
             }
+            if (auto* x = t.get("fog_mode"))
+                if (auto v = get_choice(*x, "fog mode", {"exp", "exp2"})) e.fog_exp2 = *v == 1;
             if (auto* x = t.get("fog_color")) {
                 std::array<double, 3> c;
                 if (get_vec3(*x, "fog_color", c)) e.fog_color = c;

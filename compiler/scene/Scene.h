@@ -100,6 +100,7 @@ struct EffectsDesc {
     bool ao = false;
     double fog = 0;               // density; 0 is off
     std::optional<std::array<double, 3>> fog_color;  // default: the background
+    bool fog_exp2 = false;        // fog_mode = "exp2": 1 - exp(-(density·t)²) instead of 1 - exp(-density·t)
     int reflections = 0;          // bounces
     bool refraction = false;
     int antialias = 1;            // samples per pixel side
