@@ -664,7 +664,8 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
         t += e.x;
         if (t > t_max) break;
     }
-    return clamp(res, 0.0, 1.0);
+    res = clamp(res, 0.0, 1.0);
+    return res * res * (3.0 - 2.0 * res);  // smoothstep: the penumbra's edges without a crease (after Quilez)
 }
 {{/if}}
 {{#if AO}}
