@@ -26,6 +26,11 @@ tokens = [
     "max_steps = ", "max_dist = ", "hit = ", "hit_mode = \"relative\"", "background = [", "relaxation = ",
     "step = ", "debug = \"normals\"", "shadows = \"soft\"", "shadow_softness = ", "ao = true", "fog = ",
     "fog_color = [", "reflections = ", "refraction = true", "antialias = ", "title = ", "color = [",
+    # the look (docs/look.md): lights, output, grading, sky, glows, blends, footprint
+    "type = \"sun\"", "type = \"sky\"", "type = \"bounce\"", "direction = [", "output = \"linear\"",
+    "tonemap = \"aces\"", "exposure = ", "contrast = ", "vignette = ", "fog_mode = \"exp2\"",
+    "background = { zenith = [0, 0, 1], horizon = [1, 1, 1], stars = 1 }", "glow = [", "glow_radius = ",
+    "[[blends]]", "shapes = [", "radius = ", "`w_P`", "`C_A`", "`P_L`", "`C_L`", "pbr", "checker", "glass", "mirror",
     "\"\"\"", "'''", "```iheartla\n", "```scene\n", "```\n", "❤: ", "♥: ", "torus", "box", "phong", "lambert",
 ]
 
