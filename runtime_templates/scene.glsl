@@ -90,13 +90,17 @@ const vec3 IQC_FOG_COLOR = {{FOG_COLOR}};
 
 // Fog: the colour seen at distance t fades to the fog colour by 1 - exp(-{{#if FOG_EXP2}}(density·t)²) (OpenGL's GL_EXP2: clear near,
 // thick far){{#else}}density·t){{/if}}.
-vec3 iqc_fog(vec3 c, float t) {
+// iqc_fog_keep: the share of the light from distance t that the fog lets through.
+float iqc_fog_keep(float t) {
 {{#if FOG_EXP2}}
     float x = IQC_FOG * t;
-    return mix(c, IQC_FOG_COLOR, 1.0 - exp(-x * x));
+    return exp(-x * x);
 {{#else}}
-    return mix(c, IQC_FOG_COLOR, 1.0 - exp(-IQC_FOG * t));
+    return exp(-IQC_FOG * t);
 {{/if}}
+}
+vec3 iqc_fog(vec3 c, float t) {
+    return mix(IQC_FOG_COLOR, c, iqc_fog_keep(t));
 }
 {{/if}}
 {{#if BOUNCES}}
@@ -800,23 +804,23 @@ vec3 iqc_glints(vec3 ro, vec3 rd, float t_hit) {
 {{/if}}
 {{#if FRESNEL_GLANCE}}
 // What a ray reflected off a glass surface sees: its first hit, shaded without further bounces, or the
-// background{{#if FOOTPRINT}} (`travelled`: the path's length up to p, for the pixel's cone){{/if}}.
-vec3 iqc_glance(vec3 p, vec3 N, vec3 rd{{#if FOOTPRINT}}, float travelled{{/if}}) {
+// background{{#if PATH}} (`travelled`: the path's length up to p, for the pixel's cone and the fog){{/if}}.
+vec3 iqc_glance(vec3 p, vec3 N, vec3 rd{{#if PATH}}, float travelled{{/if}}) {
     vec3 ro = iqc_bounce_origin(p, N, 1.0);
     int id, steps;
     float t = iqc_march(ro, rd, id, steps);
 {{#if GLINTS}}
-    vec3 glint = iqc_glints(ro, rd, id < 0 ? -1.0 : t);
-    if (id < 0) return {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}} + glint;
+    vec3 glint = iqc_glints(ro, rd, id < 0 ? -1.0 : t){{#if FOG}} * iqc_fog_keep(travelled){{/if}};
+    if (id < 0) return {{#if FOG}}iqc_fog({{/if}}{{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}}{{#if FOG}}, travelled){{/if}} + glint;
 {{#else}}
-    if (id < 0) return {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}};
+    if (id < 0) return {{#if FOG}}iqc_fog({{/if}}{{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}}{{#if FOG}}, travelled){{/if}};
 {{/if}}
     vec3 q = ro + t * rd;
     vec3 Nq = iqc_normal(q, t, id);
     if (dot(Nq, rd) > 0.0) Nq = -Nq;
     vec3 c = iqc_colour(id, q, Nq, ro{{#if FOOTPRINT}}, iqc_footprint(Nq, rd, iqc_pixel_cone * (travelled + t)){{/if}});
 {{#if FOG}}
-    c = iqc_fog(c, t);
+    c = iqc_fog(c, travelled + t);
 {{/if}}
     return c{{#if GLINTS}} + glint{{/if}};
 }
@@ -837,25 +841,36 @@ vec3 iqc_fresnel(vec3 F0, float cos_i) {
 float iqc_primary_t = 0.0;  // where the primary ray ended: its hit, or the march's end (the glows gather up to it)
 
 // Light a ray gathers by passing near a glowing instance (after Quilez's glowing shapes): its closest approach d
-// to the instance before t_end, sampled by marching the instance's own distance at half steps (the nearest
-// sample is within about 3% of d: full steps would band the glow into rings), as colour · exp(-d / radius).
-// A ray that meets the instance gathers the whole colour.
+// to the instance up to t_end (where the ray hits, sampled too: a floor under a lamp would band otherwise),
+// sampled by marching the instance's own distance at half steps (the nearest sample is within about 3% of d:
+// full steps would band the glow into rings), as colour · exp(-d / radius). A ray that meets the instance
+// gathers the whole colour.
 vec3 iqc_glow(vec3 ro, vec3 rd, float t_end, int id, vec3 colour, float radius) {
     float t = 0.0, d_min = 1.0e20;
     for (int i = min(iFrame, 0); i < 48; i++) {
-        if (t > t_end) break;
-        float d = iqc_distance_of(ro + t * rd, id);
+        float at = min(t, t_end);
+        float s = iqc_distance_of(ro + at * rd, id);  // a safe step
+{{#if INSTRUMENT}}
+        iqc_evals++;
+{{/if}}
+        float d = {{#if HIT_SCALE}}s * iqc_lipschitz(id){{#else}}s{{/if}};  // the field's own value
         d_min = min(d_min, d);
-        if (d < 1.0e-4 * (1.0 + t)) break;
-        t += 0.5 * d;
+        if (at >= t_end || d < 1.0e-4 * (1.0 + at)) break;
+        t += 0.5 * s;
     }
     return colour * exp(-max(d_min, 0.0) / radius);
 }
 
-// The glows of the scene's glowing instances that a primary ray from ro along rd gathers before t_end.
+// The glows of the scene's glowing instances (ids, colours, radii) that a primary ray from ro along rd gathers
+// before t_end: one loop over a table, so a shader with many glows is not many copies of the march.
+const int IQC_GLOWS = {{GLOW_COUNT}};
+const int IQC_GLOW_ID[IQC_GLOWS] = int[IQC_GLOWS]({{GLOW_IDS}});
+const vec3 IQC_GLOW_COLOR[IQC_GLOWS] = vec3[IQC_GLOWS]({{GLOW_COLORS}});
+const float IQC_GLOW_RADIUS[IQC_GLOWS] = float[IQC_GLOWS]({{GLOW_RADII}});
 vec3 iqc_glows(vec3 ro, vec3 rd, float t_end) {
     vec3 g = vec3(0.0);
-{{GLOWS}}    return g;
+    for (int k = min(iFrame, 0); k < IQC_GLOWS; k++) g += iqc_glow(ro, rd, t_end, IQC_GLOW_ID[k], IQC_GLOW_COLOR[k], IQC_GLOW_RADIUS[k]);
+    return g;
 }
 
 {{/if}}
@@ -868,8 +883,8 @@ float iqc_depth = 1.0;     // its normalized device depth (1: nothing hit)
 // The colour seen along a ray{{#if BOUNCES}}, following reflections and refractions{{/if}}.
 vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#if BOUNCES}}
-{{#if FOOTPRINT}}
-    float travelled = 0.0;  // the path's length before this ray's origin (the pixel's cone widens along all of it)
+{{#if PATH}}
+    float travelled = 0.0;  // the path's length before this ray's origin (the pixel's cone widens and fog thickens along all of it)
 {{/if}}
     vec3 col = vec3(0.0);
     vec3 throughput = vec3(1.0);
@@ -881,7 +896,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
         {{#if BOUNCES}}if (bounce == 0) {{/if}}iqc_primary_t = id < 0 ? IQC_MAX_DIST : t;
 {{/if}}
 {{#if GLINTS}}
-        if (bounce > 0) col += throughput * iqc_glints(ro, rd, id < 0 ? -1.0 : t);  // the lights, in a mirror or through glass
+        if (bounce > 0) col += throughput * iqc_glints(ro, rd, id < 0 ? -1.0 : t){{#if FOG}} * iqc_fog_keep(travelled){{/if}};  // the lights, in a mirror or through glass
 {{/if}}
 {{#if INSTRUMENT}}
         if (iqc_primary_steps < 0) iqc_primary_steps = steps;
@@ -891,7 +906,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{/if}}
         if (id < 0) {
 {{#if BOUNCES}}
-            col += throughput * {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}};
+            col += throughput * {{#if FOG}}iqc_fog({{/if}}{{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}}{{#if FOG}}, travelled){{/if}};  // the sky a mirror shows is as far as the mirror
             throughput = vec3(0.0);
             break;
 {{#else}}
@@ -913,9 +928,9 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#if DEBUG_DEPTH}}
         return vec3(1.0 - t / IQC_MAX_DIST);
 {{/if}}
-        vec3 c = iqc_colour(id, p, N, ro{{#if FOOTPRINT}}, iqc_footprint(N, rd, iqc_pixel_cone * ({{#if BOUNCES}}travelled + {{/if}}t)){{/if}});
+        vec3 c = iqc_colour(id, p, N, ro{{#if FOOTPRINT}}, iqc_footprint(N, rd, iqc_pixel_cone * ({{#if PATH}}travelled + {{/if}}t)){{/if}});
 {{#if FOG}}
-        c = iqc_fog(c, t);
+        c = iqc_fog(c, {{#if BOUNCES}}travelled + {{/if}}t);{{#if BOUNCES}}  // along the whole path: what a far mirror shows is far{{/if}}
 {{/if}}
 {{#if BOUNCES}}
 {{#if REFRACTION}}
@@ -932,7 +947,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
 {{#else}}
             vec3 R = iqc_fresnel(vec3(r0 * r0), -dot(rd, N));
 {{/if}}
-            col += throughput * kt.rgb * R * iqc_glance(p, N, reflect(rd, N){{#if FOOTPRINT}}, travelled + t{{/if}});
+            col += throughput * kt.rgb * R * iqc_glance(p, N, reflect(rd, N){{#if PATH}}, travelled + t{{/if}});
             throughput *= kt.rgb * (1.0 - R);
 {{#else}}
             throughput *= kt.rgb;
@@ -942,7 +957,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
             int id2, steps2;
             vec3 ro2 = iqc_bounce_origin(p, N, -1.0);
             float t2 = iqc_march(ro2, inside, id2, steps2);
-{{#if FOOTPRINT}}
+{{#if PATH}}
             travelled += t + max(t2, 0.0);
 {{/if}}
             if (id2 < 0) { ro = ro2; rd = inside; continue; }
@@ -967,7 +982,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
         if (max(throughput.x, max(throughput.y, throughput.z)) < 1.0e-3) break;
         ro = iqc_bounce_origin(p, N, 1.0);
         rd = reflect(rd, N);
-{{#if FOOTPRINT}}
+{{#if PATH}}
         travelled += t;
 {{/if}}
 {{#else}}
@@ -978,7 +993,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
     }
     // Bounces used up with light still carried (a row of glass balls, mirrors facing each other): the last ray
     // sees the background beyond, not black.
-    col += throughput * {{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}};
+    col += throughput * {{#if FOG}}iqc_fog({{/if}}{{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}}{{#if FOG}}, travelled){{/if}};
     return col;
 {{#else}}
         return c;

@@ -432,3 +432,64 @@ TEST_CASE("a mirror shows a point light as a glint, unless something is in the w
                                                                      "material_params = { k_e = [0, 0, 0] }\n");
     CHECK(blocked.pixel(48, 27)[0] < 0.02f);
 }
+
+TEST_CASE("glows: the field's own distance, not a bound sphere's or a Lipschitz-divided one, and many glows are one loop", "[look][render]") {
+    // The glowing ball of the first glow test, its distance written so that iqc divides it by a Lipschitz
+    // factor (2‖p‖ - 1 has gradient 2: the field value is twice the distance) and with a bound sphere of 3.
+    std::string base = "[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\nfov = 90\n"
+                       "[render]\noutput = \"linear\"\nbackground = [0, 0, 0]\n";
+    std::string plain = base + "[[shapes]]\ntype = \"sphere\"\nshape_params = { r = 0.5 }\nmaterial = \"emissive\"\n"
+                               "material_params = { k_e = [0, 0, 0] }\nglow = [1, 0, 0]\nglow_radius = 0.2\n";
+    std::string bounded = plain + "bound = 3\n";
+    const double u = (2 * 51.5 - 96) / 54.0, v = (2 * 26.5 - 54) / 54.0;
+    const double d = 5 * std::hypot(u, v) / std::sqrt(1 + u * u + v * v) - 0.5;
+    render::Image a = render_scene("glow_plain.iq", plain);
+    render::Image b = render_scene("glow_bound.iq", bounded);
+    CHECK(a.pixel(51, 27)[0] == Approx(std::exp(-d / 0.2)).epsilon(0.05));
+    CHECK(b.pixel(51, 27)[0] == Approx(a.pixel(51, 27)[0]).epsilon(0.01));
+    // At the bound sphere's silhouette (3 units from the centre, pixel column 48 + 54·0.63/2): no ring.
+    CHECK(b.pixel(65, 27)[0] == Approx(a.pixel(65, 27)[0]).margin(0.003));
+    std::string twice = "[modules]\nball2 = \"\"\"\nshape\n# lipschitz: 2\nD = 2‖p‖ - 1\nwhere\np ∈ ℝ³\n\"\"\"\n" + base +
+                        "[[shapes]]\ntype = \"ball2\"\nmaterial = \"emissive\"\nmaterial_params = { k_e = [0, 0, 0] }\n"
+                        "glow = [1, 0, 0]\nglow_radius = 0.4\n";  // the field is twice the distance: twice the radius
+    CHECK(render_scene("glow_lips.iq", twice).pixel(51, 27)[0] == Approx(std::exp(-d / 0.2)).epsilon(0.05));
+    // A floor under a glowing ball: the glow on the floor falls off smoothly (sampled where the ray ends).
+    std::string lamp = "[camera]\nposition = [0, 3, -4]\ntarget = [0, 0, 0]\nfov = 60\n"
+                       "[render]\noutput = \"linear\"\nbackground = [0, 0, 0]\n"
+                       "[[shapes]]\ntype = \"plane\"\nshape_params = { h = 0 }\nmaterial = \"emissive\"\nmaterial_params = { k_e = [0, 0, 0] }\n"
+                       "[[shapes]]\ntype = \"sphere\"\nshape_params = { r = 0.3 }\ntransform = \"T((0, 0.5, 0))\"\nmaterial = \"emissive\"\n"
+                       "material_params = { k_e = [0, 0, 0] }\nglow = [1, 1, 1]\nglow_radius = 0.5\n";
+    render::Image floor = render_scene("glow_floor.iq", lamp, 96, 54);
+    double worst = 0;
+    for (int y = 40; y < 53; ++y) worst = std::max(worst, double(std::fabs(floor.pixel(20, y)[0] - floor.pixel(20, y + 1)[0])));
+    CHECK(worst < 0.02);  // neighbouring rows of the floor differ little (the half-step samples banded by 0.06)
+    // 30 glowing balls: one loop over a table, not 30 marches in the code.
+    std::string many = base;
+    for (int i = 0; i < 30; ++i)
+        many += "[[shapes]]\ntype = \"sphere\"\nshape_params = { r = 0.1 }\ntransform = \"T((" + std::to_string(i % 6 - 2.5) + ", " +
+                std::to_string(i / 6 - 2.0) + ", 0))\"\nglow = [0.2, 0.1, 0]\n";
+    Compiled c = compile_text("glow_many.iq", many);
+    REQUIRE(c.result.exit_code == 0);
+    size_t calls = 0;
+    for (size_t at = 0; (at = c.result.code.find("iqc_glow(", at)) != std::string::npos; ++at) ++calls;
+    CHECK(calls == 2);  // its definition and the one call in the loop
+    CHECK_THAT(c.result.code, Catch::Contains("const int IQC_GLOWS = 30;"));
+    RunResult big = run_iqc(write_temp("glow_big.iq", "[[shapes]]\ntype = \"sphere\"\nglow = [1, 1, 2000]\n").string());
+    CHECK(big.exit_code == 1);
+    CHECK_THAT(big.err, Catch::Contains("glow_big.iq:3:8: error: 'glow' components above 1000 overflow the tone map"));
+}
+
+TEST_CASE("fog thickens along a reflected ray's whole path", "[look][render]") {
+    // A mirror 20 units away in white fog: what it shows (a black sky) is as fogged as the mirror.
+    std::string scene = "[camera]\nposition = [0, 0, -20]\ntarget = [0, 0, 0]\nfov = 20\n"
+                        "[render]\noutput = \"linear\"\nbackground = [0, 0, 0]\nmax_dist = 100\n"
+                        "[effects]\nreflections = 1\nfog = 0.05\nfog_color = [1, 1, 1]\n"
+                        "[[lights]]\nposition = [0, 50, -50]\ncolor = [0, 0, 0]\n"
+                        "[[shapes]]\ntype = \"box\"\nshape_params = { b = [3, 3, 0.1] }\nmaterial = \"mirror\"\n"
+                        "material_params = { k_r = 1, k_d = [0, 0, 0] }\n";
+    // The centre ray meets the mirror 19.9 away, comes straight back and leaves the scene: the sky it shows is
+    // 19.9 units of fog away at least (1 - e^-0.995 = 0.63); before, only the mirror's own colour was fogged.
+    float c = render_scene("fog_mirror.iq", scene).pixel(48, 27)[0];
+    CHECK(c > 0.6f);
+    CHECK(c < 0.66f);
+}

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <memory>
 
 #include "glsl/Emit.h"
@@ -142,7 +143,7 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     lo.params_constant = opts_.target == Target::Shadertoy;
     lo.analytic_normals = normals() == Normals::Analytic && !opts_.per_instance;
     lo.instance_normals = normals() != Normals::Analytic && !opts_.per_instance;
-    for (const InstanceDesc& in : s_.instances) lo.distance_of |= in.glow && !opts_.per_instance;
+    for (const InstanceDesc& in : s_.instances) lo.distance_of |= in.glow && !opts_.per_instance && s_.render.debug == DebugView::None;
     lo.instrument = opts_.instrument || opts_.bench;
     lo.per_instance = opts_.per_instance;
     lo.reflections = s_.effects.reflections > 0;
@@ -307,19 +308,22 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     if (scene.has_shade_light) F.insert("SHADE_LIGHT");
     if (scene.binds_footprint) F.insert("FOOTPRINT");  // some material filters by the pixel's footprint w_P
     // Glows: one call per glowing instance (its id, colour and radius), summed along the primary ray.
-    V["GLOWS"] = "";
+    for (const char* k : {"GLOW_COUNT", "GLOW_IDS", "GLOW_COLORS", "GLOW_RADII"}) V[k] = "";
     if (!opts_.per_instance && render.debug == DebugView::None) {
-        std::string glows;
+        std::vector<std::string> ids, colours, radii;
         for (size_t i = 0; i < s_.instances.size(); ++i) {
             const InstanceDesc& in = s_.instances[i];
-            if (!in.glow) continue;
-            glows += fmt::format("    g += iqc_glow(ro, rd, t_end, {}, {}, {});  // {}\n", scene.instance_ids[i],
-                                 vec3_literal(*in.glow), glsl::float_literal(in.glow_radius),
-                                 glsl::comment_text(in.name.empty() ? in.type : in.name));
+            if (!in.glow || (*in.glow)[0] + (*in.glow)[1] + (*in.glow)[2] == 0) continue;  // black: no glow to gather
+            ids.push_back(std::to_string(scene.instance_ids[i]));
+            colours.push_back(vec3_literal(*in.glow));
+            radii.push_back(glsl::float_literal(in.glow_radius));
         }
-        if (!glows.empty()) {
+        if (!ids.empty()) {
             F.insert("GLOW");
-            V["GLOWS"] = glows;
+            V["GLOW_COUNT"] = std::to_string(ids.size());
+            V["GLOW_IDS"] = fmt::format("{}", fmt::join(ids, ", "));
+            V["GLOW_COLORS"] = fmt::format("{}", fmt::join(colours, ", "));
+            V["GLOW_RADII"] = fmt::format("{}", fmt::join(radii, ", "));
         }
     }
     if (fx.shadows != Shadows::None && lights && scene.has_shade_light) {
@@ -337,6 +341,8 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     if (fx.reflections > 0 && scene.has_reflectivity) F.insert("REFLECTIONS");
     if (fx.refraction && scene.has_transmission) F.insert("REFRACTION");
     if (F.count("REFLECTIONS") || F.count("REFRACTION")) F.insert("BOUNCES");
+    // The path's length so far: the footprint's cone and the fog grow along all of it.
+    if (F.count("BOUNCES") && (F.count("FOOTPRINT") || F.count("FOG"))) F.insert("PATH");
     if (fx.antialias > 1) F.insert("AA");
     // A sky shows each sun (needs the lights' functions: some material is lit).
     if (F.count("SKY") && F.count("SUNS") && F.count("SHADE_LIGHT")) F.insert("SUN_DISC");

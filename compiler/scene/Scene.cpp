@@ -724,6 +724,8 @@ std::optional<InstanceDesc> SceneReader::read_shape(const toml::node& item) {
         if (get_vec3(*x, "glow", c)) {
             if (c[0] < 0 || c[1] < 0 || c[2] < 0)
                 d_.error(span_of(*x), "'glow' is a colour: its components cannot be negative");
+            else if (c[0] > 1000 || c[1] > 1000 || c[2] > 1000)
+                d_.error(span_of(*x), "'glow' components above 1000 overflow the tone map (at most 1000)");
             else {
                 inst.glow = c;
                 inst.glow_span = span_of(*x);
@@ -734,6 +736,8 @@ std::optional<InstanceDesc> SceneReader::read_shape(const toml::node& item) {
         if (auto v = get_number(*x, "glow_radius")) {
             if (!(*v > 0) || !std::isfinite(*v))
                 d_.error(span_of(*x), fmt::format("'glow_radius' must be positive, not {}", *v));
+            else if (*v < 1e-6 || *v > 1e6)
+                d_.error(span_of(*x), fmt::format("'glow_radius' must be in [1e-6, 1e6], not {}", *v));
             else if (!t.get("glow"))
                 d_.error(span_of(*x), "'glow_radius' without 'glow': give the glow's colour, glow = [r, g, b]");
             else

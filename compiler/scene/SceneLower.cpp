@@ -122,6 +122,10 @@ public:
                 it.unbounded_fn = it.bound.global >= 0 || o_.instrument ? item_distance(it, false) : it.distance_fn;
             scene_function(false);
         }
+        // Glows march an instance's own distance far from it: the true one, not its bound sphere's.
+        if (o_.distance_of && any_bound)
+            for (Item& it : items_)
+                if (it.unbounded_fn < 0) it.unbounded_fn = it.bound.global >= 0 ? item_distance(it, false) : it.distance_fn;
         lipschitz_function();
         if (o_.analytic_normals || o_.instance_normals || o_.distance_of) gradient_functions();
         shade_functions();
@@ -1025,7 +1029,9 @@ private:
             std::vector<ValueId> args = {p};
             if (it.group) args.push_back(b.op(Op::Sub, {id, b.integer(it.id)}));
             bool blend_first = it.blend >= 0 && &items_[blend_items_[size_t(it.blend)][0]] == &it;
-            ValueId d = blend_first ? blend_distance(b, it.blend, p, true, o_.instrument, nullptr) : b.call(it.distance_fn, args);
+            // With glows, the distance without the bound sphere (equal to it near the surface, where normals tap).
+            int fn = o_.distance_of && it.unbounded_fn >= 0 ? it.unbounded_fn : it.distance_fn;
+            ValueId d = blend_first ? blend_distance(b, it.blend, p, true, o_.instrument, nullptr) : b.call(fn, args);
             if (o_.instrument) d = b.op(Op::Extract, {d}, 0);
             cases.push_back({it.id, it.id + (long long)it.members.size(), d});
         }
