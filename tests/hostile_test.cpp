@@ -90,6 +90,14 @@ TEST_CASE("a value called with no arguments is a located error, not a crash", "[
                     "'π' is a value, not a function");
 }
 
+TEST_CASE("an empty backtick name is a located error, not a size of 0", "[hostile]") {
+    // Found by stop 27's ir fuzzing: `ℝ^``` read as ℝ⁰ and the evaluator aborted (exit 3).
+    std::string size = (fs::path(IQC_SOURCE_DIR) / "tests" / "fuzz" / "ir" / "empty_backtick_size.iql").string();
+    require_located(run_bounded("eval " + size), size + ":1:7", "expected a size, found an empty name ``");
+    require_located(run_bounded("eval " + hostile("empty_backtick.iql")), hostile("empty_backtick.iql") + ":1:5",
+                    "a name between backticks cannot be empty");
+}
+
 TEST_CASE("invalid UTF-8 in a description reaches --meta as U+FFFD, not an abort", "[hostile]") {
     fs::path meta = temp_dir() / "bad_utf8.json";
     Bounded b = run_bounded(hostile("bad_utf8_description.iql") + " -o - --meta " + meta.string());

@@ -121,7 +121,10 @@ struct Lexer {
             if (c == '`') {
                 size_t j = i + 1;
                 while (j < end && text[j] != '`' && text[j] != '\n') ++j;
-                if (j < end && text[j] == '`') {
+                if (j < end && text[j] == '`' && j == i + 1) {
+                    push(Tok::Unknown, b, uint32_t(j + 1), "``");  // an empty name: the parser says so where it meets it
+                    i = j + 1;
+                } else if (j < end && text[j] == '`') {
                     push(Tok::Backtick, b, uint32_t(j + 1), std::string(text.substr(i + 1, j - i - 1)));
                     i = j + 1;
                 } else {

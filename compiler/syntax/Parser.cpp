@@ -288,7 +288,8 @@ private:
             case Tok::Word: return fmt::format("'{}'", t.text);
             case Tok::Backtick: return fmt::format("`{}`", t.text);
             case Tok::Number: return fmt::format("number {}", t.text);
-            case Tok::Unknown: return fmt::format("'{}'", t.text);
+            case Tok::Unknown: return t.text == "``" ? std::string("an empty name `` (write the name between the backticks)")
+                                                     : fmt::format("'{}'", t.text);
             default: return token_description(t.kind);
         }
     }
@@ -1890,6 +1891,7 @@ ExprPtr Parser::parse_primary() {
                 fail(t.span, "I♥LA's derivatives (∂) are not supported: write the derivative out (iqc differentiates "
                              "shapes itself for their normals)");
             if (t.text == "∫") fail(t.span, "I♥LA's integrals (∫) are not supported: iqc's math has closed forms only");
+            if (t.text == "``") fail(t.span, "a name between backticks cannot be empty");
             fail(t.span, fmt::format("unexpected character '{}'", t.text));
         case Tok::Newline:
         case Tok::End: fail(t.span, "expected an expression, found the end of the line");
