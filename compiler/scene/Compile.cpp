@@ -134,6 +134,12 @@ private:
     // estimate, whose triangulation of consecutive spheres invents shadow from a mere bound.
     static bool exact_distances(const std::vector<InstancePlan>& plans);
     bool exact_ = false;
+    // An instance whose glow the shader gathers: a glow that is not black, outside the per-instance baseline
+    // and the debug views (which show values). The lowering emits iqc_distance_of for exactly these.
+    bool gathers_glow(const InstanceDesc& in) const {
+        return in.glow && (*in.glow)[0] + (*in.glow)[1] + (*in.glow)[2] > 0 && !opts_.per_instance &&
+               s_.render.debug == DebugView::None;
+    }
     void set_model(const SceneIR& scene);
     void warn_camera();
 };
@@ -143,7 +149,7 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     lo.params_constant = opts_.target == Target::Shadertoy;
     lo.analytic_normals = normals() == Normals::Analytic && !opts_.per_instance;
     lo.instance_normals = normals() != Normals::Analytic && !opts_.per_instance;
-    for (const InstanceDesc& in : s_.instances) lo.distance_of |= in.glow && !opts_.per_instance && s_.render.debug == DebugView::None;
+    for (const InstanceDesc& in : s_.instances) lo.distance_of |= gathers_glow(in);
     lo.instrument = opts_.instrument || opts_.bench;
     lo.per_instance = opts_.per_instance;
     lo.reflections = s_.effects.reflections > 0;
@@ -307,24 +313,22 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         F.insert("HIT_SCALE");
     if (scene.has_shade_light) F.insert("SHADE_LIGHT");
     if (scene.binds_footprint) F.insert("FOOTPRINT");  // some material filters by the pixel's footprint w_P
-    // Glows: one call per glowing instance (its id, colour and radius), summed along the primary ray.
+    // Glows: a table of the glowing instances (id, colour, radius) the primary ray gathers in one loop.
     for (const char* k : {"GLOW_COUNT", "GLOW_IDS", "GLOW_COLORS", "GLOW_RADII"}) V[k] = "";
-    if (!opts_.per_instance && render.debug == DebugView::None) {
-        std::vector<std::string> ids, colours, radii;
-        for (size_t i = 0; i < s_.instances.size(); ++i) {
-            const InstanceDesc& in = s_.instances[i];
-            if (!in.glow || (*in.glow)[0] + (*in.glow)[1] + (*in.glow)[2] == 0) continue;  // black: no glow to gather
-            ids.push_back(std::to_string(scene.instance_ids[i]));
-            colours.push_back(vec3_literal(*in.glow));
-            radii.push_back(glsl::float_literal(in.glow_radius));
-        }
-        if (!ids.empty()) {
-            F.insert("GLOW");
-            V["GLOW_COUNT"] = std::to_string(ids.size());
-            V["GLOW_IDS"] = fmt::format("{}", fmt::join(ids, ", "));
-            V["GLOW_COLORS"] = fmt::format("{}", fmt::join(colours, ", "));
-            V["GLOW_RADII"] = fmt::format("{}", fmt::join(radii, ", "));
-        }
+    std::vector<std::string> ids, colours, radii;
+    for (size_t i = 0; i < s_.instances.size(); ++i) {
+        const InstanceDesc& in = s_.instances[i];
+        if (!gathers_glow(in)) continue;
+        ids.push_back(std::to_string(scene.instance_ids[i]));
+        colours.push_back(vec3_literal(*in.glow));
+        radii.push_back(glsl::float_literal(in.glow_radius));
+    }
+    if (!ids.empty()) {
+        F.insert("GLOW");
+        V["GLOW_COUNT"] = std::to_string(ids.size());
+        V["GLOW_IDS"] = fmt::format("{}", fmt::join(ids, ", "));
+        V["GLOW_COLORS"] = fmt::format("{}", fmt::join(colours, ", "));
+        V["GLOW_RADII"] = fmt::format("{}", fmt::join(radii, ", "));
     }
     if (fx.shadows != Shadows::None && lights && scene.has_shade_light) {
         F.insert("SHADOWS");
