@@ -413,6 +413,55 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
+{{#if MARCH_SEGMENT}}
+// Segment tracing (Galin et al. 2020, "Segment Tracing Using Local Lipschitz Bounds"): a step may go as far
+// as the distance over the largest rate at which it can fall along the next segment of the ray, not over a
+// bound for the whole region. iqc_segment_gain bounds that rate by interval arithmetic on each instance's
+// gradient over the segment's box (derived by the compiler, per operator); a step is at most the segment
+// and at least the plain sphere-tracing step, and the next candidate segment is twice the step taken (κ = 2,
+// the paper's choice). Short segments near a surface have tight bounds. Each step's bound costs several
+// evaluations of the distance (docs/accuracy.md measures what it saves against what it costs).
+float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
+    float s = 1.0, t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20;
+    float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
+    id = -1;
+    steps = 0;
+{{#if SCENE_BOX}}
+    float t_far = iqc_far(ro, rd);
+    if (t_far < 0.0) return -1.0;
+{{/if}}
+    float seg = {{T_FAR}};  // the candidate segment's length: the whole ray at first
+    for (int i = 0; i < IQC_MAX_STEPS; i++) {
+        vec3 p = ro + t * rd;
+        vec2 h = iqc_scene(p);
+        steps++;
+        if (i == 0 && h.x < 0.0) s = -1.0;
+        float d = s * h.x;
+        float e = iqc_eps(t);
+        float dn = iqc_nearness(h);
+        if (dn < e) { id = int(h.y); return t; }
+{{#if EPS_CONSTANT}}
+        if (dn < best) { best = dn; best_t = t; best_id = h.y; }  // in tolerances at the end (a constant tolerance)
+{{#else}}
+        if (dn / e < best) { best = dn / e; best_t = t; best_id = h.y; }
+{{/if}}
+        prev = last;
+        last = dn;
+        last_t = t;
+        last_id = h.y;
+        float step = d;
+        if (d > 0.0) {
+            seg = max(seg, d);  // a plain step is always safe: the segment is never shorter
+            vec3 q = p + seg * rd;
+            step = min(d * iqc_segment_gain(min(p, q), max(p, q), rd), seg);
+            seg = 2.0 * step;
+        }
+        t += step;
+        if (t > {{T_FAR}}) return -1.0;
+    }
+    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
+}
+{{/if}}
 {{#if PER_INSTANCE}}
 // I♥IQ's architecture (the baseline `iqc bench` compares with): every instance is sphere-traced on its own,
 // its transform inverted for each instance at each pixel (iqc_instance_inverse); the nearest hit wins.

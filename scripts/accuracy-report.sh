@@ -32,7 +32,7 @@ fi
     echo
     echo "![scene evaluations per pixel against depth error, log axes, the Pareto front named](accuracy/$name.svg)"
     echo
-    echo "The four march methods at hit 1e-3, 256 steps, tetrahedron normals, and I♥IQ's per-instance architecture:"
+    echo "The five march methods at hit 1e-3, 256 steps, tetrahedron normals, and I♥IQ's per-instance architecture:"
     echo
     echo "| method | frame ms | evals/px (mean) | evals/px (p99) | miss % | depth err p99 | normal err p99 (°) | PSNR (dB) |"
     echo "| --- | --- | --- | --- | --- | --- | --- | --- |"

@@ -30,6 +30,7 @@ std::optional<March> parse_march(const std::string& s) {
     if (s == "sphere") return March::Sphere;
     if (s == "relaxed") return March::Relaxed;
     if (s == "auto") return March::Auto;
+    if (s == "segment") return March::Segment;
     return std::nullopt;
 }
 std::optional<Normals> parse_normals(const std::string& s) {
@@ -351,7 +352,7 @@ std::string svg(const Report& r, const std::string& title) {
     auto X = [&](double v) { return L + (std::log10(v) - vlo) / (vhi - vlo) * (W - L - R); };
     auto Y = [&](double e) { return T + (lmax - std::log10(e)) / (lmax - lmin) * (H - T - B); };
     std::map<std::string, std::string> colours = {{"fixed", "#7f7f7f"}, {"sphere", "#1f77b4"}, {"relaxed", "#2ca02c"},
-                                                  {"auto", "#d62728"}, {"per_instance", "#9467bd"}};
+                                                  {"auto", "#d62728"}, {"segment", "#ff7f0e"}, {"per_instance", "#9467bd"}};
     auto setting = [](const Row& x) { return fmt::format("{} hit {:g} steps {} {}", x.method, x.hit, x.max_steps, x.normals); };
     std::string s = fmt::format("<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"{}\" height=\"{}\" "
                                 "font-family=\"DejaVu Sans\" font-size=\"12\">\n<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"white\"/>\n",

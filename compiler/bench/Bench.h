@@ -18,7 +18,7 @@ struct Options {
     std::string input;
     int width = 160, height = 90;
     int frames = 5;                          // timed frames after one warm-up
-    std::vector<std::string> marches = {"fixed", "sphere", "relaxed", "auto"};
+    std::vector<std::string> marches = {"fixed", "sphere", "relaxed", "auto", "segment"};
     std::vector<double> hits = {1e-2, 1e-3, 1e-4};
     std::vector<int> step_caps = {64, 256};
     std::vector<std::string> normals = {"central", "forward", "tetrahedron", "analytic"};

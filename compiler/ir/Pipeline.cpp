@@ -9,6 +9,7 @@
 #include "ir/passes/Differentiate.h"
 #include "ir/passes/Fold.h"
 #include "ir/passes/Inline.h"
+#include "ir/passes/IntervalExtension.h"
 #include "ir/passes/Lipschitz.h"
 #include "ir/passes/MergeCalls.h"
 #include "ir/passes/Stable.h"
@@ -46,6 +47,78 @@ void gradient(Module& m, PipelineResult& r) {
     m.functions[size_t(grad)] = std::move(made);
 }
 
+// iqc_segment_gain(lo, hi, rd) for segment tracing (Galin et al. 2020), when the scene asks for it (the
+// scene lowering adds a placeholder returning 1). Per instance k, the interval extension of the gradient of
+// its distance g_k (as the march steps by it: divided by its Lipschitz factor) over the box gives a bound λ_k
+// of |∇g_k · rd| along every point of the segment the box holds; while g_k(t) ≥ F(t), the scene's distance,
+// g_k(t + u) ≥ F(t) - λ_k u > 0 for u < F(t)/λ_k. So the step may be F(t)·min_k 1/λ_k. λ_k is widened by
+// 0.1% and 1e-6 (32-bit rounding) and the gain is at most 10⁴ and at least 1 (a bound that is no better than
+// the factor the distance was divided by gains nothing). Scenes the pass cannot bound instance by instance
+// (groups of instances, more than kMaxItems, a gradient without an interval rule) keep the placeholder: the
+// march steps as sphere tracing does, and a warning says why.
+void segment(Module& m, PipelineResult& r) {
+    constexpr int kMaxItems = 16;
+    int dist = m.find(names::kDistanceOf), seg = m.find(names::kSegmentGain);
+    if (dist < 0 || seg < 0) return;
+    auto refuse = [&](const std::string& why) { r.segment_refused = why; };
+    // The instances: the cases of iqc_distance_of's dispatch on the id.
+    std::vector<long long> ids;
+    const Function& df = m.functions[size_t(dist)];
+    const Instr& res = df.body[df.result];
+    if (res.op == Op::Switch) {
+        for (int c = 0; c < switch_cases(res); ++c) {
+            long long lo = (long long)res.data[size_t(2 * c)], hi = (long long)res.data[size_t(2 * c + 1)];
+            if (hi - lo != 1) return refuse("a group of instances (one bound per instance is derived for scenes of up to 16 "
+                                            "instances, none in a group)");
+            ids.push_back(lo);
+        }
+    } else {
+        ids.push_back(0);
+    }
+    if (int(ids.size()) > kMaxItems) return refuse(fmt::format("{} instances (at most {})", ids.size(), kMaxItems));
+    size_t before = m.functions.size();
+    std::string why;
+    int g = differentiate(m, dist, 0, "iqc_segment_gradient", &why);
+    if (g < 0) {
+        m.functions.resize(before);
+        return refuse("no derivative of the scene's distance (" + why + ")");
+    }
+    // Constants folded first: the extension knows the sign of a constant factor (Jacobians of linear maps
+    // are mostly 0 and 1) and writes less code for it.
+    fold_constants(m, m.functions[size_t(g)]);
+    eliminate_common_subexpressions(m.functions[size_t(g)]);
+    Function made;
+    made.name = names::kSegmentGain;
+    made.glsl_name = m.functions[size_t(seg)].glsl_name;
+    made.entry = true;
+    Builder b(m, made);
+    ValueId lo = b.param("lo", Type::vector(3)), hi = b.param("hi", Type::vector(3)), rd = b.param("rd", Type::vector(3));
+    ValueId gain = b.scalar(1e4);
+    for (long long id : ids) {
+        IntervalCode ic = emit_interval_extension(b, m, g, 0, lo, hi, {lo, b.integer(id)});
+        if (!ic.ok) {
+            m.functions.resize(before);
+            return refuse("no interval rule for an instance's gradient (" + ic.why + ")");
+        }
+        // ∇g · rd over the box: each component's product with rd's (exact) component, summed.
+        ValueId a = b.op(Op::Hadamard, {rd, ic.lo}), c = b.op(Op::Hadamard, {rd, ic.hi});
+        ValueId one = b.constant(Type::vector(3), {1, 1, 1});
+        ValueId d_lo = b.op(Op::Dot, {b.builtin("min", {a, c}), one}), d_hi = b.op(Op::Dot, {b.builtin("max", {a, c}), one});
+        ValueId lam = b.builtin("max", {b.op(Op::Neg, {d_lo}), d_hi});
+        lam = b.op(Op::Add, {b.op(Op::Mul, {lam, b.scalar(1.001)}), b.scalar(1e-6)});
+        // NaN or ≥ 1: no gain (a comparison with NaN is false).
+        ValueId useful = b.compare(CompareKind::Lt, lam, b.scalar(1));
+        ValueId k = b.op(Op::Select, {useful, b.op(Op::Div, {b.scalar(1), b.builtin("max", {lam, b.scalar(1e-4)})}), b.scalar(1)});
+        gain = b.builtin("min", {gain, k});
+    }
+    made.result = b.named(gain, "gain");
+    m.functions.resize(before);
+    fold_constants(m, made);
+    eliminate_common_subexpressions(made);
+    eliminate_dead_code(made);  // each instance's extension also extends the other instances' (untaken) arms
+    m.functions[size_t(seg)] = std::move(made);
+}
+
 struct Pass {
     PassInfo info;
     std::function<void(Module&, const PipelineOptions&, PipelineResult&)> run;
@@ -73,6 +146,8 @@ const std::vector<Pass>& passes() {
          [](Module& m, const PipelineOptions& o, PipelineResult& r) { r.range_issues = analyze_ranges(m, o.guard_ranges); }},
         {{"gradient", "analytic normals: forward-mode differentiation of the scene distance"},
          [](Module& m, const PipelineOptions&, PipelineResult& r) { gradient(m, r); }},
+        {{"segment", "segment tracing: local Lipschitz bounds by interval arithmetic on each instance's gradient"},
+         [](Module& m, const PipelineOptions&, PipelineResult& r) { segment(m, r); }},
         {{"calls", "calls to one function from several cases of a switch: one call on switched arguments"},
          [](Module& m, const PipelineOptions&, PipelineResult&) { merge_switch_calls(m); }},
         {{"simplify", "fold and CSE again"},

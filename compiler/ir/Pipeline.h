@@ -9,6 +9,8 @@
 //   ranges    range analysis: guards where an operation can leave its domain, warnings where a slider can
 //             take it there (ir/passes/Ranges.h)
 //   gradient  analytic normals: iqc_gradient by forward-mode differentiation of iqc_distance_of
+//   segment   segment tracing: iqc_segment_gain from the interval extension of each instance's gradient
+//             (ir/passes/IntervalExtension.h)
 //   simplify  fold + cse again (the gradient's identity seeds, the guards' constants)
 //   dce       dead instructions, then functions and globals no entry function reaches
 //
@@ -42,6 +44,7 @@ struct PipelineOptions {
 struct PipelineResult {
     std::vector<RangeIssue> range_issues;                 // from the ranges pass
     std::vector<RangeIssue> warnings;                     // what else a pass wants the user to know (gradient, lipschitz)
+    std::string segment_refused;                          // why the segment pass kept iqc_segment_gain at 1 ("": it did not)
     std::vector<std::string> lipschitz;                   // per scene item: derived, sampled and applied bounds
     std::vector<StableRewrite> rewrites;                  // what the stable pass rewrote, where
     std::string dump;                                     // the module after `dump_after`

@@ -150,6 +150,7 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     lo.analytic_normals = normals() == Normals::Analytic && !opts_.per_instance;
     lo.instance_normals = normals() != Normals::Analytic && !opts_.per_instance;
     for (const InstanceDesc& in : s_.instances) lo.distance_of |= gathers_glow(in);
+    lo.segment = march() == March::Segment && !opts_.per_instance;
     lo.instrument = opts_.instrument || opts_.bench;
     lo.per_instance = opts_.per_instance;
     lo.reflections = s_.effects.reflections > 0;
@@ -202,6 +203,8 @@ bool SceneCompiler::optimize(SceneIR& scene) {
         else d_.warning(issue.span, issue.message);
     }
     for (const auto& w : pr.warnings) d_.warning(w.span, w.message);
+    if (!pr.segment_refused.empty())
+        d_.warning(s_.render.march_span, "segment tracing takes sphere-tracing steps in this scene: " + pr.segment_refused);
     for (const auto& [name, ms] : pr.pass_ms) res_.pass_ms.push_back({"  " + name, ms});
     res_.lipschitz = pr.lipschitz;
     if (opts_.dump_ir) {
@@ -285,7 +288,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         F.insert("SCENE_BOX");
         V["T_FAR"] = "t_far";
     }
-    static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO"};
+    static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO", "MARCH_SEGMENT"};
     F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march())]);
     if (opts_.per_instance) F.insert("LIPSCHITZ");
     // The step cap's rules (iqc_cone, iqc_nearness): only the distance-bound marches use them.

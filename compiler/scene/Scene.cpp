@@ -531,7 +531,10 @@ void SceneReader::read_render(const toml::table& root) {
                         else *out = *v;
                     }
             if (auto* x = t.get("march"))
-                if (auto v = get_choice(*x, "march method", {"fixed", "sphere", "relaxed", "auto"})) s_.render.march = March(*v);
+                if (auto v = get_choice(*x, "march method", {"fixed", "sphere", "relaxed", "auto", "segment"})) {
+                    s_.render.march = March(*v);
+                    s_.render.march_span = span_of(*x);
+                }
             if (auto* x = t.get("normals"))
                 if (auto v = get_choice(*x, "normals method", {"central", "forward", "tetrahedron", "analytic"}))
                     s_.render.normals = Normals(*v);

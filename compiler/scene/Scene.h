@@ -60,13 +60,14 @@ struct CameraDesc {
     Span position_span;  // where `position` is written (empty: the default)
 };
 
-enum class March { Fixed, Sphere, Relaxed, Auto };
+enum class March { Fixed, Sphere, Relaxed, Auto, Segment };
 enum class Normals { Central, Forward, Tetrahedron, Analytic };
 enum class DebugView { None, Normals, Steps, Depth };
 enum class Shadows { None, Hard, Soft };
 
 struct RenderDesc {
     March march = March::Sphere;
+    Span march_span;  // where `march` is written (empty: the default)
     int max_steps = 128;
     double max_dist = 100;
     double hit = 1e-3;

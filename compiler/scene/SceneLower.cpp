@@ -127,7 +127,7 @@ public:
             for (Item& it : items_)
                 if (it.unbounded_fn < 0) it.unbounded_fn = it.bound.global >= 0 ? item_distance(it, false) : it.distance_fn;
         lipschitz_function();
-        if (o_.analytic_normals || o_.instance_normals || o_.distance_of) gradient_functions();
+        if (o_.analytic_normals || o_.instance_normals || o_.distance_of || o_.segment) gradient_functions();
         shade_functions();
         // k_r: for mirrors (reflections) and for glass, whose Fresnel reflection it raises (refraction).
         if (o_.reflections || o_.refraction) out_.has_reflectivity = material_property(ir::names::kReflectivity);
@@ -1038,6 +1038,18 @@ private:
         f.result = b.switch_(id, b.scalar(2 * o_.max_dist), std::move(cases));
         f.entry = !o_.analytic_normals || o_.distance_of;  // finite-difference normals and glows call it; the gradient pass reads it
         m_.functions.push_back(std::move(f));
+        if (o_.segment) {  // filled by the segment pass; 1 (a sphere-tracing step) where it cannot derive one
+            ir::Function s;
+            s.name = ir::names::kSegmentGain;
+            s.glsl_name = s.name;
+            s.entry = true;
+            Builder sb(m_, s);
+            sb.param("lo", Type::vector(3));
+            sb.param("hi", Type::vector(3));
+            sb.param("rd", Type::vector(3));
+            s.result = sb.scalar(1);
+            m_.functions.push_back(std::move(s));
+        }
         if (!o_.analytic_normals) return;
         ir::Function g;
         g.name = ir::names::kGradient;

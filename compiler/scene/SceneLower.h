@@ -31,6 +31,7 @@ struct SceneLowerOptions {
     bool analytic_normals = false;   // iqc_distance_of + a placeholder iqc_gradient (the gradient pass fills it)
     bool instance_normals = false;   // iqc_distance_of for finite-difference normals (taps of the hit instance)
     bool distance_of = false;        // iqc_distance_of for the runtime whatever the normals (glows march it)
+    bool segment = false;            // segment tracing: iqc_distance_of + a placeholder iqc_segment_gain (the segment pass fills it)
     bool instrument = false;         // iqc_scene returns a third component: shapes evaluated in this call
     bool per_instance = false;       // I♥IQ's architecture for the benchmark: no groups, per-instance functions
     bool reflections = false;        // the scene reads k_r
