@@ -419,8 +419,10 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 // bound for the whole region. iqc_segment_gain bounds that rate by interval arithmetic on each instance's
 // gradient over the segment's box (derived by the compiler, per operator); a step is at most the segment
 // and at least the plain sphere-tracing step, and the next candidate segment is twice the step taken (κ = 2,
-// the paper's choice). Short segments near a surface have tight bounds. Each step's bound costs several
-// evaluations of the distance (docs/accuracy.md measures what it saves against what it costs).
+// the paper's choice). Short segments near a surface have tight bounds. A segment over whose box interval
+// arithmetic proves every instance's distance above the hit tolerance (iqc_segment_clear; Mitchell 1990,
+// "Robust ray intersection with interval arithmetic") holds nothing to hit: the step takes all of it. Each
+// step's bounds cost several evaluations of the distance (docs/accuracy.md: what they save and what they cost).
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20;
     float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
@@ -453,7 +455,11 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         if (d > 0.0) {
             seg = max(seg, d);  // a plain step is always safe: the segment is never shorter
             vec3 q = p + seg * rd;
-            step = min(d * iqc_segment_gain(min(p, q), max(p, q), rd), seg);
+            vec3 lo = min(p, q), hi = max(p, q);
+            // An if, not a choice: rays whose segment is clear skip the gain's code (llvmpipe still runs it for a
+            // group of pixels where any one needs it).
+            if (iqc_segment_clear(lo, hi) > e) step = seg;
+            else step = min(d * iqc_segment_gain(lo, hi, rd), seg);
             seg = 2.0 * step;
         }
         t += step;

@@ -196,3 +196,49 @@ TEST_CASE("interval extension narrows with the box: the displaced torus's gradie
         last = width;
     }
 }
+
+TEST_CASE("interval extension: where a floor, fract, sign or a piecewise choice may jump within the box", "[interval-extension]") {
+    // The voxel sphere (‖⌊n p⌋/n + 0.5/n‖ - r, a "voxel look") is constant within a cell and jumps between cells:
+    // its gradient is 0 everywhere it exists, so a gain from the gradient alone skipped the whole sphere (a new
+    // user's trial). The extension says where the box holds a jump.
+    const char* text = R"(shape
+D = ‖⌊n p⌋/n + (0.5/n)(1, 1, 1)‖ - r + 0.1 sign(p_1 - 3) + { 0.2 if p_2 > 5
+                                                             0 otherwise
+where
+p ∈ ℝ³
+n ∈ [1, 32] default = 8: voxels per unit
+r ∈ [0, 2] default = 1: radius
+)";
+    auto x = extend_shape(text, "jumps");
+    REQUIRE(x);
+    ir::Function e;
+    e.name = "continuous";
+    e.entry = true;
+    {
+        ir::Builder b(x->m, e);
+        ir::ValueId lo = b.param("lo", Type::vector(3)), hi = b.param("hi", Type::vector(3));
+        ir::IntervalCode c = ir::emit_interval_extension(b, x->m, x->value, 0, lo, hi, {lo});
+        REQUIRE(c.ok);
+        REQUIRE(c.continuous != ir::ValueId(-1));
+        e.result = b.op(ir::Op::Select, {c.continuous, b.scalar(1), b.scalar(0)});
+    }
+    x->m.functions.push_back(std::move(e));
+    int fn = int(x->m.functions.size()) - 1;
+    REQUIRE(ir::verify(x->m) == "");
+    auto continuous = [&](ir::Value lo, ir::Value hi) { return ir::evaluate(x->m, fn, {lo, hi}).v[0] == 1; };
+    // Within one cell of 1/8 (and away from x = 3 and y = 5): continuous.
+    CHECK(continuous(vec3(0.51, 0.26, 0.76), vec3(0.62, 0.37, 0.87)));
+    // Across a cell's face in x, y or z: not.
+    CHECK_FALSE(continuous(vec3(0.45, 0.26, 0.76), vec3(0.55, 0.37, 0.87)));
+    CHECK_FALSE(continuous(vec3(0.51, 0.2, 0.76), vec3(0.62, 0.3, 0.87)));
+    CHECK_FALSE(continuous(vec3(0.51, 0.26, 0.74), vec3(0.62, 0.37, 0.76)));
+    // Across sign's jump at x = 3, or the piecewise choice's at y = 5 (cells of the floor held fixed).
+    CHECK_FALSE(continuous(vec3(2.9, 0.26, 0.76), vec3(3.1, 0.37, 0.87)));
+    CHECK_FALSE(continuous(vec3(0.51, 4.9, 0.76), vec3(0.62, 5.1, 0.87)));
+    // A smooth shape has no condition at all.
+    auto torus = extend_shape(kDisplacedTorus, "displaced_torus");
+    ir::Function t;
+    ir::Builder tb(torus->m, t);
+    ir::ValueId lo = tb.param("lo", Type::vector(3)), hi = tb.param("hi", Type::vector(3));
+    CHECK(ir::emit_interval_extension(tb, torus->m, torus->value, 0, lo, hi, {lo}).continuous == ir::ValueId(-1));
+}

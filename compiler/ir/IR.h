@@ -195,6 +195,7 @@ inline constexpr const char* kLightColor = "iqc_light_color";        // (l: ℤ)
 inline constexpr const char* kReflectivity = "iqc_reflectivity";    // (id) -> k_r as ℝ³
 inline constexpr const char* kTransmission = "iqc_transmission";    // (id) -> (k_t, η)
 inline constexpr const char* kSegmentGain = "iqc_segment_gain";  // (lo, hi, rd: ℝ³) -> how many times the scene distance a step may take within the box [lo, hi]
+inline constexpr const char* kSegmentClear = "iqc_segment_clear";  // (lo, hi: ℝ³) -> a lower bound of the scene distance over the box [lo, hi]
 inline constexpr const char* kLipschitz = "iqc_lipschitz";  // (id: ℤ) -> the factor dividing that instance's distance
 inline constexpr const char* kPrepare = "iqc_prepare";         // () -> outputs named like Prepared globals
 inline constexpr const char* kInstanceInverse = "iqc_instance_inverse";    // (i: ℤ) -> world→object ℝ^(4×4)

@@ -47,19 +47,21 @@ void gradient(Module& m, PipelineResult& r) {
     m.functions[size_t(grad)] = std::move(made);
 }
 
-// iqc_segment_gain(lo, hi, rd) for segment tracing (Galin et al. 2020), when the scene asks for it (the
-// scene lowering adds a placeholder returning 1). Per instance k, the interval extension of the gradient of
+// iqc_segment_gain(lo, hi, rd) and iqc_segment_clear(lo, hi) for segment tracing (Galin et al. 2020), when
+// the scene asks for it (the scene lowering adds placeholders returning 1 and -1e30). Per instance k, the interval extension of the gradient of
 // its distance g_k (as the march steps by it: divided by its Lipschitz factor) over the box gives a bound λ_k
 // of |∇g_k · rd| along every point of the segment the box holds; while g_k(t) ≥ F(t), the scene's distance,
 // g_k(t + u) ≥ F(t) - λ_k u > 0 for u < F(t)/λ_k. So the step may be F(t)·min_k 1/λ_k. λ_k is widened by
 // 0.1% and 1e-6 (32-bit rounding) and the gain is at most 10⁴ and at least 1 (a bound that is no better than
-// the factor the distance was divided by gains nothing). Scenes the pass cannot bound instance by instance
+// the factor the distance was divided by gains nothing). The gradient knows nothing of jumps (a floor's
+// derivative is 0, and a voxelised sphere would be skipped whole): where the distance's own interval extension
+// finds an operation that may jump within the box (IntervalCode::continuous), that instance gains nothing. Scenes the pass cannot bound instance by instance
 // (groups of instances, more than kMaxItems, a gradient without an interval rule) keep the placeholder: the
 // march steps as sphere tracing does, and a warning says why.
 void segment(Module& m, PipelineResult& r) {
     constexpr int kMaxItems = 16;
-    int dist = m.find(names::kDistanceOf), seg = m.find(names::kSegmentGain);
-    if (dist < 0 || seg < 0) return;
+    int dist = m.find(names::kDistanceOf), seg = m.find(names::kSegmentGain), clear = m.find(names::kSegmentClear);
+    if (dist < 0 || seg < 0 || clear < 0) return;
     auto refuse = [&](const std::string& why) { r.segment_refused = why; };
     // The instances: the cases of iqc_distance_of's dispatch on the id.
     std::vector<long long> ids;
@@ -100,6 +102,9 @@ void segment(Module& m, PipelineResult& r) {
             m.functions.resize(before);
             return refuse("no interval rule for an instance's gradient (" + ic.why + ")");
         }
+        // The gradient says nothing of jumps (⌊x⌋'s derivative is 0): where the distance may jump within the
+        // box, no gain (a plain step, as sphere tracing takes).
+        IntervalCode value = emit_interval_extension(b, m, dist, 0, lo, hi, {lo, b.integer(id)});
         // ∇g · rd over the box: each component's product with rd's (exact) component, summed.
         ValueId a = b.op(Op::Hadamard, {rd, ic.lo}), c = b.op(Op::Hadamard, {rd, ic.hi});
         ValueId one = b.constant(Type::vector(3), {1, 1, 1});
@@ -108,15 +113,39 @@ void segment(Module& m, PipelineResult& r) {
         lam = b.op(Op::Add, {b.op(Op::Mul, {lam, b.scalar(1.001)}), b.scalar(1e-6)});
         // NaN or ≥ 1: no gain (a comparison with NaN is false).
         ValueId useful = b.compare(CompareKind::Lt, lam, b.scalar(1));
+        if (!value.ok) useful = b.constant(Type::boolean(), {0});
+        else if (value.continuous != ValueId(-1)) useful = b.op(Op::And, {useful, value.continuous});
         ValueId k = b.op(Op::Select, {useful, b.op(Op::Div, {b.scalar(1), b.builtin("max", {lam, b.scalar(1e-4)})}), b.scalar(1)});
         gain = b.builtin("min", {gain, k});
     }
     made.result = b.named(gain, "gain");
+    // iqc_segment_clear: the smallest lower bound of the instances' distances over the box (the interval
+    // extension of the distance itself, Mitchell 1990: where it is above the hit tolerance, no point of the
+    // segment can be hit, and the march takes the whole segment).
+    Function low;
+    low.name = names::kSegmentClear;
+    low.glsl_name = m.functions[size_t(clear)].glsl_name;
+    low.entry = true;
+    Builder lb(m, low);
+    ValueId llo = lb.param("lo", Type::vector(3)), lhi = lb.param("hi", Type::vector(3));
+    ValueId least = lb.scalar(1e30);
+    for (long long id : ids) {
+        IntervalCode ic = emit_interval_extension(lb, m, dist, 0, llo, lhi, {llo, lb.integer(id)});
+        if (!ic.ok) {  // a distance with no rule (the gradient had one): nothing is known clear
+            least = lb.scalar(-1e30);
+            break;
+        }
+        least = lb.builtin("min", {least, ic.lo});
+    }
+    low.result = lb.named(least, "least");
     m.functions.resize(before);
-    fold_constants(m, made);
-    eliminate_common_subexpressions(made);
-    eliminate_dead_code(made);  // each instance's extension also extends the other instances' (untaken) arms
+    for (Function* f : {&made, &low}) {
+        fold_constants(m, *f);
+        eliminate_common_subexpressions(*f);
+        eliminate_dead_code(*f);  // each instance's extension also extends the other instances' (untaken) arms
+    }
     m.functions[size_t(seg)] = std::move(made);
+    m.functions[size_t(clear)] = std::move(low);
 }
 
 struct Pass {

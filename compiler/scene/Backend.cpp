@@ -83,6 +83,7 @@ const char* entry_comment(const std::string& name) {
         {ir::names::kReflectivity, "Reflectivity of instance `id` (its material's `k_r`)."},
         {ir::names::kTransmission, "Transmission (`k_t`) and index of refraction (`η`) of instance `id`'s material."},
         {ir::names::kSegmentGain, "Segment tracing: how many times iqc_scene's distance a step may go while it stays in the box [lo, hi] (1 / the largest rate of change along rd, by interval arithmetic on each instance's gradient)."},
+        {ir::names::kSegmentClear, "Segment tracing: a lower bound of every instance's distance over the box [lo, hi] (interval arithmetic on each instance's distance): above the hit tolerance, nothing in the box can be hit."},
         {ir::names::kLipschitz, "The Lipschitz factor instance `id`'s distance was divided by (the hit test multiplies it back)."},
         {ir::names::kPrepare, "Transforms that change with sliders or time: inverted once per pixel, before any marching."},
         {ir::names::kInstanceInverse, "I♥IQ's architecture (benchmark baseline): instance i's world → object transform, inverted here."},

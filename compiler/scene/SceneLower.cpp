@@ -1038,17 +1038,21 @@ private:
         f.result = b.switch_(id, b.scalar(2 * o_.max_dist), std::move(cases));
         f.entry = !o_.analytic_normals || o_.distance_of;  // finite-difference normals and glows call it; the gradient pass reads it
         m_.functions.push_back(std::move(f));
-        if (o_.segment) {  // filled by the segment pass; 1 (a sphere-tracing step) where it cannot derive one
-            ir::Function s;
-            s.name = ir::names::kSegmentGain;
-            s.glsl_name = s.name;
-            s.entry = true;
-            Builder sb(m_, s);
-            sb.param("lo", Type::vector(3));
-            sb.param("hi", Type::vector(3));
-            sb.param("rd", Type::vector(3));
-            s.result = sb.scalar(1);
-            m_.functions.push_back(std::move(s));
+        if (o_.segment) {
+            // Placeholders the segment pass fills; where it derives nothing they stay: a gain of 1 (a
+            // sphere-tracing step) and -1e30 (no segment is known clear).
+            auto placeholder = [&](const char* name, std::vector<const char*> params, double value) {
+                ir::Function s;
+                s.name = name;
+                s.glsl_name = s.name;
+                s.entry = true;
+                Builder sb(m_, s);
+                for (const char* p : params) sb.param(p, Type::vector(3));
+                s.result = sb.scalar(value);
+                m_.functions.push_back(std::move(s));
+            };
+            placeholder(ir::names::kSegmentGain, {"lo", "hi", "rd"}, 1);
+            placeholder(ir::names::kSegmentClear, {"lo", "hi"}, -1e30);
         }
         if (!o_.analytic_normals) return;
         ir::Function g;

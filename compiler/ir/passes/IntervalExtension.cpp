@@ -25,6 +25,8 @@ class Extender {
 public:
     Extender(Builder& b, const Module& m) : b_(b), m_(m) {}
 
+    std::vector<ValueId> continuity;  // conditions that hold where the function cannot jump in the box
+
     IV run(int fn, const std::vector<IV>& params) {
         const Function& f = m_.functions[size_t(fn)];
         std::vector<IV> v(f.body.size());
@@ -139,9 +141,13 @@ private:
         auto monotone = [&](const char* fname) {
             return each(in.type, [&](size_t k) { return std::pair{call1(fname, lo(0, k)), call1(fname, hi(0, k))}; });
         };
-        if (n == "exp" || n == "tanh" || n == "sinh" || n == "floor" || n == "ceil" || n == "round" || n == "sign" ||
-            (n == "atan" && in.args.size() == 1))
-            return monotone(n.c_str());
+        if (n == "floor" || n == "ceil" || n == "round" || n == "sign")  // monotone, with jumps
+            return each(in.type, [&](size_t k) {
+                ValueId l = call1(n.c_str(), lo(0, k)), h = call1(n.c_str(), hi(0, k));
+                continuity.push_back(cmp(CompareKind::Eq, l, h));  // the same step at both ends: none between
+                return std::pair{l, h};
+            });
+        if (n == "exp" || n == "tanh" || n == "sinh" || (n == "atan" && in.args.size() == 1)) return monotone(n.c_str());
         if (n == "sqrt")
             return each(in.type, [&](size_t k) {
                 return std::pair{call1("sqrt", fmax(lo(0, k), num(0))), call1("sqrt", fmax(hi(0, k), num(0)))};
@@ -194,7 +200,9 @@ private:
             });
         if (n == "step")  // step(e, x): 0 below the edge, 1 from it on: increasing in x, decreasing in e
             return each(in.type, [&](size_t k) {
-                return std::pair{b_.builtin("step", {hi(0, k), lo(1, k)}), b_.builtin("step", {lo(0, k), hi(1, k)})};
+                ValueId l = b_.builtin("step", {hi(0, k), lo(1, k)}), h = b_.builtin("step", {lo(0, k), hi(1, k)});
+                continuity.push_back(cmp(CompareKind::Eq, l, h));
+                return std::pair{l, h};
             });
         if (n == "smoothstep") {  // monotone in x between exact edges (either way round); else [0, 1]
             if (!a[0]->exact || !a[1]->exact)
@@ -215,6 +223,7 @@ private:
             return each(in.type, [&](size_t k) {
                 ValueId l = lo(0, k), h = hi(0, k);
                 ValueId same = cmp(CompareKind::Eq, call1("floor", l), call1("floor", h));
+                continuity.push_back(same);
                 return std::pair{sel(same, call1("fract", l), num(0)), sel(same, call1("fract", h), num(1))};
             });
         if (n == "mod" && a[1]->exact)  // x - m⌊x/m⌋ with m > 0: the ends within one period, else [0, m]
@@ -223,6 +232,7 @@ private:
                 ValueId same = both(cmp(CompareKind::Gt, md, num(0)),
                                     cmp(CompareKind::Eq, call1("floor", b_.op(Op::Div, {l, md})), call1("floor", b_.op(Op::Div, {h, md}))));
                 ValueId full_lo = fmin(num(0), md), full_hi = fmax(num(0), md);
+                continuity.push_back(same);
                 return std::pair{sel(same, b_.builtin("mod", {l, md}), full_lo), sel(same, b_.builtin("mod", {h, md}), full_hi)};
             });
         if (n == "pow" && a[1]->exact)  // b^e for b ≥ 0 is monotone in b (either way): the ends; a negative base: unknown
@@ -429,6 +439,7 @@ private:
                 if (!x.bad.empty()) return x;
                 if (!y.bad.empty()) return y;
                 ValueId sure = c.lo[0], maybe = c.hi[0];
+                continuity.push_back(sel(maybe, sure, b_.constant(Type::boolean(), {1})));  // decided either way
                 if (in.type.kind == Type::Bool)
                     return pair(sel(sure, lo(1, 0), sel(maybe, both(lo(1, 0), lo(2, 0)), lo(2, 0))),
                                 sel(sure, hi(1, 0), sel(maybe, either(hi(1, 0), hi(2, 0)), hi(2, 0))));
@@ -489,6 +500,7 @@ IntervalCode emit_interval_extension(Builder& b, const Module& m, int fn, int wr
     }
     IV r = x.run(fn, params);
     IntervalCode out;
+    for (ValueId c : x.continuity) out.continuous = out.continuous == ValueId(-1) ? c : b.op(Op::And, {out.continuous, c});
     if (!r.bad.empty()) {
         out.why = r.bad;
         return out;

@@ -31,6 +31,11 @@ namespace iqc::ir {
 struct IntervalCode {
     bool ok = false;
     ValueId lo = 0, hi = 0;  // the result's interval (values of the builder's function, of fn's result type)
+    // A condition (a boolean value of the builder's function) that holds where the function is continuous over
+    // the box as far as its operations tell: no floor, ceil, round, fract, mod, sign or step whose argument's
+    // interval spans one of its jumps, no choice whose condition the box leaves undecided (a piecewise
+    // definition may jump where it switches). -1: no such operation depends on the box (continuous).
+    ValueId continuous = ValueId(-1);
     std::string why;         // when not ok: the first operation without a rule that the result depends on
 };
 
