@@ -4,6 +4,7 @@
 // differences); I♥IQ's per-instance architecture is measured as its own row. Usage errors exit 2.
 #include <catch2/catch.hpp>
 
+#include <fmt/format.h>
 #include <map>
 #include <sstream>
 
@@ -269,6 +270,13 @@ type = "menger"
     CHECK(r.exit_code == 0);
     CHECK_THAT(r.err, Catch::Contains("segment_loop.iq:3:9: warning: segment tracing takes sphere-tracing steps in this scene: "
                                       "no interval rule for an instance's gradient (a loop (a recurrence) whose values depend on the box)"));
+    // More instances than the bounds pay for (each step bounds every instance).
+    std::string five = "[render]\nmarch = \"segment\"\n";
+    for (const char* shape : {"sphere", "box", "torus", "capsule", "cylinder"}) five += fmt::format("[[shapes]]\ntype = \"{}\"\n", shape);
+    r = run_iqc(write_temp("segment_five.iq", five).string() + " -o " + (temp_dir() / "segment_five.frag").string());
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("segment_five.iq:2:9: warning: segment tracing takes sphere-tracing steps in this scene: "
+                                      "5 instances (each step evaluates the bounds of every instance: at most 4"));
     // Where it derives bounds, no warning, and the shader has the gain function the march calls.
     auto torus = write_temp("segment_torus.iq", "[render]\nmarch = \"segment\"\n[[shapes]]\ntype = \"torus\"\n");
     auto frag = temp_dir() / "segment_torus.frag";

@@ -26,11 +26,12 @@ struct Extended {
     ir::Module m;
     int value = -1, gradient = -1;           // q -> D(q), q -> ∇D(q)
     int value_box = -1, gradient_box = -1;   // (lo, hi) -> (lo, hi) of each, as one vector
+    bool jumps = false;                      // the distance has operations with jumps (widened arguments)
     std::string why;
 };
 
 // A function (lo, hi ∈ ℝ³) -> (the result's lo, then its hi) of fn's interval extension over the box.
-int extension_of(ir::Module& m, int fn, std::string* why) {
+int extension_of(ir::Module& m, int fn, std::string* why, bool* jumps = nullptr) {
     ir::Function e;
     e.name = m.functions[size_t(fn)].name + "_box";
     e.entry = true;
@@ -41,6 +42,7 @@ int extension_of(ir::Module& m, int fn, std::string* why) {
         *why = c.why;
         return -1;
     }
+    if (jumps) *jumps = c.continuous != ir::ValueId(-1);
     const Type& t = m.functions[size_t(fn)].result_type();
     e.result = b.construct(Type::vector(2 * t.components()), {c.lo, c.hi});
     m.functions.push_back(std::move(e));
@@ -77,7 +79,7 @@ std::unique_ptr<Extended> extend_shape(const std::string& text, const std::strin
     ir::rewrite_unstable_forms(out->m);
     out->gradient = ir::differentiate(out->m, out->value, 0, "object_gradient", &out->why);
     if (out->gradient < 0) return out;
-    out->value_box = extension_of(out->m, out->value, &out->why);
+    out->value_box = extension_of(out->m, out->value, &out->why, &out->jumps);
     out->gradient_box = extension_of(out->m, out->gradient, &out->why);
     REQUIRE(ir::verify(out->m) == "");
     return out;
@@ -170,8 +172,11 @@ TEST_CASE("interval extension of distances and gradients: sound on random boxes,
         Check v = check_sound(*x, x->value, x->value_box, name + " (distance)", seed++);
         Check g = check_sound(*x, x->gradient, x->gradient_box, name + " (gradient)", seed++);
         INFO(name);
-        CHECK(v.worst_point_width < 1e-9);
-        CHECK(g.worst_point_width < 1e-6);
+        // Functions with jumps have their arguments widened (10⁻⁵ of their magnitude): not points there.
+        if (!x->jumps) {
+            CHECK(v.worst_point_width < 1e-9);
+            CHECK(g.worst_point_width < 1e-6);
+        }
     }
     INFO(fmt::format("refused: {}", fmt::join(refused, "; ")));
     // Only recurrences (a loop: mandelbulb, menger) and what has no interval rule may be refused.

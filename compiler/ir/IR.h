@@ -14,7 +14,9 @@
 // are exact integers (stored as doubles); arithmetic on two ℤ operands stays ℤ (array indices, instance ids).
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -178,6 +180,10 @@ struct Module {
     // The target makes parameters constants (Shadertoy): analyses may use their values, not their sliders'
     // ranges.
     bool constant_parameters = false;
+    // Per instance id: the world box (lo x, y, z, hi x, y, z; ±1e30 on an open side) outside which the
+    // instance's nearness exceeds the scene box's level (SceneIR::box, per instance). Segment tracing skips
+    // the bounds of instances whose box the segment's misses. Not printed in the IR text.
+    std::map<long long, std::array<double, 6>> instance_boxes;
     int find(const std::string& name) const;
     int find_global(const std::string& name) const;
 };

@@ -138,6 +138,15 @@ public:
         out_.instance_ids.assign(plans_.size(), -1);
         for (const Item& it : items_)
             for (size_t m = 0; m < it.members.size(); ++m) out_.instance_ids[it.members[m]] = it.id + int(m);
+        for (size_t i = 0; i < plans_.size(); ++i)
+            if (plan_box_[i]) {
+                std::array<double, 6> b;
+                for (size_t a = 0; a < 3; ++a) {
+                    b[a] = std::isfinite((*plan_box_[i])[a].lo) ? (*plan_box_[i])[a].lo : -1e30;
+                    b[3 + a] = std::isfinite((*plan_box_[i])[a].hi) ? (*plan_box_[i])[a].hi : 1e30;
+                }
+                m_.instance_boxes[out_.instance_ids[i]] = b;
+            }
         out_.lights = int(light_pos_.size());
         out_.point_lights = point_lights_;
         return std::move(out_);
@@ -147,6 +156,8 @@ private:
     const SceneDesc& s_;
     const std::vector<InstancePlan>& plans_;
     std::vector<double> derived_bound_ = std::vector<double>(plans_.size(), 0.0);  // per plan; 0: none
+    // Per plan: its world box from scene_box (none where it found none, or stopped before it).
+    std::vector<std::optional<std::array<ir::Interval, 3>>> plan_box_ = std::vector<std::optional<std::array<ir::Interval, 3>>>(plans_.size());
     const SceneLowerOptions& o_;
     SceneIR out_;
     ir::Module& m_ = out_.module;
@@ -234,7 +245,8 @@ private:
     void scene_box() {
         const double inf = INFINITY, tau = o_.box_level;
         std::array<double, 3> lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-        auto add = [&](const std::array<ir::Interval, 3>& w) {
+        auto add = [&](size_t plan_index, const std::array<ir::Interval, 3>& w) {
+            plan_box_[plan_index] = w;
             for (size_t a = 0; a < 3; ++a) {
                 lo[a] = std::min(lo[a], w[a].lo);
                 hi[a] = std::max(hi[a], w[a].hi);
@@ -252,7 +264,7 @@ private:
                 BoundingBox b = box_of(world_sphere(p.inv_linear, p.inv_offset, bound_of(i) + tau / std::max(p.scale, 1e-9)));
                 std::array<ir::Interval, 3> w;
                 for (size_t a = 0; a < 3; ++a) w[a] = {b.center[a] - b.half[a], b.center[a] + b.half[a]};
-                add(w);
+                add(i, w);
                 continue;
             }
             kinds[p.shape].push_back(i);
@@ -294,7 +306,7 @@ private:
                     }
                     w[r] = sum;
                 }
-                add(w);
+                add(mi, w);
             }
         }
         bool bounded = false;

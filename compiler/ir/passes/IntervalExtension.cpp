@@ -107,6 +107,14 @@ private:
         ValueId lo = sel(cmp(CompareKind::Ge, l, num(0)), l2, sel(cmp(CompareKind::Le, h, num(0)), h2, num(0)));
         return {lo, fmax(l2, h2)};
     }
+    // The argument of a function with jumps, widened by 10⁻⁵ of its magnitude (and 10⁻⁶): in 32-bit floats a
+    // point's own evaluation may land across a jump that the interval's ends do not reach (a hash such as
+    // fract(43758.5 sin x) amplifies sin's rounding a hundredfold), and a step there changes the value by a
+    // whole step. A new user's trial found a segment called clear across such a jump.
+    std::pair<ValueId, ValueId> widened(ValueId l, ValueId h) {
+        ValueId w = add(mul(add(call1("abs", l), call1("abs", h)), num(1e-5)), num(1e-6));
+        return {sub(l, w), add(h, w)};
+    }
     // 1/[l, h], unbounded where the interval holds 0.
     std::pair<ValueId, ValueId> reciprocal(ValueId l, ValueId h) {
         ValueId apart = either(cmp(CompareKind::Gt, l, num(0)), cmp(CompareKind::Lt, h, num(0)));
@@ -143,7 +151,8 @@ private:
         };
         if (n == "floor" || n == "ceil" || n == "round" || n == "sign")  // monotone, with jumps
             return each(in.type, [&](size_t k) {
-                ValueId l = call1(n.c_str(), lo(0, k)), h = call1(n.c_str(), hi(0, k));
+                auto [wl, wh] = widened(lo(0, k), hi(0, k));
+                ValueId l = call1(n.c_str(), wl), h = call1(n.c_str(), wh);
                 continuity.push_back(cmp(CompareKind::Eq, l, h));  // the same step at both ends: none between
                 return std::pair{l, h};
             });
@@ -200,7 +209,8 @@ private:
             });
         if (n == "step")  // step(e, x): 0 below the edge, 1 from it on: increasing in x, decreasing in e
             return each(in.type, [&](size_t k) {
-                ValueId l = b_.builtin("step", {hi(0, k), lo(1, k)}), h = b_.builtin("step", {lo(0, k), hi(1, k)});
+                auto [wl, wh] = widened(lo(1, k), hi(1, k));
+                ValueId l = b_.builtin("step", {hi(0, k), wl}), h = b_.builtin("step", {lo(0, k), wh});
                 continuity.push_back(cmp(CompareKind::Eq, l, h));
                 return std::pair{l, h};
             });
@@ -221,14 +231,15 @@ private:
             });
         if (n == "fract")  // the ends where no integer lies between them, else [0, 1]
             return each(in.type, [&](size_t k) {
-                ValueId l = lo(0, k), h = hi(0, k);
+                auto [l, h] = widened(lo(0, k), hi(0, k));
                 ValueId same = cmp(CompareKind::Eq, call1("floor", l), call1("floor", h));
                 continuity.push_back(same);
                 return std::pair{sel(same, call1("fract", l), num(0)), sel(same, call1("fract", h), num(1))};
             });
         if (n == "mod" && a[1]->exact)  // x - m⌊x/m⌋ with m > 0: the ends within one period, else [0, m]
             return each(in.type, [&](size_t k) {
-                ValueId l = lo(0, k), h = hi(0, k), md = lo(1, k);
+                auto [l, h] = widened(lo(0, k), hi(0, k));
+                ValueId md = lo(1, k);
                 ValueId same = both(cmp(CompareKind::Gt, md, num(0)),
                                     cmp(CompareKind::Eq, call1("floor", b_.op(Op::Div, {l, md})), call1("floor", b_.op(Op::Div, {h, md}))));
                 ValueId full_lo = fmin(num(0), md), full_hi = fmax(num(0), md);

@@ -17,7 +17,8 @@
 // Values that only a choice's untaken arm uses do not matter when the choice is decided by exact values.
 // An unbounded result (a division by an interval that holds 0) is ±1e30, not ∞: 32-bit floats would turn
 // ∞ - ∞ into NaN. The code is in 32-bit floats on the GPU without directed rounding: callers widen what
-// they read by a relative margin.
+// they read by a relative margin, and the arguments of functions with jumps are widened by 10⁻⁵ of their
+// magnitude (a point's own rounding must not land across a jump the interval's ends do not reach).
 #pragma once
 
 #include <string>
