@@ -48,16 +48,23 @@ void gradient(Module& m, PipelineResult& r) {
 }
 
 // iqc_segment_gain(lo, hi, rd) and iqc_segment_clear(lo, hi) for segment tracing (Galin et al. 2020), when
-// the scene asks for it (the scene lowering adds placeholders returning 1 and -1e30). Per instance k, the interval extension of the gradient of
-// its distance g_k (as the march steps by it: divided by its Lipschitz factor) over the box gives a bound λ_k
-// of |∇g_k · rd| along every point of the segment the box holds; while g_k(t) ≥ F(t), the scene's distance,
-// g_k(t + u) ≥ F(t) - λ_k u > 0 for u < F(t)/λ_k. So the step may be F(t)·min_k 1/λ_k. λ_k is widened by
-// 0.1% and 1e-6 (32-bit rounding) and the gain is at most 10⁴ and at least 1 (a bound that is no better than
-// the factor the distance was divided by gains nothing). The gradient knows nothing of jumps (a floor's
-// derivative is 0, and a voxelised sphere would be skipped whole): where the distance's own interval extension
-// finds an operation that may jump within the box (IntervalCode::continuous), that instance gains nothing. Scenes the pass cannot bound instance by instance
-// (groups of instances, more than kMaxItems, a gradient without an interval rule) keep the placeholder: the
-// march steps as sphere tracing does, and a warning says why.
+// the scene asks for it (the scene lowering adds placeholders returning 1 and -1e30).
+//
+// Gain: per instance k, the interval extension of the gradient of its distance g_k (as the march steps by it:
+// divided by its Lipschitz factor) over the box gives a bound λ_k of |∇g_k · rd| at every point of the segment
+// the box holds; while g_k(t) ≥ F(t), the scene's distance, g_k(t + u) ≥ F(t) - λ_k u > 0 for u < F(t)/λ_k.
+// So the step may be F(t)·min_k 1/λ_k. λ_k is widened by 0.1% and 1e-6 (32-bit rounding); the gain is at most
+// 10⁴ and at least 1 (a bound no better than the factor the distance was divided by gains nothing). The
+// gradient knows nothing of jumps (a floor's derivative is 0: a voxelised sphere was skipped whole): where the
+// distance's own extension finds an operation that may jump within the box (IntervalCode::continuous), that
+// instance gains nothing.
+//
+// Clear: the least lower bound of the instances' distances over the box (Mitchell 1990): above the hit
+// tolerance, nothing in the segment can be hit and the march takes all of it.
+//
+// An instance whose own box (Module::instance_boxes) the segment's box misses is skipped by both. Scenes the
+// pass cannot bound instance by instance (groups of instances, more than kMaxItems, a gradient without an
+// interval rule) keep the placeholders: the march steps as sphere tracing does, and a warning says why.
 void segment(Module& m, PipelineResult& r) {
     // Each step evaluates every instance's bounds (those whose box the segment meets): with 6 instances the
     // frame took 3x sphere tracing's on llvmpipe, with 12 about 6x, for half the evaluations (a new user's

@@ -12,9 +12,11 @@
 // Every value is taken apart into scalar components (a matrix product is sums of scalar products).
 // Values that do not depend on the box are left as they are (exact), whatever their operation.
 //
-// What has no rule here (a loop, an array read, an integer or a matrix inverse that depends on the box,
-// tan, atan's two-argument form is [-π, π]) makes the result unknown: `ok` false and `why` says what.
-// Values that only a choice's untaken arm uses do not matter when the choice is decided by exact values.
+// What has no rule here (a loop, an array read, an integer, a matrix inverse or a switch selector that
+// depends on the box; tan, the hyperbolic inverses, mod and pow with an exponent or modulus that depends on
+// it) makes the result unknown: `ok` false and `why` says what. atan2 (and two-argument atan) is [-π, π].
+// Calls are followed into the callee. Values that only a choice's untaken arm uses do not matter when a
+// constant decides the choice.
 // An unbounded result (a division by an interval that holds 0) is ±1e30, not ∞: 32-bit floats would turn
 // ∞ - ∞ into NaN. The code is in 32-bit floats on the GPU without directed rounding: callers widen what
 // they read by a relative margin, and the arguments of functions with jumps are widened by 10⁻⁵ of their
