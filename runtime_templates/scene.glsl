@@ -127,6 +127,7 @@ int iqc_evals = 0;           // scene evaluations in this pixel (instrumented bu
 int iqc_shape_evals = 0;     // instance shape evaluations (those skipped by `bound` are not counted)
 int iqc_primary_steps = -1;  // march steps of the first ray from the camera
 int iqc_bad_distances = 0;   // scene distances that were NaN or ±∞ (a marcher cannot step on them)
+int iqc_bounds = 0;          // segment tracing: evaluations of its bounds (iqc_segment_clear, iqc_segment_gain)
 
 // Instrumented build: the scene, counting its evaluations, the shapes they evaluated and the distances
 // that were not finite.
@@ -458,8 +459,16 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
             vec3 lo = min(p, q), hi = max(p, q);
             // An if, not a choice: rays whose segment is clear skip the gain's code (llvmpipe still runs it for a
             // group of pixels where any one needs it).
+{{#if INSTRUMENT}}
+            iqc_bounds++;
+{{/if}}
             if (iqc_segment_clear(lo, hi) > e) step = seg;
-            else step = min(d * iqc_segment_gain(lo, hi, rd), seg);
+            else {
+{{#if INSTRUMENT}}
+                iqc_bounds++;
+{{/if}}
+                step = min(d * iqc_segment_gain(lo, hi, rd), seg);
+            }
             seg = 2.0 * step;
         }
         t += step;
@@ -1186,9 +1195,10 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     }
 {{/if}}
     // Instrumented build: march steps of the camera ray, scene evaluations in the pixel, flags (1: the colour
-    // is NaN or ∞, 2: some scene distance was), shape evaluations in the pixel.
+    // is NaN or ∞, 2: some scene distance was; 4 times the segment bounds evaluated), shape evaluations in the
+    // pixel.
     bool bad = any(isnan(col)) || any(isinf(col));
-    float flags = (bad ? 1.0 : 0.0) + (iqc_bad_distances > 0 ? 2.0 : 0.0);
+    float flags = (bad ? 1.0 : 0.0) + (iqc_bad_distances > 0 ? 2.0 : 0.0) + 4.0 * float(iqc_bounds);
     fragColor = vec4(float(iqc_primary_steps), float(iqc_evals), flags, float(iqc_shape_evals));
 {{#else}}
     fragColor = vec4(clamp({{#if OUTPUT}}iqc_output(col{{#if VIGNETTE}}, fragCoord / iResolution.xy{{/if}}){{#else}}col{{/if}}, 0.0, 1.0), 1.0);

@@ -287,7 +287,18 @@ type = "menger"
     CHECK_THAT(code, Catch::Contains("float iqc_segment_gain(vec3 lo, vec3 hi, vec3 rd) {"));
     CHECK_THAT(code, Catch::Contains("float iqc_segment_clear(vec3 lo, vec3 hi) {"));
     CHECK_THAT(code, Catch::Contains("if (iqc_segment_clear(lo, hi) > e) step = seg;"));
-    CHECK_THAT(code, Catch::Contains("else step = min(d * iqc_segment_gain(lo, hi, rd), seg);"));
+    CHECK_THAT(code, Catch::Contains("step = min(d * iqc_segment_gain(lo, hi, rd), seg);"));
+    // --stats counts the bounds apart from the scene evaluations (each is an interval evaluation of every
+    // instance's distance or gradient over a segment).
+    auto stats_of = [&](const std::string& scene) {
+        RunResult s = run_iqc("render " + scene + " -o " + (temp_dir() / "segment_stats.png").string() + " --size 48x27 --stats -q");
+        REQUIRE(s.exit_code == 0);
+        auto at = s.out.find("segment_bounds_mean: ");
+        REQUIRE(at != std::string::npos);
+        return std::stod(s.out.substr(at + 21));
+    };
+    CHECK(stats_of(torus.string()) > 1.0);
+    CHECK(stats_of(write_temp("sphere_torus_stats.iq", "[[shapes]]\ntype = \"torus\"\n").string()) == 0.0);
     // Other marches have none of it.
     r = run_iqc(write_temp("sphere_torus.iq", "[[shapes]]\ntype = \"torus\"\n").string() + " -o " + frag.string());
     CHECK(r.exit_code == 0);

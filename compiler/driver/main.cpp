@@ -179,6 +179,7 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
     }
     std::vector<float> steps, evals, shape_evals;
     long flagged = 0, bad_distances = 0;
+    double bounds = 0;
     for (int y = 0; y < ir.image.height; ++y)
         for (int x = 0; x < ir.image.width; ++x) {
             const float* p = ir.image.pixel(x, y);
@@ -188,6 +189,7 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
             int flags = std::isfinite(p[2]) ? int(p[2] + 0.5f) : 1;
             flagged += (flags & 1) != 0;
             bad_distances += (flags & 2) != 0;
+            bounds += double(flags >> 2);
         }
     double sm = 0, em = 0;
     for (float v : steps) sm += v;
@@ -202,6 +204,7 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
     for (float v : shape_evals) se += v;
     std::printf("shape_evals_mean: %.3f\n", se / double(shape_evals.size()));
     std::printf("shape_evals_per_eval: %.3f\n", em > 0 ? se / em : 0.0);
+    std::printf("segment_bounds_mean: %.3f\n", bounds / double(evals.size()));
     std::printf("frame_ms: %.3f\n", frame_ms[frame_ms.size() / 2]);
     std::printf("compile_ms: %.3f\n", last.compile_ms);
     std::printf("renderer: %s\n", last.renderer.c_str());
@@ -438,7 +441,7 @@ static int run(int argc, char** argv) {
     render->add_option("--target", r_target, "which shader to run: shadertoy (default) or webgl2 (its uniforms at their defaults)")
         ->check(CLI::IsMember({"shadertoy", "webgl2"}));
     render->add_flag("-q,--quiet", quiet, "print only diagnostics and --stats (no 'rendered' line)");
-    render->add_flag("--stats", r_stats, "print nan_pixels (colour NaN or ∞), nan_distance_pixels (pixels whose rays met a NaN or ∞ scene distance), steps_mean, steps_p99, evals_mean, evals_p99, shape_evals_mean (shapes evaluated per pixel: a `bound` sphere or a skipped node of a bounding-volume hierarchy stands in for its shapes), shape_evals_per_eval, frame_ms, renderer");
+    render->add_flag("--stats", r_stats, "print nan_pixels (colour NaN or ∞), nan_distance_pixels (pixels whose rays met a NaN or ∞ scene distance), steps_mean, steps_p99, evals_mean, evals_p99, shape_evals_mean (shapes evaluated per pixel: a `bound` sphere or a skipped node of a bounding-volume hierarchy stands in for its shapes), shape_evals_per_eval, segment_bounds_mean (segment tracing's bounds evaluated per pixel, each an interval evaluation of every instance's distance or gradient: not counted in evals), frame_ms, renderer");
     CLI::App* bench = app.add_subcommand(
         "bench", "measure what accuracy costs in time on this scene: every march method × hit tolerance × step cap × "
                  "normal method, and I♥IQ's one-march-per-instance architecture, against a reference");
