@@ -47,6 +47,52 @@ void gradient(Module& m, PipelineResult& r) {
     m.functions[size_t(grad)] = std::move(made);
 }
 
+// Reorders f's body as a depth-first post-order from its result (operands in order; parameters first): the
+// same function whatever order a builder appended the instructions in. C++ leaves the order in which a call's
+// arguments are evaluated unspecified, and the interval extension's helpers append instructions from within
+// argument lists: gcc and clang built it in different orders (different IR text, different GLSL names).
+// Instructions the result does not reach are dropped.
+void canonical_order(Function& f) {
+    std::vector<char> placed(f.body.size(), 0);
+    std::vector<ValueId> order;
+    for (size_t i = 0; i < f.body.size(); ++i)
+        if (f.body[i].op == Op::Param) {
+            order.push_back(ValueId(i));
+            placed[i] = 1;
+        }
+    std::vector<ValueId> roots = {f.result};
+    for (const auto& [name, v] : f.outputs) roots.push_back(v);
+    for (ValueId root : roots) {
+        std::vector<std::pair<ValueId, size_t>> stack = {{root, 0}};
+        while (!stack.empty()) {
+            auto& [v, next] = stack.back();
+            if (placed[v]) {
+                stack.pop_back();
+                continue;
+            }
+            if (next < f.body[v].args.size()) {
+                ValueId a = f.body[v].args[next++];
+                if (!placed[a]) stack.push_back({a, 0});
+                continue;
+            }
+            placed[v] = 1;
+            order.push_back(v);
+            stack.pop_back();
+        }
+    }
+    std::vector<ValueId> index(f.body.size(), 0);
+    std::vector<Instr> body;
+    for (ValueId v : order) {
+        index[v] = ValueId(body.size());
+        Instr in = std::move(f.body[v]);
+        for (ValueId& a : in.args) a = index[a];
+        body.push_back(std::move(in));
+    }
+    f.body = std::move(body);
+    f.result = index[f.result];
+    for (auto& [name, v] : f.outputs) v = index[v];
+}
+
 // iqc_segment_gain(lo, hi, rd) and iqc_segment_clear(lo, hi) for segment tracing (Galin et al. 2020), when
 // the scene asks for it (the scene lowering adds placeholders returning 1 and -1e30).
 //
@@ -175,6 +221,7 @@ void segment(Module& m, PipelineResult& r) {
         fold_constants(m, *f);
         eliminate_common_subexpressions(*f);
         eliminate_dead_code(*f);  // each instance's extension also extends the other instances' (untaken) arms
+        canonical_order(*f);
     }
     m.functions[size_t(seg)] = std::move(made);
     m.functions[size_t(clear)] = std::move(low);
