@@ -11,10 +11,12 @@
 # (scripts/sanitize.sh; built here if missing), so every ASan/UBSan report is a finding too.
 #
 # A long campaign (the issue-16 report: `IQC_FUZZ_BUILD=build-fuzz IQC_FUZZ_SANITIZERS=undefined
-# IQC_FUZZ_JOBS=2 IQC_FUZZ_TIMEOUT=60 nice -n 19 bash scripts/fuzz.sh 3600`) may use a build of its own with
+# IQC_FUZZ_JOBS=2 IQC_FUZZ_TIMEOUT=120 nice -n 10 bash scripts/fuzz.sh 3600`) may use a build of its own with
 # UBSan alone, several times the executions per second of ASan's; IQC_FUZZ_JOBS runs that many processes per
 # harness; IQC_FUZZ_TIMEOUT (seconds per input, default 10) keeps a niced process that a build starves from
-# reporting a false hang.
+# reporting a false hang. The timeout is wall time: at nice 19 beside two busy processes (ctest -j2, a build)
+# a fuzzer gets about 1% of a core, and an input of 4 s reached 60 s and was reported as a hang; nice 10 gets
+# it about 5%.
 #
 # A finding stops that harness with the input in build-asan/fuzz/artifacts/. Minimise it with
 #   build-asan/fuzz/fuzz_HARNESS -minimize_crash=1 -runs=100000 ARTIFACT
