@@ -51,6 +51,30 @@ const Row& find(const std::vector<Row>& rows, const std::string& method, const s
 
 double num(const Row& r, const char* column) { return std::stod(r.at(column)); }
 
+// `iqc bench` on bench scenes at 64x36: march `method` takes fewer than `ratio` times sphere tracing's
+// evaluations per pixel at hit 1e-3 and 1e-4 (256 steps, analytic normals), with no more misses and no larger
+// depth error (within a float's worth of noise).
+void fewer_evaluations_at_equal_accuracy(const std::string& method, const std::vector<const char*>& scenes, double ratio) {
+    for (const char* name : scenes) {
+        const std::string scene = std::string(IQC_SOURCE_DIR) + "/bench/" + name + ".iq";
+        auto csv = temp_dir() / (method + "_" + name + ".csv");
+        RunResult r = run_iqc("bench " + scene + " --size 64x36 --frames 1 --csv " + csv.string());
+        INFO(name << "\n" << r.err);
+        REQUIRE(r.exit_code == 0);
+        std::vector<std::string> header;
+        auto rows = parse_csv(read_text(csv), header);
+        for (const char* hit : {"0.001", "0.0001"}) {
+            const Row& sphere = find(rows, "sphere", hit, "256", "analytic");
+            const Row& other = find(rows, method, hit, "256", "analytic");
+            INFO("hit " << hit << ": sphere " << num(sphere, "evals_per_pixel_mean") << " evals/px, " << method << " "
+                        << num(other, "evals_per_pixel_mean"));
+            CHECK(num(other, "evals_per_pixel_mean") < ratio * num(sphere, "evals_per_pixel_mean"));
+            CHECK(num(other, "hit_mismatch_pct") <= num(sphere, "hit_mismatch_pct") + 0.05);
+            CHECK(num(other, "depth_err_p99") <= 1.1 * num(sphere, "depth_err_p99") + 1e-5);
+        }
+    }
+}
+
 }  // namespace
 
 TEST_CASE("iqc bench: columns, rows, reproducibility and the direction of every trade-off", "[bench]") {
@@ -142,25 +166,7 @@ TEST_CASE("auto-relaxed marching saves evaluations at sphere tracing's accuracy,
     // bump): auto took 1.10x sphere tracing's evaluations there before failed steps were retried with the
     // measured slope and each failure made the rest of the ray more cautious (now about 0.78x at 160x90).
     // The bench scenes' other figures are in docs/accuracy.md; these two bound the worst ones.
-    for (const char* name : {"sine_terrain", "few_shapes"}) {
-        const std::string scene = std::string(IQC_SOURCE_DIR) + "/bench/" + name + ".iq";
-        auto csv = temp_dir() / (std::string("auto_") + name + ".csv");
-        RunResult r = run_iqc("bench " + scene + " --size 64x36 --frames 1 --csv " + csv.string());
-        INFO(name << "\n" << r.err);
-        REQUIRE(r.exit_code == 0);
-        std::vector<std::string> header;
-        auto rows = parse_csv(read_text(csv), header);
-        for (const char* hit : {"0.001", "0.0001"}) {
-            const Row& sphere = find(rows, "sphere", hit, "256", "analytic");
-            const Row& autor = find(rows, "auto", hit, "256", "analytic");
-            INFO("hit " << hit << ": sphere " << num(sphere, "evals_per_pixel_mean") << " evals/px, auto "
-                        << num(autor, "evals_per_pixel_mean"));
-            CHECK(num(autor, "evals_per_pixel_mean") < 0.85 * num(sphere, "evals_per_pixel_mean"));
-            // Equal accuracy: no more misses, and the depth error no larger (within a float's worth of noise).
-            CHECK(num(autor, "hit_mismatch_pct") <= num(sphere, "hit_mismatch_pct") + 0.05);
-            CHECK(num(autor, "depth_err_p99") <= 1.1 * num(sphere, "depth_err_p99") + 1e-5);
-        }
-    }
+    fewer_evaluations_at_equal_accuracy("auto", {"sine_terrain", "few_shapes"}, 0.85);
 }
 
 TEST_CASE("segment tracing on local Lipschitz bounds saves evaluations at sphere tracing's accuracy", "[bench][march][segment]") {
@@ -170,24 +176,7 @@ TEST_CASE("segment tracing on local Lipschitz bounds saves evaluations at sphere
     // gradient's IR, and takes a whole segment where the distance's own interval is above the tolerance. At
     // 64x36 it took 0.23x, 0.49x and 0.28x sphere tracing's evaluations at 1e-4 (the gradient's bound alone:
     // 0.58x, 0.59x and 0.45x; with both functions returning their placeholders the march is sphere tracing).
-    for (const char* name : {"displaced_torus", "twisted_bar", "sine_terrain"}) {
-        const std::string scene = std::string(IQC_SOURCE_DIR) + "/bench/" + name + ".iq";
-        auto csv = temp_dir() / (std::string("segment_") + name + ".csv");
-        RunResult r = run_iqc("bench " + scene + " --size 64x36 --frames 1 --csv " + csv.string());
-        INFO(name << "\n" << r.err);
-        REQUIRE(r.exit_code == 0);
-        std::vector<std::string> header;
-        auto rows = parse_csv(read_text(csv), header);
-        for (const char* hit : {"0.001", "0.0001"}) {
-            const Row& sphere = find(rows, "sphere", hit, "256", "analytic");
-            const Row& segment = find(rows, "segment", hit, "256", "analytic");
-            INFO("hit " << hit << ": sphere " << num(sphere, "evals_per_pixel_mean") << " evals/px, segment "
-                        << num(segment, "evals_per_pixel_mean"));
-            CHECK(num(segment, "evals_per_pixel_mean") < 0.75 * num(sphere, "evals_per_pixel_mean"));
-            CHECK(num(segment, "hit_mismatch_pct") <= num(sphere, "hit_mismatch_pct") + 0.05);
-            CHECK(num(segment, "depth_err_p99") <= 1.1 * num(sphere, "depth_err_p99") + 1e-5);
-        }
-    }
+    fewer_evaluations_at_equal_accuracy("segment", {"displaced_torus", "twisted_bar", "sine_terrain"}, 0.75);
 }
 
 TEST_CASE("segment tracing takes no gain where the distance may jump: a voxelised sphere is drawn", "[march][segment]") {

@@ -253,25 +253,23 @@ private:
                 ValueId ok = cmp(CompareKind::Ge, l, num(0));
                 return std::pair{sel(ok, fmin(pl, ph), num(-kBig)), sel(ok, fmax(pl, ph), num(kBig))};
             });
-        if (n == "length") {  // √(Σ x_k²), each square never negative
-            size_t c = size_t(ts[0].components());
+        // ‖v‖ of the first argument: √(Σ v_k²), each square never negative.
+        auto norm = [&]() {
             ValueId s_lo = num(0), s_hi = num(0);
-            for (size_t k = 0; k < c; ++k) {
+            for (size_t k = 0; k < size_t(ts[0].components()); ++k) {
                 auto [l2, h2] = square(lo(0, k), hi(0, k));
                 s_lo = add(s_lo, l2);
                 s_hi = add(s_hi, h2);
             }
-            return pair(call1("sqrt", s_lo), call1("sqrt", s_hi));
+            return std::pair{call1("sqrt", s_lo), call1("sqrt", s_hi)};
+        };
+        if (n == "length") {
+            auto [l, h] = norm();
+            return pair(l, h);
         }
         if (n == "normalize") {  // v / ‖v‖, within [-1, 1]
-            size_t c = size_t(ts[0].components());
-            ValueId s_lo = num(0), s_hi = num(0);
-            for (size_t k = 0; k < c; ++k) {
-                auto [l2, h2] = square(lo(0, k), hi(0, k));
-                s_lo = add(s_lo, l2);
-                s_hi = add(s_hi, h2);
-            }
-            const auto r = reciprocal(call1("sqrt", s_lo), call1("sqrt", s_hi));  // not a structured binding: lambdas capture it
+            auto [nl, nh] = norm();
+            const auto r = reciprocal(nl, nh);  // not a structured binding: lambdas capture it
             const ValueId rl = r.first, rh = r.second;
             return each(in.type, [&](size_t k) {
                 auto [ql, qh] = product(lo(0, k), hi(0, k), false, rl, rh, false);
