@@ -254,6 +254,18 @@ float iqc_far(vec3 ro, vec3 rd) {
 
 {{/if}}
 {{#if MARCH_SPHERE}}
+{{#if MARCH_SEGMENT}}
+// Segment tracing (Galin et al. 2020, "Segment Tracing Using Local Lipschitz Bounds"): sphere tracing (below)
+// whose step may go as far as the distance over the largest rate at which it can fall along the next segment
+// of the ray, not over a bound for the whole region. iqc_segment_gain bounds that rate by interval arithmetic
+// on each instance's gradient over the segment's box (derived by the compiler, per operator); a step is at
+// most the segment and at least the plain sphere-tracing step, and the next candidate segment is twice the
+// step taken (κ = 2, the paper's choice). Short segments near a surface have tight bounds. A segment over
+// whose box interval arithmetic proves every instance's distance above the hit tolerance (iqc_segment_clear;
+// Mitchell 1990, "Robust ray intersection with interval arithmetic") holds nothing to hit: the step takes all
+// of it. Each step's bounds cost several evaluations of the distance (docs/accuracy.md: what they save and
+// what they cost).
+{{/if}}
 // Sphere tracing (Hart 1996): step by the distance bound. Starting inside a shape (a negative distance)
 // it marches to that shape's inner wall. At the step cap, iqc_at_step_cap decides (no holes at grazing
 // angles; a ray that only passed near a surface on its way is not a hit).
@@ -266,8 +278,16 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float t_far = iqc_far(ro, rd);
     if (t_far < 0.0) return -1.0;
 {{/if}}
+{{#if MARCH_SEGMENT}}
+    float seg = {{T_FAR}};  // the candidate segment's length: the whole ray at first
+{{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
+{{#if MARCH_SEGMENT}}
+        vec3 p = ro + t * rd;
+        vec2 h = iqc_scene(p);
+{{#else}}
         vec2 h = iqc_scene(ro + t * rd);
+{{/if}}
         steps++;
         if (i == 0 && h.x < 0.0) s = -1.0;
         float d = s * h.x;
@@ -283,7 +303,30 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         last = dn;
         last_t = t;
         last_id = h.y;
+{{#if MARCH_SEGMENT}}
+        float step = d;
+        if (d > 0.0) {
+            seg = max(seg, d);  // a plain step is always safe: the segment is never shorter
+            vec3 q = p + seg * rd;
+            vec3 lo = min(p, q), hi = max(p, q);
+            // An if, not a choice: rays whose segment is clear skip the gain's code (llvmpipe still runs it for a
+            // group of pixels where any one needs it).
+{{#if INSTRUMENT}}
+            iqc_bounds++;
+{{/if}}
+            if (iqc_segment_clear(lo, hi) > e) step = seg;
+            else {
+{{#if INSTRUMENT}}
+                iqc_bounds++;
+{{/if}}
+                step = min(d * iqc_segment_gain(lo, hi, rd), seg);
+            }
+            seg = 2.0 * step;
+        }
+        t += step;
+{{#else}}
         t += d;
+{{/if}}
         if (t > {{T_FAR}}) return -1.0;
     }
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
@@ -410,69 +453,6 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
             t = {{T_FAR}};
             step_len = t - t_prev;
         }
-    }
-    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
-}
-{{/if}}
-{{#if MARCH_SEGMENT}}
-// Segment tracing (Galin et al. 2020, "Segment Tracing Using Local Lipschitz Bounds"): a step may go as far
-// as the distance over the largest rate at which it can fall along the next segment of the ray, not over a
-// bound for the whole region. iqc_segment_gain bounds that rate by interval arithmetic on each instance's
-// gradient over the segment's box (derived by the compiler, per operator); a step is at most the segment
-// and at least the plain sphere-tracing step, and the next candidate segment is twice the step taken (κ = 2,
-// the paper's choice). Short segments near a surface have tight bounds. A segment over whose box interval
-// arithmetic proves every instance's distance above the hit tolerance (iqc_segment_clear; Mitchell 1990,
-// "Robust ray intersection with interval arithmetic") holds nothing to hit: the step takes all of it. Each
-// step's bounds cost several evaluations of the distance (docs/accuracy.md: what they save and what they cost).
-float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
-    float s = 1.0, t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20;
-    float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
-    id = -1;
-    steps = 0;
-{{#if SCENE_BOX}}
-    float t_far = iqc_far(ro, rd);
-    if (t_far < 0.0) return -1.0;
-{{/if}}
-    float seg = {{T_FAR}};  // the candidate segment's length: the whole ray at first
-    for (int i = 0; i < IQC_MAX_STEPS; i++) {
-        vec3 p = ro + t * rd;
-        vec2 h = iqc_scene(p);
-        steps++;
-        if (i == 0 && h.x < 0.0) s = -1.0;
-        float d = s * h.x;
-        float e = iqc_eps(t);
-        float dn = iqc_nearness(h);
-        if (dn < e) { id = int(h.y); return t; }
-{{#if EPS_CONSTANT}}
-        if (dn < best) { best = dn; best_t = t; best_id = h.y; }  // in tolerances at the end (a constant tolerance)
-{{#else}}
-        if (dn / e < best) { best = dn / e; best_t = t; best_id = h.y; }
-{{/if}}
-        prev = last;
-        last = dn;
-        last_t = t;
-        last_id = h.y;
-        float step = d;
-        if (d > 0.0) {
-            seg = max(seg, d);  // a plain step is always safe: the segment is never shorter
-            vec3 q = p + seg * rd;
-            vec3 lo = min(p, q), hi = max(p, q);
-            // An if, not a choice: rays whose segment is clear skip the gain's code (llvmpipe still runs it for a
-            // group of pixels where any one needs it).
-{{#if INSTRUMENT}}
-            iqc_bounds++;
-{{/if}}
-            if (iqc_segment_clear(lo, hi) > e) step = seg;
-            else {
-{{#if INSTRUMENT}}
-                iqc_bounds++;
-{{/if}}
-                step = min(d * iqc_segment_gain(lo, hi, rd), seg);
-            }
-            seg = 2.0 * step;
-        }
-        t += step;
-        if (t > {{T_FAR}}) return -1.0;
     }
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }

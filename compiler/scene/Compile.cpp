@@ -290,6 +290,8 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     }
     static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO", "MARCH_SEGMENT"};
     F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march())]);
+    // Segment tracing is sphere tracing with another step: one march function with both flags.
+    if (!opts_.per_instance && march() == March::Segment) F.insert("MARCH_SPHERE");
     if (opts_.per_instance) F.insert("LIPSCHITZ");
     // The step cap's rules (iqc_cone, iqc_nearness): only the distance-bound marches use them.
     if (!opts_.per_instance && march() != March::Fixed) F.insert("STEP_CAP_CONE");
