@@ -323,13 +323,23 @@ TEST_CASE("iqc render draws a Shadertoy shader as it is", "[cli][render]") {
     CHECK(img.pixel(4, 8)[0] > 0.99f);
     CHECK(img.pixel(28, 8)[0] < 0.01f);
     CHECK(img.pixel(28, 8)[1] == Approx(0.25).margin(0.01));
-    // The driver's errors count the file's own lines; a scene's options are refused.
-    auto bad = write_temp("bad.frag", "// a comment\nvoid mainImage(out vec4 c, in vec2 f) { c = vec4(undeclared); }\n");
+    // The driver's errors at the file's own lines and columns (FILE:LINE:COL, the line, a caret under the
+    // name the message quotes); a scene's options are refused.
+    auto bad = write_temp("bad.frag", "// a comment\nvoid mainImage(out vec4 c, in vec2 f) {\n\tc = vec4(undeclared);\n    c += nope(c);\n}\n");
     RunResult e = run_iqc("render " + bad.string() + " -o " + (temp_dir() / "bad.png").string());
     CHECK(e.exit_code == 1);
-    CHECK_THAT(e.err, Catch::Contains("rendering failed"));
-    CHECK_THAT(e.err, Catch::Contains("2("));
-    CHECK_THAT(e.err, Catch::Contains("undeclared"));
+    CHECK_THAT(e.err, Catch::Contains(bad.string() + ":3:11: error: `undeclared' undeclared\n"
+                                      "  \tc = vec4(undeclared);\n"
+                                      "            ^~~~~~~~~~\n"));
+    CHECK_THAT(e.err, Catch::Contains(bad.string() + ":4:10: error: no function with name 'nope'\n"
+                                      "      c += nope(c);\n"
+                                      "           ^~~~\n"));
+    CHECK_THAT(e.err, !Catch::Contains("0:3("));
+    // An error in no line of the file (Shadertoy's main calls a mainImage the file lacks): unlocated.
+    auto nomain = write_temp("nomain.frag", "void main_image(out vec4 c, in vec2 f) { c = vec4(1.0); }\n");
+    RunResult n = run_iqc("render " + nomain.string() + " -o " + (temp_dir() / "nomain.png").string());
+    CHECK(n.exit_code == 1);
+    CHECK_THAT(n.err, Catch::Contains("error: no function with name 'mainImage'"));
     RunResult s = run_iqc("render " + frag.string() + " -o " + png.string() + " --stats");
     CHECK(s.exit_code == 2);
     CHECK_THAT(s.err, Catch::Contains("--stats and --target need a scene"));

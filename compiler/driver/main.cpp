@@ -27,6 +27,7 @@
 #include "render/Render.h"
 #include "glsl/ShadertoyWrapper.h"
 #include "glsl/Names.h"
+#include "glsl/Validate.h"
 #include "glsl/Wgsl.h"
 #include "bench/Bench.h"
 #include "driver/Serve.h"
@@ -63,6 +64,7 @@ void tune_allocator() {
 
 // The PNG path of frame k of an animation: out.png -> out_0007.png.
 std::string printable(const std::string& s);
+void put(std::FILE* f, std::string_view text);
 
 std::string frame_path(const std::string& out, int k, int frames) {
     if (frames <= 1) return out;
@@ -79,7 +81,8 @@ double percentile(std::vector<float> v, double q) {
 }
 
 int render_command(const std::string& code, const iqc::ShaderInputs& inputs, bool webgl2, const std::string& output, const std::string& size, float time, int frames, float fps, bool stats,
-                   bool quiet, const std::function<iqc::CompileResult()>& instrumented) {
+                   bool quiet, const std::function<iqc::CompileResult()>& instrumented, const std::string& user_path = "",
+                   const std::string* user_code = nullptr) {
     iqc::render::RenderOptions ro;
     char rest = 0;
     if (std::sscanf(size.c_str(), "%dx%d%c", &ro.width, &ro.height, &rest) != 2 || ro.width < 1 || ro.height < 1) {
@@ -131,6 +134,17 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
         ro.frame = k;
         last = renderer->render(source, ro);
         if (!last.ok) {
+            // A shader the user wrote: the driver's messages at FILE:LINE:COL, with the line and a caret.
+            const std::string head = "fragment shader compile failed:\n";
+            if (user_code && last.error.rfind(head, 0) == 0) {
+                iqc::SourceManager sm;
+                iqc::Diagnostics diags(sm);
+                iqc::FileId f = sm.add(user_path, *user_code);
+                if (iqc::glsl::locate_shader_log(last.error.substr(head.size()), f, diags) > 0) {
+                    put(stderr, std::string(tty ? "\n" : "") + diags.render());
+                    return 1;
+                }
+            }
             std::fprintf(stderr, "%siqc: error: rendering failed: %s\n", tty ? "\n" : "", last.error.c_str());
             return 1;
         }
@@ -617,9 +631,9 @@ static int run(int argc, char** argv) {
                 std::fprintf(stderr, "iqc: error: cannot read '%s': %s\n", printable(r_input).c_str(), err.c_str());
                 return 1;
             }
-            code = "#line 1\n" + code;  // the driver's messages count the file's own lines
-            return render_command(code, iqc::ShaderInputs{}, false, r_output, r_size, r_time, r_frames, r_fps, false, quiet,
-                                  [] { return iqc::CompileResult{}; });
+            // The driver's messages count the file's own lines.
+            return render_command("#line 1\n" + code, iqc::ShaderInputs{}, false, r_output, r_size, r_time, r_frames, r_fps, false, quiet,
+                                  [] { return iqc::CompileResult{}; }, r_input, &code);
         }
     }
     auto report = [&](const std::string& path, bool changed) {
@@ -647,30 +661,12 @@ static int run(int argc, char** argv) {
             }
             iqc::glsl::ShadertoyWgsl w = iqc::glsl::shadertoy_to_wgsl(code);
             if (w.user_error) {
-                // glslang's "ERROR: iqc:LINE: message" lines, as FILE:LINE: error: message and the line
-                std::vector<std::string> lines;
-                for (size_t at = 0; at <= code.size();) {
-                    size_t nl = code.find('\n', at);
-                    lines.push_back(code.substr(at, nl == std::string::npos ? std::string::npos : nl - at));
-                    if (nl == std::string::npos) break;
-                    at = nl + 1;
-                }
-                std::istringstream log(w.log);
-                std::string l;
-                int errors = 0;
-                while (std::getline(log, l)) {
-                    const std::string head = "ERROR: iqc:";
-                    if (l.rfind(head, 0) != 0) continue;
-                    size_t colon = l.find(':', head.size());
-                    int line = std::atoi(l.substr(head.size(), colon - head.size()).c_str());
-                    std::string message = colon == std::string::npos ? l : l.substr(colon + 1);
-                    while (!message.empty() && message[0] == ' ') message.erase(0, 1);
-                    if (message.find("compilation terminated") != std::string::npos) continue;
-                    ++errors;
-                    std::string shown = line >= 1 && size_t(line) <= lines.size() ? lines[size_t(line) - 1] : "";
-                    put(stderr, fmt::format("{}:{}: error: {}\n", input, line, message) + (shown.empty() ? "" : "  " + shown + "\n"));
-                }
-                if (errors == 0) put(stderr, "iqc: error: glslang rejected " + input + ":\n" + w.log);
+                // glslang's "ERROR: iqc:LINE: message" lines, as FILE:LINE:COL: error: message, the line and a caret
+                iqc::SourceManager sm;
+                iqc::Diagnostics diags(sm);
+                iqc::FileId f = sm.add(input, code);
+                if (iqc::glsl::locate_shader_log(w.log, f, diags) > 0) put(stderr, diags.render());
+                else put(stderr, "iqc: error: glslang rejected " + input + ":\n" + w.log);
                 if (code.find("iChannel") != std::string::npos)
                     std::fprintf(stderr, "iqc: note: Shadertoy's iChannel textures are not declared in the WGSL translation\n");
                 return 1;

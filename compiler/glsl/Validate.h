@@ -5,6 +5,8 @@
 #include <mutex>
 #include <string>
 
+#include "source/Source.h"
+
 namespace iqc::glsl {
 
 enum class Profile { Es300, Core330 };
@@ -19,5 +21,14 @@ std::mutex& glslang_mutex();
 
 // Compiles and links `source` (a complete fragment shader with its #version line).
 ValidationResult validate_fragment(const std::string& source, Profile profile);
+
+// A GLSL compiler's log about a shader a user wrote (a .frag drawn or translated as it is), as located
+// diagnostics in `file` (the shader's text, its lines counted from 1 as `#line 1` makes the driver count them):
+// Mesa's `0:LINE(COL): error: message` (COL 1-based, in bytes; Mesa's column is the start of the construct it
+// rejects, not always of the token) and glslang's `ERROR: NAME:LINE: message` (no column: the caret goes under
+// the line's first non-blank character). Warnings stay warnings; lines of the log in neither form, and
+// glslang's "compilation terminated", are left out. Returns how many errors it added (0: the caller shows the
+// log as it is).
+size_t locate_shader_log(const std::string& log, FileId file, Diagnostics& diags);
 
 }  // namespace iqc::glsl
