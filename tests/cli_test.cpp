@@ -141,6 +141,23 @@ TEST_CASE("transform errors: not a 4×4 matrix, singular", "[cli]") {
                                              "```scene\n[[shapes]]\ntype = \"torus\"\ntransform = \"S((1, 0, 1))\"\n```\n");
     CHECK(s.exit_code == 1);
     CHECK_THAT(s.err, Catch::Contains("sing.md:13:14: error: the transform is singular"));
+    // Invertible, but scales 10³⁰ apart: not "singular" (a trial found that word for it)
+    RunResult c = compile_doc("cond.md", std::string(kTorus) +
+                                             "```scene\n[[shapes]]\ntype = \"torus\"\ntransform = \"[1e30 0 0 0; 0 1 0 0; 0 0 1 0; 0 0 0 1]\"\n```\n");
+    CHECK(c.exit_code == 1);
+    CHECK_THAT(c.err, Catch::Contains("cond.md:13:14: error: the transform is too badly conditioned to invert: its condition number is 1.4e+30"));
+    // The same scale on every axis is well conditioned: it compiles.
+    RunResult u = compile_doc("uni.md", std::string(kTorus) +
+                                            "```scene\n[[shapes]]\ntype = \"torus\"\ntransform = \"S((1e20, 1e20, 1e20))\"\n```\n");
+    CHECK(u.exit_code == 0);
+    RunResult ut = run_iqc((temp_dir() / "uni.md").string() + " -o -");
+    CHECK_THAT(ut.out, Catch::Contains("torus_1_to_object = mat3(1.0e-20);"));
+    // A translation with it: the adjugate's inverse offset is −L⁻¹t.
+    RunResult t = compile_doc("unit.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\ntransform = "
+                                                              "\"T((1e20, 2e20, 0))⋅S((1e20, 1e20, 1e20))\"\n```\n");
+    CHECK(t.exit_code == 0);
+    RunResult tt = run_iqc((temp_dir() / "unit.md").string() + " -o -");
+    CHECK_THAT(tt.out, Catch::Contains("vec3(-1.0, -2.0, 0.0)"));
 }
 
 TEST_CASE("parameter overrides name real parameters with the right size", "[cli]") {

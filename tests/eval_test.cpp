@@ -58,6 +58,11 @@ TEST_CASE("eval errors: unknown parameter, wrong size, bad value, invalid module
     RunResult c = run_iqc("eval " + f.string() + " --set 'p=(1,,2)'");
     CHECK(c.exit_code == 1);
     CHECK_THAT(c.err, Catch::Contains("--set p:1:4: error: expected an expression, found ','"));
+    // A value and then more (a trial's `p=(1,2,3);t=2`): an error at the extra statement, not silently dropped.
+    RunResult more = run_iqc("eval " + f.string() + " --set 'p=(1,2,3);t=(1,2)'");
+    CHECK(more.exit_code == 1);
+    CHECK_THAT(more.err, Catch::Contains("--set p:1:9: error: the value of '--set p' must be one expression; this is more"));
+    CHECK_THAT(more.err, Catch::Contains("  (1,2,3);t=(1,2)\n          ^"));
     RunResult u = run_iqc("eval " + f.string() + " --set novalue");
     CHECK(u.exit_code == 2);
     auto bad = write_temp("bad.iql", "y = x +\n");

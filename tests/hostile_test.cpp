@@ -341,6 +341,17 @@ TEST_CASE("a 6-vector never reaches the emitter's swizzles: empty and path-like 
                     "unknown shape '../../stdlib/torus'");
     fs::path abs = generated("absolute.iq", "[[shapes]]\ntype = \"" + std::string(IQC_SOURCE_DIR) + "/stdlib/torus\"\n");
     require_located(run_bounded(abs.string() + " -o -"), abs.string() + ":2:8", "unknown shape");
+    // Module names follow the same rule where they are defined: [modules] keys and ❤: lines.
+    const std::string sphere = " = \"\"\"\nshape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n\"\"\"\n";
+    // {TOML key, the name it reads as}
+    for (auto [key, name] : std::vector<std::pair<std::string, std::string>>{{"a/b", "a/b"}, {"", ""}, {".hidden", ".hidden"},
+                                                                             {"back\\\\slash", "back\\slash"}}) {
+        fs::path m = generated("module_name.iq", "[modules]\n\"" + key + "\"" + sphere + "[[shapes]]\ntype = \"sphere\"\n");
+        INFO(name);
+        require_located(run_bounded(m.string() + " -o -"), m.string() + ":2:1", "'" + name + "' cannot name a module: a name is not empty");
+    }
+    fs::path doc = generated("module_name.md", "❤: ../up\n```iheartla\nshape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n```\n");
+    require_located(run_bounded(doc.string() + " -o -"), doc.string() + ":1:1", "'../up' cannot name a module");
 }
 
 TEST_CASE("property: every input of the fuzz corpora ends with exit 0 or 1 within 10 s and 2 GB", "[hostile][corpus]") {

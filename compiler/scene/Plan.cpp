@@ -202,11 +202,36 @@ struct Planner {
                                 "supported", v[12], v[13], v[14], v[15]));
             return false;
         }
+        // Invertible when the linear part L is: its condition number ‖L‖_F·‖L⁻¹‖_F, L⁻¹ = adj(L)/det(L) (cofactors),
+        // at most 10¹² (past that, neither the inverse nor float32 arithmetic with it means anything).
+        const double a = v[0], b = v[1], c = v[2], e = v[4], f = v[5], g = v[6], h = v[8], i = v[9], j = v[10];
+        const double cof[9] = {f * j - g * i, -(e * j - g * h), e * i - f * h, -(b * j - c * i), a * j - c * h,
+                               -(a * i - b * h), b * g - c * f, -(a * g - c * e), a * f - b * e};
+        const double det = a * cof[0] + b * cof[1] + c * cof[2];
+        double nl = 0, na = 0;
+        for (int k : {0, 1, 2, 4, 5, 6, 8, 9, 10}) nl += v[size_t(k)] * v[size_t(k)];
+        for (double x : cof) na += x * x;
+        const double cond = std::sqrt(nl) * std::sqrt(na) / std::fabs(det);
+        if (det == 0 || !std::isfinite(cond)) {
+            d.error(m->ret->value->span, "the transform is singular (it flattens space and has no inverse)");
+            return false;
+        }
+        if (cond > 1e12) {
+            d.error(m->ret->value->span, fmt::format("the transform is too badly conditioned to invert: its condition number is "
+                                                     "{:.2g} (at most 10¹²: float32 keeps 7 digits)", cond));
+            return false;
+        }
         bool singular = false;
         std::vector<double> inv = ir::mat_inverse(v, 4, &singular);
         if (singular) {
-            d.error(m->ret->value->span, "the transform is singular (it flattens space and has no inverse)");
-            return false;
+            // Gauss-Jordan's pivot test is relative to the largest entry, the homogeneous 1 included: a uniform
+            // scale of 10²⁰ fails it. The adjugate's inverse, then: [L⁻¹, −L⁻¹t].
+            inv.assign(16, 0.0);
+            for (int r = 0; r < 3; ++r) {
+                for (int k = 0; k < 3; ++k) inv[size_t(4 * r + k)] = cof[3 * k + r] / det;
+                inv[size_t(4 * r + 3)] = -(inv[size_t(4 * r)] * v[3] + inv[size_t(4 * r + 1)] * v[7] + inv[size_t(4 * r + 2)] * v[11]);
+            }
+            inv[15] = 1;
         }
         plan.has_transform = true;
         plan.inv_linear = {inv[0], inv[1], inv[2], inv[4], inv[5], inv[6], inv[8], inv[9], inv[10]};

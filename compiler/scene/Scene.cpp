@@ -96,6 +96,14 @@ size_t toml_too_deep(std::string_view t) {
 }
 
 constexpr size_t kMaxLights = 256;
+// The error for a module name that could not be a file's (ModuleLibrary::is_file_name): `type` names a scene's
+// modules, an included file and a .iql file alike.
+std::string bad_module_name(const std::string& name) {
+    return fmt::format("'{}' cannot name a module: a name is not empty, does not start with '.', holds no '/', '\\' or "
+                       "control characters, and has at most 200 bytes (it names a .iql file too)",
+                       name.size() > 60 ? name.substr(0, 60) + "…" : name);
+}
+
 const std::vector<std::string> kTopKeys = {"title", "include", "modules", "camera", "render", "effects", "lights", "shapes", "blends"};
 const std::vector<std::string> kShapeKeys = {"name", "type", "material", "transform", "shape_params", "material_params", "bound",
                                              "glow", "glow_radius"};
@@ -422,6 +430,10 @@ void SceneReader::read_modules(const toml::table& root) {
             for (auto&& [k, v] : *n->as_table()) {
                 auto src = get_string(v, std::string(k.str()));
                 if (!src) continue;
+                if (!ModuleLibrary::is_file_name(std::string(k.str()))) {
+                    d_.error(span_of(k.source()), bad_module_name(std::string(k.str())));
+                    continue;
+                }
                 s_.modules.push_back(string_source(v, *src, std::string(k.str()), "scene"));
             }
         }
@@ -809,6 +821,8 @@ void read_document(SourceManager& sm, Diagnostics& d, SceneDesc& s) {
             if (pending_name.empty()) {
                 d.error({s.file, lines[li].first, lines[li].second},
                         "this iheartla block has no module name: put a line '❤: name' before it");
+            } else if (!ModuleLibrary::is_file_name(pending_name)) {
+                d.error(pending_span, bad_module_name(pending_name));
             } else if (auto it = by_name.find(pending_name); it != by_name.end()) {
                 s.modules[it->second].ranges.push_back({body_begin, body_end});  // blocks with one name join
             } else {
