@@ -295,6 +295,9 @@ TEST_CASE("user text in comments cannot inject code", "[hostile]") {
         if (std::string(target) != "wgsl") CHECK(comments_with_names >= 4);
         else CHECK_THAT(b.run.out, Catch::StartsWith("// title #define IQC_BACKGROUND"));
     }
+    // A module name with a newline is no name at all (it could not be a .iql file's): a located error.
+    fs::path nl = generated("newline_module.iq", "[modules]\n\"evil\\nint injected_module;\" = \"\"\"\nshape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n\"\"\"\n");
+    require_located(run_bounded(nl.string() + " -o -"), nl.string() + ":2:1", "'evil\\nint injected_module;' cannot name a module");
 }
 
 TEST_CASE("comment_text: one line, no comment delimiters, no continuation, valid UTF-8", "[hostile]") {
