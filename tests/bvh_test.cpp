@@ -3,6 +3,7 @@
 // same depth everywhere with at most `branching` children per node.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <fmt/format.h>
@@ -197,4 +198,75 @@ function plane(p: ℝ³) -> ℝ {
     CHECK_FALSE(ir::support_radius(m, 0, 0, V{{}, {{-1, -1}}}));
     // The answer does not depend on the order of evaluation: the same twice.
     CHECK(ir::support_radius(m, 1, 0, V{{}, {{0.3, 0.3}, {0.08, 0.08}}}) == torus);
+}
+
+TEST_CASE("find_instance_lattice: full and partly filled lattices in any member order, none for other layouts", "[bvh][lattice]") {
+    // Members listed x fastest, then z, then y (bench/rings.sh's order), spacing (1, 0.5, 1), radius 0.4.
+    auto rings = [](int n, int side) {
+        std::vector<BoundingSphere> s;
+        for (int i = 0; i < n; ++i)
+            s.push_back({{double(i % side) - side / 2.0, (i / (side * side)) * 0.5 - 0.7, double((i / side) % side) - side / 2.0}, 0.4});
+        return s;
+    };
+    // k = base + Σ stride·cell for every member, each cell's centre = origin + cell·spacing.
+    auto check = [](const std::vector<BoundingSphere>& s, const InstanceLattice& L) {
+        for (size_t k = 0; k < s.size(); ++k) {
+            std::array<long long, 3> c{};
+            for (size_t a = 0; a < 3; ++a) {
+                c[a] = std::llround((s[k].center[a] - L.origin[a]) / L.spacing[a]);
+                CHECK(c[a] >= 0);
+                CHECK(c[a] < L.n[a]);
+                CHECK(std::fabs(L.origin[a] + double(c[a]) * L.spacing[a] - s[k].center[a]) < 1e-9);
+            }
+            CHECK(L.base + L.stride[0] * c[0] + L.stride[1] * c[1] + L.stride[2] * c[2] == (long long)k);
+        }
+    };
+    InstanceLattice full = find_instance_lattice(rings(1000, 10));
+    REQUIRE(full.found());
+    CHECK(full.n == std::array<int, 3>{10, 10, 10});
+    CHECK(full.spacing[1] == Approx(0.5));
+    CHECK(full.stride == std::array<long long, 3>{1, 100, 10});
+    CHECK(full.back_axis == -1);
+    CHECK(full.radius == 0.4);
+    check(rings(1000, 10), full);
+    // 3,000 rings on 18 × 18 cells a layer: ten layers, the last one with 84 members.
+    InstanceLattice partial = find_instance_lattice(rings(3000, 18));
+    REQUIRE(partial.found());
+    CHECK(partial.n == std::array<int, 3>{18, 10, 18});
+    CHECK(partial.back_axis == 1);  // y: one layer down is filled
+    CHECK(partial.members == 3000);
+    check(rings(3000, 18), partial);
+    // Reversed order: negative strides.
+    std::vector<BoundingSphere> rev = rings(100, 10);
+    std::reverse(rev.begin(), rev.end());
+    InstanceLattice r = find_instance_lattice(rev);
+    REQUIRE(r.found());
+    CHECK(r.stride[0] == -1);
+    check(rev, r);
+    // A plane of tori (bench/instances_100.iq): one cell thick along z.
+    std::vector<BoundingSphere> plane;
+    for (int k = 0; k < 100; ++k) plane.push_back({{k % 10 - 4.5, k / 10 - 4.5, 0}, 0.4});
+    InstanceLattice p = find_instance_lattice(plane);
+    REQUIRE(p.found());
+    CHECK(p.n == std::array<int, 3>{10, 10, 1});
+    CHECK(p.stride[2] == 0);
+    check(plane, p);
+    // Not lattices: jittered centres, two members in one cell, an order not affine in the cells (a serpentine),
+    // most cells empty, an empty cell inside the filled range.
+    std::vector<BoundingSphere> jitter = rings(100, 10);
+    jitter[37].center[0] += 0.01;
+    CHECK_FALSE(find_instance_lattice(jitter).found());
+    std::vector<BoundingSphere> twice = rings(100, 10);
+    twice[5] = twice[6];
+    CHECK_FALSE(find_instance_lattice(twice).found());
+    std::vector<BoundingSphere> snake = rings(100, 10);
+    for (int k = 0; k < 100; ++k)
+        if ((k / 10) % 2) snake[size_t(k)].center[0] = double(9 - k % 10) - 5;
+    CHECK_FALSE(find_instance_lattice(snake).found());
+    std::vector<BoundingSphere> sparse = {{{0, 0, 0}, 0.4}, {{1, 0, 1}, 0.4}, {{2, 0, 2}, 0.4}, {{3, 0, 3}, 0.4}};  // a diagonal
+    CHECK_FALSE(find_instance_lattice(sparse).found());
+    std::vector<BoundingSphere> hole = rings(100, 10);
+    hole.erase(hole.begin() + 50);  // the rest renumbered: k no longer affine
+    CHECK_FALSE(find_instance_lattice(hole).found());
+    CHECK_FALSE(find_instance_lattice({{{0, 0, 0}, 1}}).found());
 }

@@ -90,10 +90,11 @@ TEST_CASE("1000 rings are one loop and one case of each dispatch on every target
         REQUIRE(c.result.exit_code == 0);  // glslang accepted it
         const std::string& code = c.result.code;
         if (t == Target::Shadertoy) {
-            // Constant parameters: a bound derived from the ring (ir/Support.h), hence a hierarchy, whose last
-            // level is one member loop calling the shape once.
-            CHECK(count(code, "ring_lambert: 1000 instances, a bounding-box hierarchy of 3 levels") == 1);
-            CHECK(count(code, "ring(q, ") == 2);  // and once in iqc_distance_of (the normal's taps)
+            // Constant parameters: a bound derived from the ring (ir/Support.h); the rings' spheres fill a lattice,
+            // so the cells near the point are found by arithmetic: the nearest cell's member, then one loop over
+            // the cells within reach, each calling the shape once.
+            CHECK(count(code, "ring_lambert: 1000 instances on a 10×10×10 lattice: the cells within reach") == 1);
+            CHECK(count(code, "ring(q") == 3);  // and once in iqc_distance_of (the normal's taps)
         } else {
             // Sliders: the ring's extent over its slider range (up to (2, 2): 4 units on a grid of 1) would make
             // spheres that overlap too much to skip anything, so no bound is derived. One loop, 16 instances per
@@ -110,10 +111,10 @@ TEST_CASE("1000 rings are one loop and one case of each dispatch on every target
         CHECK(count(code, "c = lambert_light(") == 1);
         CHECK(count(code, "if (id ==") < 5);
     }
-    // Shadertoy: the grid's offsets are arithmetic on the member's index (a lattice, listed in the
-    // hierarchy's leaf order), and a value every ring shares is one constant.
+    // Shadertoy: the grid's offsets are arithmetic on the member's index, and a value every ring shares is one
+    // constant.
     Compiled st = compile_path(path);
-    CHECK_THAT(st.result.code, Catch::Contains("vec3 q = p + vec3(5.0 - float(ring_lambert_tree_members["));
+    CHECK_THAT(st.result.code, Catch::Contains("vec3 q = p + vec3(5.0 - float(nearest % 10)"));
     CHECK(count(st.result.code, "const vec2 ring_shape_t = vec2(0.3, 0.08);") == 1);
 }
 
@@ -238,26 +239,39 @@ TEST_CASE("a lattice of 1000 tori draws the reference with or without bound", "[
     CHECK(changed <= W * H / 200);
 }
 
-TEST_CASE("rings with bound are a bounding-volume hierarchy: few shapes per scene evaluation, the reference's picture",
-          "[instancing][render]") {
-    // 1,000 rings each with `bound`: the group's loop visits the hierarchy's nodes whose spheres are nearer than
-    // the nearest distance found so far (without the hierarchy every step tested all 1,000 spheres: a frame
-    // 8.5 times that of 10 rings on llvmpipe). Members keep their ids and their lattice (the leaves list them
-    // through a table).
+TEST_CASE("rings with bound: a lattice on a grid, a bounding-volume hierarchy otherwise: few shapes per scene evaluation, the "
+          "reference's picture",
+          "[instancing][render][lattice]") {
+    // 1,000 rings each with `bound`: on a grid, the members whose cells are within reach of the point (arithmetic on
+    // the cell, no tables); jittered and tilted, the hierarchy's nodes whose boxes are nearer than the nearest
+    // distance found so far (without either every step tested all 1,000 spheres: a frame 8.5 times that of 10
+    // rings on llvmpipe). 700 rings fill 8 layers of 9 × 9 and 52 cells of a 9th: a lattice with empty cells
+    // (here in WebGL2 GLSL: the lattice needs no tables on any target).
     const int W = 64, H = 36;
-    for (bool irregular : {false, true}) {
+    for (int variant : {0, 1, 2}) {
+        const bool irregular = variant == 1;
+        const int n = variant == 2 ? 700 : 1000;
         CompileOptions o;
-        o.target = irregular ? Target::WebGL2 : Target::Shadertoy;
+        o.target = irregular || variant == 2 ? Target::WebGL2 : Target::Shadertoy;
         o.ids = true;
-        auto path = write_temp(fmt::format("rings_bound_{}.iq", irregular), rings_scene(1000, irregular, 0.4));
+        auto path = write_temp(fmt::format("rings_bound_{}.iq", variant), rings_scene(n, irregular, 0.4));
         Compiled c = compile_path(path, o);
-        INFO((irregular ? "irregular, webgl2" : "grid, shadertoy") << "\n" << c.diagnostics);
+        INFO((irregular ? "irregular, webgl2" : variant == 2 ? "partial grid, webgl2" : "grid, shadertoy") << "\n" << c.diagnostics);
         REQUIRE(c.result.exit_code == 0);
-        CHECK_THAT(c.result.code, Catch::Contains("ring_lambert: 1000 instances, a bounding-box hierarchy of 3 levels"));
-        // One member loop at the hierarchy's last level, and iqc_distance_of (the normal's taps).
-        CHECK(count(c.result.code, "ring(q, ") == 2);
-        if (!irregular)  // the lattice stays arithmetic on the member's index
-            CHECK_THAT(c.result.code, Catch::Contains("vec3(5.0 - float(ring_lambert_tree_members["));
+        if (irregular) {
+            CHECK_THAT(c.result.code, Catch::Contains("ring_lambert: 1000 instances, a bounding-box hierarchy of 3 levels"));
+            // One member loop at the hierarchy's last level, and iqc_distance_of (the normal's taps).
+            CHECK(count(c.result.code, "ring(q, ") == 2);
+        } else {
+            CHECK_THAT(c.result.code, Catch::Contains(variant == 2 ? "ring_lambert: 700 instances on a 9×9×9 lattice: the cells within reach"
+                                                                   : "ring_lambert: 1000 instances on a 10×10×10 lattice: the cells within reach"));
+            CHECK_THAT(c.result.code, !Catch::Contains("bounding-box hierarchy"));
+            // The nearest cell's member, the cells' loop, and iqc_distance_of.
+            CHECK(count(c.result.code, "ring(q") == 3);
+            // The lattice stays arithmetic on the member's index; empty cells are skipped.
+            CHECK_THAT(c.result.code, Catch::Contains(variant == 2 ? "vec3(4.5 - float(nearest % 9)" : "vec3(5.0 - float(nearest % 10)"));
+            if (variant == 2) CHECK_THAT(c.result.code, Catch::Contains(">= 700"));
+        }
         render::RenderResult r = render_compiled(c.result, W, H);
         INFO(r.error);
         REQUIRE(r.ok);
@@ -284,7 +298,7 @@ TEST_CASE("rings with bound are a bounding-volume hierarchy: few shapes per scen
     }
 }
 
-TEST_CASE("rings without bound get one derived from the shape: a hierarchy, few shapes per evaluation, the reference's picture",
+TEST_CASE("rings without bound get one derived from the shape: a lattice, few shapes per evaluation, the reference's picture",
           "[instancing][render][bvh]") {
     // A group of 48 or more instances without `bound` gets the radius interval arithmetic proves contains the
     // shape (ir/Support.h): the ring's (0.3, 0.08) is within 0.38 of its origin; the derived radius is a
@@ -296,7 +310,7 @@ TEST_CASE("rings without bound get one derived from the shape: a hierarchy, few 
     Compiled c = compile_path(path, o);
     INFO(c.diagnostics);
     REQUIRE(c.result.exit_code == 0);
-    CHECK_THAT(c.result.code, Catch::Contains("ring_lambert: 1000 instances, a bounding-box hierarchy of 3 levels"));
+    CHECK_THAT(c.result.code, Catch::Contains("ring_lambert: 1000 instances on a 10×10×10 lattice"));
     CHECK_THAT(c.result.code, Catch::Contains("// radius of the bounding sphere, derived from the shape"));
     std::string code = c.result.code;
     size_t at = code.find("const float ring_lambert_bound = ");
@@ -340,7 +354,9 @@ TEST_CASE("the hierarchy serves the unbounded scene only for exact shapes", "[in
         Compiled c = compile_path(write_temp(fmt::format("rings_soft_{}.iq", exact), s));
         INFO(c.diagnostics);
         REQUIRE(c.result.exit_code == 0);
-        CHECK(count(c.result.code, "a bounding-box hierarchy of") == (exact ? 2 : 1));
+        // iqc_scene: the lattice; iqc_scene_unbounded: the hierarchy for an exact shape.
+        CHECK(count(c.result.code, "100 instances on a 4×7×4 lattice") == 1);
+        CHECK(count(c.result.code, "a bounding-box hierarchy of") == (exact ? 1 : 0));
         CHECK(count(c.result.code, "{  // ring_lambert: 100 instances (unrolled by 2)") == (exact ? 0 : 1));  // every member
     }
 }
@@ -368,7 +384,8 @@ TEST_CASE("small groups with bound compile on every target: lattices, repeats, c
             Compiled c = compile_path(write_temp(name + ".iq", text), o);
             INFO(name << " " << target_name(t) << "\n" << c.diagnostics << c.result.internal);
             CHECK(c.result.exit_code == 0);
-            CHECK_THAT(c.result.code, Catch::Contains("a bounding-box hierarchy of"));
+            // Rings fill a lattice (the last layer in part); the spheres' layouts are none.
+            CHECK_THAT(c.result.code, Catch::Contains(name.rfind("rings", 0) == 0 ? " lattice: the cells within reach" : "a bounding-box hierarchy of"));
         }
 }
 
@@ -411,7 +428,7 @@ TEST_CASE("a hierarchy node standing in for its members is never a hit", "[insta
 TEST_CASE("a bounded group too large for a hierarchy on Shadertoy is told so, located", "[instancing][bvh]") {
     // Past 2,048 members the hierarchy's tables would be code (llvmpipe compiles them for minutes): the group is
     // one loop there, and said to be (it was silent; stop 20's trial).
-    auto path = write_temp("rings_2049.iq", rings_scene(2049, false, 0.4));
+    auto path = write_temp("rings_2049.iq", rings_scene(2049, true, 0.4));
     Compiled toy = compile_path(path);
     REQUIRE(toy.result.exit_code == 0);
     CHECK_THAT(toy.diagnostics, Catch::Contains("rings_2049.iq:39:8: warning: 2049 instances of 'ring' with `bound` are marched in "
@@ -422,6 +439,11 @@ TEST_CASE("a bounded group too large for a hierarchy on Shadertoy is told so, lo
     Compiled web = compile_path(path, o);
     REQUIRE(web.result.exit_code == 0);
     CHECK(web.diagnostics.find("bounding-volume hierarchy") == std::string::npos);
-    Compiled small = compile_path(write_temp("rings_2048.iq", rings_scene(2048, false, 0.4)));
+    Compiled small = compile_path(write_temp("rings_2048.iq", rings_scene(2048, true, 0.4)));
     CHECK(small.diagnostics.find("bounding-volume hierarchy") == std::string::npos);
+    // On a grid the group needs no tables at any size: a lattice, no warning.
+    Compiled grid = compile_path(write_temp("rings_grid_2049.iq", rings_scene(2049, false, 0.4)));
+    REQUIRE(grid.result.exit_code == 0);
+    CHECK(grid.diagnostics.find("bounding-volume hierarchy") == std::string::npos);
+    CHECK_THAT(grid.result.code, Catch::Contains("2049 instances on a 15×10×15 lattice"));
 }

@@ -407,6 +407,7 @@ struct FunctionEmitter {
             case Op::Sub: return a(0) + " - " + a(1);
             case Op::IntDiv: return a(0) + " / " + a(1);
             case Op::IntMod: return a(0) + " % " + a(1);
+            case Op::FloorInt: return "int(floor(" + plain(0) + "))";
             case Op::Mul: {
                 const Type& lt = f.body[in.args[0]].type;
                 const Type& rt = f.body[in.args[1]].type;

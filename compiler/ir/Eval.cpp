@@ -162,6 +162,9 @@ void run_op(const Instr& in, const Arg* a, double* r) {
         case Op::Sub: return each2([](double x, double y) { return x - y; });
         case Op::IntDiv: return each2([](double x, double y) { return std::floor(x / y); });
         case Op::IntMod: return each2([](double x, double y) { return x - y * std::floor(x / y); });
+        case Op::FloorInt:
+            r[0] = std::floor(a[0].at(0));
+            return;
         case Op::Hadamard: return each2([](double x, double y) { return x * y; });
         case Op::Div: return each2([](double x, double y) { return x / y; });
         case Op::Neg:

@@ -98,6 +98,8 @@ Type result_type(Op op, const std::vector<Type>& a, int aux) {
         case Op::IntDiv:
         case Op::IntMod:
             return a[0].kind == Type::Integer && a[1].kind == Type::Integer ? Type::integer() : Type{};
+        case Op::FloorInt:
+            return a[0].is_scalar() && a[0].kind != Type::Integer ? Type::integer() : Type{};
         case Op::Add:
         case Op::Sub:
             if (a[0].kind == Type::Integer && a[1].kind == Type::Integer) return Type::integer();

@@ -61,6 +61,7 @@ namespace iqc::ir {
     X(Switch, -1)     /* args: selector (ℤ), default, cases; data: each case's [lo, hi) */ \
     X(IntDiv, 2)      /* ℤ ÷ ℤ rounded down (operands ≥ 0: GLSL's a / b) */              \
     X(IntMod, 2)      /* ℤ mod ℤ: a - b⌊a/b⌋ (operands ≥ 0: GLSL's a % b) */            \
+    X(FloorInt, 1)    /* ℝ -> ℤ: ⌊x⌋ (GLSL's int(floor(x))); x within ±2³¹ */           \
     X(Element, 1)     /* aux: 0-based index of an array's element */                    \
     X(At, -1)         /* args: an array, vector or matrix, then 0-based indices (values, \
                          rounded; clamped to the range): a[i], v[i], M[i][j] */

@@ -395,6 +395,9 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
         case Op::IntMod:
             if (comp(*a[1], 0).lo > 0) x.c = {{0, comp(*a[1], 0).hi - 1}};
             break;
+        case Op::FloorInt:
+            x.c = {{std::floor(comp(*a[0], 0).lo), std::floor(comp(*a[0], 0).hi)}};
+            break;
         case Op::Compare:
             x.c = {{0, 1}};
             if (a[0]->c.size() == 1 && a[1]->c.size() == 1) {

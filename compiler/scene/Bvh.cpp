@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 #include <numeric>
 
@@ -167,6 +168,84 @@ BoundsTree build_bounds_tree(const std::vector<BoundingSphere>& members, int bra
     std::iota(all.begin(), all.end(), 0);
     b.build(all, 0, depth);
     return std::move(b.tree);
+}
+
+InstanceLattice find_instance_lattice(const std::vector<BoundingSphere>& members) {
+    InstanceLattice L;
+    const size_t N = members.size();
+    if (N < 2) return {};
+    double extent = 0;
+    for (size_t a = 0; a < 3; ++a) {
+        double lo = INFINITY, hi = -INFINITY;
+        for (const auto& m : members) lo = std::min(lo, m.center[a]), hi = std::max(hi, m.center[a]);
+        extent = std::max({extent, hi - lo, std::fabs(lo), std::fabs(hi)});
+    }
+    const double tol = 1e-6 * std::max(extent, 1e-6);
+    for (size_t a = 0; a < 3; ++a) {
+        std::vector<double> v;
+        for (const auto& m : members) v.push_back(m.center[a]);
+        std::sort(v.begin(), v.end());
+        std::vector<double> distinct = {v[0]};
+        for (double x : v)
+            if (x - distinct.back() > tol) distinct.push_back(x);
+        L.origin[a] = distinct.front();
+        L.n[a] = int(distinct.size());
+        if (distinct.size() > 1) {
+            L.spacing[a] = (distinct.back() - distinct.front()) / double(distinct.size() - 1);
+            if (!(L.spacing[a] > 4 * tol)) return {};
+            for (size_t j = 0; j < distinct.size(); ++j)
+                if (std::fabs(distinct[j] - (L.origin[a] + double(j) * L.spacing[a])) > tol) return {};
+        }
+    }
+    const size_t cells = size_t(L.n[0]) * size_t(L.n[1]) * size_t(L.n[2]);
+    if (cells < N || cells > 2 * N) return {};
+    // Each member's cell; every cell once (N members in N cells, none twice).
+    std::vector<long long> member_of(cells, -1);
+    std::vector<std::array<long long, 3>> cell(N);
+    for (size_t k = 0; k < N; ++k) {
+        size_t flat = 0, mul = 1;
+        for (size_t a = 0; a < 3; ++a) {
+            const double u = (members[k].center[a] - L.origin[a]) / L.spacing[a];
+            const double r = std::round(u);
+            if (std::fabs(members[k].center[a] - (L.origin[a] + r * L.spacing[a])) > tol || r < 0 || r >= L.n[a]) return {};
+            cell[k][a] = (long long)r;
+            flat += size_t(r) * mul;
+            mul *= size_t(L.n[a]);
+        }
+        if (member_of[flat] >= 0) return {};
+        member_of[flat] = (long long)k;
+        L.radius = std::max(L.radius, members[k].radius);
+    }
+    // k = base + Σ stride_a · cell_a: base from cell (0, 0, 0), each stride from the next cell along its axis.
+    L.base = member_of[0];
+    L.members = (long long)N;
+    if (L.base < 0) return {};
+    for (size_t a = 0, mul = 1; a < 3; mul *= size_t(L.n[a]), ++a) {
+        if (L.n[a] > 1 && member_of[mul] < 0) return {};
+        L.stride[a] = L.n[a] > 1 ? member_of[mul] - L.base : 0;
+    }
+    auto affine = [&](size_t i, size_t j, size_t l) {
+        return L.base + L.stride[0] * (long long)i + L.stride[1] * (long long)j + L.stride[2] * (long long)l;
+    };
+    for (size_t k = 0; k < N; ++k)
+        if (affine(size_t(cell[k][0]), size_t(cell[k][1]), size_t(cell[k][2])) != (long long)k) return {};
+    if (cells == N) return L;
+    // Empty cells: outside [0, N), with the cell one step back along the axis of the largest stride filled.
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+        if (std::llabs(L.stride[size_t(a)]) > std::llabs(L.stride[size_t(axis)])) axis = a;
+    L.back_axis = axis;
+    const size_t step = axis == 0 ? 1 : axis == 1 ? size_t(L.n[0]) : size_t(L.n[0]) * size_t(L.n[1]);
+    for (size_t l = 0, flat = 0; l < size_t(L.n[2]); ++l)
+        for (size_t j = 0; j < size_t(L.n[1]); ++j)
+            for (size_t i = 0; i < size_t(L.n[0]); ++i, ++flat) {
+                if (member_of[flat] >= 0) continue;
+                const long long k = affine(i, j, l);
+                if (k >= 0 && k < (long long)N) return {};
+                const size_t at[3] = {i, j, l};
+                if (at[axis] == 0 || member_of[flat - step] < 0) return {};
+            }
+    return L;
 }
 
 }  // namespace iqc

@@ -56,4 +56,30 @@ BoundingBox box_of(const BoundingSphere& s);
 // node, splitting each set at the median of its centres along their widest axis.
 BoundsTree build_bounds_tree(const std::vector<BoundingSphere>& members, int branching);
 
+// Members whose spheres' centres fill a regular axis-aligned lattice, one member a cell: member k's centre is
+// origin + (i·spacing₀, j·spacing₁, l·spacing₂) for the one cell (i, j, l) ∈ [0, n₀)×[0, n₁)×[0, n₂) with
+// k = base + i·stride₀ + j·stride₁ + l·stride₂. Found, the scene function needs no tables to find the members
+// near a point (the hand-written shader's "visit only the cells that can hold the nearest", Quilez's domain
+// repetition with neighbours): a member whose sphere is no nearer than a distance already found cannot
+// lower the minimum (Hart 1996 §4), and the cells whose centres lie within that distance plus the radius of
+// the point, per axis, are an index box.
+struct InstanceLattice {
+    std::array<double, 3> origin{0, 0, 0};   // world centre of cell (0, 0, 0)
+    std::array<double, 3> spacing{1, 1, 1};  // world units (> 0; 1 on an axis of one cell)
+    std::array<int, 3> n{0, 0, 0};           // cells per axis; all 0: no lattice
+    std::array<long long, 3> stride{0, 0, 0};
+    long long base = 0;
+    long long members = 0;  // N: cells whose k lies outside [0, N) are empty (a partly filled last layer)
+    // Where some cell is empty: the axis along which the cell one step back (index − 1) of every empty cell is
+    // filled (the nearest cell's stand-in); -1 when every cell is filled.
+    int back_axis = -1;
+    double radius = 0;  // the largest sphere's radius (world units)
+    bool found() const { return n[0] > 0; }
+};
+
+// The lattice of `members` (n ≥ 2), or none (n all 0) when their centres are not one (to 10⁻⁶ of the extent),
+// a cell holds two members, member indices are not affine in the cells, more than half the cells are empty,
+// or an empty cell's k falls in [0, N) or has no filled cell one step back along one axis.
+InstanceLattice find_instance_lattice(const std::vector<BoundingSphere>& members);
+
 }  // namespace iqc

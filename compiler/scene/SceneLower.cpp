@@ -81,6 +81,9 @@ struct Item {
     };
     std::vector<TreeLevel> tree_globals;
     Field tree_order;
+    // A group with `bound` whose spheres fill a lattice (InstanceLattice): iqc_scene finds the members near a
+    // point by arithmetic instead of the hierarchy.
+    InstanceLattice lattice;
     bool exact = false;  // the shape says `# exact`: skipping far subtrees leaves iqc_scene_unbounded's value as is
     int blend = -1;      // a single instance in a [[blends]] entry: the scene and the shading see the blend instead
 };
@@ -97,6 +100,9 @@ constexpr size_t kMinTree = 48;
 // few formulas. Targets with uniform blocks or the data texture build it at any size.
 constexpr size_t kMaxTreeInCode = 2048;
 constexpr int kTreeBranching = 8;
+// A lattice is used where its spheres' radius is at most this many times its smallest spacing (else a point
+// near the lattice is near too many cells, and the hierarchy visits fewer).
+constexpr double kLatticeMostRadius = 1.5;
 
 class SceneLowering {
 public:
@@ -364,8 +370,9 @@ private:
                 }
             }
             g.derived_bound = bounded && !std::get<2>(key);
+            if (bounded && members.size() >= kMinTree) find_lattice(g);
             if (bounded && members.size() >= kMinTree && (!o_.params_constant || members.size() <= kMaxTreeInCode)) build_tree(g);
-            else if (std::get<2>(key) && members.size() > kMaxTreeInCode)
+            else if (std::get<2>(key) && members.size() > kMaxTreeInCode && !g.lattice.found())
                 out_.warnings.push_back({plan(members[0]).desc->type_span,
                                          fmt::format("{} instances of '{}' with `bound` are marched in one loop, without a bounding-volume "
                                                      "hierarchy: on the shadertoy target its tables would be code, and past {} members "
@@ -448,6 +455,18 @@ private:
         for (size_t mi : g.members) spheres.push_back(world_sphere(plan(mi).inv_linear, plan(mi).inv_offset, bound_of(mi)));
         g.tree = build_bounds_tree(spheres, kTreeBranching);
         g.exact = plan(g.members[0]).shape->exactness == "exact";
+    }
+
+    // The group's lattice, where its members' world spheres fill one (a grid of instances; see kLatticeMostRadius).
+    void find_lattice(Item& g) {
+        std::vector<BoundingSphere> spheres;
+        for (size_t mi : g.members) spheres.push_back(world_sphere(plan(mi).inv_linear, plan(mi).inv_offset, bound_of(mi)));
+        InstanceLattice L = find_instance_lattice(spheres);
+        if (!L.found()) return;
+        double smallest = INFINITY;
+        for (size_t a = 0; a < 3; ++a)
+            if (L.n[a] > 1) smallest = std::min(smallest, L.spacing[a]);
+        if (L.radius <= kLatticeMostRadius * smallest) g.lattice = L;
     }
 
     std::string unique_name(const std::string& base) {
@@ -948,22 +967,124 @@ private:
     // nearest kept.
     std::vector<ValueId> member_loop(Builder& outer, const Item& it, ValueId p, ValueId base, ValueId hi, const std::vector<ValueId>& states,
                                      bool bounded, const std::string& source) {
-        const bool counted = o_.instrument && bounded;
         std::vector<std::pair<std::string, ValueId>> captures = {{"p", p}};
         if (base != ValueId(-1)) captures.push_back({"first", base});
         std::string name = (bounded ? "iqc_scene." : "iqc_scene_unbounded.") + it.name + (base != ValueId(-1) ? ".members" : "");
         return counted_loop(outer, name, hi, states, captures, source, [&](Builder& b, ValueId k, const std::vector<ValueId>& st,
                                                                             const std::vector<ValueId>& cap) {
             ValueId m = cap.size() > 1 ? read(b, it.tree_order, b.op(Op::Add, {cap[1], k})) : k;
-            ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {cap[0], m});
-            ValueId d = counted ? b.op(Op::Extract, {call}, 0) : call;
-            d = b.named(d, it.name, fmt::format("instance {} + k of {}", it.id, it.members.size()));
-            ValueId nearer = b.compare(CompareKind::Lt, d, st[0]);
-            std::vector<ValueId> next = {b.op(Op::Select, {nearer, d, st[0]}),
-                                         b.op(Op::Select, {nearer, b.op(Op::Add, {b.integer(it.id), m}), st[1]})};
-            if (counted) next.push_back(b.op(Op::Add, {st[2], b.op(Op::Extract, {call}, 1)}));
-            return next;
+            return member_step(b, it, cap[0], m, st, bounded);
         });
+    }
+
+    // Member m (ℤ) of a group evaluated at p: the states (nearest distance, its id[, shapes evaluated]) with it.
+    std::vector<ValueId> member_step(Builder& b, const Item& it, ValueId p, ValueId m, const std::vector<ValueId>& st, bool bounded) {
+        const bool counted = o_.instrument && bounded;
+        ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {p, m});
+        ValueId d = counted ? b.op(Op::Extract, {call}, 0) : call;
+        d = b.named(d, it.name, fmt::format("instance {} + k of {}", it.id, it.members.size()));
+        ValueId nearer = b.compare(CompareKind::Lt, d, st[0]);
+        std::vector<ValueId> next = {b.op(Op::Select, {nearer, d, st[0]}),
+                                     b.op(Op::Select, {nearer, b.op(Op::Add, {b.integer(it.id), m}), st[1]})};
+        if (counted) next.push_back(b.op(Op::Add, {st[2], b.op(Op::Extract, {call}, 1)}));
+        return next;
+    }
+
+    // A group over a lattice (InstanceLattice) in iqc_scene. Farther than a cell from the box of its spheres, that
+    // box's distance stands in for every member (a lower bound, id -1: no hit test accepts it, as with the
+    // hierarchy's boxes). Nearer, the member of the nearest cell is evaluated first, then every other member whose
+    // cell centre lies, per axis, within the nearest distance so far plus the spheres' radius: the others'
+    // spheres are no nearer than that distance, so their distances cannot lower it (Hart 1996 §4), and the
+    // result is the loop over all members' (for distances no smaller than their sphere's) or a lower bound of it.
+    std::vector<ValueId> lattice_lookup(Builder& b, const Item& it, ValueId p, const std::vector<ValueId>& st) {
+        const InstanceLattice& L = it.lattice;
+        const Type v3 = Type::vector(3);
+        auto vec = [&](const std::array<double, 3>& a) { return b.constant(v3, {a[0], a[1], a[2]}); };
+        auto splat = [&](ValueId x) { return b.construct(v3, {x, x, x}); };
+        std::array<double, 3> inv, last, centre, half;
+        double cell = o_.bound_margin, scale = 0;
+        for (size_t a = 0; a < 3; ++a) {
+            inv[a] = 1 / L.spacing[a];
+            last[a] = L.n[a] - 1;
+            centre[a] = L.origin[a] + L.spacing[a] * last[a] / 2;
+            half[a] = L.spacing[a] * last[a] / 2 + L.radius;
+            if (L.n[a] > 1) cell = std::max(cell, L.spacing[a]);
+            scale = std::max({scale, std::fabs(centre[a]) + half[a]});
+        }
+        // float32 rounding of the distances and of the cell arithmetic: a little more reach.
+        const double slack = 1e-5 * scale + 1e-6;
+        for (double& h : half) h += slack;
+        const Type vt = Type::vector(int(st.size()));
+        ValueId box = b.builtin("length", {b.builtin("max", {b.op(Op::Sub, {b.builtin("abs", {b.op(Op::Sub, {p, vec(centre)})}), vec(half)}),
+                                                             vec({0, 0, 0})})});
+        box = b.named(box, "lattice", "distance to the box of the lattice's bounding spheres");
+        std::vector<ValueId> stand_in = {box, b.scalar(-1)};
+        if (st.size() > 2) stand_in.push_back(st[2]);
+        ValueId far = b.if_(b.compare(CompareKind::Lt, box, st[0]), b.construct(vt, stand_in), b.construct(vt, st));
+        // The nearest cell and its member.
+        ValueId u = b.op(Op::Hadamard, {b.op(Op::Sub, {p, vec(L.origin)}), vec(inv)});
+        ValueId c0 = b.builtin("clamp", {b.builtin("floor", {b.op(Op::Add, {u, vec({0.5, 0.5, 0.5})})}), vec({0, 0, 0}), vec(last)});
+        ValueId kf = b.op(Op::Add, {b.scalar(double(L.base)), b.op(Op::Dot, {c0, vec({double(L.stride[0]), double(L.stride[1]), double(L.stride[2])})})});
+        ValueId k0 = b.op(Op::FloorInt, {b.op(Op::Add, {kf, b.scalar(0.5)})});
+        auto in_range = [&](Builder& lb, ValueId k) {
+            return lb.op(Op::And, {lb.compare(CompareKind::Ge, k, lb.integer(0)), lb.compare(CompareKind::Lt, k, lb.integer(L.members))});
+        };
+        if (L.back_axis >= 0)  // an empty cell: the filled one behind it
+            k0 = b.op(Op::Select, {in_range(b, k0), k0, b.op(Op::Sub, {k0, b.integer(L.stride[size_t(L.back_axis)])})});
+        k0 = b.named(k0, "nearest", "the member of the nearest (filled) cell");
+        std::vector<ValueId> st1 = member_step(b, it, p, k0, st, true);
+        // The cells within reach, per axis [lo, lo + count).
+        ValueId reach = splat(b.op(Op::Add, {st1[0], b.scalar(L.radius + slack)}));
+        ValueId lo = b.builtin("clamp", {b.builtin("ceil", {b.op(Op::Hadamard, {b.op(Op::Sub, {b.op(Op::Sub, {p, reach}), vec(L.origin)}), vec(inv)})}),
+                                         vec({0, 0, 0}), vec(last)});
+        ValueId hi = b.builtin("clamp", {b.builtin("floor", {b.op(Op::Hadamard, {b.op(Op::Sub, {b.op(Op::Add, {p, reach}), vec(L.origin)}), vec(inv)})}),
+                                         vec({0, 0, 0}), vec(last)});
+        std::vector<ValueId> from, count;
+        for (int a = 0; a < 3; ++a) {
+            ValueId l = b.op(Op::FloorInt, {b.op(Op::Extract, {lo}, a)});
+            ValueId h = b.op(Op::FloorInt, {b.op(Op::Extract, {hi}, a)});
+            ValueId c = b.op(Op::Add, {b.op(Op::Sub, {h, l}), b.integer(1)});
+            from.push_back(l);
+            count.push_back(b.op(Op::Select, {b.compare(CompareKind::Lt, h, l), b.integer(0), c}));
+        }
+        // Three nested loops, layers (l), rows (j), cells (i): no integer division (scalarised on SIMD CPUs).
+        auto stride = [&](Builder& lb, int a, ValueId k, ValueId first, ValueId step) {
+            if (L.stride[size_t(a)] == 0) return k;
+            return lb.op(Op::Add, {k, lb.op(Op::Mul, {lb.integer(L.stride[size_t(a)]), lb.op(Op::Add, {first, step})})});
+        };
+        const std::string name = "iqc_scene." + it.name;
+        std::vector<ValueId> near = counted_loop(
+            b, name + ".layers", b.op(Op::Sub, {count[2], b.integer(1)}), st1,
+            {{"p", p}, {"nearest", k0}, {"i0", from[0]}, {"j0", from[1]}, {"l0", from[2]}, {"ni", count[0]}, {"nj", count[1]}},
+            fmt::format("{}: {} instances on a {}×{}×{} lattice: the cells within reach", it.name, it.members.size(), L.n[0], L.n[1], L.n[2]),
+            [&](Builder& lb, ValueId ql, const std::vector<ValueId>& s, const std::vector<ValueId>& cap) {
+                ValueId kl = stride(lb, 2, lb.integer(L.base), cap[4], ql);
+                return counted_loop(
+                    lb, name + ".rows", lb.op(Op::Sub, {cap[6], lb.integer(1)}), s,
+                    {{"p", cap[0]}, {"nearest", cap[1]}, {"i0", cap[2]}, {"j0", cap[3]}, {"ni", cap[5]}, {"kl", kl}}, "",
+                    [&](Builder& jb, ValueId qj, const std::vector<ValueId>& s2, const std::vector<ValueId>& cap2) {
+                        ValueId kj = stride(jb, 1, cap2[5], cap2[3], qj);
+                        return counted_loop(
+                            jb, name + ".cells", jb.op(Op::Sub, {cap2[4], jb.integer(1)}), s2,
+                            {{"p", cap2[0]}, {"nearest", cap2[1]}, {"i0", cap2[2]}, {"kj", kj}}, "",
+                            [&](Builder& ib, ValueId qi, const std::vector<ValueId>& s3, const std::vector<ValueId>& cap3) {
+                                ValueId k = stride(ib, 0, cap3[3], cap3[2], qi);
+                                std::vector<ValueId> next = member_step(ib, it, cap3[0], k, s3, true);
+                                ValueId skip = ib.compare(CompareKind::Eq, k, cap3[1]);
+                                if (L.back_axis >= 0)  // an empty cell
+                                    skip = ib.op(Op::Or, {skip, ib.op(Op::Or, {ib.compare(CompareKind::Lt, k, ib.integer(0)),
+                                                                               ib.compare(CompareKind::Ge, k, ib.integer(L.members))})});
+                                ValueId chosen = ib.if_(skip, ib.construct(vt, s3), ib.construct(vt, next));
+                                std::vector<ValueId> out;
+                                for (size_t c = 0; c < s3.size(); ++c) out.push_back(ib.op(Op::Extract, {chosen}, int(c)));
+                                return out;
+                            });
+                    });
+            });
+        ValueId chosen = b.if_(b.compare(CompareKind::Gt, box, b.scalar(cell)), far, b.construct(vt, near));
+        std::vector<ValueId> out;
+        for (size_t c = 0; c < st.size(); ++c) out.push_back(b.op(Op::Extract, {chosen}, int(c)));
+        return out;
     }
 
     // Level l of a group's bounding-volume hierarchy: its nodes [base, base + hi] (base -1: the top level, from 0); a
@@ -1018,7 +1139,9 @@ private:
         std::vector<ValueId> states;
         for (int c = 0; c < width; ++c) states.push_back(outer.op(Op::Extract, {res}, c));
         std::vector<ValueId> out;
-        if (!it.tree.levels.empty() && (bounded || it.exact))
+        if (bounded && it.lattice.found())
+            out = lattice_lookup(outer, it, p, states);
+        else if (!it.tree.levels.empty() && (bounded || it.exact))
             out = tree_loop(outer, it, 0, p, ValueId(-1), outer.integer(int(it.tree.levels[0].nodes.size()) - 1), states, bounded);
         else
             out = member_loop(outer, it, p, ValueId(-1), outer.integer(int(it.members.size()) - 1), states, bounded,

@@ -145,6 +145,7 @@ struct Differentiator {
             case Op::Index:
             case Op::IntDiv:  // ℤ
             case Op::IntMod:
+            case Op::FloorInt:
                 return kZero;
             case Op::If: {
                 // The derivative of the arm taken, as lazy as the choice itself.
