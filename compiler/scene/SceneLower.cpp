@@ -990,7 +990,7 @@ private:
         return next;
     }
 
-    // A group over a lattice (InstanceLattice) in iqc_scene. Farther than a cell from the box of its spheres, that
+    // A group over a lattice (InstanceLattice) in iqc_scene. Farther than a quarter cell from the box of its spheres, that
     // box's distance stands in for every member (a lower bound, id -1: no hit test accepts it, as with the
     // hierarchy's boxes). Nearer, the member of the nearest cell is evaluated first, then every other member whose
     // cell centre lies, per axis, within the nearest distance so far plus the spheres' radius: the others'
@@ -1002,13 +1002,16 @@ private:
         auto vec = [&](const std::array<double, 3>& a) { return b.constant(v3, {a[0], a[1], a[2]}); };
         auto splat = [&](ValueId x) { return b.construct(v3, {x, x, x}); };
         std::array<double, 3> inv, last, centre, half;
+        // The stand-in serves farther than a quarter of the largest spacing (and the margin) from the box: nearer,
+        // the lookup's exact minimum saves more steps than it costs (1,000 rings, llvmpipe: 8.8 ms a frame at a
+        // quarter against 9.2 at a whole spacing and 11.5 at three).
         double cell = o_.bound_margin, scale = 0;
         for (size_t a = 0; a < 3; ++a) {
             inv[a] = 1 / L.spacing[a];
             last[a] = L.n[a] - 1;
             centre[a] = L.origin[a] + L.spacing[a] * last[a] / 2;
             half[a] = L.spacing[a] * last[a] / 2 + L.radius;
-            if (L.n[a] > 1) cell = std::max(cell, L.spacing[a]);
+            if (L.n[a] > 1) cell = std::max(cell, L.spacing[a] / 4);
             scale = std::max({scale, std::fabs(centre[a]) + half[a]});
         }
         // float32 rounding of the distances and of the cell arithmetic: a little more reach.
