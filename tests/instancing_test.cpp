@@ -446,4 +446,14 @@ TEST_CASE("a bounded group too large for a hierarchy on Shadertoy is told so, lo
     REQUIRE(grid.result.exit_code == 0);
     CHECK(grid.diagnostics.find("bounding-volume hierarchy") == std::string::npos);
     CHECK_THAT(grid.result.code, Catch::Contains("2049 instances on a 15×10×15 lattice"));
+    // Without `bound` too: past 2,048 members Shadertoy derives one from the shape where the centres form a
+    // lattice (it needs no tables), and none where they do not (the flat loop).
+    Compiled derived = compile_path(write_temp("rings_grid_2049_derived.iq", rings_scene(2049, false, 0)));
+    REQUIRE(derived.result.exit_code == 0);
+    CHECK_THAT(derived.result.code, Catch::Contains("// radius of the bounding sphere, derived from the shape"));
+    CHECK_THAT(derived.result.code, Catch::Contains("2049 instances on a 15×10×15 lattice"));
+    Compiled jittered = compile_path(write_temp("rings_irregular_2049_derived.iq", rings_scene(2049, true, 0)));
+    REQUIRE(jittered.result.exit_code == 0);
+    CHECK_THAT(jittered.result.code, !Catch::Contains("derived from the shape"));
+    CHECK_THAT(jittered.result.code, !Catch::Contains("lattice"));
 }

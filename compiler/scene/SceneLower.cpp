@@ -360,8 +360,9 @@ private:
             std::string shape = plan(members[0]).desc->type, material = plan(members[0]).desc->material;
             g.name = unique_name(material.empty() ? shape : shape + "_" + material);
             bool bounded = std::get<2>(key);
-            if (!bounded && members.size() >= kMinTree && (!o_.params_constant || members.size() <= kMaxTreeInCode) &&
-                !o_.per_instance) {
+            // (On Shadertoy past kMaxTreeInCode members only for a lattice, which needs no tables.)
+            if (!bounded && members.size() >= kMinTree &&
+                (!o_.params_constant || members.size() <= kMaxTreeInCode || centres_form_lattice(members)) && !o_.per_instance) {
                 // No `bound` written: the compiler derives one from the shape where it can (ir/Support.h).
                 if (auto R = derived_bound(members)) {
                     for (size_t mi : members) derived_bound_[mi] = *R;
@@ -455,6 +456,13 @@ private:
         for (size_t mi : g.members) spheres.push_back(world_sphere(plan(mi).inv_linear, plan(mi).inv_offset, bound_of(mi)));
         g.tree = build_bounds_tree(spheres, kTreeBranching);
         g.exact = plan(g.members[0]).shape->exactness == "exact";
+    }
+
+    // Whether the members' origins in the world (their transforms' centres) fill a lattice (InstanceLattice).
+    bool centres_form_lattice(const std::vector<size_t>& members) {
+        std::vector<BoundingSphere> points;
+        for (size_t mi : members) points.push_back(world_sphere(plan(mi).inv_linear, plan(mi).inv_offset, 0));
+        return find_instance_lattice(points).found();
     }
 
     // The group's lattice, where its members' world spheres fill one (a grid of instances; see kLatticeMostRadius).
