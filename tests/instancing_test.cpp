@@ -111,10 +111,17 @@ TEST_CASE("1000 rings are one loop and one case of each dispatch on every target
         CHECK(count(code, "c = lambert_light(") == 1);
         CHECK(count(code, "if (id ==") < 5);
     }
-    // Shadertoy: the grid's offsets are arithmetic on the member's index, and a value every ring shares is one
-    // constant.
+    // Shadertoy: rings alike but for their place are evaluated as the first ring at the point moved by the
+    // cell's offset (no integer division by the member's index in iqc_scene); the normal's taps keep the
+    // grid's offsets as arithmetic on the index; a value every ring shares is one constant.
     Compiled st = compile_path(path);
-    CHECK_THAT(st.result.code, Catch::Contains("vec3 q = p + vec3(5.0 - float(nearest % 10)"));
+    const std::string& sc = st.result.code;
+    size_t from = sc.find("vec2 iqc_scene(vec3 p) {"), to = sc.find("\n}\n", from);
+    REQUIRE(from != std::string::npos);
+    const std::string scene_fn = sc.substr(from, to - from);
+    CHECK_THAT(scene_fn, Catch::Contains(" * vec3(1.0, 0.5, 1.0))) + vec3(5.0, 0.7, 5.0);"));
+    CHECK_THAT(scene_fn, !Catch::Contains("%"));
+    CHECK_THAT(sc, Catch::Contains("vec3 q = p + vec3(5.0 - float((id - 1) % 10)"));
     CHECK(count(st.result.code, "const vec2 ring_shape_t = vec2(0.3, 0.08);") == 1);
 }
 
@@ -268,8 +275,10 @@ TEST_CASE("rings with bound: a lattice on a grid, a bounding-volume hierarchy ot
             CHECK_THAT(c.result.code, !Catch::Contains("bounding-box hierarchy"));
             // The nearest cell's member, the cells' loop, and iqc_distance_of.
             CHECK(count(c.result.code, "ring(q") == 3);
-            // The lattice stays arithmetic on the member's index; empty cells are skipped.
-            CHECK_THAT(c.result.code, Catch::Contains(variant == 2 ? "vec3(4.5 - float(nearest % 9)" : "vec3(5.0 - float(nearest % 10)"));
+            // Shadertoy: the rings are alike but for their place: the first ring at the point moved by the cell's
+            // offset. webgl2: each ring has its own slider values, so the member's data are read by its index
+            // (the lattice's offsets as arithmetic on it). Empty cells are skipped.
+            CHECK_THAT(c.result.code, Catch::Contains(variant == 2 ? "vec3(4.5 - float(nearest % 9)" : ") + vec3(5.0, 0.7, 5.0);"));
             if (variant == 2) CHECK_THAT(c.result.code, Catch::Contains(">= 700"));
         }
         render::RenderResult r = render_compiled(c.result, W, H);
@@ -456,4 +465,34 @@ TEST_CASE("a bounded group too large for a hierarchy on Shadertoy is told so, lo
     REQUIRE(jittered.result.exit_code == 0);
     CHECK_THAT(jittered.result.code, !Catch::Contains("derived from the shape"));
     CHECK_THAT(jittered.result.code, !Catch::Contains("lattice"));
+}
+
+TEST_CASE("a lattice of members that differ (tilts, sizes) reads each member's data: the reference's picture", "[instancing][render][lattice]") {
+    // Rings on a grid, each tilted by its own angle, or each with its own radii: the centres are a lattice, but
+    // member k at p is not member 0 at a moved point, so the scene reads member k's transform and parameters.
+    const int W = 64, H = 36;
+    for (int variant : {0, 1}) {
+        std::string s = rings_scene(0, false, 0);
+        for (int i = 0; i < 400; ++i) {
+            double x = (i % 7) - 3.5, z = (i / 7) % 7 - 3.5, y = (i / 49) * 0.5 - 0.7;
+            if (i >= 343) break;
+            s += variant == 0 ? fmt::format("[[shapes]]\ntype = \"ring\"\nmaterial = \"lambert\"\ntransform = \"T(({}, {}, {}))⋅`R_x`({:.2f})\"\n"
+                                            "bound = 0.4\n", x, y, z, 0.4 * (i % 5))
+                              : fmt::format("[[shapes]]\ntype = \"ring\"\nmaterial = \"lambert\"\ntransform = \"T(({}, {}, {}))\"\n"
+                                            "shape_params = {{ t = [{:.2f}, 0.08] }}\nbound = 0.4\n", x, y, z, 0.2 + 0.03 * (i % 4));
+        }
+        CompileOptions o;
+        o.ids = true;
+        Compiled c = compile_path(write_temp(fmt::format("lattice_differ_{}.iq", variant), s), o);
+        INFO(variant << "\n" << c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        CHECK_THAT(c.result.code, Catch::Contains("343 instances on a 7×7×7 lattice: the cells within reach"));
+        CHECK_THAT(c.result.code, Catch::Contains("[nearest]"));  // member k's own data, by its index
+        render::RenderResult r = render_compiled(c.result, W, H);
+        INFO(r.error);
+        REQUIRE(r.ok);
+        Agreement a = against_reference(c.result, r, W, H, 3);
+        CHECK(a.disagree <= a.samples / 50);
+        CHECK(a.rings > a.samples / 20);
+    }
 }

@@ -458,6 +458,23 @@ private:
         g.exact = plan(g.members[0]).shape->exactness == "exact";
     }
 
+    // Whether a lattice's members differ only in their place: one linear map, scale, bound and shape parameter
+    // values (known at compile time, or one shared global). Then member k at p is member `base` at
+    // p − (cell_k − cell_base)·spacing, whose data are constants: no per-member arithmetic on k (the tables pass's
+    // k % 10, k / 100, … are integer divisions, which SIMD CPUs scalarise).
+    bool members_alike(const Item& g) {
+        const size_t a = g.members[0];
+        for (size_t mi : g.members)
+            if (plan(mi).inv_linear != plan(a).inv_linear || plan(mi).scale != plan(a).scale || bound_of(mi) != bound_of(a) ||
+                plan(mi).shape_values != plan(a).shape_values)
+                return false;
+        // Parameters the renderer sets per member (sliders on webgl2) may differ at run time.
+        if (!o_.params_constant)
+            for (const Field& f : g.shape_params)
+                if (f.global >= 0 && f.array) return false;
+        return true;
+    }
+
     // Whether the members' origins in the world (their transforms' centres) fill a lattice (InstanceLattice).
     bool centres_form_lattice(const std::vector<size_t>& members) {
         std::vector<BoundingSphere> points;
@@ -986,9 +1003,12 @@ private:
     }
 
     // Member m (ℤ) of a group evaluated at p: the states (nearest distance, its id[, shapes evaluated]) with it.
-    std::vector<ValueId> member_step(Builder& b, const Item& it, ValueId p, ValueId m, const std::vector<ValueId>& st, bool bounded) {
+    // `at` (with `as`): evaluate member `as` at the point `at` instead (a lattice's members alike but for their
+    // place: member m at p is member `as` at p moved by their offset), m still the id.
+    std::vector<ValueId> member_step(Builder& b, const Item& it, ValueId p, ValueId m, const std::vector<ValueId>& st, bool bounded,
+                                     ValueId at = ValueId(-1), ValueId as = ValueId(-1)) {
         const bool counted = o_.instrument && bounded;
-        ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {p, m});
+        ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {at != ValueId(-1) ? at : p, as != ValueId(-1) ? as : m});
         ValueId d = counted ? b.op(Op::Extract, {call}, 0) : call;
         d = b.named(d, it.name, fmt::format("instance {} + k of {}", it.id, it.members.size()));
         ValueId nearer = b.compare(CompareKind::Lt, d, st[0]);
@@ -1008,6 +1028,7 @@ private:
         const InstanceLattice& L = it.lattice;
         const Type v3 = Type::vector(3);
         auto vec = [&](const std::array<double, 3>& a) { return b.constant(v3, {a[0], a[1], a[2]}); };
+        auto vec3c = [&](Builder& lb, const std::array<double, 3>& a) { return lb.constant(v3, {a[0], a[1], a[2]}); };
         auto splat = [&](ValueId x) { return b.construct(v3, {x, x, x}); };
         std::array<double, 3> inv, last, centre, half;
         // The stand-in serves farther than a quarter of the largest spacing (and the margin) from the box: nearer,
@@ -1043,7 +1064,17 @@ private:
         if (L.back_axis >= 0)  // an empty cell: the filled one behind it
             k0 = b.op(Op::Select, {in_range(b, k0), k0, b.op(Op::Sub, {k0, b.integer(L.stride[size_t(L.back_axis)])})});
         k0 = b.named(k0, "nearest", "the member of the nearest (filled) cell");
-        std::vector<ValueId> st1 = member_step(b, it, p, k0, st, true);
+        const bool alike = members_alike(it);
+        const ValueId base = b.integer(L.base);
+        // Member k at p as member `base` at p − cell·spacing (members_alike).
+        auto moved = [&](Builder& lb, ValueId at, ValueId cellv) { return lb.op(Op::Sub, {at, lb.op(Op::Hadamard, {cellv, vec3c(lb, L.spacing)})}); };
+        ValueId c0used = c0;
+        if (alike && L.back_axis >= 0) {
+            std::array<double, 3> e{0, 0, 0};
+            e[size_t(L.back_axis)] = 1;
+            c0used = b.op(Op::Select, {in_range(b, b.op(Op::FloorInt, {b.op(Op::Add, {kf, b.scalar(0.5)})})), c0, b.op(Op::Sub, {c0, vec(e)})});
+        }
+        std::vector<ValueId> st1 = alike ? member_step(b, it, p, k0, st, true, moved(b, p, c0used), base) : member_step(b, it, p, k0, st, true);
         // The cells within reach, per axis [lo, lo + count).
         ValueId reach = splat(b.op(Op::Add, {st1[0], b.scalar(L.radius + slack)}));
         ValueId lo = b.builtin("clamp", {b.builtin("ceil", {b.op(Op::Hadamard, {b.op(Op::Sub, {b.op(Op::Sub, {p, reach}), vec(L.origin)}), vec(inv)})}),
@@ -1070,17 +1101,23 @@ private:
             fmt::format("{}: {} instances on a {}×{}×{} lattice: the cells within reach", it.name, it.members.size(), L.n[0], L.n[1], L.n[2]),
             [&](Builder& lb, ValueId ql, const std::vector<ValueId>& s, const std::vector<ValueId>& cap) {
                 ValueId kl = stride(lb, 2, lb.integer(L.base), cap[4], ql);
+                ValueId cl = lb.op(Op::Add, {cap[4], ql});
                 return counted_loop(
                     lb, name + ".rows", lb.op(Op::Sub, {cap[6], lb.integer(1)}), s,
-                    {{"p", cap[0]}, {"nearest", cap[1]}, {"i0", cap[2]}, {"j0", cap[3]}, {"ni", cap[5]}, {"kl", kl}}, "",
+                    {{"p", cap[0]}, {"nearest", cap[1]}, {"i0", cap[2]}, {"j0", cap[3]}, {"ni", cap[5]}, {"kl", kl}, {"cl", cl}}, "",
                     [&](Builder& jb, ValueId qj, const std::vector<ValueId>& s2, const std::vector<ValueId>& cap2) {
                         ValueId kj = stride(jb, 1, cap2[5], cap2[3], qj);
+                        ValueId cj = jb.op(Op::Add, {cap2[3], qj});
                         return counted_loop(
                             jb, name + ".cells", jb.op(Op::Sub, {cap2[4], jb.integer(1)}), s2,
-                            {{"p", cap2[0]}, {"nearest", cap2[1]}, {"i0", cap2[2]}, {"kj", kj}}, "",
+                            {{"p", cap2[0]}, {"nearest", cap2[1]}, {"i0", cap2[2]}, {"kj", kj}, {"cl", cap2[6]}, {"cj", cj}}, "",
                             [&](Builder& ib, ValueId qi, const std::vector<ValueId>& s3, const std::vector<ValueId>& cap3) {
                                 ValueId k = stride(ib, 0, cap3[3], cap3[2], qi);
-                                std::vector<ValueId> next = member_step(ib, it, cap3[0], k, s3, true);
+                                ValueId ci = ib.op(Op::Add, {cap3[2], qi});
+                                std::vector<ValueId> next =
+                                    alike ? member_step(ib, it, cap3[0], k, s3, true,
+                                                        moved(ib, cap3[0], ib.construct(Type::vector(3), {ci, cap3[5], cap3[4]})), ib.integer(L.base))
+                                          : member_step(ib, it, cap3[0], k, s3, true);
                                 ValueId skip = ib.compare(CompareKind::Eq, k, cap3[1]);
                                 if (L.back_axis >= 0)  // an empty cell
                                     skip = ib.op(Op::Or, {skip, ib.op(Op::Or, {ib.compare(CompareKind::Lt, k, ib.integer(0)),
