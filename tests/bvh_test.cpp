@@ -173,6 +173,29 @@ function plane(p: ℝ³) -> ℝ {
   %3 = ℝ Add %1, %2
   return %3
 }
+function two_balls(p: ℝ³, c: ℝ³) -> ℝ {
+  %0 = ℝ³ Param #0 p  ; p
+  %1 = ℝ³ Param #1 c  ; c
+  %2 = ℝ Builtin length %0
+  %3 = ℝ Const 300
+  %4 = ℝ Sub %2, %3
+  %5 = ℝ³ Sub %0, %1
+  %6 = ℝ Builtin length %5
+  %7 = ℝ Sub %6, %3
+  %8 = ℝ Builtin min %4, %7
+  return %8
+}
+function ball_and_far_plane(p: ℝ³, c: ℝ) -> ℝ {
+  %0 = ℝ³ Param #0 p  ; p
+  %1 = ℝ Param #1 c  ; c
+  %2 = ℝ Extract [1] %0
+  %3 = ℝ Add %2, %1
+  %4 = ℝ Builtin length %0
+  %5 = ℝ Const 1
+  %6 = ℝ Sub %4, %5
+  %7 = ℝ Builtin min %6, %3
+  return %7
+}
 )";
     ir::Module m;
     std::string error;
@@ -196,6 +219,13 @@ function plane(p: ℝ³) -> ℝ {
     CHECK_FALSE(ir::support_radius(m, 0, 0, V{{}, {{-INFINITY, INFINITY}}}));  // an unbounded radius
     // A negative radius: no point where the distance can be ≤ 0, nothing to bound.
     CHECK_FALSE(ir::support_radius(m, 0, 0, V{{}, {{-1, -1}}}));
+    // Parts beyond the search cube (half-side 1024) are not cut off (a trial's model in millimetres: a second
+    // ball 2000 units away was dropped from the radius, and drawn nowhere): no radius. Near, both balls count.
+    CHECK_FALSE(ir::support_radius(m, 3, 0, V{{}, {{2000, 2000}, {0, 0}, {0, 0}}}));
+    auto near = ir::support_radius(m, 3, 0, V{{}, {{600, 600}, {0, 0}, {0, 0}}});
+    REQUIRE(near);
+    CHECK(*near >= 900);
+    CHECK_FALSE(ir::support_radius(m, 4, 0, V{{}, {{1e4, 1e4}}}));  // a ball and a plane 10⁴ below it
     // The answer does not depend on the order of evaluation: the same twice.
     CHECK(ir::support_radius(m, 1, 0, V{{}, {{0.3, 0.3}, {0.08, 0.08}}}) == torus);
 }

@@ -63,6 +63,15 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
     // Coarse: the solid must stay off the boundary of the big cube (levels of 1/64 of it).
     if (!pass(domain, 6, true, kept)) return std::nullopt;
     if (kept.empty()) return std::nullopt;  // nothing where the distance can be ≤ 0: no solid to bound
+    // Nor beyond the cube: each of the six half-spaces past a face (the other axes unbounded) must be free, or a
+    // part of the solid farther than `reach` (a model in millimetres scaled to metres) would be cut off.
+    for (size_t a = 0; a < 3; ++a)
+        for (int side : {-1, 1}) {
+            Box slab{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
+            if (side > 0) slab.lo[a] = reach;
+            else slab.hi[a] = -reach;
+            if (--budget < 0 || !(lowest(slab) > 0)) return std::nullopt;
+        }
     // Fine: the hull of what is left, widened by half a cell, split again (four times: each cell is 1/8 of the
     // last hull, which shrinks to the solid's).
     for (int round = 0; round < 4; ++round) {

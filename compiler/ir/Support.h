@@ -23,9 +23,10 @@ namespace iqc::ir {
 
 // Function `fn` of `m` returns a scalar distance; parameter `query` is the ℝ³ point, the others lie in
 // `params` (one entry per parameter, its components' intervals; the query's entry is ignored). Returns the
-// radius (object-space units, rounded up), or nothing when a box touching the cube of half-side `reach` may
-// hold the solid (an unbounded shape, such as a plane, or a distance the intervals cannot bound), or when the
-// work budget (interval evaluations) runs out first.
+// radius (object-space units, rounded up), or nothing when a box touching the cube of half-side `reach`, or a
+// half-space beyond one of its faces, may hold the solid (an unbounded shape, such as a plane; a part farther
+// than `reach`; a distance the intervals cannot bound), or when the work budget (interval evaluations) runs
+// out first.
 std::optional<double> support_radius(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
                                       double reach = 1024, int budget = 20000);
 
