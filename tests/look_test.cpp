@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "SceneRender.h"
@@ -477,6 +478,24 @@ TEST_CASE("glows: the field's own distance, not a bound sphere's or a Lipschitz-
     RunResult big = run_iqc(write_temp("glow_big.iq", "[[shapes]]\ntype = \"sphere\"\nglow = [1, 1, 2000]\n").string());
     CHECK(big.exit_code == 1);
     CHECK_THAT(big.err, Catch::Contains("glow_big.iq:3:8: error: 'glow' components above 1000 overflow the tone map"));
+}
+
+TEST_CASE("iqc render --stats draws glowing instances with bound, alone, in a group and unbounded beside them", "[look][render][stats]") {
+    // Found by a trial: the instrumented shader (--stats) read the shapes-evaluated count from the distance without
+    // the bound sphere (which glows march), a float: glslang rejected it and iqc exited 3.
+    std::string base = "[camera]\nposition = [0, 1, -6]\ntarget = [0, 0, 0]\n[[lights]]\nposition = [-5, 8, -6]\n";
+    std::string one = base + "[[shapes]]\ntype = \"sphere\"\nmaterial = \"lambert\"\nglow = [0.6, 0.4, 0.1]\nbound = 1.1\n";
+    std::string group = base + "[[shapes]]\ntype = \"plane\"\nshape_params = { h = 1 }\n";
+    for (int i = 0; i < 6; ++i)
+        group += fmt::format("[[shapes]]\ntype = \"sphere\"\nshape_params = {{ r = 0.3 }}\ntransform = \"T(({}, 0, 0))\"\nglow = [0.2, 0.1, 0]\n"
+                             "bound = 0.35\n", i - 2.5);
+    for (const auto& [name, text] : {std::pair{"stats_glow_one.iq", one}, std::pair{"stats_glow_group.iq", group}}) {
+        auto path = write_temp(name, text);
+        RunResult r = run_iqc("render " + path.string() + " --size 48x27 --stats -o " + (temp_dir() / "stats_glow.png").string());
+        INFO(name << "\n" << r.err);
+        CHECK(r.exit_code == 0);
+        CHECK_THAT(r.out + r.err, Catch::Contains("shape_evals_per_eval"));
+    }
 }
 
 TEST_CASE("fog thickens along a reflected ray's whole path", "[look][render]") {

@@ -178,7 +178,9 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
         }
     iqc::CompileResult ic = instrumented();
     if (ic.exit_code != 0) {
-        std::fprintf(stderr, "iqc: error: the instrumented shader failed to compile\n");
+        // The scene compiled without the counters: a failure here is iqc's, and says what it was.
+        std::fprintf(stderr, "iqc: internal compiler error: the instrumented shader (--stats) failed to compile (this is a bug in "
+                             "iqc):\n%s\n", ic.internal.c_str());
         return 3;
     }
     iqc::render::RenderOptions io = ro;

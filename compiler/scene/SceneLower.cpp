@@ -1215,7 +1215,9 @@ private:
             // With glows, the distance without the bound sphere (equal to it near the surface, where normals tap).
             int fn = o_.distance_of && it.unbounded_fn >= 0 ? it.unbounded_fn : it.distance_fn;
             ValueId d = blend_first ? blend_distance(b, it.blend, p, true, o_.instrument, nullptr) : b.call(fn, args);
-            if (o_.instrument) d = b.op(Op::Extract, {d}, 0);
+            // Instrumented, the bounded distance (and a blend) also returns the shapes it evaluated; the distance
+            // without its bound sphere (glows) does not.
+            if (o_.instrument && (blend_first || fn == it.distance_fn)) d = b.op(Op::Extract, {d}, 0);
             cases.push_back({it.id, it.id + (long long)it.members.size(), d});
         }
         f.result = b.switch_(id, b.scalar(2 * o_.max_dist), std::move(cases));
