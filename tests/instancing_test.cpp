@@ -434,6 +434,27 @@ TEST_CASE("a hierarchy node standing in for its members is never a hit", "[insta
     CHECK(behind == 0);
 }
 
+TEST_CASE("a Shadertoy table past 4,096 vec4 slots is told of, located: llvmpipe compiles it for minutes", "[instancing]") {
+    // A trial's tori, each tilted by its own angle: mat3[N] takes 3N slots. At 1,380 (4,140 slots) llvmpipe's
+    // compile ran past a minute (1,300: 7.9 s); webgl2 keeps the table in a uniform block.
+    auto tilted = [](int n) {
+        std::string s = "[camera]\nposition = [0, 8, -20]\ntarget = [0, 0, 0]\n";
+        for (int i = 0; i < n; ++i)
+            s += fmt::format("[[shapes]]\ntype = \"torus\"\ntransform = \"T(({}, 0, {}))⋅`R_x`({:.4f})\"\n", i % 40 - 20, i / 40 - 17,
+                             0.001 * i);
+        return s;
+    };
+    Compiled big = compile_path(write_temp("tilted_1380.iq", tilted(1380)));
+    REQUIRE(big.result.exit_code == 0);
+    CHECK_THAT(big.diagnostics, Catch::Contains("tilted_1380.iq:5:8: warning: on Shadertoy the table 'torus_to_object' (1380 elements, "
+                                                "4140 vec4 slots) is code"));
+    CHECK(count(big.diagnostics, "warning: on Shadertoy the table") == 1);  // once per group
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    CHECK(compile_path(write_temp("tilted_1380.iq", tilted(1380)), o).diagnostics.find("vec4 slots") == std::string::npos);
+    CHECK(compile_path(write_temp("tilted_1300.iq", tilted(1300))).diagnostics.find("vec4 slots") == std::string::npos);
+}
+
 TEST_CASE("a bounded group too large for a hierarchy on Shadertoy is told so, located", "[instancing][bvh]") {
     // Past 2,048 members the hierarchy's tables would be code (llvmpipe compiles them for minutes): the group is
     // one loop there, and said to be (it was silent; stop 20's trial).

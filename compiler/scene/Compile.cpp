@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <set>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <memory>
@@ -127,6 +128,7 @@ private:
 
     SceneIR lower(const std::vector<InstancePlan>& plans);
     bool optimize(SceneIR& scene);
+    void warn_large_tables(const SceneIR& scene);
     void warn_idle_effects(const SceneIR& scene);
     std::string assemble(const SceneIR& scene, const SceneCode& code);
     // Whether every instance's distance is exact (its shape says `# exact` and its transform is a similarity
@@ -216,6 +218,32 @@ bool SceneCompiler::optimize(SceneIR& scene) {
         res_.ir = notes + res_.ir;
     }
     return true;
+}
+
+// On Shadertoy every table is code: a constant array of more than 4,096 vec4 slots (a mat3 takes 3, a vector or
+// number 1) is more than llvmpipe keeps as uniform storage, and its indexing compiles for minutes (1,300 tilted
+// tori, mat3[1300] = 3,900 slots: 7.9 s; 1,380: over a minute). Said where the table's item starts.
+void SceneCompiler::warn_large_tables(const SceneIR& scene) {
+    if (opts_.target != Target::Shadertoy) return;
+    constexpr long long kSlots = 4096;
+    const ir::Module& m = scene.module;
+    std::vector<bool> used(m.globals.size(), false);
+    for (const auto& f : m.functions)
+        for (const auto& in : f.body)
+            if (in.op == ir::Op::Global && in.aux >= 0 && size_t(in.aux) < used.size()) used[size_t(in.aux)] = true;
+    std::set<std::pair<uint32_t, uint32_t>> said;  // one warning per item
+    for (size_t g = 0; g < m.globals.size(); ++g) {
+        const ir::Global& gl = m.globals[g];
+        if (!used[g] || !gl.type.is_array()) continue;
+        const long long slots = (long long)gl.type.count * (gl.type.elem == Type::Matrix ? gl.type.cols : 1);
+        if (slots <= kSlots) continue;
+        auto at = scene.global_spans.find(int(g));
+        if (at == scene.global_spans.end() || !said.insert({at->second.file, at->second.begin}).second) continue;
+        d_.warning(at->second, fmt::format("on Shadertoy the table '{}' ({} elements, {} vec4 slots) is code: past {} slots a driver may "
+                                           "compile its indexing for minutes (llvmpipe does); --target webgl2 keeps tables in uniform "
+                                           "blocks or a texture",
+                                           gl.name, gl.type.count, slots, kSlots));
+    }
 }
 
 std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code) {
@@ -525,6 +553,7 @@ CompileResult SceneCompiler::run_checked() {
         lap("lower to IR");
         warn_idle_effects(scene);
         optimize(scene);
+        warn_large_tables(scene);
         lap("pass pipeline");
         if (d_.error_count() != before) return std::move(res_);
         BackendOptions bo;

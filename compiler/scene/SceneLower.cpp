@@ -185,6 +185,7 @@ private:
     std::map<std::pair<int, bool>, int> parts_;  // (material function, light part?) -> material_part
     std::vector<std::vector<size_t>> blend_items_;  // per [[blends]] entry: its members' items, in instance order
     std::string owner_;  // the item being declared (Global::owner)
+    Span owner_span_;    // its first instance's `type` (SceneIR::global_spans)
 
     const InstancePlan& plan(size_t i) const { return plans_[i]; }
     // An instance's bounding-sphere radius: its `bound`, or the one derived for its group (0: none).
@@ -511,6 +512,7 @@ private:
         g.bounds.input = false;
         g.comment = std::move(comment);
         m_.globals.push_back(std::move(g));
+        if (owner_span_.valid()) out_.global_spans[int(m_.globals.size() - 1)] = owner_span_;
         return int(m_.globals.size() - 1);
     }
 
@@ -646,6 +648,7 @@ private:
     void declare_item(Item& it) {
         const InstancePlan& first = plan(it.members[0]);
         owner_ = owner_of(it);
+        owner_span_ = first.desc->type_span;
         std::vector<std::vector<double>> L, off, sc, R;
         for (size_t mi : it.members) {
             L.push_back(plan(mi).inv_linear);
@@ -933,6 +936,7 @@ private:
         std::vector<std::tuple<long long, long long, ValueId>> cs;
         for (const Item& it : items_) {
             owner_ = owner_of(it);
+            owner_span_ = plan(it.members[0]).desc->type_span;
             int g = add_global(it.name + "_lipschitz", Type::scalar(), Global::Kind::Constant, {1},
                                "the Lipschitz factor dividing its distance (the hit test multiplies it back)");
             m_.functions[size_t(it.distance_fn)].lipschitz.factor_global = g;

@@ -63,6 +63,9 @@ struct SceneIR {
     std::vector<std::string> group_notes;  // "torus with lambert: 1000 instances in one loop"
     std::vector<int> instance_ids;         // per plan: the id iqc_scene returns for it (and iqc_distance_of takes)
     std::vector<std::pair<Span, std::string>> warnings;  // what the lowering chose against the scene's wish, located
+    // Per global made for a scene item (index into module.globals): the item's first instance's `type`, where a
+    // diagnostic about the global points.
+    std::map<int, Span> global_spans;
 };
 
 // Lowers the planned instances (plans[i] is scene.instances[i]) with their modules.
