@@ -286,6 +286,13 @@ TEST_CASE("find_instance_lattice: full and partly filled lattices in any member 
     std::vector<BoundingSphere> jitter = rings(100, 10);
     jitter[37].center[0] += 0.01;
     CHECK_FALSE(find_instance_lattice(jitter).found());
+    // Within 10⁻³ of the spacing (positions written rounded): a lattice, with how far the centres stray.
+    std::vector<BoundingSphere> rounded = rings(100, 10);
+    rounded[37].center[0] += 0.0004;
+    InstanceLattice near = find_instance_lattice(rounded);
+    REQUIRE(near.found());
+    CHECK(near.deviation == Approx(0.0004).margin(1e-9));
+    CHECK(full.deviation == 0);
     std::vector<BoundingSphere> twice = rings(100, 10);
     twice[5] = twice[6];
     CHECK_FALSE(find_instance_lattice(twice).found());

@@ -180,11 +180,16 @@ InstanceLattice find_instance_lattice(const std::vector<BoundingSphere>& members
         for (const auto& m : members) lo = std::min(lo, m.center[a]), hi = std::max(hi, m.center[a]);
         extent = std::max({extent, hi - lo, std::fabs(lo), std::fabs(hi)});
     }
-    const double tol = 1e-6 * std::max(extent, 1e-6);
+    // Per axis: centres within a thousandth of the largest gap between neighbouring coordinates (about the spacing)
+    // of their cell's are on the lattice (positions written rounded, thirds to 4 decimals); L.deviation says how far.
+    std::array<double, 3> tols;
     for (size_t a = 0; a < 3; ++a) {
         std::vector<double> v;
         for (const auto& m : members) v.push_back(m.center[a]);
         std::sort(v.begin(), v.end());
+        double gap = 0;
+        for (size_t i = 1; i < v.size(); ++i) gap = std::max(gap, v[i] - v[i - 1]);
+        const double tol = tols[a] = std::max(1e-6 * std::max(extent, 1e-6), 1e-3 * gap);
         std::vector<double> distinct = {v[0]};
         for (double x : v)
             if (x - distinct.back() > tol) distinct.push_back(x);
@@ -207,7 +212,9 @@ InstanceLattice find_instance_lattice(const std::vector<BoundingSphere>& members
         for (size_t a = 0; a < 3; ++a) {
             const double u = (members[k].center[a] - L.origin[a]) / L.spacing[a];
             const double r = std::round(u);
-            if (std::fabs(members[k].center[a] - (L.origin[a] + r * L.spacing[a])) > tol || r < 0 || r >= L.n[a]) return {};
+            const double off = std::fabs(members[k].center[a] - (L.origin[a] + r * L.spacing[a]));
+            if (off > tols[a] || r < 0 || r >= L.n[a]) return {};
+            L.deviation = std::max(L.deviation, off);
             cell[k][a] = (long long)r;
             flat += size_t(r) * mul;
             mul *= size_t(L.n[a]);

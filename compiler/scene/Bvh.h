@@ -73,11 +73,13 @@ struct InstanceLattice {
     // Where some cell is empty: the axis along which the cell one step back (index − 1) of every empty cell is
     // filled (the nearest cell's stand-in); -1 when every cell is filled.
     int back_axis = -1;
-    double radius = 0;  // the largest sphere's radius (world units)
+    double radius = 0;     // the largest sphere's radius (world units)
+    double deviation = 0;  // the largest distance of a centre's coordinate from its cell's (world units)
     bool found() const { return n[0] > 0; }
 };
 
-// The lattice of `members` (n ≥ 2), or none (n all 0) when their centres are not one (to 10⁻⁶ of the extent),
+// The lattice of `members` (n ≥ 2), or none (n all 0) when their centres are not one (each coordinate within
+// 10⁻³ of the spacing, or 10⁻⁶ of the extent, of its cell's: `deviation`),
 // a cell holds two members, member indices are not affine in the cells, more than half the cells are empty,
 // or an empty cell's k falls in [0, N) or has no filled cell one step back along one axis.
 InstanceLattice find_instance_lattice(const std::vector<BoundingSphere>& members);

@@ -465,6 +465,10 @@ private:
     // k % 10, k / 100, … are integer divisions, which SIMD CPUs scalarise).
     bool members_alike(const Item& g) {
         const size_t a = g.members[0];
+        // Evaluated at the lattice's offsets, not their own: only where these are theirs (to float precision).
+        double scale = 1;
+        for (size_t c = 0; c < 3; ++c) scale = std::max({scale, std::fabs(g.lattice.origin[c]), g.lattice.spacing[c] * g.lattice.n[c]});
+        if (g.lattice.deviation > 1e-7 * scale) return false;
         for (size_t mi : g.members)
             if (plan(mi).inv_linear != plan(a).inv_linear || plan(mi).scale != plan(a).scale || bound_of(mi) != bound_of(a) ||
                 plan(mi).shape_values != plan(a).shape_values)
@@ -1047,8 +1051,9 @@ private:
             if (L.n[a] > 1) cell = std::max(cell, L.spacing[a] / 4);
             scale = std::max({scale, std::fabs(centre[a]) + half[a]});
         }
-        // float32 rounding of the distances and of the cell arithmetic: a little more reach.
-        const double slack = 1e-5 * scale + 1e-6;
+        // float32 rounding of the distances and of the cell arithmetic, and the centres' distance from their cells':
+        // a little more reach.
+        const double slack = 1e-5 * scale + 1e-6 + 2 * L.deviation;
         for (double& h : half) h += slack;
         const Type vt = Type::vector(int(st.size()));
         ValueId box = b.builtin("length", {b.builtin("max", {b.op(Op::Sub, {b.builtin("abs", {b.op(Op::Sub, {p, vec(centre)})}), vec(half)}),
