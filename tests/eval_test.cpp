@@ -63,6 +63,14 @@ TEST_CASE("eval errors: unknown parameter, wrong size, bad value, invalid module
     CHECK(more.exit_code == 1);
     CHECK_THAT(more.err, Catch::Contains("--set p:1:9: error: the value of '--set p' must be one expression; this is more"));
     CHECK_THAT(more.err, Catch::Contains("  (1,2,3);t=(1,2)\n          ^"));
+    // A declaration as the value (a trial's `r=x ∈ ℝ` crashed: no statement at all): a located error.
+    for (const char* decl : {"p=x ∈ ℝ", "p=x, y ∈ ℝ", "p=v ∈ ℝ³ default = (1, 2, 3)"}) {
+        RunResult d = run_iqc("eval " + f.string() + " --set '" + decl + "'");
+        INFO(decl << "\n" << d.err);
+        CHECK(d.exit_code == 1);
+        CHECK_THAT(d.err, Catch::Contains("--set p:1:1: error: the value of '--set p' must be an expression"));
+        CHECK_THAT(d.err, Catch::Contains("not a declaration"));
+    }
     RunResult u = run_iqc("eval " + f.string() + " --set novalue");
     CHECK(u.exit_code == 2);
     auto bad = write_temp("bad.iql", "y = x +\n");

@@ -353,6 +353,9 @@ TEST_CASE("a 6-vector never reaches the emitter's swizzles: empty and path-like 
         INFO(name);
         require_located(run_bounded(m.string() + " -o -"), m.string() + ":2:1", "'" + name + "' cannot name a module: a name is not empty");
     }
+    // A declaration where a value goes (a shape parameter's string): a located error (it crashed).
+    fs::path decl = generated("decl_value.iq", "[[shapes]]\ntype = \"sphere\"\nshape_params = { r = \"x ∈ ℝ\" }\n");
+    require_located(run_bounded(decl.string() + " -o -"), decl.string() + ":3:22", "'r' must be a number, an array, or a constant expression");
     fs::path doc = generated("module_name.md", "❤: ../up\n```iheartla\nshape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n```\n");
     require_located(run_bounded(doc.string() + " -o -"), doc.string() + ":1:1", "'../up' cannot name a module");
 }

@@ -127,14 +127,20 @@ std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& nam
     lib.constants_ = true;
     auto m = lib.parse_check(src, "value", false);
     if (d.error_count() != before) return std::nullopt;
-    if (m->ast.stmts.size() > 1 || !m->ast.decls.empty()) {
-        // `(2,0,0);r=0.5`, a value and then more: the rest would be ignored.
-        const ast::Stmt& extra = m->ast.stmts.size() > 1 ? m->ast.stmts[1] : m->ast.stmts.back();
-        Span at = extra.name_span.valid() && extra.name_span.end > extra.name_span.begin ? extra.name_span
-                  : extra.value                                                      ? extra.value->span
-                                                                                     : Span{f, 0, 1};
-        if (m->ast.stmts.size() <= 1) at = {f, 0, uint32_t(std::max<size_t>(1, text.size()))};
-        d.error(at, fmt::format("the value of '{}' must be one expression; this is more (set each name with its own option)", name));
+    if (m->ast.stmts.size() != 1 || !m->ast.decls.empty()) {
+        // `(2,0,0);r=0.5`, a value and then more (the rest would be ignored), or a declaration `x ∈ ℝ` (no value).
+        Span at{f, 0, uint32_t(std::max<size_t>(1, text.size()))};
+        if (m->ast.stmts.size() > 1) {
+            const ast::Stmt& extra = m->ast.stmts[1];
+            if (extra.name_span.end > extra.name_span.begin) at = extra.name_span;
+            else if (extra.value) at = extra.value->span;
+        } else if (!m->ast.decls.empty() && m->ast.decls[0].span.end > m->ast.decls[0].span.begin) {
+            at = m->ast.decls[0].span;
+        }
+        d.error(at, m->ast.stmts.empty()
+                        ? fmt::format("the value of '{}' must be an expression: a number, a vector (1, 2, 3), a matrix [1 2; 3 4] "
+                                      "or a sequence {{(1, 2), (3, 4)}}, not a declaration", name)
+                        : fmt::format("the value of '{}' must be one expression; this is more (set each name with its own option)", name));
         return std::nullopt;
     }
     if (!m->ret || !m->params.empty() || !(m->primary_type.is_numeric() || m->primary_type.is_array())) {
