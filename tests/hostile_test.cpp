@@ -300,6 +300,29 @@ TEST_CASE("user text in comments cannot inject code", "[hostile]") {
     require_located(run_bounded(nl.string() + " -o -"), nl.string() + ":2:1", "'evil\\nint injected_module;' cannot name a module");
 }
 
+TEST_CASE("a hand-written shader that crashes the driver's or glslang's compiler is a diagnostic, not iqc's crash", "[hostile][render]") {
+    // Found by a re-trial of issue 16: a sum of 20,000 terms overflowed the stack of Mesa's GLSL compiler (render)
+    // and a chain of 10,000 commas glslang's SPIR-V generator (wgsl): iqc died with them (exit 139). Each is
+    // tried in a child process first.
+    std::string sum = "void mainImage(out vec4 c, in vec2 f) {\n    float x = 0.0\n";
+    for (int i = 0; i < 20000; ++i) sum += "        + 1.0\n";
+    sum += "    ;\n    c = vec4(x);\n}\n";
+    fs::path big = generated("long_sum.frag", sum);
+    Bounded r = run_bounded("render " + big.string() + " --size 16x9 -o " + (temp_dir() / "long_sum.png").string());
+    INFO(r.run.err);
+    CHECK(r.run.exit_code == 1);
+    CHECK_THAT(r.run.err, Catch::Contains("long_sum.frag: the GL driver crashed compiling this shader (signal 11"));
+    std::string commas = "void mainImage(out vec4 c, in vec2 f) {\n    float x = (1.0";
+    for (int i = 0; i < 10000; ++i) commas += ",1.0";
+    commas += ");\n    c = vec4(x);\n}\n";
+    fs::path comma = generated("long_comma.frag", commas);
+    Bounded w = run_bounded(comma.string() + " --target wgsl -o " + (temp_dir() / "long_comma.wgsl").string());
+    INFO(w.run.err);
+    CHECK(w.run.exit_code == 1);
+    CHECK_THAT(w.run.err, Catch::Contains("long_comma.frag: glslang crashed compiling this shader (signal 11"));
+    CHECK_FALSE(fs::exists(temp_dir() / "long_comma.wgsl"));
+}
+
 TEST_CASE("comment_text: one line, no comment delimiters, no continuation, valid UTF-8", "[hostile]") {
     CHECK(glsl::comment_text("a\nb\r\nc\vd\fe") == "a b c d e");
     CHECK(glsl::comment_text("x\xC2\x85y\xE2\x80\xA8z\xE2\x80\xA9w") == "x y z w");  // NEL, U+2028, U+2029

@@ -12,6 +12,9 @@
 #include <cerrno>
 #include <malloc.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <fcntl.h>
 #include <unistd.h>
 #include <chrono>
 #include <cstdio>
@@ -65,6 +68,43 @@ void tune_allocator() {
 // The PNG path of frame k of an animation: out.png -> out_0007.png.
 std::string printable(const std::string& s);
 void put(std::FILE* f, std::string_view text);
+
+// Runs `work` in a child process (its output discarded) and says how it died ("" when it did not). A shader a user
+// wrote by hand goes to third-party compilers (glslang, Mesa's) whose recursion a long enough expression
+// overflows (a sum of 20,000 terms: a segfault in the driver): tried in a child first, such a crash becomes a
+// diagnostic instead of iqc's death. Call before any thread or GL context exists.
+std::string crash_in_child(const std::function<void()>& work) {
+    std::fflush(stdout);
+    std::fflush(stderr);
+    pid_t pid = fork();
+    if (pid < 0) return "";  // no child: go on without the check
+    if (pid == 0) {
+        struct rlimit none = {0, 0};
+        setrlimit(RLIMIT_CORE, &none);  // no core file for the crash this is here to catch
+        int null = open("/dev/null", O_WRONLY);
+        if (null >= 0) {
+            dup2(null, 1);
+            dup2(null, 2);
+        }
+        work();
+        _exit(0);
+    }
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    // A signal, or (a sanitizer's handler reports the overflow and exits) a status `work` never ends with.
+    if (WIFSIGNALED(status)) return fmt::format("signal {}, {}", WTERMSIG(status), strsignal(WTERMSIG(status)));
+    if (WIFEXITED(status) && WEXITSTATUS(status) != 0) return fmt::format("exit status {}", WEXITSTATUS(status));
+    return "";
+}
+
+// The diagnostic for a hand-written shader that crashed a third-party compiler (crash_in_child).
+int report_compiler_crash(const std::string& path, const char* compiler, const std::string& how) {
+    std::fprintf(stderr, "iqc: error: %s: %s crashed compiling this shader (%s): an expression or a chain of "
+                         "operators too long or too deeply nested for its compiler; split it into statements\n",
+                 printable(path).c_str(), compiler, how.c_str());
+    return 1;
+}
 
 std::string frame_path(const std::string& out, int k, int frames) {
     if (frames <= 1) return out;
@@ -633,6 +673,17 @@ static int run(int argc, char** argv) {
                 std::fprintf(stderr, "iqc: error: cannot read '%s': %s\n", printable(r_input).c_str(), err.c_str());
                 return 1;
             }
+            // Tried in a child first: a crash in the driver's compiler is a diagnostic (crash_in_child).
+            if (std::string how = crash_in_child([&] {
+                    std::string e;
+                    auto r = iqc::render::Renderer::create(&e);
+                    if (!r) return;
+                    iqc::render::RenderOptions one;
+                    one.width = one.height = 1;
+                    r->render(iqc::glsl::wrap_shadertoy("#line 1\n" + code), one);
+                });
+                !how.empty())
+                return report_compiler_crash(r_input, "the GL driver", how);
             // The driver's messages count the file's own lines.
             return render_command("#line 1\n" + code, iqc::ShaderInputs{}, false, r_output, r_size, r_time, r_frames, r_fps, false, quiet,
                                   [] { return iqc::CompileResult{}; }, r_input, &code);
@@ -661,6 +712,8 @@ static int run(int argc, char** argv) {
                 std::fprintf(stderr, "iqc: error: cannot read '%s': %s\n", printable(input).c_str(), err.c_str());
                 return 1;
             }
+            if (std::string how = crash_in_child([&] { iqc::glsl::shadertoy_to_wgsl(code); }); !how.empty())
+                return report_compiler_crash(input, "glslang", how);
             iqc::glsl::ShadertoyWgsl w = iqc::glsl::shadertoy_to_wgsl(code);
             if (w.user_error) {
                 // glslang's "ERROR: iqc:LINE: message" lines, as FILE:LINE:COL: error: message, the line and a caret
