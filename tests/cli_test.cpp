@@ -158,6 +158,17 @@ TEST_CASE("transform errors: not a 4×4 matrix, singular", "[cli]") {
     CHECK(t.exit_code == 0);
     RunResult tt = run_iqc((temp_dir() / "unit.md").string() + " -o -");
     CHECK_THAT(tt.out, Catch::Contains("vec3(-1.0, -2.0, 0.0)"));
+    // Values the shader would compute with outside float32 (a trial's: silently flushed to 0 or clamped), and a
+    // scale so small that the scene's reach squares to ∞ in object space: located errors.
+    RunResult huge = compile_doc("huge.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\ntransform = \"S((10^60, 10^60, 10^60))\"\n```\n");
+    CHECK(huge.exit_code == 1);
+    CHECK_THAT(huge.err, Catch::Contains("huge.md:13:14: error: the transform leaves float32's range, which shaders compute in: its inverse holds 1e-60"));
+    RunResult far = compile_doc("far.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\ntransform = \"T((3e38, 0, 0))T((3e38, 0, 0))\"\n```\n");
+    CHECK(far.exit_code == 1);
+    CHECK_THAT(far.err, Catch::Contains("far.md:13:14: error: the transform leaves float32's range"));
+    RunResult tiny = compile_doc("tiny.md", std::string(kTorus) + "```scene\n[[shapes]]\ntype = \"torus\"\ntransform = \"S((1e-20, 1e-20, 1e-20))\"\n```\n");
+    CHECK(tiny.exit_code == 1);
+    CHECK_THAT(tiny.err, Catch::Contains("tiny.md:13:14: error: the transform maps the scene's reach (max_dist 100 around the camera) to object coordinates up to"));
 }
 
 TEST_CASE("parameter overrides name real parameters with the right size", "[cli]") {
@@ -352,6 +363,11 @@ TEST_CASE("iqc render draws a Shadertoy shader as it is", "[cli][render]") {
                                       "      c += nope(c);\n"
                                       "           ^~~~\n"));
     CHECK_THAT(e.err, !Catch::Contains("0:3("));
+    // The preprocessor's errors too (Mesa: `0:L(C): preprocessor error: …`).
+    auto pre = write_temp("pre.frag", "// fine\n#error stop here\nvoid mainImage(out vec4 c, in vec2 f) { c = vec4(1.0); }\n");
+    RunResult pe = run_iqc("render " + pre.string() + " -o " + (temp_dir() / "pre.png").string());
+    CHECK(pe.exit_code == 1);
+    CHECK_THAT(pe.err, Catch::Contains(pre.string() + ":2:1: error: #error stop here\n  #error stop here\n  ^"));
     // An error in no line of the file (Shadertoy's main calls a mainImage the file lacks): unlocated.
     auto nomain = write_temp("nomain.frag", "void main_image(out vec4 c, in vec2 f) { c = vec4(1.0); }\n");
     RunResult n = run_iqc("render " + nomain.string() + " -o " + (temp_dir() / "nomain.png").string());

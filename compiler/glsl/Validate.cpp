@@ -77,6 +77,7 @@ size_t locate_shader_log(const std::string& log, FileId file, Diagnostics& diags
             if (col < 0 || l.substr(i, 3) != "): ") continue;
             std::string_view rest = l.substr(i + 3);
             if (starts(rest, "error: ")) message = rest.substr(7);
+            else if (starts(rest, "preprocessor error: ")) message = rest.substr(20);
             else if (starts(rest, "warning: ")) message = rest.substr(9), warning = true;
             else continue;
         } else if (starts(l, "ERROR: ") || starts(l, "WARNING: ")) {  // glslang: ERROR: NAME:LINE: message

@@ -238,6 +238,30 @@ struct Planner {
         plan.inv_offset = {inv[3], inv[7], inv[11]};
         double norm = spectral_norm3(plan.inv_linear);
         plan.scale = std::fabs(norm - 1) < 1e-9 ? 1.0 : 1.0 / norm;
+        // What the shader computes with — the inverse, its offset and the scale — must be float32 numbers: past
+        // 3.4·10³⁸ they were clamped, below 1.2·10⁻³⁸ flushed to 0 or denormal (S((10⁶⁰, …)) drew everything
+        // inside the shape; T((3e38, …))⋅T((3e38, …)) moved it silently).
+        std::vector<double> used = plan.inv_linear;
+        used.insert(used.end(), plan.inv_offset.begin(), plan.inv_offset.end());
+        used.push_back(plan.scale);
+        for (double x : used)
+            if (std::fabs(x) > 3.4e38 || (x != 0 && std::fabs(x) < 1.2e-38)) {
+                d.error(m->ret->value->span, fmt::format("the transform leaves float32's range, which shaders compute in: its "
+                                                         "inverse holds {:.3g} (float32 keeps magnitudes from 1.2e-38 to 3.4e38)", x));
+                return false;
+            }
+        // Nor may the object-space points of the scene's reach (max_dist around the camera) square past float32's
+        // range: lengths of them would be ∞ (a uniform scale of 10⁻²⁰ put ∞ in every pixel's distance).
+        double reach = s.render.max_dist;
+        for (double c : s.camera.position) reach += std::fabs(c);
+        double far = norm * reach;
+        for (double o : plan.inv_offset) far += std::fabs(o);
+        if (far > 1e19) {
+            d.error(m->ret->value->span, fmt::format("the transform maps the scene's reach (max_dist {} around the camera) to object "
+                                                     "coordinates up to {:.3g}, whose squares overflow float32: scale it less",
+                                                     s.render.max_dist, far));
+            return false;
+        }
         plan.transform = std::move(m);
         return true;
     }
