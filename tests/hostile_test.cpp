@@ -311,7 +311,7 @@ TEST_CASE("a hand-written shader that crashes the driver's or glslang's compiler
     Bounded r = run_bounded("render " + big.string() + " --size 16x9 -o " + (temp_dir() / "long_sum.png").string());
     INFO(r.run.err);
     CHECK(r.run.exit_code == 1);
-    CHECK_THAT(r.run.err, Catch::Contains("long_sum.frag: the GL driver crashed compiling this shader (signal 11"));
+    CHECK_THAT(r.run.err, Catch::Contains("long_sum.frag: the GL driver crashed compiling this shader ("));
     std::string commas = "void mainImage(out vec4 c, in vec2 f) {\n    float x = (1.0";
     for (int i = 0; i < 10000; ++i) commas += ",1.0";
     commas += ");\n    c = vec4(x);\n}\n";
@@ -319,7 +319,7 @@ TEST_CASE("a hand-written shader that crashes the driver's or glslang's compiler
     Bounded w = run_bounded(comma.string() + " --target wgsl -o " + (temp_dir() / "long_comma.wgsl").string());
     INFO(w.run.err);
     CHECK(w.run.exit_code == 1);
-    CHECK_THAT(w.run.err, Catch::Contains("long_comma.frag: glslang crashed compiling this shader (signal 11"));
+    CHECK_THAT(w.run.err, Catch::Contains("long_comma.frag: glslang crashed compiling this shader ("));
     CHECK_FALSE(fs::exists(temp_dir() / "long_comma.wgsl"));
 }
 
