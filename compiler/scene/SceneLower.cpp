@@ -1061,7 +1061,12 @@ private:
         box = b.named(box, "lattice", "distance to the box of the lattice's bounding spheres");
         std::vector<ValueId> stand_in = {box, b.scalar(-1)};
         if (st.size() > 2) stand_in.push_back(st[2]);
-        ValueId far = b.if_(b.compare(CompareKind::Lt, box, st[0]), b.construct(vt, stand_in), b.construct(vt, st));
+        // (Builder calls as arguments of one call run in an order C++ leaves open: named first, the IR is the same
+        // with every compiler.)
+        const ValueId nearer_box = b.compare(CompareKind::Lt, box, st[0]);
+        const ValueId boxed = b.construct(vt, stand_in);
+        const ValueId kept = b.construct(vt, st);
+        ValueId far = b.if_(nearer_box, boxed, kept);
         // The nearest cell and its member.
         ValueId u = b.op(Op::Hadamard, {b.op(Op::Sub, {p, vec(L.origin)}), vec(inv)});
         ValueId c0 = b.builtin("clamp", {b.builtin("floor", {b.op(Op::Add, {u, vec({0.5, 0.5, 0.5})})}), vec({0, 0, 0}), vec(last)});
@@ -1132,14 +1137,18 @@ private:
                                 if (L.back_axis >= 0)  // an empty cell
                                     skip = ib.op(Op::Or, {skip, ib.op(Op::Or, {ib.compare(CompareKind::Lt, k, ib.integer(0)),
                                                                                ib.compare(CompareKind::Ge, k, ib.integer(L.members))})});
-                                ValueId chosen = ib.if_(skip, ib.construct(vt, s3), ib.construct(vt, next));
+                                const ValueId unchanged = ib.construct(vt, s3);
+                                const ValueId with = ib.construct(vt, next);
+                                ValueId chosen = ib.if_(skip, unchanged, with);
                                 std::vector<ValueId> out;
                                 for (size_t c = 0; c < s3.size(); ++c) out.push_back(ib.op(Op::Extract, {chosen}, int(c)));
                                 return out;
                             });
                     });
             });
-        ValueId chosen = b.if_(b.compare(CompareKind::Gt, box, b.scalar(far_from)), far, b.construct(vt, near));
+        const ValueId beyond = b.compare(CompareKind::Gt, box, b.scalar(far_from));
+        const ValueId looked_up = b.construct(vt, near);
+        ValueId chosen = b.if_(beyond, far, looked_up);
         std::vector<ValueId> out;
         for (size_t c = 0; c < st.size(); ++c) out.push_back(b.op(Op::Extract, {chosen}, int(c)));
         return out;
