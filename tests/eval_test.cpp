@@ -51,10 +51,10 @@ TEST_CASE("eval errors: unknown parameter, wrong size, bad value, invalid module
     auto f = write_temp("torus2.iql", kTorus);
     RunResult a = run_iqc("eval " + f.string() + " --set 'pp=(1,2,3)'");
     CHECK(a.exit_code == 1);
-    CHECK_THAT(a.err, Catch::Contains("--set pp: the module has no parameter 'pp' (its parameters: p, t)"));
+    CHECK_THAT(a.err, Catch::Contains("--set pp:1:1: error: the module has no parameter 'pp' (its parameters: p, t)\n  (1,2,3)\n  ^~~~~~~"));
     RunResult b = run_iqc("eval " + f.string() + " --set 'p=(1,2)'");
     CHECK(b.exit_code == 1);
-    CHECK_THAT(b.err, Catch::Contains("--set p: 'p' is ℝ³, but the value is ℝ²"));
+    CHECK_THAT(b.err, Catch::Contains("--set p:1:1: error: 'p' is ℝ³, but the value is ℝ²\n  (1,2)\n  ^~~~~"));
     RunResult c = run_iqc("eval " + f.string() + " --set 'p=(1,,2)'");
     CHECK(c.exit_code == 1);
     CHECK_THAT(c.err, Catch::Contains("--set p:1:4: error: expected an expression, found ','"));
@@ -94,7 +94,7 @@ TEST_CASE("eval binds symbolic sizes from --set values and checks integers", "[e
     CHECK(run_iqc("eval " + g.string() + " --set N=4").out == "x_(N+1) = 10\ny = 10\n");
     RunResult frac = run_iqc("eval " + g.string() + " --set N=2.5");
     CHECK(frac.exit_code == 1);
-    CHECK_THAT(frac.err, Catch::Contains("--set N: 'N' is ℤ, but the value 2.5 is not a whole number"));
+    CHECK_THAT(frac.err, Catch::Contains("--set N:1:1: error: 'N' is ℤ, but the value 2.5 is not a whole number"));
 }
 
 TEST_CASE("eval: sequences and function parameters from --set, and their errors", "[eval]") {
@@ -105,7 +105,7 @@ TEST_CASE("eval: sequences and function parameters from --set, and their errors"
     CHECK(a.out == "s = (9, 12)\nf = (3, 4)\n");
     RunResult wrong = run_iqc("eval " + seq.string() + " --set 'x={1, 2}'");
     CHECK(wrong.exit_code == 1);
-    CHECK_THAT(wrong.err, Catch::Contains("--set x: 'x' is ℝ²[2], but the value is ℝ[2]"));
+    CHECK_THAT(wrong.err, Catch::Contains("--set x:1:1: error: 'x' is ℝ²[2], but the value is ℝ[2]"));
     // A sequence whose default is too large for iqc's sizes.
     std::string zeros = "(0";
     for (int i = 1; i < 4096; ++i) zeros += ", 0";

@@ -24,10 +24,13 @@ void report_eval_limit(Diagnostics& d, const ir::EvalLimit& limit) {
                                     "evaluate (iqc eval stops there)", limits::kMaxEvalSteps));
 }
 
-// Evaluates a value such as `3`, `-0.5`, `(1, 2, 3)`, `[1 2; 3 4]` or `√2` (any constant expression).
-bool parse_value(const std::string& name, const std::string& text, SourceManager& sm, Diagnostics& d, ir::Value& out) {
+// Evaluates a value such as `3`, `-0.5`, `(1, 2, 3)`, `[1 2; 3 4]` or `√2` (any constant expression); `where`:
+// the value's text as a file of its own ("--set NAME"), for diagnostics about it.
+bool parse_value(const std::string& name, const std::string& text, SourceManager& sm, Diagnostics& d, ir::Value& out, Span& where) {
+    const FileId f = FileId(sm.size());  // evaluate_constant adds the value's text first
     auto v = ModuleLibrary::evaluate_constant(fmt::format("--set {}", name), text, sm, d);
     if (!v) return false;
+    where = {f, 0, uint32_t(std::max<size_t>(1, text.size()))};
     out = std::move(*v);
     return true;
 }
@@ -108,6 +111,7 @@ bool evaluate_checked(const EvalRequest& req, SourceManager& sm, Diagnostics& d,
     std::map<std::string, ir::Value> given;
     std::map<std::string, Type> given_types;
     std::map<std::string, std::shared_ptr<const ast::Module>> given_functions;
+    std::map<std::string, Span> given_spans;  // each value's text (`--set NAME:1:1`)
     for (const auto& [sname, stext] : req.sets) {
         if (size_t paren = sname.find('('); paren != std::string::npos) {  // f(x)=x²: a function parameter's definition
             std::string text = sname + " = " + stext;
@@ -119,8 +123,10 @@ bool evaluate_checked(const EvalRequest& req, SourceManager& sm, Diagnostics& d,
             continue;
         }
         ir::Value v;
-        if (!parse_value(sname, stext, sm, d, v)) continue;
+        Span where;
+        if (!parse_value(sname, stext, sm, d, v, where)) continue;
         given[sname] = v;
+        given_spans[sname] = where;
         given_types[sname] = v.type;
     }
     if (d.error_count() != before) return false;
@@ -139,24 +145,24 @@ bool evaluate_checked(const EvalRequest& req, SourceManager& sm, Diagnostics& d,
         if (pi < 0) {
             std::vector<std::string> cands;
             for (const auto& p : m->params) cands.push_back(p.name);
-            std::string msg = fmt::format("--set {}: the module has no parameter '{}'", sname, sname);
+            std::string msg = fmt::format("the module has no parameter '{}'", sname);
             if (auto s = did_you_mean(sname, cands)) msg += fmt::format(" (did you mean '{}'?)", *s);
             else if (!cands.empty()) msg += fmt::format(" (its parameters: {})", fmt::join(cands, ", "));
-            d.error_nospan(msg);
+            d.error(given_spans[sname], msg);
             continue;
         }
         const Type& want = m->params[size_t(pi)].type;
         if (v.type != want && !(want.is_scalar() && v.type.is_scalar())) {
-            d.error_nospan(fmt::format("--set {}: '{}' is {}, but the value is {}", sname, sname, want.str(), v.type.str()));
+            d.error(given_spans[sname], fmt::format("'{}' is {}, but the value is {}", sname, want.str(), v.type.str()));
             continue;
         }
         if (want.kind == Type::Integer && v.v[0] != std::floor(v.v[0])) {
-            d.error_nospan(fmt::format("--set {}: '{}' is ℤ, but the value {} is not a whole number", sname, sname, v.v[0]));
+            d.error(given_spans[sname], fmt::format("'{}' is ℤ, but the value {} is not a whole number", sname, v.v[0]));
             continue;
         }
         if (want.kind == Type::Integer && !limits::is_int32(v.v[0])) {
-            d.error_nospan(fmt::format("--set {}: '{}' is ℤ, but the value {} is not a 32-bit integer (a shader's int: "
-                                       "-2147483648 … 2147483647)", sname, sname, v.v[0]));
+            d.error(given_spans[sname], fmt::format("'{}' is ℤ, but the value {} is not a 32-bit integer (a shader's int: "
+                                                    "-2147483648 … 2147483647)", sname, v.v[0]));
             continue;
         }
         args[size_t(pi)] = {want, v.v};
