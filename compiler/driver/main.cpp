@@ -402,17 +402,7 @@ bool depfile_text(const std::vector<std::string>& outputs, const std::vector<std
 }
 
 // A path for a message: control characters as \n, \t or \xNN.
-std::string printable(const std::string& s) {
-    std::string out;
-    for (char c : s) {
-        unsigned char u = static_cast<unsigned char>(c);
-        if (c == '\n') out += "\\n";
-        else if (c == '\t') out += "\\t";
-        else if (u < 0x20 || u == 0x7f) out += fmt::format("\\x{:02x}", u);
-        else out += c;
-    }
-    return out;
-}
+std::string printable(const std::string& s) { return iqc::escape_controls(s); }
 
 }  // namespace
 

@@ -99,17 +99,9 @@ constexpr size_t kMaxLights = 256;
 // The error for a module name that could not be a file's (ModuleLibrary::is_file_name): `type` names a scene's
 // modules, an included file and a .iql file alike.
 std::string bad_module_name(const std::string& raw) {
-    std::string name;  // control characters as escapes: the message stays one line
     size_t cut = std::min<size_t>(raw.size(), 60);
     while (cut < raw.size() && cut > 0 && (static_cast<unsigned char>(raw[cut]) & 0xC0) == 0x80) --cut;  // a whole UTF-8 character
-    for (char c : raw.substr(0, cut)) {
-        const auto u = static_cast<unsigned char>(c);
-        if (c == '\n') name += "\\n";
-        else if (c == '\r') name += "\\r";
-        else if (c == '\t') name += "\\t";
-        else if (u < 0x20 || u == 0x7F) name += fmt::format("\\x{:02X}", u);
-        else name += c;
-    }
+    std::string name = escape_controls(std::string_view(raw).substr(0, cut));  // the message stays one line
     if (cut < raw.size()) name += "…";
     return fmt::format("'{}' cannot name a module: a name is not empty, does not start with '.', holds no '/', '\\' or "
                        "control characters, and has at most 200 bytes (it names a .iql file too)",

@@ -231,6 +231,18 @@ static const char* severity_name(Severity s) {
     return "error";
 }
 
+std::string escape_controls(std::string_view s) {
+    std::string out;
+    for (char c : s) {
+        unsigned char u = static_cast<unsigned char>(c);
+        if (c == '\n') out += "\\n";
+        else if (c == '\t') out += "\\t";
+        else if (u < 0x20 || u == 0x7f) out += fmt::format("\\x{:02x}", u);
+        else out += c;
+    }
+    return out;
+}
+
 // Text as shown in a diagnostic: control characters (a NUL, an escape sequence) become their visible
 // pictures (U+2400 + c, ␡ for DEL), one column each like the byte they stand for; tabs and (in messages)
 // newlines stay.

@@ -114,6 +114,9 @@ private:
     size_t errors_ = 0, dropped_ = 0;
 };
 
+// A user's name or path for a one-line message: newline and tab as \n and \t, other control characters as \xNN.
+std::string escape_controls(std::string_view s);
+
 // UTF-8 helpers shared by the lexer and the renderer.
 namespace utf8 {
 // Decodes one code point at text[i]; advances i. Invalid bytes decode as U+FFFD.
