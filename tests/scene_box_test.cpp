@@ -254,3 +254,87 @@ TEST_CASE("a benchmark build's box covers the largest hit tolerance the sweep gi
     CHECK(b->second[1] >= 1.5);
     CHECK(b->second[1] <= 1.51);
 }
+
+TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a constant bound the axes they mix",
+          "[scene][box]") {
+    // A shape that rotates its point in a coordinate plane mixes two axes: interval arithmetic alone closes
+    // neither side of x or z (c·x - s·z over x ≥ c with z unbounded). The rotated pair keeps the norm of (x, z)
+    // (cos² + sin² = 1), so the box of the rotated coordinates bounds both: support_box's PlanePair.
+    auto level = [](double max_dist) { return std::max(0.1, max_dist / (360 / std::tan(M_PI / 6))); };
+    const double m = level(100);
+    auto near = [](double got, double want) {
+        INFO("got " << got << ", want " << want);
+        CHECK(got >= want);
+        CHECK(got <= want + 0.01);
+    };
+    // The twisted box (1 x 3 x 1, `u = (c p_1 - s p_3, p_2, s p_1 + c p_3)`): its rounded corner's radius in x and
+    // z, 0.5·√2 + m (the box of (u_1, u_3) is ±(0.5 + m); its far cells are split down to the corner).
+    Compiled twisted = compile_path(bench("twisted.iq"));
+    REQUIRE(twisted.result.exit_code == 0);
+    auto b = box_of(twisted.result.code);
+    REQUIRE(b);
+    for (int a : {0, 2}) {
+        near(-b->first[a], 0.5 * std::sqrt(2.0) + m);
+        near(b->second[a], 0.5 * std::sqrt(2.0) + m);
+    }
+    near(b->second[1], 1.5 + m);
+    CHECK(differ_without_box(twisted.result, 96, 54) == 0);
+    // The twisted bar (the standard library's `twist` in a called function, four calls merged): the bar's
+    // corner, narrower than its `bound = 1.6` sphere's box.
+    Compiled bar = compile_path(bench("twisted_bar.iq"));
+    REQUIRE(bar.result.exit_code == 0);
+    b = box_of(bar.result.code);
+    REQUIRE(b);
+    for (int a : {0, 2}) near(b->second[a], 0.3 * std::sqrt(2.0) + m);
+    near(b->second[1], 1.5 + m);
+    CHECK(differ_without_box(bar.result, 96, 54) == 0);
+    // A slab turned about y by a matrix of a slider's angle: on webgl2 any angle in [0, 6.3], so x and z reach
+    // the corner's radius |(1 + m, 0.3 + m)|.
+    const std::string slab =
+        "[modules]\nslab = \"\"\"\nshape\nsin, cos from trigonometry\nD = max(|v_1| - 1, |p_2| - 0.2, |v_2| - 0.3)\n"
+        "v = R (p_1, p_3)\nR = [cos(θ) -sin(θ); sin(θ) cos(θ)]\nwhere\np ∈ ℝ³\nθ ∈ [0, 6.3] default = 0.7\n\"\"\"\n"
+        "[[shapes]]\ntype = \"slab\"\n";
+    CompileOptions webgl2;
+    webgl2.target = Target::WebGL2;
+    Compiled turned = compile_path(write_temp("box_slab.iq", slab), webgl2);
+    INFO(turned.diagnostics);
+    REQUIRE(turned.result.exit_code == 0);
+    b = box_of(turned.result.code);
+    REQUIRE(b);
+    for (int a : {0, 2}) near(b->second[a], std::hypot(1 + m, 0.3 + m));
+    near(b->second[1], 0.2 + m);
+    // A constant turn (cos = 0.8, sin = 0.6): the rectangle ±(1 + m) x ±(0.3 + m) mapped back exactly,
+    // x within 0.8(1 + m) + 0.6(0.3 + m), z within 0.6(1 + m) + 0.8(0.3 + m).
+    Compiled constant = compile_text("box_const.iq", "[modules]\nturned = \"\"\"\nshape\nD = max(|u_1| - 1, |u_2| - 0.2, |u_3| - 0.3)\n"
+                                                     "u = (0.8 p_1 - 0.6 p_3, p_2, 0.6 p_1 + 0.8 p_3)\nwhere\np ∈ ℝ³\n\"\"\"\n"
+                                                     "[[shapes]]\ntype = \"turned\"\n");
+    REQUIRE(constant.result.exit_code == 0);
+    b = box_of(constant.result.code);
+    REQUIRE(b);
+    near(b->second[0], 0.8 * (1 + m) + 0.6 * (0.3 + m));
+    near(b->second[2], 0.6 * (1 + m) + 0.8 * (0.3 + m));
+    // `bend` turns (x, y) by an angle of x itself: still a rotation, |(x, y)| ≤ |(1 + m, 0.2 + m)|.
+    Compiled bent = compile_text("box_bend.iq", "[modules]\nbent = \"\"\"\nshape\nbend from domain\n# lipschitz: 2\n"
+                                                "D = max(|q_1| - 1, |q_2| - 0.2, |q_3| - 0.3)\nq = bend(p, k)\nwhere\np ∈ ℝ³\n"
+                                                "k ∈ [0, 2] default = 0.5\n\"\"\"\n[[shapes]]\ntype = \"bent\"\n");
+    INFO(bent.diagnostics);
+    REQUIRE(bent.result.exit_code == 0);
+    b = box_of(bent.result.code);
+    REQUIRE(b);
+    for (int a : {0, 1}) near(b->second[a], std::hypot(1 + m, 0.2 + m));
+    near(b->second[2], 0.3 + m);
+    // Not a rotation: (c x - s z, c x + s z) does not keep |(x, z)|, and the rule must not apply (x and z stay
+    // unbounded; only y is closed).
+    Compiled sheared = compile_text("box_shear.iq", "[modules]\nsheared = \"\"\"\nshape\nsin, cos from trigonometry\n# lipschitz: 2\n"
+                                                    "D = max(|u_1| - 1, |p_2| - 0.2, |u_2| - 0.3)\n"
+                                                    "u = (c p_1 - s p_3, c p_1 + s p_3)\nc = cos(k p_2)\ns = sin(k p_2)\nwhere\np ∈ ℝ³\n"
+                                                    "k ∈ [0, 2] default = 1\n\"\"\"\n[[shapes]]\ntype = \"sheared\"\n");
+    REQUIRE(sheared.result.exit_code == 0);
+    b = box_of(sheared.result.code);
+    REQUIRE(b);
+    for (int a : {0, 2}) {
+        CHECK(b->first[a] == -1e30);
+        CHECK(b->second[a] == 1e30);
+    }
+    near(b->second[1], 0.2 + m);
+}

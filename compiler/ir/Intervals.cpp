@@ -419,7 +419,11 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
 
 std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params,
                                       const IntervalHook& hook, int loop_trips, long* work) {
-    const Function& f = m.functions[size_t(fn)];
+    return interval_analysis(m, m.functions[size_t(fn)], params, hook, loop_trips, work);
+}
+
+std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
+                                      const IntervalHook& hook, int loop_trips, long* work) {
     std::vector<Bounds> r(f.body.size());
     std::map<size_t, std::vector<Bounds>> loop_states;  // a Loop's final states (read by Member)
     for (size_t i = 0; i < f.body.size(); ++i) {

@@ -65,6 +65,10 @@ struct Bounds {
 using IntervalHook = std::function<bool(size_t, std::vector<Bounds>&)>;
 std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params,
                                       const IntervalHook& hook = {}, int loop_trips = 0, long* work = nullptr);
+// The same for a function `f` outside the module (a scratch copy: ir/Support.cpp's inlined shape); its calls
+// and loops name functions of `m`.
+std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
+                                      const IntervalHook& hook = {}, int loop_trips = 0, long* work = nullptr);
 
 // Whether `a k b` holds for every a, b in the intervals (1), for none (0), or is undecided (-1).
 int decided(CompareKind k, Interval a, Interval b);

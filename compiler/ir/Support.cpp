@@ -3,7 +3,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
+#include <map>
 #include <queue>
+
+#include "ir/passes/CSE.h"
+#include "ir/passes/Fold.h"
+#include "ir/passes/Inline.h"
+#include "sema/Builtins.h"
 
 namespace iqc::ir {
 
@@ -12,6 +19,191 @@ namespace {
 struct Box {
     std::array<double, 3> lo, hi;
 };
+
+// ---- rotations of the query point in a coordinate plane ----
+//
+// A shape that rotates its point in a coordinate plane (Quilez's twist and bend, a rotation about an axis by a
+// parameter, a constant angle) mixes two axes: over a half-space x ≥ c, with z unbounded, c·x - s·z is
+// unbounded, so interval arithmetic can close no side of either axis. What it loses is the rotation's
+// invariant: the rotated pair (u, w) has the norm of (p_a, p_b) (cos² + sin² = 1, whatever the angle depends
+// on). support_box therefore also analyses the shape with u and w as the free coordinates of the box (p_a and
+// p_b unbounded wherever else they appear): the box it finds for (u, w) bounds ‖(p_a, p_b)‖ = ‖(u, w)‖. A
+// constant invertible 2×2 map of the pair works the same way, through its inverse.
+
+// A coefficient of a linear form: a constant, or ±cos θ / ±sin θ of one value θ.
+struct Coefficient {
+    enum Kind { Constant, Cos, Sin } kind = Constant;
+    double value = 0;  // Constant: the value; Cos and Sin: the sign, ±1
+    ValueId angle = 0;
+};
+
+// Value v as a coefficient (a constant, ±cos θ, ±sin θ), or nothing.
+std::optional<Coefficient> coefficient(const Function& g, ValueId v, double sign, int depth = 0) {
+    const Instr& in = g.body[v];
+    if (depth > 8 || !in.type.is_scalar()) return std::nullopt;
+    if (in.op == Op::Const && in.data.size() == 1) return Coefficient{Coefficient::Constant, sign * in.data[0], 0};
+    if (in.op == Op::Copy) return coefficient(g, in.args[0], sign, depth + 1);
+    if (in.op == Op::Neg) return coefficient(g, in.args[0], -sign, depth + 1);
+    if (in.op == Op::Builtin && in.args.size() == 1) {
+        const std::string& n = builtin(in.aux).name;
+        if (n == "cos") return Coefficient{Coefficient::Cos, sign, in.args[0]};
+        if (n == "sin") return Coefficient{Coefficient::Sin, sign, in.args[0]};
+    }
+    return std::nullopt;
+}
+
+// Which component of the query point value v is (an Extract of the query parameter), or -1.
+int query_axis(const Function& g, int query, ValueId v) {
+    const Instr& in = g.body[v];
+    if (in.op == Op::Copy) return query_axis(g, query, in.args[0]);
+    if (in.op != Op::Extract || in.aux < 0 || in.aux > 2) return -1;
+    const Instr& p = g.body[in.args[0]];
+    return p.op == Op::Param && p.aux == query && p.type.is_vector() && p.type.rows == 3 ? in.aux : -1;
+}
+
+// A linear form of the query point's components: value = Σ terms[axis] · p_axis.
+using LinearForm = std::map<int, Coefficient>;
+
+bool add_term(LinearForm& f, int axis, Coefficient c) {
+    if (axis < 0) return false;
+    auto it = f.find(axis);
+    if (it == f.end()) {
+        if (c.kind != Coefficient::Constant || c.value != 0) f[axis] = c;
+        return true;
+    }
+    if (it->second.kind != Coefficient::Constant || c.kind != Coefficient::Constant) return false;
+    it->second.value += c.value;
+    if (it->second.value == 0) f.erase(it);
+    return true;
+}
+
+// Component `comp` of vector value v (or scalar v, comp -1) as a linear form of the query's components,
+// times `sign`, added to f; false when it is not one (an offset, a product of two coordinates, ...).
+bool linear_form(const Function& g, int query, ValueId v, int comp, double sign, LinearForm& f, int depth = 0) {
+    const Instr& in = g.body[v];
+    if (depth > 16) return false;
+    if (comp < 0) {
+        if (!in.type.is_scalar()) return false;
+        if (int a = query_axis(g, query, v); a >= 0) return add_term(f, a, {Coefficient::Constant, sign, 0});
+        switch (in.op) {
+            case Op::Copy: return linear_form(g, query, in.args[0], -1, sign, f, depth + 1);
+            case Op::Neg: return linear_form(g, query, in.args[0], -1, -sign, f, depth + 1);
+            case Op::Add:
+            case Op::Sub:
+                return linear_form(g, query, in.args[0], -1, sign, f, depth + 1) &&
+                       linear_form(g, query, in.args[1], -1, in.op == Op::Sub ? -sign : sign, f, depth + 1);
+            case Op::Mul: {
+                if (!g.body[in.args[0]].type.is_scalar() || !g.body[in.args[1]].type.is_scalar()) return false;
+                for (int k : {0, 1})
+                    if (auto c = coefficient(g, in.args[size_t(k)], sign)) {
+                        int a = query_axis(g, query, in.args[size_t(1 - k)]);
+                        if (a >= 0) return add_term(f, a, *c);
+                    }
+                return false;
+            }
+            case Op::Extract: {
+                const Instr& src = g.body[in.args[0]];
+                return src.type.is_vector() && linear_form(g, query, in.args[0], in.aux, sign, f, depth + 1);
+            }
+            default: return false;
+        }
+    }
+    // A vector's component: of a Construct of scalars, or of a matrix (a Construct of scalars, or a constant)
+    // times a vector (a Construct of scalars, or the query point itself).
+    if (in.op == Op::Copy) return linear_form(g, query, in.args[0], comp, sign, f, depth + 1);
+    if (in.op == Op::Construct) {
+        if (size_t(comp) >= in.args.size()) return false;
+        for (ValueId a : in.args)
+            if (!g.body[a].type.is_scalar()) return false;
+        return linear_form(g, query, in.args[size_t(comp)], -1, sign, f, depth + 1);
+    }
+    if (in.op != Op::Mul) return false;
+    const Instr& M = g.body[in.args[0]];
+    const Instr& x = g.body[in.args[1]];
+    if (!M.type.is_matrix() || !x.type.is_vector() || M.type.cols != x.type.rows || comp >= M.type.rows) return false;
+    const int cols = M.type.cols;
+    for (int j = 0; j < cols; ++j) {
+        size_t e = size_t(comp * cols + j);
+        std::optional<Coefficient> c;
+        if (M.op == Op::Const && M.data.size() == size_t(M.type.rows * cols)) c = Coefficient{Coefficient::Constant, sign * M.data[e], 0};
+        else if (M.op == Op::Construct && M.args.size() == size_t(M.type.rows * cols)) c = coefficient(g, M.args[e], sign);
+        if (!c) return false;
+        if (c->kind == Coefficient::Constant && c->value == 0) continue;
+        int a = -1;
+        if (x.op == Op::Param && x.aux == query && x.type.rows == 3) a = j;
+        else if (x.op == Op::Construct && x.args.size() == size_t(cols)) a = query_axis(g, query, x.args[size_t(j)]);
+        if (!add_term(f, a, *c)) return false;
+    }
+    return true;
+}
+
+// One rotated (or linearly mixed) pair: values u and w (component comp of a vector value; -1: scalars) are
+// the query's axes a and b through the 2×2 map M = [[α, β], [γ, δ]]: an orthogonal one of cos and sin of one
+// angle (`orthogonal`), or an invertible constant one (`inverse` holds M⁻¹, row-major).
+struct PlanePair {
+    ValueId u = 0, w = 0;
+    int u_comp = -1, w_comp = -1;
+    int a = 0, b = 1;
+    bool orthogonal = false;
+    std::array<double, 4> inverse{};
+};
+
+std::optional<PlanePair> plane_pair(const LinearForm& fu, const LinearForm& fw) {
+    if (fu.size() != 2 || fw.size() != 2 || fu.begin()->first != fw.begin()->first || fu.rbegin()->first != fw.rbegin()->first)
+        return std::nullopt;
+    PlanePair p;
+    p.a = fu.begin()->first;
+    p.b = fu.rbegin()->first;
+    const Coefficient &al = fu.at(p.a), &be = fu.at(p.b), &ga = fw.at(p.a), &de = fw.at(p.b);
+    using K = Coefficient::Kind;
+    if (al.kind == K::Constant && be.kind == K::Constant && ga.kind == K::Constant && de.kind == K::Constant) {
+        double det = al.value * de.value - be.value * ga.value;
+        double scale = std::max({std::fabs(al.value), std::fabs(be.value), std::fabs(ga.value), std::fabs(de.value)});
+        if (!(std::fabs(det) > 1e-9 * scale * scale) || !std::isfinite(det)) return std::nullopt;
+        p.inverse = {de.value / det, -be.value / det, -ga.value / det, al.value / det};
+        return p;
+    }
+    // cos θ and sin θ of one θ: [[±c, ±s], [±s, ±c]] (or the sines first) is orthogonal when its rows are.
+    bool trig = al.kind != K::Constant && be.kind != K::Constant && ga.kind != K::Constant && de.kind != K::Constant;
+    if (!trig || al.angle != be.angle || al.angle != ga.angle || al.angle != de.angle) return std::nullopt;
+    if (al.kind != de.kind || be.kind != ga.kind || al.kind == be.kind) return std::nullopt;
+    if (al.value * ga.value != -be.value * de.value) return std::nullopt;
+    p.orthogonal = true;
+    return p;
+}
+
+// The rotated pairs of the query's components in g (at most one per plane: the first found).
+std::vector<PlanePair> plane_pairs(const Function& g, int query) {
+    struct Candidate {
+        ValueId v;
+        int comp;
+        LinearForm f;
+    };
+    std::vector<Candidate> c;
+    for (size_t i = 0; i < g.body.size(); ++i) {
+        const Instr& in = g.body[i];
+        if (in.type.is_scalar() && (in.op == Op::Add || in.op == Op::Sub)) {
+            LinearForm f;
+            if (linear_form(g, query, ValueId(i), -1, 1, f) && f.size() == 2) c.push_back({ValueId(i), -1, std::move(f)});
+        } else if (in.op == Op::Mul && in.type.is_vector() && in.type.rows <= 4) {
+            for (int k = 0; k < in.type.rows; ++k) {
+                LinearForm f;
+                if (linear_form(g, query, ValueId(i), k, 1, f) && f.size() == 2) c.push_back({ValueId(i), k, std::move(f)});
+            }
+        }
+    }
+    std::vector<PlanePair> out;
+    std::array<bool, 3> plane_done{};  // by the axis left out
+    for (size_t i = 0; i < c.size(); ++i)
+        for (size_t j = i + 1; j < c.size(); ++j) {
+            auto p = plane_pair(c[i].f, c[j].f);
+            if (!p || plane_done[size_t(3 - p->a - p->b)]) continue;
+            p->u = c[i].v, p->u_comp = c[i].comp, p->w = c[j].v, p->w_comp = c[j].comp;
+            plane_done[size_t(3 - p->a - p->b)] = true;
+            out.push_back(*p);
+        }
+    return out;
+}
 
 }  // namespace
 
@@ -124,22 +316,10 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
     return std::nextafter(r * (1 + 1e-9), INFINITY);
 }
 
-std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
-                                      double level, int per_proof, int loop_trips, long work) {
-    if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
-    const Function& f = m.functions[size_t(fn)];
-    const Type& rt = f.body[f.result].type;
-    if (!rt.is_scalar() && !rt.is_vector()) return std::nullopt;  // a scene's (distance, id): the first component
-    // The distance's interval over a box (its first component; [-∞, ∞] where unknown or NaN).
-    auto range = [&](const Box& b) {
-        params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
-        std::vector<Bounds> v = interval_analysis(m, fn, params, {}, loop_trips, &work);
-        const Bounds& r = v[f.result];
-        Interval x = r.c.empty() ? Interval{} : r.c[0];
-        if (std::isnan(x.lo)) x.lo = -INFINITY;
-        if (std::isnan(x.hi)) x.hi = INFINITY;
-        return x;
-    };
+namespace {
+
+// support_box's search, side by side, for a distance whose interval over a box `range` gives (spending `work`).
+SupportBox box_sides(const std::function<Interval(const Box&)>& range, double level, int per_proof, long& work) {
     // A point inside an interval, and its halves (an unbounded side grows geometrically).
     auto centre = [](double lo, double hi) {
         if (std::isinf(lo) && std::isinf(hi)) return 0.0;
@@ -177,7 +357,6 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
     };
     constexpr double R = 1048576.0;  // 2^20: beyond this, a side is unbounded
     SupportBox out;
-    bool any = false;
     // One side's edge: the nearest plane c (along axis a, from below or above) beyond which nothing is ≤ level;
     // ±∞ where the half-space beyond R is not proven free.
     auto edge_of = [&](size_t a, bool upper) {
@@ -220,8 +399,121 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
             double e = edge_of(a, upper);
             left -= given - work;
             (upper ? out.hi[a] : out.lo[a]) = e;
-            any |= std::isfinite(e);
         }
+    return out;
+}
+
+}  // namespace
+
+std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
+                                      double level, int per_proof, int loop_trips, long work) {
+    if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
+    const Function& f = m.functions[size_t(fn)];
+    const Type& rt = f.body[f.result].type;
+    if (!rt.is_scalar() && !rt.is_vector()) return std::nullopt;  // a scene's (distance, id): the first component
+    // The first component of the result's interval ([-∞, ∞] where unknown or NaN).
+    auto first = [](const Bounds& r) {
+        Interval x = r.c.empty() ? Interval{} : r.c[0];
+        if (std::isnan(x.lo)) x.lo = -INFINITY;
+        if (std::isnan(x.hi)) x.hi = INFINITY;
+        return x;
+    };
+    // The distance's interval over a box.
+    auto range = [&](const Box& b) {
+        params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
+        return first(interval_analysis(m, fn, params, {}, loop_trips, &work)[f.result]);
+    };
+    const long budget = work;
+    SupportBox out = box_sides(range, level, per_proof, work);
+
+    // Rotated pairs of the query's axes (see plane_pair): once more per plane, in the pair's coordinates, on a
+    // copy of the function with its calls inlined and common subexpressions merged (so that cos θ and sin θ
+    // are seen to share θ), with a budget of its own.
+    std::optional<Function> g;
+    try {
+        g = inline_calls(m, f);
+    } catch (const SizeLimit&) {
+        g.reset();  // too large to inline: the axis-aligned box stands
+    }
+    if (g && g->body.size() <= 20000) {
+        fold_constants(m, *g);
+        eliminate_common_subexpressions(*g);
+        for (const PlanePair& pp : plane_pairs(*g, query)) {
+            const int o = 3 - pp.a - pp.b;  // the axis the pair leaves alone
+            Box cur;  // the box of (u at a, p_o at o, w at b) being analysed
+            auto set = [](Bounds& r, int comp, Interval x) {
+                if (comp < 0) r.c = {x};
+                else if (size_t(comp) < r.c.size()) r.c[size_t(comp)] = x;
+                r.norm = r.norm_from_components();
+            };
+            IntervalHook hook = [&](size_t i, std::vector<Bounds>& r) {
+                if (i == pp.u) set(r[i], pp.u_comp, {cur.lo[size_t(pp.a)], cur.hi[size_t(pp.a)]});
+                if (i == pp.w) set(r[i], pp.w_comp, {cur.lo[size_t(pp.b)], cur.hi[size_t(pp.b)]});
+                return true;
+            };
+            long rotated_work = budget;
+            auto rotated = [&](const Box& b) {
+                cur = b;
+                // p_a and p_b themselves are unknown (wherever else the shape reads them); p_o is the box's.
+                params[size_t(query)] = {{}, {}, {}};
+                params[size_t(query)][size_t(o)] = {b.lo[size_t(o)], b.hi[size_t(o)]};
+                return first(interval_analysis(m, *g, params, hook, loop_trips, &rotated_work)[g->result]);
+            };
+            SupportBox v = box_sides(rotated, level, per_proof, rotated_work);
+            // (p_a, p_b) from (u, w): the same norm (orthogonal), or M⁻¹ applied to the box.
+            std::array<Interval, 2> pab;
+            Interval ua{v.lo[size_t(pp.a)], v.hi[size_t(pp.a)]}, wb{v.lo[size_t(pp.b)], v.hi[size_t(pp.b)]};
+            if (pp.orthogonal) {
+                // ‖(u, w)‖ over the rectangle's cells where the distance may be ≤ level, best first (the cell
+                // with the farthest corner is split until it is small against that distance): the twisted
+                // box's rounded corner, not its rectangle's.
+                auto far_corner = [&](const Box& b) {
+                    return std::hypot(std::max(std::fabs(b.lo[size_t(pp.a)]), std::fabs(b.hi[size_t(pp.a)])),
+                                      std::max(std::fabs(b.lo[size_t(pp.b)]), std::fabs(b.hi[size_t(pp.b)])));
+                };
+                auto size = [&](const Box& b) {
+                    return std::max(b.hi[size_t(pp.a)] - b.lo[size_t(pp.a)], b.hi[size_t(pp.b)] - b.lo[size_t(pp.b)]);
+                };
+                auto nearer = [&](const Box& x, const Box& y) { return far_corner(x) < far_corner(y); };
+                const Box whole{v.lo, v.hi};
+                double rho = far_corner(whole);
+                if (std::isfinite(rho)) {
+                    std::priority_queue<Box, std::vector<Box>, decltype(nearer)> cells(nearer);
+                    cells.push(whole);
+                    for (int splits = 0; !cells.empty(); ++splits) {
+                        Box b = cells.top();
+                        if (size(b) <= 0.002 * far_corner(b) || splits >= 2000 || rotated_work <= 0) break;
+                        cells.pop();
+                        for (int q = 0; q < 4; ++q) {
+                            Box c = b;
+                            for (int k = 0; k < 2; ++k) {
+                                size_t axis = size_t(k == 0 ? pp.a : pp.b);
+                                double mid = 0.5 * (b.lo[axis] + b.hi[axis]);
+                                ((q >> k) & 1 ? c.lo[axis] : c.hi[axis]) = mid;
+                            }
+                            if (!(rotated(c).lo > level)) cells.push(c);
+                        }
+                    }
+                    if (!cells.empty()) rho = std::min(rho, far_corner(cells.top()));
+                }
+                rho = std::nextafter(rho * (1 + 1e-9), INFINITY);
+                pab = {Interval{-rho, rho}, Interval{-rho, rho}};
+            } else {
+                for (size_t r = 0; r < 2; ++r)
+                    pab[r] = iv::add(iv::mul({pp.inverse[r * 2], pp.inverse[r * 2]}, ua), iv::mul({pp.inverse[r * 2 + 1], pp.inverse[r * 2 + 1]}, wb));
+            }
+            auto narrow = [&](size_t axis, Interval x) {
+                if (std::isnan(x.lo) || std::isnan(x.hi)) return;
+                out.lo[axis] = std::max(out.lo[axis], x.lo);
+                out.hi[axis] = std::min(out.hi[axis], x.hi);
+            };
+            narrow(size_t(pp.a), pab[0]);
+            narrow(size_t(pp.b), pab[1]);
+            narrow(size_t(o), {v.lo[size_t(o)], v.hi[size_t(o)]});
+        }
+    }
+    bool any = false;
+    for (size_t a = 0; a < 3; ++a) any |= std::isfinite(out.lo[a]) || std::isfinite(out.hi[a]);
     if (!any) return std::nullopt;
     return out;
 }

@@ -243,10 +243,11 @@ private:
     }
     // The scene's box (SceneIR::box): the union of every instance's world box, where its nearness (its
     // distance in world units, before any Lipschitz division: what the hit test and the step cap read) can be
-    // within the `bound` margin of 0. An instance with a bound sphere (written or derived): the sphere's box;
-    // else the shape's own box (ir/Support.h's support_box in object space, once per group over its members'
-    // parameters) mapped to the world through its affine transform (an unbounded side stays unbounded where the
-    // map mixes it into a world axis). No box when any instance has none: a transform that moves at run time,
+    // within the `bound` margin of 0: the shape's own box (ir/Support.h's support_box in object space, once per
+    // group over its members' parameters) mapped to the world through its affine transform (an unbounded side
+    // stays unbounded where the map mixes it into a world axis); with a bound sphere (written or derived), that
+    // box and the sphere's box, whichever is narrower on each side. No box when any instance has none: a
+    // transform that moves at run time,
     // a smooth blend (its members' distances are divided by Lipschitz factors the passes derive later), or a
     // side unbounded on every axis.
     void scene_box() {
@@ -261,6 +262,9 @@ private:
         };
         // Instances of one shape: analysed together (over their parameters' hull) when many, else each alone.
         std::map<const CheckedModule*, std::vector<size_t>> kinds;
+        // An instance with a bound sphere: the sphere's world box, narrowed by the shape's own box where the
+        // analysis finds one (inside the sphere the nearness is the shape's).
+        std::map<size_t, std::array<ir::Interval, 3>> sphere_box;
         for (size_t i = 0; i < plans_.size(); ++i) {
             const InstancePlan& p = plan(i);
             if (runtime_transform(p) || p.blend >= 0) return;
@@ -271,11 +275,28 @@ private:
                 BoundingBox b = box_of(world_sphere(p.inv_linear, p.inv_offset, bound_of(i) + tau / std::max(p.scale, 1e-9)));
                 std::array<ir::Interval, 3> w;
                 for (size_t a = 0; a < 3; ++a) w[a] = {b.center[a] - b.half[a], b.center[a] + b.half[a]};
-                add(i, w);
-                continue;
+                sphere_box[i] = w;
             }
             kinds[p.shape].push_back(i);
         }
+        // An instance's world box: its sphere's narrowed by `shape` (nothing: the sphere's; without a sphere,
+        // nothing means no scene box).
+        auto place = [&](size_t i, const std::optional<std::array<ir::Interval, 3>>& shape) {
+            auto it = sphere_box.find(i);
+            if (it == sphere_box.end()) {
+                if (!shape) return false;
+                add(i, *shape);
+                return true;
+            }
+            std::array<ir::Interval, 3> w = it->second;
+            if (shape)
+                for (size_t a = 0; a < 3; ++a) {
+                    ir::Interval x{std::max(w[a].lo, (*shape)[a].lo), std::min(w[a].hi, (*shape)[a].hi)};
+                    if (x.lo <= x.hi) w[a] = x;
+                }
+            add(i, w);
+            return true;
+        };
         // Analysed once per shape and parameter values (instances that differ only in their transform share
         // one object box), and once over the hull of all values where more than four values differ.
         std::vector<std::vector<size_t>> sets;
@@ -290,19 +311,25 @@ private:
             const InstancePlan& first = plan(members[0]);
             int fn = lower_module_cached(*first.shape, ctx_);
             auto params = shape_intervals(members);
-            if (!params) return;
             // The nearness is the object distance times the map's scale: within tau where the object distance is
             // within tau / scale (the smallest scale of the members).
             double scale = 1;
             for (size_t mi : members) scale = std::min(scale, plan(mi).scale);
-            auto box = ir::support_box(m_, fn, first.query, std::move(*params), tau / std::max(scale, 1e-9));
-            if (!box) return;
+            std::optional<ir::SupportBox> box;
+            if (params) box = ir::support_box(m_, fn, first.query, std::move(*params), tau / std::max(scale, 1e-9));
             for (size_t mi : members) {
                 const InstancePlan& p = plan(mi);
+                if (!box) {
+                    if (!place(mi, std::nullopt)) return;
+                    continue;
+                }
                 // object = L·world + o, so world = L⁻¹(object − o): each world axis an interval sum over the box.
                 bool singular = false;
                 std::vector<double> Li = ir::mat_inverse(p.inv_linear, 3, &singular);
-                if (singular) return;
+                if (singular) {
+                    if (!place(mi, std::nullopt)) return;
+                    continue;
+                }
                 std::array<ir::Interval, 3> w;
                 for (size_t r = 0; r < 3; ++r) {
                     ir::Interval sum{0, 0};
@@ -313,7 +340,7 @@ private:
                     }
                     w[r] = sum;
                 }
-                add(mi, w);
+                place(mi, w);
             }
         }
         bool bounded = false;
