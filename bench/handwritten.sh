@@ -11,10 +11,11 @@
 #   compile: the first frame minus that median (llvmpipe compiles at the first draw).
 # It prints the PSNR of the two pictures (the references must stay at or above 50 dB; `inf` is identical)
 # and the ratios iqc/hand; below 1 iqc is faster. Ratios from one run on one machine compare; absolute
-# times do not.
+# times do not. llvmpipe draws on one thread (LP_NUM_THREADS=1 unless set): on a shared two-core machine its
+# threads' frame times were bimodal (8.7 and 14 ms for one shader), a single thread's stay within 2%.
 #
-#   bench/handwritten.sh                     # every scene with a reference, 7 rounds at 320x180
-#   ROUNDS=9 SIZE=640x360 bench/handwritten.sh few_shapes twisted
+#   bench/handwritten.sh                     # every scene with a reference, 7 rounds at 640x360
+#   ROUNDS=9 SIZE=320x180 bench/handwritten.sh few_shapes twisted
 #
 # Run after scripts/build.sh. Exit status 1 if a reference's picture is below 50 dB (it no longer draws
 # the same picture: update it with the scene), else 0.
@@ -22,11 +23,12 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 IQC=${IQC:-./build/iqc}
 rounds=${ROUNDS:-7}
-size=${SIZE:-320x180}
+size=${SIZE:-640x360}
 frames=${FRAMES:-5}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 export MESA_SHADER_CACHE_DISABLE=true
+export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 
 scenes=("$@")
 if [ ${#scenes[@]} -eq 0 ]; then

@@ -338,3 +338,28 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
     }
     near(b->second[1], 0.2 + m);
 }
+
+TEST_CASE("a ray that enters the box only beyond the far plane takes no step", "[scene][box][render]") {
+    // A ground y ≤ 0 seen level from y = 1 with max_dist 30: the rows just below the horizon meet the box
+    // (y ≤ 0.16) beyond t = 30 (they were marched to the far plane, up to 30 steps each); the picture is the
+    // same with the box opened.
+    const std::string scene = "[modules]\nground = \"\"\"\nshape\nD = p_2\nwhere\np ∈ ℝ³\n\"\"\"\n"
+                              "[camera]\nposition = [0, 1, 0]\ntarget = [0, 1, 1]\n[render]\nmax_dist = 30\n"
+                              "[[shapes]]\ntype = \"ground\"\n";
+    Compiled c = compile_text("box_horizon.iq", scene);
+    REQUIRE(c.result.exit_code == 0);
+    REQUIRE(box_of(c.result.code));
+    CHECK(differ_without_box(c.result, 160, 360) == 0);
+    CompileOptions o;
+    o.instrument = true;
+    Compiled counted = compile_path(write_temp("box_horizon_i.iq", scene), o);
+    REQUIRE(counted.result.exit_code == 0);
+    const int W = 16, H = 90;
+    render::RenderResult r = render_compiled(counted.result, W, H);
+    INFO(r.error);
+    REQUIRE(r.ok);
+    // Row 45 from the top (fragCoord.y = 44.5, just below the centre): rd.y ≈ -0.0064, the ground's box at t ≈ 130.
+    for (int x = 0; x < W; ++x) CHECK(r.image.pixel(x, 45)[1] == 0.0f);
+    // Far below the horizon the rays do march.
+    CHECK(r.image.pixel(W / 2, H - 6)[1] > 0.0f);
+}

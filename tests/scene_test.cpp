@@ -132,6 +132,48 @@ TEST_CASE("a camera inside a shape still renders: the inner wall, no NaN", "[sce
     CHECK(px[2] == Approx(0.0f).margin(0.02));
 }
 
+TEST_CASE("the march tests its first sample's sign only where a march can start inside a shape", "[scene]") {
+    // The inside-start test (a compare and a select in every step) is left out where the compiler proved every
+    // march starts outside every shape: a fixed Shadertoy camera, no reflection or refraction rays, no input,
+    // and the distance at the camera above ten hit tolerances. Everywhere else it stays.
+    const std::string test = "if (i == 0 && h.x < 0.0) s = -1.0;";
+    auto code = [](const std::string& name, const std::string& scene, Target target = Target::Shadertoy) {
+        CompileOptions o;
+        o.target = target;
+        Compiled c = compile_path(write_temp(name, scene), o);
+        INFO(c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        return c.result.code;
+    };
+    const std::string ball = kBall + "```scene\n[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\n[[shapes]]\ntype = \"ball\"\n";
+    CHECK_THAT(code("outside.md", ball + "```\n"), !Catch::Contains(test));
+    // The camera inside the ball, or within ten tolerances of its surface.
+    CHECK_THAT(code("inside.md", kBall + "```scene\n[camera]\nposition = [0, 0, 0.5]\n[[shapes]]\ntype = \"ball\"\n```\n"),
+               Catch::Contains(test));
+    CHECK_THAT(code("touching.md", kBall + "```scene\n[camera]\nposition = [0, 0, -1.005]\n[[shapes]]\ntype = \"ball\"\n```\n"),
+               Catch::Contains(test));
+    // A camera the user can move (an orbit, or uniforms on every other target), a ball that moves with time.
+    CHECK_THAT(code("orbit.md", kBall + "```scene\n[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\norbit = true\n"
+                                        "[[shapes]]\ntype = \"ball\"\n```\n"),
+               Catch::Contains(test));
+    CHECK_THAT(code("uniform.md", ball + "```\n", Target::WebGL2), Catch::Contains(test));
+    CHECK_THAT(code("timed.md", ball + "transform = \"T((0, 0, time))\"\n```\n"), Catch::Contains(test));
+    // Glass: a refracted ray starts inside it.
+    CHECK_THAT(code("glass.md", kBall + "```scene\n[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\n[effects]\nrefraction = true\n"
+                                        "[[shapes]]\ntype = \"ball\"\nmaterial = \"glass\"\n```\n"),
+               Catch::Contains(test));
+}
+
+TEST_CASE("a division by a constant is emitted as a multiplication by its reciprocal", "[scene][glsl]") {
+    // llvmpipe keeps x / c a division (several times a multiplication's latency); the Lipschitz factor divides
+    // every step's distance.
+    Compiled c = compile_text("third.md", "❤: third\n```iheartla\nshape\nD = ‖p‖/3 - r\nwhere\np ∈ ℝ³\nr ∈ [0,3] default = 1\n```\n"
+                                          "```scene\n[[shapes]]\ntype = \"third\"\n```\n");
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.result.code, Catch::Contains("length(p) * 0.33333334"));
+    CHECK_THAT(c.result.code, !Catch::Contains("length(p) / 3.0"));
+}
+
 TEST_CASE("a transform that uses time is evaluated per pixel, even on Shadertoy", "[scene][render]") {
     auto c = compile_text("timed.md", kBall + "```scene\n[[shapes]]\ntype = \"ball\"\ntransform = \"T((time, 0, 5))\"\n"
                                                "shape_params = { r = 0.5 }\n```\n");

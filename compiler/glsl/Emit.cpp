@@ -416,7 +416,18 @@ struct FunctionEmitter {
                 if (lt.is_vector() && rrow) return fmt::format("outerProduct({}, {})", plain(0), plain(1));
                 return a(0) + " * " + a(1);
             }
-            case Op::Div: return a(0) + " / " + a(1);
+            case Op::Div: {
+                // By a constant: times its reciprocal. llvmpipe keeps a division by a constant a division (LLVM
+                // without fast-math), several times a multiplication's latency in every march step (the
+                // Lipschitz factor): sine_terrain's frame 6% faster. The result may differ by an ulp.
+                const Instr& den = f.body[in.args[1]];
+                if (den.op == Op::Const && den.type.kind == Type::Scalar && in.type.kind != Type::Integer && den.data.size() == 1) {
+                    double c = den.data[0], r = 1.0 / c;
+                    if (std::isfinite(c) && c != 0 && std::fabs(r) >= 1e-30 && std::fabs(r) <= 1e30 && r > 0)
+                        return a(0) + " * " + float_literal(r);
+                }
+                return a(0) + " / " + a(1);
+            }
             case Op::Neg: return "-" + a(0);
             case Op::Hadamard:
                 if (in.type.is_matrix() && in.type.rows > 1) return fmt::format("matrixCompMult({}, {})", plain(0), plain(1));

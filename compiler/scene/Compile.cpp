@@ -13,6 +13,7 @@
 #include "glsl/Spirv.h"
 #include "glsl/Wgsl.h"
 #include "glsl/Validate.h"
+#include "ir/Eval.h"
 #include "ir/Pipeline.h"
 #include "resources/Embedded.h"
 #include "scene/Modules.h"
@@ -127,6 +128,12 @@ private:
     }
 
     SceneIR lower(const std::vector<InstancePlan>& plans);
+    // Whether a march may start inside a shape (the march then tests its first sample's sign, a compare and a
+    // select in every step). Not when every march starts at the camera (no reflection or refraction rays) and
+    // the camera is fixed (Shadertoy without orbit: other targets move it by uniforms), the scene reads no
+    // input (time, mouse) and its distance at the camera, in double precision, is above ten hit tolerances
+    // and the float spacing there.
+    bool march_may_start_inside(const SceneIR& scene, const std::set<std::string>& flags) const;
     bool optimize(SceneIR& scene);
     void warn_large_tables(const SceneIR& scene);
     void warn_idle_effects(const SceneIR& scene);
@@ -194,6 +201,24 @@ void SceneCompiler::warn_idle_effects(const SceneIR& scene) {
 }
 
 // The pass pipeline; range warnings become diagnostics (errors with --strict-ranges).
+bool SceneCompiler::march_may_start_inside(const SceneIR& scene, const std::set<std::string>& flags) const {
+    if (opts_.target != Target::Shadertoy || s_.camera.orbit || flags.count("BOUNCES") || opts_.per_instance) return true;
+    const ir::Module& m = scene.module;
+    for (const ir::Function& f : m.functions)
+        for (const ir::Instr& in : f.body)
+            if (in.op == ir::Op::Input) return true;  // the distance at the camera changes with time or the mouse
+    int fn = m.find(ir::names::kScene);
+    if (fn < 0) return true;
+    const auto& eye = s_.camera.position;
+    double reach = std::max({std::fabs(eye[0]), std::fabs(eye[1]), std::fabs(eye[2])});
+    try {
+        ir::Value d = ir::evaluate(m, fn, {ir::Value{Type::vector(3), {eye[0], eye[1], eye[2]}}});
+        return !(d.v.size() >= 1 && d.v[0] > std::max(10 * hit(), 1e-5 * (1 + reach)));
+    } catch (...) {  // an evaluation past its budget: keep the test
+        return true;
+    }
+}
+
 bool SceneCompiler::optimize(SceneIR& scene) {
     ir::PipelineOptions po;
     po.verify_each = opts_.verify_each;
@@ -392,6 +417,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         // Mirrors and glass show the point lights (a sun is in the sky already, where there is one).
         if (F.count("SHADE_LIGHT") && scene.point_lights > 0) F.insert("GLINTS");
     }
+    if (march_may_start_inside(scene, F)) F.insert("INSIDE_START");
     // The output transform: exposure, tone map, sRGB (not for the debug views, which show values).
     V["EXPOSURE"] = glsl::float_literal(render.exposure);
     V["VIGNETTE"] = glsl::float_literal(render.vignette);
