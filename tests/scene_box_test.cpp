@@ -169,10 +169,21 @@ TEST_CASE("clipping rays to the box changes no pixel and saves evaluations, with
             auto [plain_code, plain] = draw("box_b.iq", unboxed_text, false);
             REQUIRE(box_of(boxed_code));
             REQUIRE_FALSE(box_of(plain_code));
+            // The same hits and normals: colours within a quarter of an 8-bit level. The two shaders differ in
+            // code around the scene (the moving ball, its per-pixel transform), and llvmpipe fuses multiplies and
+            // adds into FMAs differently in each, so their floats may differ in the last bits (since the tilted
+            // tori's maps are built from their entries: 2,000 components, by up to 1.2·10⁻⁴); a missed or added hit
+            // or a different normal changes a colour by far more.
             int differ = 0;
+            float largest = 0;
             for (int y = 0; y < H; ++y)
                 for (int x = 0; x < W; ++x)
-                    for (int k = 0; k < 3; ++k) differ += std::fabs(boxed.image.pixel(x, y)[k] - plain.image.pixel(x, y)[k]) > 1e-6f;
+                    for (int k = 0; k < 3; ++k) {
+                        float e = std::fabs(boxed.image.pixel(x, y)[k] - plain.image.pixel(x, y)[k]);
+                        largest = std::max(largest, e);
+                        differ += e > 1e-3f;
+                    }
+            INFO("largest difference " << largest);
             CHECK(differ == 0);
             double with_box = evals(draw("box_ai.iq", boxed_text, true).second);
             double without = evals(draw("box_bi.iq", unboxed_text, true).second);

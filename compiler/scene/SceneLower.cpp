@@ -85,6 +85,15 @@ struct Item {
     // point by arithmetic instead of the hierarchy.
     InstanceLattice lattice;
     bool exact = false;  // the shape says `# exact`: skipping far subtrees leaves iqc_scene_unbounded's value as is
+    // A group whose world → object maps differ in few entries (tori tilted about one axis: 4 of 9, two values up
+    // to sign): the map is built per member from its entries, each a constant (linear_global -1: linear_value)
+    // or linear_sign times a scalar table (linear_global). Reading a whole mat3 table is 9 gathers per member.
+    bool linear_split = false;
+    std::array<int, 9> linear_global{};
+    std::array<double, 9> linear_value{}, linear_sign{};
+    // A lattice group whose members sit on their cells' centres (to float precision): the distance of member k
+    // at a point already moved to its cell's centre (q = L_k·(p − centre), no offset table), or -1.
+    int centred_fn = -1;
     int blend = -1;      // a single instance in a [[blends]] entry: the scene and the shading see the blend instead
 };
 
@@ -119,7 +128,10 @@ public:
         if (!o_.per_instance) scene_box();
         declare_lights();
         for (Item& it : items_) declare_item(it);
-        for (Item& it : items_) it.distance_fn = item_distance(it, true);
+        for (Item& it : items_) {
+            it.distance_fn = item_distance(it, true);
+            if (lattice_centred(it)) it.centred_fn = item_distance(it, true, true);
+        }
         scene_function(true);
         bool any_bound = false;
         for (const Item& it : items_) any_bound |= it.bound.global >= 0;
@@ -507,6 +519,15 @@ private:
         return true;
     }
 
+    // Whether a lattice group's members, not alike (members_alike), sit on their cells' centres to float precision:
+    // member k's object point is then L_k·(p − centre of its cell), the centre computed from the cell (Item::centred_fn).
+    bool lattice_centred(const Item& g) {
+        if (!g.lattice.found() || g.offset.global < 0 || runtime_transform(plan(g.members[0])) || members_alike(g)) return false;
+        double scale = 1;
+        for (size_t c = 0; c < 3; ++c) scale = std::max({scale, std::fabs(g.lattice.origin[c]), g.lattice.spacing[c] * g.lattice.n[c]});
+        return g.lattice.deviation <= 1e-7 * scale;
+    }
+
     // Whether the members' origins in the world (their transforms' centres) fill a lattice (InstanceLattice).
     bool centres_form_lattice(const std::vector<size_t>& members) {
         std::vector<BoundingSphere> points;
@@ -558,6 +579,62 @@ private:
         for (const auto& v : values) all.insert(all.end(), v.begin(), v.end());
         return {add_global(it.name + "_" + what, Type::array(t, int(values.size())), Global::Kind::Constant, std::move(all), comment),
                 true};
+    }
+
+    // The members' world → object maps by entry (Item::linear_split), where they differ and at most four scalar
+    // tables (entries equal up to sign share one) hold what differs; false (nothing declared) otherwise.
+    bool split_linear(Item& it, const std::vector<std::vector<double>>& L) {
+        if (!it.group || L.empty()) return false;
+        bool same = true;
+        for (const auto& v : L) same &= v == L[0];
+        if (same) return false;
+        struct Table {
+            std::vector<double> values;
+            int global = -1;
+        };
+        std::vector<Table> tables;
+        std::array<int, 9> which{};
+        for (size_t e = 0; e < 9; ++e) {
+            std::vector<double> v, neg;
+            for (const auto& m : L) {
+                v.push_back(m[e]);
+                neg.push_back(-m[e]);
+            }
+            which[e] = -1;
+            it.linear_value[e] = v[0];
+            it.linear_sign[e] = 1;
+            if (std::all_of(v.begin(), v.end(), [&](double x) { return x == v[0]; })) continue;
+            // Equal to 1e-12 (an inverse's entries that are equal in exact arithmetic differ in their last bits;
+            // far below float precision).
+            auto equal = [](const std::vector<double>& a, const std::vector<double>& b) {
+                for (size_t i = 0; i < a.size(); ++i)
+                    if (!(std::fabs(a[i] - b[i]) <= 1e-12 * std::max(1.0, std::fabs(a[i])))) return false;
+                return true;
+            };
+            for (size_t t = 0; t < tables.size() && which[e] < 0; ++t) {
+                if (equal(tables[t].values, v)) which[e] = int(t);
+                else if (equal(tables[t].values, neg)) which[e] = int(t), it.linear_sign[e] = -1;
+            }
+            if (which[e] < 0) {
+                which[e] = int(tables.size());
+                tables.push_back({v, -1});
+            }
+        }
+        if (tables.size() > 4) return false;
+        static const char* names[] = {"11", "12", "13", "21", "22", "23", "31", "32", "33"};
+        for (size_t e = 0; e < 9; ++e) {
+            it.linear_global[e] = -1;
+            if (which[e] < 0) continue;
+            Table& t = tables[size_t(which[e])];
+            if (t.global < 0)
+                t.global = add_global(it.name + "_to_object_" + names[e], Type::array(Type::scalar(), int(t.values.size())),
+                                      Global::Kind::Constant, t.values,
+                                      fmt::format("entry ({}, {}) of the world → object map, per instance (the other entries {})",
+                                                  e / 3 + 1, e % 3 + 1, "are constants or share these tables"));
+            it.linear_global[e] = t.global;
+        }
+        it.linear_split = true;
+        return true;
     }
 
     // A module parameter of every member: a slider per instance, shared (one constant) when parameters are
@@ -697,7 +774,7 @@ private:
                 unit &= sc[k][0] == 1.0;
             }
             std::string what = it.group ? "world → object, per instance" : first.transform_comment;
-            if (!identity) it.to_object = constant_field(it, "to_object", Type::matrix(3, 3), L, what);
+            if (!identity && !split_linear(it, L)) it.to_object = constant_field(it, "to_object", Type::matrix(3, 3), L, what);
             if (!no_offset) it.offset = constant_field(it, "offset", Type::vector(3), off, identity ? what : "");
             if (!unit) it.scale = constant_field(it, "scale", Type::scalar(), sc, "1 / Lipschitz factor: keeps distances conservative");
         }
@@ -804,12 +881,13 @@ private:
     // One item's distance at world point p: (p [, k]) -> ℝ, marked for inlining.
     // `bounded`: with the item's `bound` sphere (iqc_scene), else without it (iqc_scene_unbounded, never
     // instrumented).
-    int item_distance(const Item& it, bool bounded) {
+    // `centred`: p is already the point moved to the member's lattice cell centre (Item::centred_fn): no offset.
+    int item_distance(const Item& it, bool bounded, bool centred = false) {
         const InstancePlan& first = plan(it.members[0]);
         const bool counted = o_.instrument && bounded;
         ir::Function f;
-        f.name = "iqc_distance." + it.name + (bounded ? "" : ".unbounded");
-        f.glsl_name = it.name + (bounded ? "_distance" : "_distance_unbounded");
+        f.name = "iqc_distance." + it.name + (bounded ? "" : ".unbounded") + (centred ? ".centred" : "");
+        f.glsl_name = it.name + (bounded ? "_distance" : "_distance_unbounded") + (centred ? "_centred" : "");
         f.inline_hint = true;
         int fn = int(m_.functions.size());
         m_.functions.push_back({});
@@ -817,8 +895,21 @@ private:
         ValueId p = b.param("p", Type::vector(3));
         ValueId k = it.group ? b.param("k", Type::integer()) : ValueId(-1);
         ValueId q = p;
-        if (it.to_object.global >= 0) q = b.op(Op::Mul, {read(b, it.to_object, k), q});
-        if (it.offset.global >= 0) q = b.op(Op::Add, {q, read(b, it.offset, k)});
+        if (it.linear_split) {
+            std::vector<ValueId> e;
+            for (size_t i = 0; i < 9; ++i) {
+                if (it.linear_global[i] < 0) {
+                    e.push_back(b.scalar(it.linear_value[i]));
+                    continue;
+                }
+                ValueId x = b.op(Op::Index, {b.global(it.linear_global[i]), k});
+                e.push_back(it.linear_sign[i] < 0 ? b.op(Op::Neg, {x}) : x);
+            }
+            q = b.op(Op::Mul, {b.construct(Type::matrix(3, 3), e), q});
+        } else if (it.to_object.global >= 0) {
+            q = b.op(Op::Mul, {read(b, it.to_object, k), q});
+        }
+        if (it.offset.global >= 0 && !centred) q = b.op(Op::Add, {q, read(b, it.offset, k)});
         if (q != p) f.body[q].name = "q";
         // Scaled like the shape by the transform's Lipschitz factor; the shape's own (declared, or derived by
         // the compiler) divides the result in the lipschitz pass (f.lipschitz).
@@ -846,7 +937,7 @@ private:
         }
         // The variant without its bound sphere is bounded by the same factor: the same object function, whose
         // estimate the lipschitz pass computes once.
-        f.lipschitz = bounded ? lipschitz_spec(it, shape_fn) : m_.functions[size_t(it.distance_fn)].lipschitz;
+        f.lipschitz = bounded && !centred ? lipschitz_spec(it, shape_fn) : m_.functions[size_t(it.distance_fn)].lipschitz;
         m_.functions[size_t(fn)] = std::move(f);
         return fn;
     }
@@ -1041,9 +1132,10 @@ private:
     // `at` (with `as`): evaluate member `as` at the point `at` instead (a lattice's members alike but for their
     // place: member m at p is member `as` at p moved by their offset), m still the id.
     std::vector<ValueId> member_step(Builder& b, const Item& it, ValueId p, ValueId m, const std::vector<ValueId>& st, bool bounded,
-                                     ValueId at = ValueId(-1), ValueId as = ValueId(-1)) {
+                                     ValueId at = ValueId(-1), ValueId as = ValueId(-1), int fn = -1) {
         const bool counted = o_.instrument && bounded;
-        ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {at != ValueId(-1) ? at : p, as != ValueId(-1) ? as : m});
+        if (fn < 0) fn = bounded ? it.distance_fn : it.unbounded_fn;
+        ValueId call = b.call(fn, {at != ValueId(-1) ? at : p, as != ValueId(-1) ? as : m});
         ValueId d = counted ? b.op(Op::Extract, {call}, 0) : call;
         d = b.named(d, it.name, fmt::format("instance {} + k of {}", it.id, it.members.size()));
         ValueId nearer = b.compare(CompareKind::Lt, d, st[0]);
@@ -1107,16 +1199,21 @@ private:
             k0 = b.op(Op::Select, {in_range(b, k0), k0, b.op(Op::Sub, {k0, b.integer(L.stride[size_t(L.back_axis)])})});
         k0 = b.named(k0, "nearest", "the member of the nearest (filled) cell");
         const bool alike = members_alike(it);
+        const bool centred = !alike && it.centred_fn >= 0;
         const ValueId base = b.integer(L.base);
         // Member k at p as member `base` at p − cell·spacing (members_alike).
         auto moved = [&](Builder& lb, ValueId at, ValueId cellv) { return lb.op(Op::Sub, {at, lb.op(Op::Hadamard, {cellv, vec3c(lb, L.spacing)})}); };
+        // p moved to member k's cell centre, origin + cell·spacing (lattice_centred).
+        auto to_centre = [&](Builder& lb, ValueId at, ValueId cellv) { return moved(lb, lb.op(Op::Sub, {at, vec3c(lb, L.origin)}), cellv); };
         ValueId c0used = c0;
-        if (alike && L.back_axis >= 0) {
+        if ((alike || centred) && L.back_axis >= 0) {
             std::array<double, 3> e{0, 0, 0};
             e[size_t(L.back_axis)] = 1;
             c0used = b.op(Op::Select, {in_range(b, nearest_cell), c0, b.op(Op::Sub, {c0, vec(e)})});
         }
-        std::vector<ValueId> st1 = alike ? member_step(b, it, p, k0, st, true, moved(b, p, c0used), base) : member_step(b, it, p, k0, st, true);
+        std::vector<ValueId> st1 = alike      ? member_step(b, it, p, k0, st, true, moved(b, p, c0used), base)
+                                   : centred ? member_step(b, it, p, k0, st, true, to_centre(b, p, c0used), ValueId(-1), it.centred_fn)
+                                             : member_step(b, it, p, k0, st, true);
         // The cells within reach, per axis [lo, lo + count).
         ValueId reach = splat(b.op(Op::Add, {st1[0], b.scalar(L.radius + slack)}));
         ValueId lo = b.builtin("clamp", {b.builtin("ceil", {b.op(Op::Hadamard, {b.op(Op::Sub, {b.op(Op::Sub, {p, reach}), vec(L.origin)}), vec(inv)})}),
@@ -1156,10 +1253,14 @@ private:
                             [&](Builder& ib, ValueId qi, const std::vector<ValueId>& s3, const std::vector<ValueId>& cap3) {
                                 ValueId k = stride(ib, 0, cap3[3], cap3[2], qi);
                                 ValueId ci = ib.op(Op::Add, {cap3[2], qi});
-                                std::vector<ValueId> next =
-                                    alike ? member_step(ib, it, cap3[0], k, s3, true,
-                                                        moved(ib, cap3[0], ib.construct(Type::vector(3), {ci, cap3[5], cap3[4]})), ib.integer(L.base))
-                                          : member_step(ib, it, cap3[0], k, s3, true);
+                                std::vector<ValueId> next;
+                                if (alike || centred) {
+                                    const ValueId cell = ib.construct(Type::vector(3), {ci, cap3[5], cap3[4]});
+                                    next = alike ? member_step(ib, it, cap3[0], k, s3, true, moved(ib, cap3[0], cell), ib.integer(L.base))
+                                                 : member_step(ib, it, cap3[0], k, s3, true, to_centre(ib, cap3[0], cell), ValueId(-1), it.centred_fn);
+                                } else {
+                                    next = member_step(ib, it, cap3[0], k, s3, true);
+                                }
                                 ValueId skip = ib.compare(CompareKind::Eq, k, cap3[1]);
                                 if (L.back_axis >= 0)  // an empty cell
                                     skip = ib.op(Op::Or, {skip, ib.op(Op::Or, {ib.compare(CompareKind::Lt, k, ib.integer(0)),
