@@ -43,6 +43,8 @@ std::optional<std::pair<Vec, Vec>> box_of(const std::string& code) {
 
 std::string bench(const std::string& name) { return std::string(IQC_SOURCE_DIR) + "/bench/" + name; }
 
+int differ_without_box(const CompileResult& c, int W, int H);  // below
+
 const std::string kBall =
     "[modules]\nball = \"\"\"\nshape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ [0,3] default = 1\n\"\"\"\n"
     "ground = \"\"\"\nshape\nD = p_2 + 1\nwhere\np ∈ ℝ³\n\"\"\"\n";
@@ -50,10 +52,13 @@ const std::string kBall =
 }  // namespace
 
 TEST_CASE("the scene's box: a recurrence, a height field, rotated and moved shapes, slider ranges", "[scene][box]") {
-    // The box's level (Compile.cpp box_level): the `bound` margin 0.1, or the step cap's pixel cone at max_dist
-    // on 360 rows where wider: t / (rows · focal), focal 1/tan(30°) at the default field of view.
+    // The box's level (Compile.cpp box_level): the `bound` margin 0.1, or the step cap's pixel cone on 360 rows
+    // where wider: t / (rows · focal), focal 1/tan(30°) at the default field of view, at max_dist, or on Shadertoy
+    // (a fixed camera) at the box's farthest point from the camera.
+    // On Shadertoy (a fixed camera) the cone is taken at the box's farthest point from the camera, here within 62
+    // units (0.1 wins); on slider targets the camera goes anywhere, and the cone is taken at max_dist.
     auto level = [](double max_dist) { return std::max(0.1, max_dist / (360 / std::tan(M_PI / 6))); };
-    const double m = level(100);  // max_dist 100 (the default): 0.16
+    const double m = 0.1, m_uniform = level(100);  // max_dist 100 (the default): 0.16
     // The Menger sponge: a recurrence of four steps (intervals carried through the loop) inside |p| <= 1.
     Compiled sponge = compile_path(bench("fractal.iq"));
     REQUIRE(sponge.result.exit_code == 0);
@@ -80,11 +85,12 @@ TEST_CASE("the scene's box: a recurrence, a height field, rotated and moved shap
     }
     // A ground (y <= -1), a ball at x = -2, a box turned about y, and a torus (0.8, 0.25) turned by 1 radian about x
     // at x = 2: the top is the torus's, its object box (±(1.05 + m), ±(0.25 + m), ±(1.05 + m)) turned into the world.
+    // The ground leaves the box open below: no farthest point, so the cone is taken at max_dist (0.16).
     Compiled few = compile_path(bench("few_shapes.iq"));
     REQUIRE(few.result.exit_code == 0);
     b = box_of(few.result.code);
     REQUIRE(b);
-    double top = std::sin(1.0) * (1.05 + m) + std::cos(1.0) * (0.25 + m);
+    double top = std::sin(1.0) * (1.05 + m_uniform) + std::cos(1.0) * (0.25 + m_uniform);
     CHECK(b->second[1] >= top);
     CHECK(b->second[1] <= top + 0.01);
     CHECK(b->first[1] == -1e30);
@@ -104,9 +110,20 @@ TEST_CASE("the scene's box: a recurrence, a height field, rotated and moved shap
     REQUIRE(slider.result.exit_code == 0);
     b = box_of(slider.result.code);
     REQUIRE(b);
-    CHECK(b->first[1] <= 2 - 3 - m);
-    CHECK(b->second[1] >= 2 + 3 + m);
-    CHECK(b->second[1] <= 2 + 3 + m + 0.01);
+    CHECK(b->first[1] <= 2 - 3 - m_uniform);
+    CHECK(b->second[1] >= 2 + 3 + m_uniform);
+    CHECK(b->second[1] <= 2 + 3 + m_uniform + 0.01);
+    // A ball 100 units from the camera (max_dist 300): the pixel cone at its far side, 101 / (360 · focal), is
+    // wider than 0.1, and the level covers it.
+    Compiled far = compile_text("box_far_ball.iq", kBall + "[camera]\nposition = [0, 0, -100]\ntarget = [0, 0, 0]\n[render]\n"
+                                                         "max_dist = 300\n[[shapes]]\ntype = \"ball\"\n");
+    REQUIRE(far.result.exit_code == 0);
+    b = box_of(far.result.code);
+    REQUIRE(b);
+    const double cone = (100 + 1 + 0.17) / (360 / std::tan(M_PI / 6));
+    CHECK(b->second[0] >= 1 + cone);
+    CHECK(b->second[0] <= 1 + 1.06 * cone + 0.01);
+    CHECK(differ_without_box(far.result, 160, 360) == 0);
 }
 
 TEST_CASE("no box where the compiler cannot know one: a tilted plane, a moving instance, a blend", "[scene][box]") {
@@ -272,7 +289,7 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
     // neither side of x or z (c·x - s·z over x ≥ c with z unbounded). The rotated pair keeps the norm of (x, z)
     // (cos² + sin² = 1), so the box of the rotated coordinates bounds both: support_box's PlanePair.
     auto level = [](double max_dist) { return std::max(0.1, max_dist / (360 / std::tan(M_PI / 6))); };
-    const double m = level(100);
+    const double m = 0.1, m_uniform = level(100);  // Shadertoy's fixed camera; webgl2's (see the first test case)
     auto near = [](double got, double want) {
         INFO("got " << got << ", want " << want);
         CHECK(got >= want);
@@ -312,8 +329,8 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
     REQUIRE(turned.result.exit_code == 0);
     b = box_of(turned.result.code);
     REQUIRE(b);
-    for (int a : {0, 2}) near(b->second[a], std::hypot(1 + m, 0.3 + m));
-    near(b->second[1], 0.2 + m);
+    for (int a : {0, 2}) near(b->second[a], std::hypot(1 + m_uniform, 0.3 + m_uniform));
+    near(b->second[1], 0.2 + m_uniform);
     // A constant turn (cos = 0.8, sin = 0.6): the rectangle ±(1 + m) x ±(0.3 + m) mapped back exactly,
     // x within 0.8(1 + m) + 0.6(0.3 + m), z within 0.6(1 + m) + 0.8(0.3 + m).
     Compiled constant = compile_text("box_const.iq", "[modules]\nturned = \"\"\"\nshape\nD = max(|u_1| - 1, |u_2| - 0.2, |u_3| - 0.3)\n"
@@ -347,7 +364,7 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
         CHECK(b->first[a] == -1e30);
         CHECK(b->second[a] == 1e30);
     }
-    near(b->second[1], 0.2 + m);
+    near(b->second[1], 0.2 + m_uniform);  // an open box: the cone at max_dist
 }
 
 TEST_CASE("a ray that enters the box only beyond the far plane takes no step", "[scene][box][render]") {

@@ -170,6 +170,23 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     lo.max_dist = s_.render.max_dist;
     lo.bound_margin = bound_margin();
     lo.box_level = box_level();
+    {
+        // The cone's part of the level at the box's farthest point, where the camera cannot go anywhere (uniform
+        // targets move it freely): Shadertoy's fixed camera, or its orbit around the target.
+        double focal = 1.0 / std::tan(s_.camera.fov * M_PI / 360.0);
+        double far_tolerance = 4 * (spacing0() + 2.4e-7 * s_.render.max_dist);
+        double bench = 10 * opts_.bench_max_hit * (s_.render.hit_relative ? s_.render.max_dist : 1.0);
+        lo.box_level_floor = std::max({bound_margin(), bench, 10 * far_tolerance});
+        if (opts_.target == Target::Shadertoy) {
+            lo.box_cone = 1 / (360 * focal);
+            lo.box_eye = s_.camera.orbit ? s_.camera.target : s_.camera.position;
+            if (s_.camera.orbit) {
+                double r2 = 0;
+                for (int k = 0; k < 3; ++k) r2 += std::pow(s_.camera.position[k] - s_.camera.target[k], 2);
+                lo.box_eye_radius = std::sqrt(r2);
+            }
+        }
+    }
     return lower_scene(s_, plans, lo);
 }
 

@@ -263,7 +263,37 @@ private:
     // a smooth blend (its members' distances are divided by Lipschitz factors the passes derive later), or a
     // side unbounded on every axis.
     void scene_box() {
-        const double inf = INFINITY, tau = o_.box_level;
+        if (!o_.box_eye || !(o_.box_cone > 0) || o_.box_level_floor >= o_.box_level) {
+            scene_box_at(o_.box_level);
+            return;
+        }
+        // The level the box's farthest point from the camera needs (the pixel cone there), from the floor up: the
+        // box at a level holds every sample a march takes within it, and a march ends where it leaves the box.
+        double tau = o_.box_level_floor;
+        for (int round = 0; round < 3; ++round) {
+            scene_box_at(tau);
+            if (!out_.box) break;
+            double far = 0;
+            for (int corner = 0; corner < 8; ++corner) {
+                double d2 = 0;
+                for (size_t a = 0; a < 3; ++a) {
+                    double x = (corner >> a) & 1 ? out_.box->second[a] : out_.box->first[a];
+                    d2 += std::pow(x - (*o_.box_eye)[a], 2);
+                }
+                far = std::max(far, std::sqrt(d2));
+            }
+            double need = o_.box_cone * (far + o_.box_eye_radius);
+            if (need <= tau) return;  // (an open side: far is ∞, and the cone at max_dist stands)
+            if (!std::isfinite(need) || need >= o_.box_level) break;
+            tau = need * 1.05;  // the box grows with the level: a little more, so the next round holds
+        }
+        scene_box_at(o_.box_level);
+    }
+
+    void scene_box_at(double tau) {
+        const double inf = INFINITY;
+        out_.box.reset();
+        for (auto& b : plan_box_) b.reset();
         std::array<double, 3> lo{inf, inf, inf}, hi{-inf, -inf, -inf};
         auto add = [&](size_t plan_index, const std::array<ir::Interval, 3>& w) {
             plan_box_[plan_index] = w;

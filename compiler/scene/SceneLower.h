@@ -40,6 +40,13 @@ struct SceneLowerOptions {
     double max_dist = 100;           // the scene distance with nothing in it is twice this
     double bound_margin = 0.1;       // `bound`: the shape is evaluated within this distance of its sphere
     double box_level = 0.1;          // the scene box holds every point whose nearness can be ≤ this (SceneIR::box)
+    // Where the camera is known (fixed, or an orbit around a known target), the part of box_level that is the step
+    // cap's pixel cone at max_dist need only reach the box's farthest point from the camera: the level is then
+    // max(box_level_floor, box_cone · that distance) (at most box_level; Compile.cpp box_level).
+    double box_level_floor = 0.1;    // the level without the cone
+    double box_cone = 0;             // the cone's radius per unit of distance along a ray (0: box_level as it is)
+    std::optional<std::array<double, 3>> box_eye;  // the camera, or an orbit's target
+    double box_eye_radius = 0;       // an orbit's radius: the camera anywhere on that sphere around box_eye
     int min_group = 4;               // instances of one kind that become a loop
 };
 
