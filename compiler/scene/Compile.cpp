@@ -121,12 +121,14 @@ private:
     // be accepted at — ten hit tolerances at the farthest distance (the `bound` margin, and the FAR tolerance's
     // four float spacings), and the step cap's pixel cone at max_dist for images 360 rows tall or more
     // (iqc render's default; on smaller images a ray that runs out of steps beside a surface may differ).
-    double box_level() const {
-        double focal = 1.0 / std::tan(s_.camera.fov * M_PI / 360.0);
+    double box_level() const { return std::max(box_level_floor(), s_.render.max_dist * box_cone()); }
+    // The level without the step cap's cone, and the cone's radius per unit of distance (360 rows).
+    double box_level_floor() const {
         double far_tolerance = 4 * (spacing0() + 2.4e-7 * s_.render.max_dist);
         double bench = 10 * opts_.bench_max_hit * (s_.render.hit_relative ? s_.render.max_dist : 1.0);
-        return std::max({bound_margin(), bench, 10 * far_tolerance, s_.render.max_dist / (360 * focal)});
+        return std::max({bound_margin(), bench, 10 * far_tolerance});
     }
+    double box_cone() const { return std::tan(s_.camera.fov * M_PI / 360.0) / 360; }
 
     SceneIR lower(const std::vector<InstancePlan>& plans);
     // Whether a march may start inside a shape (the march then tests its first sample's sign, a compare and a
@@ -174,12 +176,9 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     {
         // The cone's part of the level at the box's farthest point, where the camera cannot go anywhere (uniform
         // targets move it freely): Shadertoy's fixed camera, or its orbit around the target.
-        double focal = 1.0 / std::tan(s_.camera.fov * M_PI / 360.0);
-        double far_tolerance = 4 * (spacing0() + 2.4e-7 * s_.render.max_dist);
-        double bench = 10 * opts_.bench_max_hit * (s_.render.hit_relative ? s_.render.max_dist : 1.0);
-        lo.box_level_floor = std::max({bound_margin(), bench, 10 * far_tolerance});
+        lo.box_level_floor = box_level_floor();
         if (opts_.target == Target::Shadertoy) {
-            lo.box_cone = 1 / (360 * focal);
+            lo.box_cone = box_cone();
             lo.box_eye = s_.camera.orbit ? s_.camera.target : s_.camera.position;
             if (s_.camera.orbit) {
                 double r2 = 0;
