@@ -295,6 +295,15 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
         CHECK(got >= want);
         CHECK(got <= want + 0.01);
     };
+    // A scene's box (it must compile, and have one).
+    auto boxed = [](const std::string& name, const std::string& text, CompileOptions o = {}) {
+        Compiled c = compile_path(write_temp(name, text), o);
+        INFO(c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        auto b = box_of(c.result.code);
+        REQUIRE(b);
+        return *b;
+    };
     // The twisted box (1 x 3 x 1, `u = (c p_1 - s p_3, p_2, s p_1 + c p_3)`): its rounded corner's radius in x and
     // z, 0.5·√2 + m (the box of (u_1, u_3) is ±(0.5 + m); its far cells are split down to the corner).
     Compiled twisted = compile_path(bench("twisted.iq"));
@@ -324,42 +333,28 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
         "[[shapes]]\ntype = \"slab\"\n";
     CompileOptions webgl2;
     webgl2.target = Target::WebGL2;
-    Compiled turned = compile_path(write_temp("box_slab.iq", slab), webgl2);
-    INFO(turned.diagnostics);
-    REQUIRE(turned.result.exit_code == 0);
-    b = box_of(turned.result.code);
-    REQUIRE(b);
+    b = boxed("box_slab.iq", slab, webgl2);
     for (int a : {0, 2}) near(b->second[a], std::hypot(1 + m_uniform, 0.3 + m_uniform));
     near(b->second[1], 0.2 + m_uniform);
     // A constant turn (cos = 0.8, sin = 0.6): the rectangle ±(1 + m) x ±(0.3 + m) mapped back exactly,
     // x within 0.8(1 + m) + 0.6(0.3 + m), z within 0.6(1 + m) + 0.8(0.3 + m).
-    Compiled constant = compile_text("box_const.iq", "[modules]\nturned = \"\"\"\nshape\nD = max(|u_1| - 1, |u_2| - 0.2, |u_3| - 0.3)\n"
+    b = boxed("box_const.iq", "[modules]\nturned = \"\"\"\nshape\nD = max(|u_1| - 1, |u_2| - 0.2, |u_3| - 0.3)\n"
                                                      "u = (0.8 p_1 - 0.6 p_3, p_2, 0.6 p_1 + 0.8 p_3)\nwhere\np ∈ ℝ³\n\"\"\"\n"
                                                      "[[shapes]]\ntype = \"turned\"\n");
-    REQUIRE(constant.result.exit_code == 0);
-    b = box_of(constant.result.code);
-    REQUIRE(b);
     near(b->second[0], 0.8 * (1 + m) + 0.6 * (0.3 + m));
     near(b->second[2], 0.6 * (1 + m) + 0.8 * (0.3 + m));
     // `bend` turns (x, y) by an angle of x itself: still a rotation, |(x, y)| ≤ |(1 + m, 0.2 + m)|.
-    Compiled bent = compile_text("box_bend.iq", "[modules]\nbent = \"\"\"\nshape\nbend from domain\n# lipschitz: 2\n"
+    b = boxed("box_bend.iq", "[modules]\nbent = \"\"\"\nshape\nbend from domain\n# lipschitz: 2\n"
                                                 "D = max(|q_1| - 1, |q_2| - 0.2, |q_3| - 0.3)\nq = bend(p, k)\nwhere\np ∈ ℝ³\n"
                                                 "k ∈ [0, 2] default = 0.5\n\"\"\"\n[[shapes]]\ntype = \"bent\"\n");
-    INFO(bent.diagnostics);
-    REQUIRE(bent.result.exit_code == 0);
-    b = box_of(bent.result.code);
-    REQUIRE(b);
     for (int a : {0, 1}) near(b->second[a], std::hypot(1 + m, 0.2 + m));
     near(b->second[2], 0.3 + m);
     // Not a rotation: (c x - s z, c x + s z) does not keep |(x, z)|, and the rule must not apply (x and z stay
     // unbounded; only y is closed).
-    Compiled sheared = compile_text("box_shear.iq", "[modules]\nsheared = \"\"\"\nshape\nsin, cos from trigonometry\n# lipschitz: 2\n"
+    b = boxed("box_shear.iq", "[modules]\nsheared = \"\"\"\nshape\nsin, cos from trigonometry\n# lipschitz: 2\n"
                                                     "D = max(|u_1| - 1, |p_2| - 0.2, |u_2| - 0.3)\n"
                                                     "u = (c p_1 - s p_3, c p_1 + s p_3)\nc = cos(k p_2)\ns = sin(k p_2)\nwhere\np ∈ ℝ³\n"
                                                     "k ∈ [0, 2] default = 1\n\"\"\"\n[[shapes]]\ntype = \"sheared\"\n");
-    REQUIRE(sheared.result.exit_code == 0);
-    b = box_of(sheared.result.code);
-    REQUIRE(b);
     for (int a : {0, 2}) {
         CHECK(b->first[a] == -1e30);
         CHECK(b->second[a] == 1e30);
