@@ -532,12 +532,17 @@ private:
     // values (known at compile time, or one shared global). Then member k at p is member `base` at
     // p − (cell_k − cell_base)·spacing, whose data are constants: no per-member arithmetic on k (the tables pass's
     // k % 10, k / 100, … are integer divisions, which SIMD CPUs scalarise).
+    // Whether a lattice group's members sit on their cells' centres to float precision.
+    static bool on_cell_centres(const Item& g) {
+        double scale = 1;
+        for (size_t c = 0; c < 3; ++c) scale = std::max({scale, std::fabs(g.lattice.origin[c]), g.lattice.spacing[c] * g.lattice.n[c]});
+        return g.lattice.deviation <= 1e-7 * scale;
+    }
+
     bool members_alike(const Item& g) {
         const size_t a = g.members[0];
         // Evaluated at the lattice's offsets, not their own: only where these are theirs (to float precision).
-        double scale = 1;
-        for (size_t c = 0; c < 3; ++c) scale = std::max({scale, std::fabs(g.lattice.origin[c]), g.lattice.spacing[c] * g.lattice.n[c]});
-        if (g.lattice.deviation > 1e-7 * scale) return false;
+        if (!on_cell_centres(g)) return false;
         for (size_t mi : g.members)
             if (plan(mi).inv_linear != plan(a).inv_linear || plan(mi).scale != plan(a).scale || bound_of(mi) != bound_of(a) ||
                 plan(mi).shape_values != plan(a).shape_values)
@@ -553,9 +558,7 @@ private:
     // member k's object point is then L_k·(p − centre of its cell), the centre computed from the cell (Item::centred_fn).
     bool lattice_centred(const Item& g) {
         if (!g.lattice.found() || g.offset.global < 0 || runtime_transform(plan(g.members[0])) || members_alike(g)) return false;
-        double scale = 1;
-        for (size_t c = 0; c < 3; ++c) scale = std::max({scale, std::fabs(g.lattice.origin[c]), g.lattice.spacing[c] * g.lattice.n[c]});
-        return g.lattice.deviation <= 1e-7 * scale;
+        return on_cell_centres(g);
     }
 
     // Whether the members' origins in the world (their transforms' centres) fill a lattice (InstanceLattice).
