@@ -258,14 +258,17 @@ float iqc_far(vec3 ro, vec3 rd) {
 {{#if MARCH_SEGMENT}}
 // Segment tracing (Galin et al. 2020, "Segment Tracing Using Local Lipschitz Bounds"): sphere tracing (below)
 // whose step may go as far as the distance over the largest rate at which it can fall along the next segment
-// of the ray, not over a bound for the whole region. iqc_segment_gain bounds that rate by interval arithmetic
-// on each instance's gradient over the segment's box (derived by the compiler, per operator); a step is at
-// most the segment and at least the plain sphere-tracing step, and the next candidate segment is twice the
-// step taken (κ = 2, the paper's choice). Short segments near a surface have tight bounds. A segment over
-// whose box interval arithmetic proves every instance's distance above the hit tolerance (iqc_segment_clear;
-// Mitchell 1990, "Robust ray intersection with interval arithmetic") holds nothing to hit: the step takes all
-// of it. Each step's bounds cost several evaluations of the distance (docs/accuracy.md: what they save and
-// what they cost).
+// of the ray, not over a bound for the whole region. Each step first asks whether the candidate segment is
+// clear: where interval arithmetic over the segment's box proves every instance's distance above the hit
+// tolerance (iqc_segment_clear; Mitchell 1990, "Robust ray intersection with interval arithmetic"), the
+// segment holds nothing to hit, and the step takes all of it without evaluating the scene (no sample there
+// could be a hit). Otherwise the scene is evaluated, and iqc_segment_gain bounds the rate by interval
+// arithmetic on each instance's gradient over the same box (derived by the compiler, per operator): the step
+// is at most the segment and at least the plain sphere-tracing step. The next candidate segment is twice the
+// step taken (κ = 2, the paper's choice), shortened to stop before a surface the last two samples foresee;
+// short segments near a surface have tight bounds. Both bounds read
+// the same box, so a shader compiler shares their common parts. Each step's bounds cost more than an
+// evaluation of the distance (docs/accuracy.md: what they save and what they cost).
 {{/if}}
 // Sphere tracing (Hart 1996): step by the distance bound. Starting inside a shape (a negative distance)
 // it marches to that shape's inner wall (the test is left out where the compiler proved that every march
@@ -282,11 +285,20 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{/if}}
 {{#if MARCH_SEGMENT}}
     float seg = {{T_FAR}};  // the candidate segment's length: the whole ray at first
+    float d_prev = -1.0, t_prev = 0.0;  // the last sample's distance and where it was taken
 {{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
 {{#if MARCH_SEGMENT}}
-        vec3 p = ro + t * rd;
-        vec2 h = iqc_scene(p);
+        vec3 p = ro + t * rd, q = p + seg * rd;
+        vec3 lo = min(p, q), hi = max(p, q);
+        float e = iqc_eps(t);
+{{#if INSTRUMENT}}
+        iqc_bounds++;
+{{/if}}
+        bool clear = iqc_segment_clear(lo, hi) > e;
+        vec2 h = vec2(1.0e20, -1.0);  // a clear segment's start: no sample (nothing within 10^20, no instance)
+        // An if, not a choice: the scene is evaluated only where the segment is not clear.
+        if (!clear) h = iqc_scene(p);
 {{#else}}
         vec2 h = iqc_scene(ro + t * rd);
 {{/if}}
@@ -295,9 +307,19 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         if (i == 0 && h.x < 0.0) s = -1.0;
 {{/if}}
         float d = s * h.x;
+{{#if MARCH_SEGMENT}}
+{{#else}}
         float e = iqc_eps(t);
+{{/if}}
+{{#if MARCH_SEGMENT}}
+        float dn = clear ? 1.0e20 : iqc_nearness(h);  // (no instance's factor is read for id -1)
+{{#else}}
         float dn = iqc_nearness(h);
+{{/if}}
         if (dn < e) { id = int(h.y); return t; }
+{{#if MARCH_SEGMENT}}
+        if (!clear) {  // the step cap's bookkeeping reads samples only
+{{/if}}
 {{#if EPS_CONSTANT}}
         if (dn < best) { best = dn; best_t = t; best_id = h.y; }  // in tolerances at the end (a constant tolerance)
 {{#else}}
@@ -308,25 +330,29 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         last_t = t;
         last_id = h.y;
 {{#if MARCH_SEGMENT}}
-        float step = d;
-        if (d > 0.0) {
-            seg = max(seg, d);  // a plain step is always safe: the segment is never shorter
-            vec3 q = p + seg * rd;
-            vec3 lo = min(p, q), hi = max(p, q);
-            // An if, not a choice: rays whose segment is clear skip the gain's code (llvmpipe still runs it for a
-            // group of pixels where any one needs it).
+        }
+        float step = seg;
+        if (clear) seg = 2.0 * step;
+        else if (d > 0.0) {
+            // The gain over the clear test's box; a plain step d is always safe.
 {{#if INSTRUMENT}}
             iqc_bounds++;
 {{/if}}
-            if (iqc_segment_clear(lo, hi) > e) step = seg;
-            else {
-{{#if INSTRUMENT}}
-                iqc_bounds++;
-{{/if}}
-                step = min(d * iqc_segment_gain(lo, hi, rd), seg);
-            }
+            step = max(d, min(d * iqc_segment_gain(lo, hi, rd), seg));
+            // The next segment: twice the step, but where the secant through this sample and the one before
+            // (the distance falling from d_prev to d over the way between them) puts a surface within it, 0.8
+            // of the way to that surface. A segment's box that reaches across a surface bounds the gradient by
+            // the hull of both sides' cases (a box's outside and inside terms each add the whole normal: twice
+            // the slope), and each step then only halves the way left (13 samples to hit a twisted bar's face
+            // head-on); stopping short of it keeps the bound tight, and the step takes 0.8 of the way.
             seg = 2.0 * step;
-        }
+            if (d_prev > d) {
+                float left = d * (t - t_prev) / (d_prev - d) - step;  // beyond the step, to the secant's surface
+                if (left > 0.0) seg = min(seg, 0.8 * left);
+            }
+            d_prev = d;
+            t_prev = t;
+        } else step = d;  // back to a wall (inside a shape): the segment stays
         t += step;
 {{#else}}
         t += d;

@@ -247,3 +247,27 @@ r ∈ [0, 2] default = 1: radius
     ir::ValueId lo = tb.param("lo", Type::vector(3)), hi = tb.param("hi", Type::vector(3));
     CHECK(ir::emit_interval_extension(tb, torus->m, torus->value, 0, lo, hi, {lo}).continuous == ir::ValueId(-1));
 }
+
+TEST_CASE("interval extension: a gradient's unit vector v/‖v‖ stays a unit vector near a box's face", "[interval-extension][segment]") {
+    // ∂‖v‖/∂v = v/‖v‖. As an interval product, v's interval times 1/‖v‖'s forgets that the result has length
+    // 1: just outside a box's face, max(|q| - b, 0) = (x - b_x, 0, 0) with x - b_x in [0.001, 0.01] gave
+    // the normal's first component [0.1, 10] (and segment tracing took sphere-tracing steps along a twisted
+    // bar). Each component is bounded as v_k/√(v_k² + R²), R the other components' length, at its ends.
+    auto x = extend_shape(test::read_text(std::filesystem::path(IQC_SOURCE_DIR) / "stdlib" / "box.iql"), "box");
+    REQUIRE(x);
+    REQUIRE(x->gradient_box >= 0);
+    // The box's half-extents are (1, 0.6, 0.8) at its defaults (stdlib/box.iql): a box over [1.001, 1.01] in x.
+    ir::Value r = ir::evaluate(x->m, x->gradient_box, {vec3(1.001, -0.1, -0.2), vec3(1.01, 0.2, 0.1)});
+    INFO("x in [" << r.v[0] << ", " << r.v[3] << "], y in [" << r.v[1] << ", " << r.v[4] << "], z in [" << r.v[2] << ", " << r.v[5] << "]");
+    CHECK(r.v[0] > 0.9999);
+    CHECK(r.v[3] < 1.0001);
+    for (int k : {1, 2}) CHECK((r.v[size_t(k)] == 0 && r.v[size_t(3 + k)] == 0));
+    // Over a corner region (two components positive) each component stays within [0, 1] where an interval
+    // product gave up to 1/0.001.
+    r = ir::evaluate(x->m, x->gradient_box, {vec3(1.001, 0.601, -0.2), vec3(1.5, 1.1, 0.1)});
+    for (int k : {0, 1}) {
+        CHECK(r.v[size_t(k)] >= 0);
+        CHECK(r.v[size_t(3 + k)] <= 1);
+        CHECK(r.v[size_t(3 + k)] > 0.99);  // still sound: (0.5, 0.001) beyond the edge points almost along x
+    }
+}

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <optional>
+#include <string_view>
 
 #include "sema/Builtins.h"
 
@@ -120,6 +121,44 @@ private:
         ValueId apart = either(cmp(CompareKind::Gt, l, num(0)), cmp(CompareKind::Lt, h, num(0)));
         ValueId rl = b_.op(Op::Div, {num(1), h}), rh = b_.op(Op::Div, {num(1), l});
         return {sel(apart, rl, num(-kBig)), sel(apart, rh, num(kBig))};
+    }
+
+    // v/‖v‖ per component, tight: v_k/√(v_k² + R²), R² the other components' squares, increases with v_k and
+    // its magnitude falls as R grows, so each end comes from one end of v_k and one end of R. A product of v's
+    // intervals with 1/‖v‖'s forgets that the result is a unit vector: near a face of a box SDF (‖v‖ small)
+    // it bounded the components of the gradient by 10 and more, and segment tracing took sphere-tracing steps.
+    // (0/0 is 0, as the point code's max(‖v‖, 1e-30) makes it.)
+    IV unit_vector(const IV& v, const Type& t) {
+        size_t n = size_t(std::max(1, t.components()));
+        std::vector<std::pair<ValueId, ValueId>> sq;
+        for (size_t k = 0; k < n; ++k) sq.push_back(square(comp(v, t, k, false), comp(v, t, k, true)));
+        return each(t, [&](size_t k) {
+            ValueId r_lo = num(0), r_hi = num(0);
+            for (size_t j = 0; j < n; ++j)
+                if (j != k) {
+                    r_lo = add(r_lo, sq[j].first);
+                    r_hi = add(r_hi, sq[j].second);
+                }
+            ValueId l = comp(v, t, k, false), h = comp(v, t, k, true);
+            auto end = [&](ValueId x, ValueId r2) { return b_.op(Op::Div, {x, fmax(call1("sqrt", add(mul(x, x), r2)), num(1e-30))}); };
+            ValueId top = end(h, sel(cmp(CompareKind::Ge, h, num(0)), r_lo, r_hi));
+            ValueId bottom = end(l, sel(cmp(CompareKind::Ge, l, num(0)), r_hi, r_lo));
+            return std::pair{fmax(bottom, num(-1)), fmin(top, num(1))};
+        });
+    }
+
+    // Whether divisor (in f) is ‖v‖ or max(‖v‖, c): v / divisor is then v's unit vector.
+    static bool is_norm_of(const Function& f, ValueId divisor, ValueId v) {
+        const Instr* d = &f.body[divisor];
+        if (d->op == Op::Builtin && std::string_view(builtin(d->aux).name) == "max" && d->args.size() == 2) {
+            for (int s = 0; s < 2; ++s)
+                if (f.body[d->args[size_t(1 - s)]].op == Op::Const) {
+                    const Instr& c = f.body[d->args[size_t(1 - s)]];
+                    if (c.data.size() == 1 && c.data[0] > 0 && c.data[0] <= 1e-20) return is_norm_of(f, d->args[size_t(s)], v);
+                }
+            return false;
+        }
+        return d->op == Op::Builtin && std::string_view(builtin(d->aux).name) == "length" && d->args.size() == 1 && d->args[0] == v;
     }
 
     // An interval per component from per-component rules over the operands.
@@ -267,15 +306,7 @@ private:
             auto [l, h] = norm();
             return pair(l, h);
         }
-        if (n == "normalize") {  // v / ‖v‖, within [-1, 1]
-            auto [nl, nh] = norm();
-            const auto r = reciprocal(nl, nh);  // not a structured binding: lambdas capture it
-            const ValueId rl = r.first, rh = r.second;
-            return each(in.type, [&](size_t k) {
-                auto [ql, qh] = product(lo(0, k), hi(0, k), false, rl, rh, false);
-                return std::pair{fmax(ql, num(-1)), fmin(qh, num(1))};
-            });
-        }
+        if (n == "normalize") return unit_vector(*a[0], ts[0]);  // v / ‖v‖
         if (n == "atan" || n == "atan2") return each(in.type, [&](size_t) { return std::pair{num(-M_PI), num(M_PI)}; });
         return unknown(fmt::format("no interval rule for {}", n));
     }
@@ -351,6 +382,7 @@ private:
                 });
             }
             case Op::Div: {
+                if (!ts[0].is_scalar() && ts[1].is_scalar() && is_norm_of(f, in.args[1], in.args[0])) return unit_vector(*a[0], ts[0]);
                 if (a[1]->exact)
                     return each(in.type, [&](size_t k) {
                         ValueId p = b_.op(Op::Div, {lo(0, k), lo(1, 0)}), q = b_.op(Op::Div, {hi(0, k), lo(1, 0)});
