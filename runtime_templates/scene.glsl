@@ -344,11 +344,13 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
             // of the way to that surface. A segment's box that reaches across a surface bounds the gradient by
             // the hull of both sides' cases (a box's outside and inside terms each add the whole normal: twice
             // the slope), and each step then only halves the way left (13 samples to hit a twisted bar's face
-            // head-on); stopping short of it keeps the bound tight, and the step takes 0.8 of the way.
+            // head-on); stopping short of it keeps the bound tight, and the step takes 0.8 of the way. Never
+            // below half the step: a secant across a `bound` sphere's surface (its distance, then the shape's)
+            // foresees a surface far too near, and each clear segment after it only doubles.
             seg = 2.0 * step;
             if (d_prev > d) {
                 float left = d * (t - t_prev) / (d_prev - d) - step;  // beyond the step, to the secant's surface
-                if (left > 0.0) seg = min(seg, 0.8 * left);
+                if (left > 0.0) seg = min(seg, max(0.8 * left, 0.5 * step));
             }
             d_prev = d;
             t_prev = t;
