@@ -245,13 +245,29 @@ float iqc_max_singular(mat3 L) {
 // margin (ten hit tolerances, at least 0.1): no sample there is a hit or the step cap's closest approach, so a
 // ray that misses the box, or enters it only beyond the far plane (the sky over a terrain's horizon), is
 // background without a step, and one that leaves it stops there instead of marching on.
+{{#if MARCH_SEGMENT}}
+// Segment tracing also reads where the ray enters the box (t_enter, 0 from inside it): the way up to there is
+// a segment the box proves clear, taken without a sample.
+float iqc_far(vec3 ro, vec3 rd, out float t_enter) {
+{{#else}}
 float iqc_far(vec3 ro, vec3 rd) {
+{{/if}}
     vec3 m = 1.0 / rd;
     vec3 a = (IQC_BOX_LO - ro) * m, b = (IQC_BOX_HI - ro) * m;
     vec3 n = min(a, b), f = max(a, b);
     float t_in = max(max(n.x, n.y), n.z), t_out = min(min(min(f.x, f.y), f.z), IQC_MAX_DIST);
+{{#if MARCH_SEGMENT}}
+    t_enter = max(t_in, 0.0);
+{{/if}}
     return t_in > t_out || t_out < 0.0 ? -1.0 : t_out;
 }
+{{#if MARCH_SEGMENT}}
+
+float iqc_far(vec3 ro, vec3 rd) {
+    float t_enter;
+    return iqc_far(ro, rd, t_enter);
+}
+{{/if}}
 
 {{/if}}
 {{#if MARCH_SPHERE}}
@@ -280,11 +296,15 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     id = -1;
     steps = 0;
 {{#if SCENE_BOX}}
+{{#if MARCH_SEGMENT}}
+    float t_far = iqc_far(ro, rd, t);
+{{#else}}
     float t_far = iqc_far(ro, rd);
+{{/if}}
     if (t_far < 0.0) return -1.0;
 {{/if}}
 {{#if MARCH_SEGMENT}}
-    float seg = {{T_FAR}};  // the candidate segment's length: the whole ray at first
+    float seg = {{T_FAR}} - t;  // the candidate segment's length: the whole ray at first
     float d_prev = -1.0, t_prev = 0.0;  // the last sample's distance and where it was taken
 {{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -295,7 +315,8 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{#if INSTRUMENT}}
         iqc_bounds++;
 {{/if}}
-        bool clear = iqc_segment_clear(lo, hi) > e;
+        float e_end = iqc_eps(t + seg);  // the tolerance at the segment's end (a relative one grows along it)
+        bool clear = iqc_segment_clear(lo, hi) > e_end;
         vec2 h = vec2(1.0e20, -1.0);  // a clear segment's start: no sample (nothing within 10^20, no instance)
         // An if, not a choice: the scene is evaluated only where the segment is not clear.
         if (!clear) h = iqc_scene(p);
@@ -334,11 +355,15 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float step = seg;
         if (clear) seg = 2.0 * step;
         else if (d > 0.0) {
-            // The gain over the clear test's box; a plain step d is always safe.
+            // The gain over the clear test's box, for the way to the hit tolerance's shell, not to the surface:
+            // along the step every sample's nearness stays above e (a step to the surface itself passed over a
+            // crest within the tolerance, where sphere tracing stops, and hit the crest's far slope: back-facing
+            // speckles on a grazed terrain at hit 0.05). d/dn is this instance's 1/K. A plain step d is always
+            // safe.
 {{#if INSTRUMENT}}
             iqc_bounds++;
 {{/if}}
-            step = max(d, min(d * iqc_segment_gain(lo, hi, rd), seg));
+            step = max(d, min(d * max(1.0 - e_end / dn, 0.0) * iqc_segment_gain(lo, hi, rd), seg));
             // The next segment: twice the step, but where the secant through this sample and the one before
             // (the distance falling from d_prev to d over the way between them) puts a surface within it, 0.8
             // of the way to that surface. A segment's box that reaches across a surface bounds the gradient by

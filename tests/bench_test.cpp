@@ -231,6 +231,55 @@ type = "vox"
     CHECK(segment < 1.25 * sphere);
 }
 
+TEST_CASE("segment tracing stops at a crest within the hit tolerance, as sphere tracing does", "[march][segment]") {
+    // A sine terrain skimmed by the camera at hit 0.05 (a new user's trial): a segment step to the surface
+    // itself passed over crests the ray came within the tolerance of, where sphere tracing stops, and hit their
+    // far slopes: 141 pixels whose normal faces down (drawn flipped, magenta) against sphere tracing's 6, at
+    // 320x180. Each step now goes only as far as the tolerance's shell, and a relative tolerance is taken at
+    // the segment's end (185 against 8 in relative mode at hit 0.002, now 9).
+    auto down_facing = [](const std::string& march, const std::string& mode, const std::string& hit) {
+        auto scene = write_temp("crest_" + march + mode + ".iq", R"TOML(title = "grazed sine terrain"
+[render]
+march = ")TOML" + march + R"TOML("
+hit_mode = ")TOML" + mode + R"TOML("
+hit = )TOML" + hit + R"TOML(
+max_dist = 80
+[modules]
+terrain = """
+shape
+sin from trigonometry
+D = p_2 + 1 - 0.3 sin(1.3 p_1) sin(1.1 p_3)
+where
+p ∈ ℝ³
+"""
+[camera]
+position = [0, 1.5, -6]
+target = [0, 0, 10]
+[[shapes]]
+type = "terrain"
+)TOML");
+        auto png = temp_dir() / ("crest_" + march + mode + ".png");
+        RunResult r = run_iqc("render " + scene.string() + " -o " + png.string() + " --size 320x180 -q");
+        INFO(r.err);
+        REQUIRE(r.exit_code == 0);
+        iqc::render::Image img;
+        std::string err;
+        REQUIRE(iqc::render::read_png(png.string(), img, &err));
+        int n = 0;  // normal colours 0.5 + 0.5 N with N.y well below 0 (green under red and blue)
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) {
+                const float* p = img.pixel(x, y);
+                n += p[1] + 0.15f < p[0] && p[1] + 0.15f < p[2];
+            }
+        return n;
+    };
+    for (auto [mode, hit] : {std::pair{"absolute", "0.05"}, std::pair{"relative", "0.002"}}) {
+        int sphere = down_facing("sphere", mode, hit), segment = down_facing("segment", mode, hit);
+        INFO(mode << " " << hit << ": pixels facing down, sphere " << sphere << ", segment " << segment);
+        CHECK(segment <= sphere + 5);
+    }
+}
+
 TEST_CASE("segment tracing says where it falls back to sphere-tracing steps, at the march key", "[march][segment]") {
     // A group of instances (one loop in the scene function) and a recurrence (a loop in the shape) have no
     // per-instance interval bound: the march still works, as sphere tracing, and a warning says why.
@@ -272,6 +321,9 @@ type = "menger"
     CHECK(r.exit_code == 0);
     CHECK_THAT(r.err, Catch::Contains("segment_five.iq:2:9: warning: segment tracing takes sphere-tracing steps in this scene: "
                                       "5 instances (each step evaluates the bounds of every instance: at most 4"));
+    // There the shader is sphere tracing's: no bound functions, and --stats counts no bounds (a new user's
+    // trial: segment_bounds_mean 2.5 for bounds that were constants).
+    CHECK_THAT(read_text(temp_dir() / "segment_five.frag"), !Catch::Contains("iqc_segment"));
     // Where it derives bounds, no warning, and the shader has the gain function the march calls.
     auto torus = write_temp("segment_torus.iq", "[render]\nmarch = \"segment\"\n[[shapes]]\ntype = \"torus\"\n");
     auto frag = temp_dir() / "segment_torus.frag";
@@ -281,9 +333,9 @@ type = "menger"
     std::string code = read_text(frag);
     CHECK_THAT(code, Catch::Contains("float iqc_segment_gain(vec3 lo, vec3 hi, vec3 rd) {"));
     CHECK_THAT(code, Catch::Contains("float iqc_segment_clear(vec3 lo, vec3 hi) {"));
-    CHECK_THAT(code, Catch::Contains("bool clear = iqc_segment_clear(lo, hi) > e;"));
+    CHECK_THAT(code, Catch::Contains("bool clear = iqc_segment_clear(lo, hi) > e_end;"));
     CHECK_THAT(code, Catch::Contains("if (!clear) h = iqc_scene(p);"));  // a clear segment costs no evaluation
-    CHECK_THAT(code, Catch::Contains("step = max(d, min(d * iqc_segment_gain(lo, hi, rd), seg));"));
+    CHECK_THAT(code, Catch::Contains("step = max(d, min(d * max(1.0 - e_end / dn, 0.0) * iqc_segment_gain(lo, hi, rd), seg));"));
     // --stats counts the bounds apart from the scene evaluations (each is an interval evaluation of every
     // instance's distance or gradient over a segment).
     auto stats_of = [&](const std::string& scene) {
@@ -294,6 +346,7 @@ type = "menger"
         return std::stod(s.out.substr(at + 21));
     };
     CHECK(stats_of(torus.string()) > 1.0);
+    CHECK(stats_of((temp_dir() / "segment_five.iq").string()) == 0.0);
     CHECK(stats_of(write_temp("sphere_torus_stats.iq", "[[shapes]]\ntype = \"torus\"\n").string()) == 0.0);
     // Other marches have none of it.
     r = run_iqc(write_temp("sphere_torus.iq", "[[shapes]]\ntype = \"torus\"\n").string() + " -o " + frag.string());

@@ -118,7 +118,13 @@ void segment(Module& m, PipelineResult& r) {
     constexpr int kMaxItems = 4;
     int dist = m.find(names::kDistanceOf), seg = m.find(names::kSegmentGain), clear = m.find(names::kSegmentClear);
     if (dist < 0 || seg < 0 || clear < 0) return;
-    auto refuse = [&](const std::string& why) { r.segment_refused = why; };
+    // Refused: the placeholders are no longer entries (dead code removes them) and the march is sphere tracing
+    // (Compile leaves MARCH_SEGMENT out: no bound is evaluated or counted).
+    auto refuse = [&](const std::string& why) {
+        r.segment_refused = why;
+        m.functions[size_t(seg)].entry = false;
+        m.functions[size_t(clear)].entry = false;
+    };
     // The instances: the cases of iqc_distance_of's dispatch on the id.
     std::vector<long long> ids;
     const Function& df = m.functions[size_t(dist)];

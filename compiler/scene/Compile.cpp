@@ -146,6 +146,7 @@ private:
     // estimate, whose triangulation of consecutive spheres invents shadow from a mere bound.
     static bool exact_distances(const std::vector<InstancePlan>& plans);
     bool exact_ = false;
+    bool segment_refused_ = false;  // march = "segment", but the segment pass derived no bounds
     // An instance whose glow the shader gathers: a glow that is not black, outside the per-instance baseline
     // and the debug views (which show values). The lowering emits iqc_distance_of for exactly these.
     bool gathers_glow(const InstanceDesc& in) const {
@@ -256,7 +257,8 @@ bool SceneCompiler::optimize(SceneIR& scene) {
         else d_.warning(issue.span, issue.message);
     }
     for (const auto& w : pr.warnings) d_.warning(w.span, w.message);
-    if (!pr.segment_refused.empty())
+    segment_refused_ = !pr.segment_refused.empty();
+    if (segment_refused_)
         d_.warning(s_.render.march_span, "segment tracing takes sphere-tracing steps in this scene: " + pr.segment_refused);
     for (const auto& [name, ms] : pr.pass_ms) res_.pass_ms.push_back({"  " + name, ms});
     res_.lipschitz = pr.lipschitz;
@@ -368,9 +370,10 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         V["T_FAR"] = "t_far";
     }
     static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO", "MARCH_SEGMENT"};
-    F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march())]);
-    // Segment tracing is sphere tracing with another step: one march function with both flags.
-    if (!opts_.per_instance && march() == March::Segment) F.insert("MARCH_SPHERE");
+    // Segment tracing is sphere tracing with another step: one march function with both flags (sphere tracing
+    // alone where the segment pass derived no bounds).
+    if (!opts_.per_instance && march() == March::Segment) F.insert(segment_refused_ ? "MARCH_SPHERE" : "MARCH_SEGMENT");
+    F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march() == March::Segment ? March::Sphere : march())]);
     if (opts_.per_instance) F.insert("LIPSCHITZ");
     // The step cap's rules (iqc_cone, iqc_nearness): only the distance-bound marches use them.
     if (!opts_.per_instance && march() != March::Fixed) F.insert("STEP_CAP_CONE");
