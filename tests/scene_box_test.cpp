@@ -45,6 +45,26 @@ std::string bench(const std::string& name) { return std::string(IQC_SOURCE_DIR) 
 
 int differ_without_box(const CompileResult& c, int W, int H);  // below
 
+// The box's level where the camera is fixed (Shadertoy; Compile.cpp box_level, SceneLower scene_box): ten hit
+// tolerances (0.01 at the default 1e-3), or where wider the step cap's pixel cone on 360 rows, far / (360 ·
+// focal) with focal 1/tan(30°), at the box's farthest corner from the camera (taken 5% wider, as the compiler
+// does). lo and hi: the shapes' own extent.
+double fixed_level(std::array<double, 3> eye, std::array<double, 3> lo, std::array<double, 3> hi) {
+    double m = 0.01;
+    for (int round = 0; round < 3; ++round) {
+        double far = 0;
+        for (int corner = 0; corner < 8; ++corner) {
+            double d2 = 0;
+            for (int a = 0; a < 3; ++a) d2 += std::pow(((corner >> a) & 1 ? hi[a] + m : lo[a] - m) - eye[a], 2);
+            far = std::max(far, std::sqrt(d2));
+        }
+        double need = far / (360 / std::tan(M_PI / 6));
+        if (need <= m) break;
+        m = 1.05 * need;
+    }
+    return m;
+}
+
 const std::string kBall =
     "[modules]\nball = \"\"\"\nshape\nD = ‖p‖ - r\nwhere\np ∈ ℝ³\nr ∈ [0,3] default = 1\n\"\"\"\n"
     "ground = \"\"\"\nshape\nD = p_2 + 1\nwhere\np ∈ ℝ³\n\"\"\"\n";
@@ -52,13 +72,16 @@ const std::string kBall =
 }  // namespace
 
 TEST_CASE("the scene's box: a recurrence, a height field, rotated and moved shapes, slider ranges", "[scene][box]") {
-    // The box's level (Compile.cpp box_level): the `bound` margin 0.1, or the step cap's pixel cone on 360 rows
+    // The box's level (Compile.cpp box_level): ten hit tolerances, or the step cap's pixel cone on 360 rows
     // where wider: t / (rows · focal), focal 1/tan(30°) at the default field of view, at max_dist, or on Shadertoy
-    // (a fixed camera) at the box's farthest point from the camera.
-    // On Shadertoy (a fixed camera) the cone is taken at the box's farthest point from the camera, here within 62
-    // units (0.1 wins); on slider targets the camera goes anywhere, and the cone is taken at max_dist.
-    auto level = [](double max_dist) { return std::max(0.1, max_dist / (360 / std::tan(M_PI / 6))); };
-    const double m = 0.1, m_uniform = level(100);  // max_dist 100 (the default): 0.16
+    // (a fixed camera) at the box's farthest point from the camera (fixed_level). On slider targets the camera
+    // goes anywhere, and the cone is taken at max_dist; so it is where the box is open on a side.
+    auto level = [](double max_dist) { return std::max(0.01, max_dist / (360 / std::tan(M_PI / 6))); };
+    const double m_uniform = level(100);  // max_dist 100 (the default): 0.16
+    // Ten hit tolerances, not the `bound` margin 0.1 (the hand-written sponge's box is ±1.01: iqc's ±1.1 cost 5%
+    // of its frame).
+    double m = fixed_level({2.2, 1.6, -2.6}, {-1, -1, -1}, {1, 1, 1});
+    CHECK(m == 0.01);
     // The Menger sponge: a recurrence of four steps (intervals carried through the loop) inside |p| <= 1.
     Compiled sponge = compile_path(bench("fractal.iq"));
     REQUIRE(sponge.result.exit_code == 0);
@@ -70,14 +93,14 @@ TEST_CASE("the scene's box: a recurrence, a height field, rotated and moved shap
         CHECK(b->second[a] >= 1 + m);
         CHECK(b->second[a] <= 1 + m + 0.01);
     }
-    // y = 0.6 sin(3x) sin(3z), max_dist 30: a slab below y = 0.6 + 0.1, unbounded elsewhere.
-    REQUIRE(level(30) == 0.1);
+    // y = 0.6 sin(3x) sin(3z), max_dist 30: a slab below y = 0.6 + the cone at max_dist (0.048), unbounded
+    // elsewhere.
     Compiled terrain = compile_path(bench("sine_terrain.iq"));
     REQUIRE(terrain.result.exit_code == 0);
     b = box_of(terrain.result.code);
     REQUIRE(b);
-    CHECK(b->second[1] >= 0.7);
-    CHECK(b->second[1] <= 0.71);
+    CHECK(b->second[1] >= 0.6 + level(30));
+    CHECK(b->second[1] <= 0.61 + level(30));
     CHECK(b->first[1] == -1e30);
     for (int a : {0, 2}) {
         CHECK(b->first[a] == -1e30);
@@ -96,6 +119,7 @@ TEST_CASE("the scene's box: a recurrence, a height field, rotated and moved shap
     CHECK(b->first[1] == -1e30);
     // Shadertoy: the ball's radius is its value; webgl2: any value of its slider, up to 3.
     std::string scene = kBall + "[[shapes]]\ntype = \"ball\"\ntransform = \"T((0, 2, 0))\"\n";
+    m = fixed_level({0, 0, -1}, {-1, 1, -1}, {1, 3, 1});  // the default camera
     Compiled constant = compile_text("box_ball.iq", scene);
     REQUIRE(constant.result.exit_code == 0);
     b = box_of(constant.result.code);
@@ -288,8 +312,7 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
     // A shape that rotates its point in a coordinate plane mixes two axes: interval arithmetic alone closes
     // neither side of x or z (c·x - s·z over x ≥ c with z unbounded). The rotated pair keeps the norm of (x, z)
     // (cos² + sin² = 1), so the box of the rotated coordinates bounds both: support_box's PlanePair.
-    auto level = [](double max_dist) { return std::max(0.1, max_dist / (360 / std::tan(M_PI / 6))); };
-    const double m = 0.1, m_uniform = level(100);  // Shadertoy's fixed camera; webgl2's (see the first test case)
+    const double m_uniform = 100 / (360 / std::tan(M_PI / 6));  // webgl2's level (see the first test case)
     auto near = [](double got, double want) {
         INFO("got " << got << ", want " << want);
         CHECK(got >= want);
@@ -306,6 +329,7 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
     };
     // The twisted box (1 x 3 x 1, `u = (c p_1 - s p_3, p_2, s p_1 + c p_3)`): its rounded corner's radius in x and
     // z, 0.5·√2 + m (the box of (u_1, u_3) is ±(0.5 + m); its far cells are split down to the corner).
+    double m = fixed_level({0, 1, -5}, {-0.71, -1.5, -0.71}, {0.71, 1.5, 0.71});  // Shadertoy's fixed camera
     Compiled twisted = compile_path(bench("twisted.iq"));
     REQUIRE(twisted.result.exit_code == 0);
     auto b = box_of(twisted.result.code);
@@ -318,6 +342,7 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
     CHECK(differ_without_box(twisted.result, 96, 54) == 0);
     // The twisted bar (the standard library's `twist` in a called function, four calls merged): the bar's
     // corner, narrower than its `bound = 1.6` sphere's box.
+    m = fixed_level({0, 0.5, -4}, {-0.43, -1.5, -0.43}, {0.43, 1.5, 0.43});
     Compiled bar = compile_path(bench("twisted_bar.iq"));
     REQUIRE(bar.result.exit_code == 0);
     b = box_of(bar.result.code);
@@ -337,6 +362,7 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
     for (int a : {0, 2}) near(b->second[a], std::hypot(1 + m_uniform, 0.3 + m_uniform));
     near(b->second[1], 0.2 + m_uniform);
     // A constant turn (cos = 0.8, sin = 0.6): the rectangle ±(1 + m) x ±(0.3 + m) mapped back exactly,
+    m = fixed_level({0, 0, -1}, {-0.98, -0.2, -0.84}, {0.98, 0.2, 0.84});
     // x within 0.8(1 + m) + 0.6(0.3 + m), z within 0.6(1 + m) + 0.8(0.3 + m).
     b = boxed("box_const.iq", "[modules]\nturned = \"\"\"\nshape\nD = max(|u_1| - 1, |u_2| - 0.2, |u_3| - 0.3)\n"
                                                      "u = (0.8 p_1 - 0.6 p_3, p_2, 0.6 p_1 + 0.8 p_3)\nwhere\np ∈ ℝ³\n\"\"\"\n"
@@ -344,6 +370,7 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
     near(b->second[0], 0.8 * (1 + m) + 0.6 * (0.3 + m));
     near(b->second[2], 0.6 * (1 + m) + 0.8 * (0.3 + m));
     // `bend` turns (x, y) by an angle of x itself: still a rotation, |(x, y)| ≤ |(1 + m, 0.2 + m)|.
+    m = fixed_level({0, 0, -1}, {-1.02, -1.02, -0.3}, {1.02, 1.02, 0.3});
     b = boxed("box_bend.iq", "[modules]\nbent = \"\"\"\nshape\nbend from domain\n# lipschitz: 2\n"
                                                 "D = max(|q_1| - 1, |q_2| - 0.2, |q_3| - 0.3)\nq = bend(p, k)\nwhere\np ∈ ℝ³\n"
                                                 "k ∈ [0, 2] default = 0.5\n\"\"\"\n[[shapes]]\ntype = \"bent\"\n");
