@@ -241,10 +241,10 @@ float iqc_max_singular(mat3 L) {
 {{#if SCENE_BOX}}
 // How far a march along the ray goes: to where it leaves the scene's box (the slab method, Kay & Kajiya 1986),
 // at most IQC_MAX_DIST; -1 where it meets the box nowhere up to IQC_MAX_DIST. Outside the box the compiler
-// proved, by interval arithmetic on each instance's shape, that every instance's distance exceeds the `bound`
-// margin (ten hit tolerances, at least 0.1): no sample there is a hit or the step cap's closest approach, so a
-// ray that misses the box, or enters it only beyond the far plane (the sky over a terrain's horizon), is
-// background without a step, and one that leaves it stops there instead of marching on.
+// proved, by interval arithmetic on each instance's shape, that every instance's distance exceeds the box's
+// level (ten hit tolerances, or the step cap's pixel cone where wider): no sample there is a hit or the step
+// cap's closest approach, so a ray that misses the box, or enters it only beyond the far plane (the sky over a
+// terrain's horizon), is background without a step, and one that leaves it stops there instead of marching on.
 {{#if MARCH_SEGMENT}}
 // Segment tracing also reads where the ray enters the box (t_enter, 0 from inside it): the way up to there is
 // a segment the box proves clear, taken without a sample.
