@@ -10,6 +10,7 @@
 #include <fmt/ranges.h>
 #include <set>
 
+#include "glsl/Emit.h"
 #include "glsl/Names.h"
 #include "scene/Bvh.h"
 #include "ir/Builder.h"
@@ -915,6 +916,27 @@ private:
     // `bounded`: with the item's `bound` sphere (iqc_scene), else without it (iqc_scene_unbounded, never
     // instrumented).
     // `centred`: p is already the point moved to the member's lattice cell centre (Item::centred_fn): no offset.
+    // Whether shape function fn (with the functions it calls) is at most kCheapShape operations without a loop:
+    // a bounding sphere's length, test and branch cost about as much as evaluating it.
+    bool cheap_shape(int fn, int depth = 0) const {
+        constexpr int kCheapShape = 12;
+        int ops = 0;
+        std::function<bool(int, int)> count = [&](int g, int level) {
+            if (level > 8) return false;
+            for (const ir::Instr& in : m_.functions[size_t(g)].body) {
+                switch (in.op) {
+                    case Op::Param: case Op::Const: case Op::Global: case Op::Extract: case Op::Construct: case Op::Copy: break;
+                    case Op::Loop: return false;
+                    case Op::Call: if (!count(in.aux, level + 1)) return false; break;
+                    default: ++ops;
+                }
+                if (ops > kCheapShape) return false;
+            }
+            return true;
+        };
+        return count(fn, depth);
+    }
+
     int item_distance(const Item& it, bool bounded, bool centred = false) {
         const InstancePlan& first = plan(it.members[0]);
         const bool counted = o_.instrument && bounded;
@@ -953,7 +975,11 @@ private:
         int shape_fn = lower_module_cached(*first.shape, ctx_);
         std::vector<ValueId> args = module_args(b, *first.shape, it.shape_params, {{first.query, q}}, k);
         ValueId bound_d = 0, far = 0;
-        if (bounded && it.bound.global >= 0) {
+        // A bound the compiler derived (for a group's hierarchy or lattice) stands in for a cheap shape only where
+        // it saves more than it costs: a torus is two lengths, and its sphere's length, test and branch per member
+        // made 100 instances' frame 5% slower (the hand-written reference has none). A written `bound` always does.
+        const bool stand_in = bounded && it.bound.global >= 0 && !(it.derived_bound && cheap_shape(shape_fn));
+        if (stand_in) {
             // `bound = R`: outside the sphere ‖q‖ = R by more than the margin, its distance (a lower bound) stands
             // for the shape's, which is not evaluated.
             bound_d = conservative(b.op(Op::Sub, {b.builtin("length", {q}), read(b, it.bound, k)}));
@@ -961,11 +987,11 @@ private:
             far = b.compare(CompareKind::Gt, bound_d, b.scalar(o_.bound_margin));
         }
         ValueId d = conservative(b.call(shape_fn, std::move(args)));
-        if (bounded && it.bound.global >= 0) d = b.if_(far, bound_d, d);
+        if (stand_in) d = b.if_(far, bound_d, d);
         f.result = d;
         if (counted) {  // shapes evaluated: 0 where the bound stood in
             ValueId one = b.scalar(1);
-            ValueId count = it.bound.global >= 0 ? b.op(Op::Select, {far, b.scalar(0), one}) : one;
+            ValueId count = stand_in ? b.op(Op::Select, {far, b.scalar(0), one}) : one;
             f.result = b.construct(Type::vector(2), {d, count});
         }
         // The variant without its bound sphere is bounded by the same factor: the same object function, whose
@@ -1270,7 +1296,9 @@ private:
         std::vector<ValueId> near = counted_loop(
             b, name + ".layers", b.op(Op::Sub, {count[2], b.integer(1)}), st1,
             {{"p", p}, {"nearest", k0}, {"i0", from[0]}, {"j0", from[1]}, {"l0", from[2]}, {"ni", count[0]}, {"nj", count[1]}},
-            fmt::format("{}: {} instances on a {}×{}×{} lattice: the cells within reach", it.name, it.members.size(), L.n[0], L.n[1], L.n[2]),
+            fmt::format("{}: {} instances on a {}×{}×{} lattice: the cells within reach (each member within {} of its centre{})",
+                        it.name, it.members.size(), L.n[0], L.n[1], L.n[2], glsl::float_literal(bound_of(it.members[0])),
+                        it.derived_bound ? ", derived from the shape" : ""),
             [&](Builder& lb, ValueId ql, const std::vector<ValueId>& s, const std::vector<ValueId>& cap) {
                 ValueId kl = stride(lb, 2, lb.integer(L.base), cap[4], ql);
                 ValueId cl = lb.op(Op::Add, {cap[4], ql});
