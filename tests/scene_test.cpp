@@ -163,6 +163,12 @@ TEST_CASE("the march tests its first sample's sign only where a march can start 
     CHECK_THAT(code("noise.md", "```scene\n[camera]\nposition = [2.6, -0.246943, 2.7]\ntarget = [2.6, -0.246943, 7.7]\n"
                                 "[render]\nmax_dist = 40\n[[shapes]]\ntype = \"terrain\"\n```\n"),
                Catch::Contains(test));
+    // But a field with steps whose interval over a box around the camera stays above the level leaves it out: the
+    // Menger sponge's mod-folded holes are cut from a box the camera is outside of (max(box, holes) ≥ box).
+    Compiled sponge = compile_path(std::string(IQC_SOURCE_DIR) + "/bench/fractal.iq");
+    REQUIRE(sponge.result.exit_code == 0);
+    CHECK_THAT(sponge.result.code, Catch::Contains("mod("));
+    CHECK_THAT(sponge.result.code, !Catch::Contains(test));
     // Glass: a refracted ray starts inside it.
     CHECK_THAT(code("glass.md", kBall + "```scene\n[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\n[effects]\nrefraction = true\n"
                                         "[[shapes]]\ntype = \"ball\"\nmaterial = \"glass\"\n```\n"),

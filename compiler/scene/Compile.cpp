@@ -14,6 +14,7 @@
 #include "glsl/Wgsl.h"
 #include "glsl/Validate.h"
 #include "ir/Eval.h"
+#include "ir/Intervals.h"
 #include "sema/Builtins.h"
 #include "ir/Pipeline.h"
 #include "resources/Embedded.h"
@@ -226,25 +227,38 @@ void SceneCompiler::warn_idle_effects(const SceneIR& scene) {
 bool SceneCompiler::march_may_start_inside(const SceneIR& scene, const std::set<std::string>& flags) const {
     if (opts_.target != Target::Shadertoy || s_.camera.orbit || flags.count("BOUNCES") || opts_.per_instance) return true;
     const ir::Module& m = scene.module;
+    bool steps = false;
     for (const ir::Function& f : m.functions)
         for (const ir::Instr& in : f.body)
             if (in.op == ir::Op::Input) return true;  // the distance at the camera changes with time or the mouse
             else if (in.op == ir::Op::Builtin) {
-                // A step in the field (fract of a hashed sin, floor, mod): float and double may land on different
-                // sides of it, and the double-precision value at the camera proves nothing about the shader's
-                // (a noise terrain 0.03 below the camera in double was 0.28 above it in float: a new-user trial).
                 const std::string& n = builtin(in.aux).name;
-                if (n == "fract" || n == "floor" || n == "ceil" || n == "mod" || n == "round" || n == "sign" || n == "step" ||
-                    n == "trunc")
-                    return true;
+                steps |= n == "fract" || n == "floor" || n == "ceil" || n == "mod" || n == "round" || n == "sign" || n == "step" ||
+                         n == "trunc";
             }
     int fn = m.find(ir::names::kScene);
     if (fn < 0) return true;
     const auto& eye = s_.camera.position;
     double reach = std::max({std::fabs(eye[0]), std::fabs(eye[1]), std::fabs(eye[2])});
+    const double above = std::max(10 * hit(), 1e-5 * (1 + reach));
+    if (steps) {
+        // A step in the field (fract of a hashed sin, floor, mod): float and double may land on different sides
+        // of it, and the double-precision value at the camera proves nothing about the shader's (a noise terrain
+        // 0.03 below the camera in double was 0.28 above it in float: a new-user trial). Interval arithmetic over
+        // a box around the camera, 10⁻³ of its distance from the origin wide (a hash's argument then spans whole
+        // periods, and its interval every value), must keep the distance above the level: a Menger sponge's
+        // mod-folded holes are cut from a box the camera is outside of (max(box, holes) ≥ box).
+        const double r = 1e-3 * (1 + reach);
+        std::vector<ir::Interval> box;
+        for (int a = 0; a < 3; ++a) box.push_back({eye[size_t(a)] - r, eye[size_t(a)] + r});
+        long work = 200000;
+        auto b = ir::interval_analysis(m, fn, {box}, {}, 16, &work);
+        const ir::Function& f = m.functions[size_t(fn)];
+        if (b.size() <= f.result || b[f.result].c.empty() || !(b[f.result].c[0].lo > above)) return true;
+    }
     try {
         ir::Value d = ir::evaluate(m, fn, {ir::Value{Type::vector(3), {eye[0], eye[1], eye[2]}}});
-        return !(d.v.size() >= 1 && d.v[0] > std::max(10 * hit(), 1e-5 * (1 + reach)));
+        return !(d.v.size() >= 1 && d.v[0] > above);
     } catch (...) {  // an evaluation past its budget: keep the test
         return true;
     }
