@@ -674,7 +674,7 @@ struct FunctionEmitter {
         const Instr& hi = f.body[in.args[0]];
         long long lo = std::llround(in.data[0]);
         long long trips = hi.op == Op::Const ? std::llround(hi.data[0]) - lo + 1 : -1;
-        std::string hi_text = hi.op == Op::Const ? std::to_string(std::llround(hi.data[0])) : arg(in, 0, false);
+        std::string hi_text = hi.op == Op::Const ? std::to_string(std::llround(hi.data[0])) : arg(in, 0, hi.op == Op::Select);  // k <= (c ? a : b)
         // One iteration with index `kn`: the body's region, then the next states.
         auto iteration = [&](const std::string& kn, const std::string& inner) {
             FunctionEmitter be(m, body, em, diags, locals);
