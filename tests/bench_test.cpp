@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <fmt/format.h>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -73,6 +74,24 @@ void fewer_evaluations_at_equal_accuracy(const std::string& method, const std::v
             CHECK(num(other, "depth_err_p99") <= 1.1 * num(sphere, "depth_err_p99") + 1e-5);
         }
     }
+}
+
+// Renders `scene` at `size` (WxH) and counts the pixels for which `counts(pixel, background)` holds
+// (background: the top-left pixel's RGBA).
+int count_rendered(const std::filesystem::path& scene, const std::string& size,
+                   const std::function<bool(const float*, const float*)>& counts) {
+    auto png = temp_dir() / (scene.stem().string() + ".png");
+    RunResult r = run_iqc("render " + scene.string() + " -o " + png.string() + " --size " + size + " -q");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    iqc::render::Image img;
+    std::string err;
+    REQUIRE(iqc::render::read_png(png.string(), img, &err));
+    const float* bg = img.pixel(0, 0);
+    int n = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) n += counts(img.pixel(x, y), bg);
+    return n;
 }
 
 }  // namespace
@@ -208,21 +227,9 @@ march = ")TOML" + march + R"TOML("
 [[shapes]]
 type = "vox"
 )TOML");
-        auto png = temp_dir() / ("voxel_" + march + ".png");
-        RunResult r = run_iqc("render " + scene.string() + " -o " + png.string() + " --size 96x54 -q");
-        INFO(r.err);
-        REQUIRE(r.exit_code == 0);
-        iqc::render::Image img;
-        std::string err;
-        REQUIRE(iqc::render::read_png(png.string(), img, &err));
-        const float* bg = img.pixel(0, 0);
-        int drawn = 0;
-        for (int y = 0; y < img.height; ++y)
-            for (int x = 0; x < img.width; ++x) {
-                const float* p = img.pixel(x, y);
-                drawn += std::fabs(p[0] - bg[0]) + std::fabs(p[1] - bg[1]) + std::fabs(p[2] - bg[2]) > 0.05f;
-            }
-        return drawn;
+        return count_rendered(scene, "96x54", [](const float* p, const float* bg) {
+            return std::fabs(p[0] - bg[0]) + std::fabs(p[1] - bg[1]) + std::fabs(p[2] - bg[2]) > 0.05f;
+        });
     };
     int sphere = count_drawn("sphere"), segment = count_drawn("segment");
     INFO("pixels drawn: sphere " << sphere << ", segment " << segment);
@@ -258,20 +265,8 @@ target = [0, 0, 10]
 [[shapes]]
 type = "terrain"
 )TOML");
-        auto png = temp_dir() / ("crest_" + march + mode + ".png");
-        RunResult r = run_iqc("render " + scene.string() + " -o " + png.string() + " --size 320x180 -q");
-        INFO(r.err);
-        REQUIRE(r.exit_code == 0);
-        iqc::render::Image img;
-        std::string err;
-        REQUIRE(iqc::render::read_png(png.string(), img, &err));
-        int n = 0;  // normal colours 0.5 + 0.5 N with N.y well below 0 (green under red and blue)
-        for (int y = 0; y < img.height; ++y)
-            for (int x = 0; x < img.width; ++x) {
-                const float* p = img.pixel(x, y);
-                n += p[1] + 0.15f < p[0] && p[1] + 0.15f < p[2];
-            }
-        return n;
+        // Normal colours 0.5 + 0.5 N with N.y well below 0 (green under red and blue).
+        return count_rendered(scene, "320x180", [](const float* p, const float*) { return p[1] + 0.15f < p[0] && p[1] + 0.15f < p[2]; });
     };
     for (auto [mode, hit] : {std::pair{"absolute", "0.05"}, std::pair{"relative", "0.002"}}) {
         int sphere = down_facing("sphere", mode, hit), segment = down_facing("segment", mode, hit);

@@ -918,7 +918,7 @@ private:
     // `centred`: p is already the point moved to the member's lattice cell centre (Item::centred_fn): no offset.
     // Whether shape function fn (with the functions it calls) is at most kCheapShape operations without a loop:
     // a bounding sphere's length, test and branch cost about as much as evaluating it.
-    bool cheap_shape(int fn, int depth = 0) const {
+    bool cheap_shape(int fn) const {
         constexpr int kCheapShape = 12;
         int ops = 0;
         std::function<bool(int, int)> count = [&](int g, int level) {
@@ -934,7 +934,7 @@ private:
             }
             return true;
         };
-        return count(fn, depth);
+        return count(fn, 0);
     }
 
     int item_distance(const Item& it, bool bounded, bool centred = false) {
