@@ -1,9 +1,10 @@
 #include "glsl/Emit.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fmt/format.h>
 #include <functional>
-#include <regex>
 #include <set>
 
 #include "ir/Schedule.h"
@@ -409,8 +410,9 @@ struct FunctionEmitter {
         for (double x : *M) dense += x != 0 && x != 1 && x != -1;
         if (dense == lt.rows * lt.cols) return "";
         std::string v = arg(in, 1, false);
-        static const std::regex name("[A-Za-z_][A-Za-z0-9_]*");
-        if (!std::regex_match(v, name)) return "";
+        if (v.empty() || std::isdigit(static_cast<unsigned char>(v[0])) ||
+            !std::all_of(v.begin(), v.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }))
+            return "";
         std::vector<std::string> rows;
         for (int r = 0; r < lt.rows; ++r) {
             std::string row;

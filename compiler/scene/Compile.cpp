@@ -15,13 +15,13 @@
 #include "glsl/Validate.h"
 #include "ir/Eval.h"
 #include "ir/Intervals.h"
-#include "sema/Builtins.h"
 #include "ir/Pipeline.h"
 #include "resources/Embedded.h"
 #include "scene/Modules.h"
 #include "scene/Plan.h"
 #include "scene/SceneLower.h"
 #include "scene/Template.h"
+#include "sema/Builtins.h"
 #include "source/Internal.h"
 
 namespace iqc {
@@ -119,8 +119,8 @@ private:
         return 2.4e-7 * reach;
     }
     // The scene box's level (SceneLowerOptions::box_level): above every value a sample outside the box could
-    // be accepted at — ten hit tolerances at the farthest distance (the `bound` margin, and the FAR tolerance's
-    // four float spacings), and the step cap's pixel cone at max_dist for images 360 rows tall or more
+    // be accepted at — ten hit tolerances at the farthest distance (and the FAR tolerance's four float
+    // spacings), and the step cap's pixel cone at max_dist for images 360 rows tall or more
     // (iqc render's default; on smaller images a ray that runs out of steps beside a surface may differ).
     double box_level() const { return std::max(box_level_floor(), s_.render.max_dist * box_cone()); }
     // The level without the step cap's cone, and the cone's radius per unit of distance (360 rows).

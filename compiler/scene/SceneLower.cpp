@@ -529,10 +529,6 @@ private:
         g.exact = plan(g.members[0]).shape->exactness == "exact";
     }
 
-    // Whether a lattice's members differ only in their place: one linear map, scale, bound and shape parameter
-    // values (known at compile time, or one shared global). Then member k at p is member `base` at
-    // p − (cell_k − cell_base)·spacing, whose data are constants: no per-member arithmetic on k (the tables pass's
-    // k % 10, k / 100, … are integer divisions, which SIMD CPUs scalarise).
     // Whether a lattice group's members sit on their cells' centres to float precision.
     static bool on_cell_centres(const Item& g) {
         double scale = 1;
@@ -540,6 +536,10 @@ private:
         return g.lattice.deviation <= 1e-7 * scale;
     }
 
+    // Whether a lattice's members differ only in their place: one linear map, scale, bound and shape parameter
+    // values (known at compile time, or one shared global). Then member k at p is member `base` at
+    // p − (cell_k − cell_base)·spacing, whose data are constants: no per-member arithmetic on k (the tables pass's
+    // k % 10, k / 100, … are integer divisions, which SIMD CPUs scalarise).
     bool members_alike(const Item& g) {
         const size_t a = g.members[0];
         // Evaluated at the lattice's offsets, not their own: only where these are theirs (to float precision).
@@ -912,10 +912,6 @@ private:
 
     // ---- the scene distance ----
 
-    // One item's distance at world point p: (p [, k]) -> ℝ, marked for inlining.
-    // `bounded`: with the item's `bound` sphere (iqc_scene), else without it (iqc_scene_unbounded, never
-    // instrumented).
-    // `centred`: p is already the point moved to the member's lattice cell centre (Item::centred_fn): no offset.
     // Whether shape function fn (with the functions it calls) is at most kCheapShape operations without a loop:
     // a bounding sphere's length, test and branch cost about as much as evaluating it.
     bool cheap_shape(int fn) const {
@@ -937,6 +933,10 @@ private:
         return count(fn, 0);
     }
 
+    // One item's distance at world point p: (p [, k]) -> ℝ, marked for inlining.
+    // `bounded`: with the item's `bound` sphere (iqc_scene), else without it (iqc_scene_unbounded, never
+    // instrumented).
+    // `centred`: p is already the point moved to the member's lattice cell centre (Item::centred_fn): no offset.
     int item_distance(const Item& it, bool bounded, bool centred = false) {
         const InstancePlan& first = plan(it.members[0]);
         const bool counted = o_.instrument && bounded;
@@ -1309,15 +1309,15 @@ private:
         }
         static const char* kLevel[] = {"cells", "rows", "layers"};
         static const char* kAxis[] = {"x", "y", "z"};
-        // vals: p, nearest, k so far, the cell's x, y, z (ints: looped axes' are set by their loops), then the
-        // first cell and count of each axis still to loop.
+        // vals: p, k so far, the cell's x, y, z (ints: looped axes' are set by their loops), then the first cell
+        // and count of each axis still to loop.
         std::function<std::vector<ValueId>(Builder&, size_t, const std::vector<ValueId>&, const std::vector<ValueId>&)> nest =
             [&](Builder& lb, size_t level, const std::vector<ValueId>& s, const std::vector<ValueId>& vals) -> std::vector<ValueId> {
             if (level == axes.size()) {
-                ValueId k = vals[2];
+                ValueId k = vals[1];
                 std::vector<ValueId> next;
                 if (alike || centred) {
-                    const ValueId cell = lb.construct(Type::vector(3), {vals[3], vals[4], vals[5]});
+                    const ValueId cell = lb.construct(Type::vector(3), {vals[2], vals[3], vals[4]});
                     next = alike ? member_step(lb, it, vals[0], k, s, true, moved(lb, vals[0], cell), lb.integer(L.base))
                                  : member_step(lb, it, vals[0], k, s, true, to_centre(lb, vals[0], cell), ValueId(-1), it.centred_fn);
                 } else {
@@ -1336,13 +1336,13 @@ private:
                 return out;
             }
             const int a = axes[level];
-            std::vector<std::pair<std::string, ValueId>> captures = {{"p", vals[0]}, {"nearest", vals[1]}, {"k" + std::string(kAxis[a]), vals[2]},
-                                                                     {"cx", vals[3]}, {"cy", vals[4]}, {"cz", vals[5]}};
+            std::vector<std::pair<std::string, ValueId>> captures = {{"p", vals[0]}, {"k" + std::string(kAxis[a]), vals[1]},
+                                                                     {"cx", vals[2]}, {"cy", vals[3]}, {"cz", vals[4]}};
             for (size_t j = level; j < axes.size(); ++j) {
-                captures.push_back({std::string("first_") + kAxis[axes[j]], vals[6 + 2 * (j - level)]});
-                captures.push_back({std::string("n_") + kAxis[axes[j]], vals[7 + 2 * (j - level)]});
+                captures.push_back({std::string("first_") + kAxis[axes[j]], vals[5 + 2 * (j - level)]});
+                captures.push_back({std::string("n_") + kAxis[axes[j]], vals[6 + 2 * (j - level)]});
             }
-            ValueId hi = lb.op(Op::Sub, {vals[7], lb.integer(1)});
+            ValueId hi = lb.op(Op::Sub, {vals[6], lb.integer(1)});
             std::string source;
             if (level == 0) {
                 if (gate != ValueId(-1)) hi = lb.op(Op::Select, {gate, hi, lb.integer(-1)});  // no cell of a one-cell axis in reach
@@ -1352,13 +1352,13 @@ private:
             }
             return counted_loop(lb, name + "." + kLevel[a], hi, s, captures, source,
                                 [&](Builder& ib, ValueId q, const std::vector<ValueId>& s2, const std::vector<ValueId>& cap) {
-                                    std::vector<ValueId> inner = {cap[0], cap[1], stride(ib, a, cap[2], cap[6], q), cap[3], cap[4], cap[5]};
-                                    inner[size_t(3 + a)] = ib.op(Op::Add, {cap[6], q});
-                                    for (size_t j = 8; j < cap.size(); ++j) inner.push_back(cap[j]);
+                                    std::vector<ValueId> inner = {cap[0], stride(ib, a, cap[1], cap[5], q), cap[2], cap[3], cap[4]};
+                                    inner[size_t(2 + a)] = ib.op(Op::Add, {cap[5], q});
+                                    for (size_t j = 7; j < cap.size(); ++j) inner.push_back(cap[j]);
                                     return nest(ib, level + 1, s2, inner);
                                 });
         };
-        std::vector<ValueId> vals = {p, k0, k_fixed, from[0], from[1], from[2]};
+        std::vector<ValueId> vals = {p, k_fixed, from[0], from[1], from[2]};
         for (int a : axes) {
             vals.push_back(from[size_t(a)]);
             vals.push_back(count[size_t(a)]);
