@@ -282,9 +282,9 @@ float iqc_far(vec3 ro, vec3 rd) {
 // arithmetic on each instance's gradient over the same box (derived by the compiler, per operator): the step
 // is at most the segment and at least the plain sphere-tracing step. The next candidate segment is twice the
 // step taken (κ = 2, the paper's choice), shortened to stop before a surface the last two samples foresee;
-// short segments near a surface have tight bounds. Both bounds read
-// the same box, so a shader compiler shares their common parts. Each step's bounds cost more than an
-// evaluation of the distance (docs/accuracy.md: what they save and what they cost).
+// short segments near a surface have tight bounds. Both bounds read the same box, so a shader compiler shares
+// their common parts. Each step's bounds cost more than an evaluation of the distance (docs/accuracy.md: what
+// they save and what they cost).
 {{/if}}
 // Sphere tracing (Hart 1996): step by the distance bound. Starting inside a shape (a negative distance)
 // it marches to that shape's inner wall (the test is left out where the compiler proved that every march
@@ -329,12 +329,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{/if}}
         float d = s * h.x;
 {{#if MARCH_SEGMENT}}
-{{#else}}
-        float e = iqc_eps(t);
-{{/if}}
-{{#if MARCH_SEGMENT}}
         float dn = clear ? 1.0e20 : iqc_nearness(h);  // (no instance's factor is read for id -1)
 {{#else}}
+        float e = iqc_eps(t);
         float dn = iqc_nearness(h);
 {{/if}}
         if (dn < e) { id = int(h.y); return t; }
