@@ -245,29 +245,17 @@ float iqc_max_singular(mat3 L) {
 // level (ten hit tolerances, or the step cap's pixel cone where wider): no sample there is a hit or the step
 // cap's closest approach, so a ray that misses the box, or enters it only beyond the far plane (the sky over a
 // terrain's horizon), is background without a step, and one that leaves it stops there instead of marching on.
-{{#if MARCH_SEGMENT}}
-// Segment tracing also reads where the ray enters the box (t_enter, 0 from inside it): the way up to there is
-// a segment the box proves clear, taken without a sample.
+// t_enter is where the ray enters the box (0 from inside it): a march starts there, since no sample on the way
+// could be a hit (from the camera, sphere tracing's steps toward the box are bounded by the distance to the
+// nearest surface, not to the box: 9 of the displaced torus's 20 evaluations per pixel were spent there).
 float iqc_far(vec3 ro, vec3 rd, out float t_enter) {
-{{#else}}
-float iqc_far(vec3 ro, vec3 rd) {
-{{/if}}
     vec3 m = 1.0 / rd;
     vec3 a = (IQC_BOX_LO - ro) * m, b = (IQC_BOX_HI - ro) * m;
     vec3 n = min(a, b), f = max(a, b);
     float t_in = max(max(n.x, n.y), n.z), t_out = min(min(min(f.x, f.y), f.z), IQC_MAX_DIST);
-{{#if MARCH_SEGMENT}}
     t_enter = max(t_in, 0.0);
-{{/if}}
     return t_in > t_out || t_out < 0.0 ? -1.0 : t_out;
 }
-{{#if MARCH_SEGMENT}}
-
-float iqc_far(vec3 ro, vec3 rd) {
-    float t_enter;
-    return iqc_far(ro, rd, t_enter);
-}
-{{/if}}
 
 {{/if}}
 {{#if MARCH_SPHERE}}
@@ -296,11 +284,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     id = -1;
     steps = 0;
 {{#if SCENE_BOX}}
-{{#if MARCH_SEGMENT}}
-    float t_far = iqc_far(ro, rd, t);
-{{#else}}
-    float t_far = iqc_far(ro, rd);
-{{/if}}
+    float t_far = iqc_far(ro, rd, t);  // t: where the ray enters the box
     if (t_far < 0.0) return -1.0;
 {{/if}}
 {{#if MARCH_SEGMENT}}
@@ -397,7 +381,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     id = -1;
     steps = 0;
 {{#if SCENE_BOX}}
-    float t_far = iqc_far(ro, rd);
+    float t_far = iqc_far(ro, rd, t);  // t: where the ray enters the box
     if (t_far < 0.0) return -1.0;
 {{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
@@ -443,40 +427,59 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{/if}}
 {{#if MARCH_AUTO}}
 // Sphere tracing with automatic step relaxation (after Bán & Valasek 2023, "Automatic Step Size Relaxation
-// in Sphere Tracing"). The slope m of the distance along the ray is estimated from consecutive samples
-// (smoothed: 0.7 new, 0.3 old) and the step is d·(1 + γ(1 + m)/(1 − m)): at γ = 1 that is 2d/(1 − m),
-// whose next unbounding sphere just touches this one where the distance is linear along the ray. When two
-// unbounding spheres stop overlapping (the step may have skipped a surface) the march retries once from the
-// previous sample with the slope measured across the failed step (a shorter step, checked the same way),
-// then falls back to a plain step. Each failure lowers γ for the rest of the ray (×0.75, not below 0.5) and
-// each good step raises it by 0.01 (up to 0.95): over bumpy ground a ray stays cautious, over smooth ground
-// it stays bold. Tuned on bench/*.iq (docs/accuracy.md).
+// in Sphere Tracing"). The slope m of the distance along the ray is the secant of the last two samples, and
+// the step is d·(1 + γ(1 + m)/(1 − m)): at γ = 1 that is 2d/(1 − m), whose next unbounding sphere just
+// touches this one where the distance is linear along the ray. Across samples of different instances (or a
+// `bound` sphere's distance, then its shape's) the secant is no slope of either, and the step is plain (m = −1).
+// When two unbounding spheres stop overlapping the step may have skipped a surface:
+// - if the new sample is outside every shape, its own sphere is clear too and only the gap between the two
+//   spheres is unknown: the march samples the gap's middle (a shorter step from the previous sample, checked
+//   the same way); where that sample's sphere covers the gap it reaches both, and the march goes on from the
+//   failed sample without evaluating it again (a failure costs one evaluation, not the way back);
+// - else (inside a shape, or the gap's sample failed too) it retries once from the previous sample with the
+//   slope measured across the failed step, then falls back to a plain step.
+// Each failure lowers γ for the rest of the ray (×0.9, not below 0.8) and each good step raises it by 0.01
+// (up to 0.95). Tuned on bench/*.iq (docs/accuracy.md).
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, m = -1.0, g = 0.95, t_prev = 0.0, r_prev = 0.0, d_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
     float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
-    bool retried = false;
+    float t_f = -1.0;  // a failed sample outside every shape while the gap before it is sampled (-1: none)
+    vec2 h_f = vec2(0.0);  // its scene value
+    bool retried = false, reuse = false;
     id = -1;
     steps = 0;
 {{#if SCENE_BOX}}
-    float t_far = iqc_far(ro, rd);
+    float t_far = iqc_far(ro, rd, t);  // t: where the ray enters the box
     if (t_far < 0.0) return -1.0;
 {{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
-        vec2 h = iqc_scene(ro + t * rd);
-        steps++;
+        vec2 h;
+        if (reuse) {
+            h = h_f;  // the failed sample the gap's sample reached: evaluated already
+        } else {
+            h = iqc_scene(ro + t * rd);
+            steps++;
+        }
+        reuse = false;
 {{#if INSIDE_START}}
         if (i == 0 && h.x < 0.0) s = -1.0;
 {{/if}}
         float d = s * h.x;
         if (step_len > 0.0 && abs(d) + r_prev < step_len) {
-            if (!retried && r_prev > 0.0) {
+            g = max(0.9 * g, 0.8);
+            if (t_f < 0.0 && d > 0.0) {
+                t_f = t;
+                h_f = h;
+                step_len = r_prev + 0.5 * ((t - d) - (t_prev + r_prev));  // to the middle of the gap
+            } else if (!retried) {
+                t_f = -1.0;
                 retried = true;
-                g = max(0.75 * g, 0.5);
                 m = clamp((d - d_prev) / step_len, -1.0, 0.8);
                 step_len = r_prev * (1.0 + g * (1.0 + m) / (1.0 - m));
             } else {
                 // A plain step from the previous sample: its sphere covers it, so the check passes.
+                t_f = -1.0;
                 retried = false;
                 m = -1.0;
                 step_len = r_prev;
@@ -492,16 +495,26 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{#else}}
         if (dn / e < best) { best = dn / e; best_t = t; best_id = h.y; }
 {{/if}}
+        if (step_len > 0.0) m = h.y == last_id ? clamp((d - d_prev) / step_len, -1.0, 0.8) : -1.0;
         prev = last;
         last = dn;
         last_t = t;
         last_id = h.y;
-        if (step_len > 0.0) m = mix(clamp((d - d_prev) / step_len, -1.0, 0.8), m, 0.3);
         retried = false;
         t_prev = t;
         r_prev = abs(d);
         d_prev = d;
         g = min(g + 0.01, 0.95);
+        if (t_f > 0.0) {
+            // The gap's sample: where its sphere reaches the failed sample's, the way there is clear.
+            reuse = abs(d) + s * h_f.x >= t_f - t;
+            step_len = t_f - t;
+            t_f = -1.0;
+            if (reuse) {
+                t += step_len;
+                continue;
+            }
+        }
         step_len = d * (1.0 + g * (1.0 + m) / (1.0 - m));
         t += step_len;
         if (t > {{T_FAR}}) {
@@ -555,10 +568,10 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     id = -1;
     steps = 0;
 {{#if SCENE_BOX}}
-    float t_far = iqc_far(ro, rd);
+    float t_far = iqc_far(ro, rd, t);  // t: where the ray enters the box
     if (t_far < 0.0) return -1.0;
 {{/if}}
-    vec2 h = iqc_scene(ro);
+    vec2 h = iqc_scene(ro + t * rd);
     steps++;
     if (h.x < 0.0) s = -1.0;
     for (int i = 1; i < IQC_MAX_STEPS; i++) {
@@ -693,7 +706,8 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
     float t_max = length(to_light);
     vec3 rd = to_light / t_max;
 {{#if SCENE_BOX}}
-    t_max = min(t_max, iqc_far(ro, rd));  // beyond the scene's box nothing is near enough to occlude
+    float t_in;
+    t_max = min(t_max, iqc_far(ro, rd, t_in));  // beyond the scene's box nothing is near enough to occlude
 {{/if}}
     float t = 0.0, last = -1.0;
     bool leaving = true;

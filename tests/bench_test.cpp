@@ -183,7 +183,9 @@ TEST_CASE("iqc bench: columns, rows, reproducibility and the direction of every 
 TEST_CASE("auto-relaxed marching saves evaluations at sphere tracing's accuracy, on bumpy terrain too", "[bench][march]") {
     // The sine terrain is where a relaxed step fails most (the slope along the ray changes sign over each
     // bump): auto took 1.10x sphere tracing's evaluations there before failed steps were retried with the
-    // measured slope and each failure made the rest of the ray more cautious (now about 0.78x at 160x90).
+    // measured slope and each failure made the rest of the ray more cautious, 0.78x at 160x90 before a failed
+    // sample outside every shape was kept and only the gap before it sampled (now 0.70x and 0.61x at 64x36,
+    // the terrain and a few shapes at 1e-3).
     // The bench scenes' other figures are in docs/accuracy.md; these two bound the worst ones.
     fewer_evaluations_at_equal_accuracy("auto", {"sine_terrain", "few_shapes"}, 0.85);
 }
@@ -197,10 +199,11 @@ TEST_CASE("segment tracing on local Lipschitz bounds saves evaluations at sphere
     // cost no evaluation; the gradient's bound alone: 0.45x; with both functions returning their placeholders
     // the march is sphere tracing).
     fewer_evaluations_at_equal_accuracy("segment", {"sine_terrain"}, 0.5);
-    // Issue 17: at least 5x fewer than sphere tracing on its global bound. At 64x36: 0.11x and 0.13x (1e-3),
-    // 0.10x and 0.12x (1e-4); 0.23x and 0.49x before segments proven clear were taken without evaluating the
-    // scene, the gradient's unit vectors were bounded as such (a box's face) and segments stopped short of
-    // the surface the last two samples foresee.
+    // Issue 17: at least 5x fewer than sphere tracing on its global bound. At 64x36: 0.15x and 0.12x (1e-3),
+    // 0.12x and 0.11x (1e-4), with sphere tracing too starting where the ray enters the box (0.11x and 0.13x
+    // at 1e-3 when it started at the camera); 0.23x and 0.49x before segments proven clear were taken without
+    // evaluating the scene, the gradient's unit vectors were bounded as such (a box's face) and segments
+    // stopped short of the surface the last two samples foresee.
     fewer_evaluations_at_equal_accuracy("segment", {"displaced_torus", "twisted_bar"}, 0.2);
 }
 

@@ -50,7 +50,11 @@ float map(vec3 p)
 
 float raymarch(vec3 ro, vec3 rd)
 {
-    float t = 0.0, tl = 0.0;    // current and last sample's distance along the ray
+    // nothing rises above y = 1.2411 (the torus's top plus ten tolerances, iqc's box): a ray from above
+    // that level going up is background, one going down starts there
+    float top = 1.2411047;
+    if (ro.y > top && rd.y >= 0.0) return -1.0;
+    float t = ro.y > top ? (top - ro.y) / rd.y : 0.0, tl = 0.0;    // current and last sample's distance along the ray
     float h = 1e20, hp;         // last and previous |d|
     for (int i = 0; i < 128; i++)
     {

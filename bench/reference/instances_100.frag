@@ -5,10 +5,10 @@
 //
 // Shared with iqc, so that the pictures agree pixel for pixel:
 //  - camera: look-at from (0,0,-14) to the origin, 60 degree vertical fov (focal 1/tan(30deg)).
-//  - plain sphere tracing from the eye, at most 128 steps, hit when |d| < 0.001, miss beyond t = 100.
-//    map() returns the exact union distance (the min over all 100 tori, equal up to rounding), so the
-//    step sequence is the same: a cheaper bound, or starting at the bounding box, would find slightly
-//    different hits at the silhouettes.
+//  - plain sphere tracing from where the ray enters the grid's bounding box, at most 128 steps, hit
+//    when |d| < 0.001, miss beyond t = 100. map() returns the exact union distance (the min over all
+//    100 tori, equal up to rounding), so the step sequence is the same: a cheaper bound would find
+//    slightly different hits at the silhouettes.
 //    No ray here runs out of steps.
 //  - tetrahedron normals with a 0.0005 offset.
 //  - colour 0.5 + 0.5*n, background (0.05,0.05,0.08), then the exact sRGB transfer function.
@@ -64,7 +64,7 @@ float raymarch(vec3 ro, vec3 rd)
     vec2 b = iBox(ro, rd);
     if (b.x > b.y) return -1.0;
     float tmax = min(b.y, 100.0);
-    float t = 0.0;
+    float t = max(b.x, 0.0);  // from where the ray enters the box
     for (int i = 0; i < 128; i++)
     {
         float d = map(ro + t*rd);

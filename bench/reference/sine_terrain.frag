@@ -30,7 +30,9 @@ float raymarch(vec3 ro, vec3 rd)
     // rays that never come near the hills
     if (ro.y + 30.0 * rd.y > 0.61 + 30.0 * px) return -1.0;
 
-    float t = 0.0;
+    // start where the ray comes down to the hills' slab (iqc's box: y <= 0.6484375, the hills plus the
+    // step cap's cone at the far end)
+    float t = max((0.6484375 - ro.y) / rd.y, 0.0);
     float tl = 0.0, hl = 1e20;   // last sample
     float tb = 0.0, hb = 1e20;   // closest sample
     bool closing = true;

@@ -6,7 +6,7 @@
 //    map() returns half the box distance, a safe sphere-tracing step.
 //  - hit when the field itself (twice the step) is under 0.001, not the halved step (a surface thicker
 //    by a tolerance).
-//  - sphere tracing from the eye, at most 128 steps, far plane 100. A few rays grazing the twisted edges
+//  - sphere tracing from where the ray enters the box (below), at most 128 steps, far plane 100. A few rays grazing the twisted edges
 //    run out of steps; like iqc, such a ray still hits if it was closing in within its pixel's cone, or
 //    came within 10 tolerances and stalled there (without this, about 20 edge pixels change).
 //    The eye is outside the shape, so there is no inside-start case to handle.
@@ -36,13 +36,13 @@ float map(vec3 p)
 float raymarch(vec3 ro, vec3 rd)
 {
     // clip to a box around the twisted box (half-extents 0.5, 1.5, 0.5: within 0.71 of the y axis) with room for the tolerances: a ray that misses it is background, one that leaves it stops
-    vec3 m = 1.0/rd, n = m*ro, k = abs(m)*vec3(0.8, 1.6, 0.8);
+    vec3 m = 1.0/rd, n = m*ro, k = abs(m)*vec3(0.7187748, 1.5107422, 0.7187748);
     vec3 t1 = -n - k, t2 = -n + k;
     float tN = max(max(t1.x, t1.y), t1.z), tF = min(min(t2.x, t2.y), t2.z);
     if (tN > tF || tF < 0.0) return -1.0;
     float tmax = min(tF, 100.0);
 
-    float t = 0.0;
+    float t = max(tN, 0.0);  // from where the ray enters the box
     float dm = 1e20, tm = 0.0;  // closest approach
     float dl = 1e20, tl = 0.0;  // last sample
     float dp = 1e20;            // the one before it
