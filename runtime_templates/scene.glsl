@@ -528,6 +528,51 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
+{{#if MARCH_ORACLE}}
+// `iqc bench`'s floor (row `oracle`), not a method to draw with: the fewest samples any march whose steps are
+// certified by overlapping unbounding spheres (sphere tracing, over-relaxation, auto-relaxation: a step is
+// safe when the spheres of its two samples overlap, as the distance d is 1-Lipschitz) can take on this ray.
+// From each sample the next is the farthest x whose sphere reaches back to this one's, x − |d(x)| ≤ t + |d(t)|;
+// x − |d(x)| never falls as x grows, so bisection finds it, and since the farthest reach of the next sample
+// never falls either, the farthest sample each time is the best chain (greedy covering). The search's
+// evaluations are not counted (they need to know the distance ahead, which no march does); the samples are.
+vec2 iqc_scene_uncounted(vec3 p) {
+{{#if INSTRUMENT}}
+    return iqc_scene_counted(p).xy;
+{{#else}}
+    return iqc_scene(p);
+{{/if}}
+}
+
+float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
+    float t = 0.0;
+    id = -1;
+    steps = 0;
+{{#if SCENE_BOX}}
+    float t_far = iqc_far(ro, rd, t);  // t: where the ray enters the box
+    if (t_far < 0.0) return -1.0;
+{{/if}}
+    vec2 h = iqc_scene(ro + t * rd);
+    steps++;
+    for (int i = 0; i < IQC_MAX_STEPS; i++) {
+        if (iqc_nearness(h) < iqc_eps(t)) { id = int(h.y); return t; }
+        float reach = t + abs(h.x);  // where this sample's sphere ends
+        if (reach >= {{T_FAR}}) return -1.0;
+        float lo = reach, hi = {{T_FAR}};
+        if (hi - abs(iqc_scene_uncounted(ro + hi * rd).x) <= reach) lo = hi;
+        else
+            for (int k = 0; k < 40; k++) {
+                float mid = 0.5 * (lo + hi);
+                if (mid - abs(iqc_scene_uncounted(ro + mid * rd).x) <= reach) lo = mid;
+                else hi = mid;
+            }
+        t = lo;
+        h = iqc_scene(ro + t * rd);
+        steps++;
+    }
+    return -1.0;
+}
+{{/if}}
 {{#if PER_INSTANCE}}
 // I♥IQ's architecture (the baseline `iqc bench` compares with): every instance is sphere-traced on its own,
 // its transform inverted for each instance at each pixel (iqc_instance_inverse); the nearest hit wins.

@@ -32,12 +32,13 @@ fi
     echo
     echo "![scene evaluations per pixel against depth error, log axes, the Pareto front named](accuracy/$name.svg)"
     echo
-    echo "The five march methods at hit 1e-3, 256 steps, tetrahedron normals, and I♥IQ's per-instance architecture:"
+    echo "The five march methods at hit 1e-3, 256 steps, tetrahedron normals, I♥IQ's per-instance architecture, and the"
+    echo "oracle (the fewest evaluations any march certified by overlapping unbounding spheres can take; not timed):"
     echo
     echo "| method | frame ms | evals/px (mean) | evals/px (p99) | miss % | depth err p99 | normal err p99 (°) | PSNR (dB) |"
     echo "| --- | --- | --- | --- | --- | --- | --- | --- |"
     awk -F, 'NR > 1 && (($2 == "0.001" && $3 == "256" && $4 == "tetrahedron") || $1 == "per_instance") {
-      printf "| %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $5, $6, $7, $8, $9, $10, $11 }' "$out/$name.csv"
+      printf "| %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, ($5 == "nan" ? "—" : $5), $6, $7, $8, $9, $10, $11 }' "$out/$name.csv"
     echo
     echo "Normal methods (sphere tracing, hit 1e-3, 256 steps):"
     echo

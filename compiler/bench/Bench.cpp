@@ -42,7 +42,7 @@ std::optional<Normals> parse_normals(const std::string& s) {
 }
 
 struct Setting {
-    std::string method;  // a march method or "per_instance"
+    std::string method;  // a march method, "per_instance" or "oracle"
     double hit;
     int max_steps;
     std::string normals;
@@ -77,6 +77,7 @@ Report run(const Options& o) {
         co.bench = bench;
         co.bench_max_hit = *std::max_element(o.hits.begin(), o.hits.end());
         co.per_instance = s.method == "per_instance";
+        co.oracle = s.method == "oracle";
         if (auto m = parse_march(s.method)) co.march = m;
         co.normals = parse_normals(s.normals);
         if (!bench) {
@@ -201,6 +202,12 @@ Report run(const Options& o) {
                 for (int cap : o.step_caps) settings.push_back({m, h, cap, n});
     // I♥IQ's per-instance march takes each instance alone: it cannot draw a blend.
     if (o.per_instance && !base.blends) settings.push_back({"per_instance", model.render.hit, model.render.max_steps, "tetrahedron"});
+    // The floor of the marches certified by overlapping unbounding spheres, with the normals the other
+    // methods' table reads and the largest step cap (it has no step cap rules: a ray it takes past the cap is
+    // a miss); its frame is a search's, not timed.
+    if (o.oracle && !o.step_caps.empty())
+        for (double h : o.hits)
+            settings.push_back({"oracle", h, *std::max_element(o.step_caps.begin(), o.step_caps.end()), "tetrahedron"});
 
     // One benchmark build per (method, normals): the hit tolerance, the step cap and the output are uniforms.
     std::string bench_code;
@@ -232,12 +239,13 @@ Report run(const Options& o) {
         };
         Row row{s.method, s.hit, s.max_steps, s.normals};
         render::RenderResult rc, ri, rg;
-        if (!draw(0, o.frames, rc) || !draw(1, 0, ri) || !draw(2, 0, rg)) {
+        bool timed = s.method != "oracle";
+        if (!draw(0, timed ? o.frames : 0, rc) || !draw(1, 0, ri) || !draw(2, 0, rg)) {
             rep.error = err;
             return rep;
         }
         std::vector<double> times(rc.repeat_ms.begin(), rc.repeat_ms.end());
-        row.frame_ms = percentile(times, 0.5);
+        row.frame_ms = timed ? percentile(times, 0.5) : std::nan("");
         std::vector<double> evals, depth, angle;
         long mismatch = 0;
         double mse = 0;
@@ -324,9 +332,9 @@ std::string table(const Report& r) {
                                   "steps", "normals", "frame ms", "evals/px", "evals p99", "miss %", "depth p99",
                                   "normal p99", "PSNR");
     for (const auto& x : r.rows)
-        out += fmt::format("{:<13} {:>7} {:>6} {:<12} {:>9.2f} {:>10.2f} {:>9.0f} {:>9.3f} {:>10.3g} {:>9.3g}° {:>7.1f}\n", x.method,
-                           x.hit, x.max_steps, x.normals, x.frame_ms, x.evals_mean, x.evals_p99, x.hit_mismatch_pct,
-                           x.depth_err_p99, x.normal_err_deg_p99, x.psnr_db);
+        out += fmt::format("{:<13} {:>7} {:>6} {:<12} {:>9} {:>10.2f} {:>9.0f} {:>9.3f} {:>10.3g} {:>9.3g}° {:>7.1f}\n", x.method,
+                           x.hit, x.max_steps, x.normals, std::isnan(x.frame_ms) ? "-" : fmt::format("{:.2f}", x.frame_ms),
+                           x.evals_mean, x.evals_p99, x.hit_mismatch_pct, x.depth_err_p99, x.normal_err_deg_p99, x.psnr_db);
     return out;
 }
 
@@ -352,7 +360,8 @@ std::string svg(const Report& r, const std::string& title) {
     auto X = [&](double v) { return L + (std::log10(v) - vlo) / (vhi - vlo) * (W - L - R); };
     auto Y = [&](double e) { return T + (lmax - std::log10(e)) / (lmax - lmin) * (H - T - B); };
     std::map<std::string, std::string> colours = {{"fixed", "#7f7f7f"}, {"sphere", "#1f77b4"}, {"relaxed", "#2ca02c"},
-                                                  {"auto", "#d62728"}, {"segment", "#ff7f0e"}, {"per_instance", "#9467bd"}};
+                                                  {"auto", "#d62728"}, {"segment", "#ff7f0e"}, {"per_instance", "#9467bd"},
+                                                  {"oracle", "#8c564b"}};
     auto setting = [](const Row& x) { return fmt::format("{} hit {:g} steps {} {}", x.method, x.hit, x.max_steps, x.normals); };
     std::string s = fmt::format("<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"{}\" height=\"{}\" "
                                 "font-family=\"DejaVu Sans\" font-size=\"12\">\n<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"white\"/>\n",
@@ -375,9 +384,11 @@ std::string svg(const Report& r, const std::string& title) {
                      (L + W - R) / 2, H - 18);
     s += fmt::format("<text x=\"20\" y=\"{}\" text-anchor=\"middle\" transform=\"rotate(-90 20 {})\">depth error, 99th percentile</text>\n",
                      (T + H - B) / 2, (T + H - B) / 2);
-    // Pareto front: no other setting needs fewer evaluations and is more accurate.
+    // Pareto front: no other setting needs fewer evaluations and is more accurate (the oracle is a floor, not a
+    // setting to draw with).
     std::vector<const Row*> rows;
-    for (const auto& x : r.rows) rows.push_back(&x);
+    for (const auto& x : r.rows)
+        if (x.method != "oracle") rows.push_back(&x);
     std::sort(rows.begin(), rows.end(), [&](const Row* a, const Row* b) {
         return evals(*a) != evals(*b) ? evals(*a) < evals(*b) : err(*a) < err(*b);
     });
@@ -393,9 +404,10 @@ std::string svg(const Report& r, const std::string& title) {
     s += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"black\" stroke-dasharray=\"4,3\"/>\n", points);
     for (const auto& x : r.rows) {
         std::string c = colours.count(x.method) ? colours[x.method] : "black";
-        s += fmt::format("<g><title>{}: {:.2f} ms, depth p99 {:.3g}, {:.1f} evals/px</title>"
+        s += fmt::format("<g><title>{}: {} ms, depth p99 {:.3g}, {:.1f} evals/px</title>"
                          "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3.5\" fill=\"{}\" fill-opacity=\"0.75\"/></g>\n",
-                         setting(x), x.frame_ms, x.depth_err_p99, x.evals_mean, X(evals(x)), Y(err(x)), c);
+                         setting(x), std::isnan(x.frame_ms) ? "-" : fmt::format("{:.2f}", x.frame_ms), x.depth_err_p99,
+                         x.evals_mean, X(evals(x)), Y(err(x)), c);
     }
     for (size_t k = 0; k < front.size(); ++k)  // the front's settings by name, above and below in turn
         s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"9\" fill=\"#333333\">{}</text>\n", X(evals(*front[k])) + 6,

@@ -2,7 +2,7 @@
 //
 // Renders the scene headlessly under a sweep of march methods × hit tolerances × step caps × normal
 // methods, plus I♥IQ's architecture (`per_instance`: one march per instance, transforms inverted per
-// instance per pixel), and compares each with a reference: depth and normals from the double-precision
+// instance per pixel) and the floor of the marches certified by overlapping unbounding spheres (`oracle`), and compares each with a reference: depth and normals from the double-precision
 // evaluator where that is feasible at the chosen size (else the most accurate setting on the GPU), colour
 // from the most accurate setting. Reports frame time (median of timed frames after a warm-up), distance
 // evaluations per pixel (an instrumented build), hit mismatches, depth and normal errors, and PSNR.
@@ -23,6 +23,11 @@ struct Options {
     std::vector<int> step_caps = {64, 256};
     std::vector<std::string> normals = {"central", "forward", "tetrahedron", "analytic"};
     bool per_instance = true;
+    // Rows `oracle`: the fewest evaluations any march certified by overlapping unbounding spheres can take
+    // (a greedy chain of the farthest samples whose spheres overlap, found by a search it does not count;
+    // runtime_templates/scene.glsl MARCH_ORACLE), at every hit tolerance with the largest step cap and
+    // tetrahedron normals; frame_ms NaN (not timed).
+    bool oracle = true;
     std::function<void(int done, int total, const std::string& what)> progress;
 };
 

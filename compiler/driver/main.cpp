@@ -490,7 +490,8 @@ static int run(int argc, char** argv) {
     render->add_flag("--stats", r_stats, "print nan_pixels (colour NaN or ∞), nan_distance_pixels (pixels whose rays met a NaN or ∞ scene distance), steps_mean, steps_p99, evals_mean, evals_p99, shape_evals_mean (shapes evaluated per pixel: a `bound` sphere or a skipped node of a bounding-volume hierarchy stands in for its shapes), shape_evals_per_eval, segment_bounds_mean (segment tracing's bounds evaluated per pixel, each an interval evaluation of every instance's distance or gradient: not counted in evals), frame_ms, renderer");
     CLI::App* bench = app.add_subcommand(
         "bench", "measure what accuracy costs in time on this scene: every march method × hit tolerance × step cap × "
-                 "normal method, and I♥IQ's one-march-per-instance architecture, against a reference");
+                 "normal method, I♥IQ's one-march-per-instance architecture, and the oracle: the fewest evaluations any march "
+                 "certified by overlapping unbounding spheres (sphere tracing, relaxed, auto) can take, against a reference");
     std::string b_input, b_size = "160x90", b_csv, b_plot;
     int b_frames = 5;
     bench->add_option("input", b_input, "scene (.iq), document (.md) or shape module (.iql)")->required();

@@ -99,7 +99,7 @@ private:
         res_.pass_ms.push_back({name, std::chrono::duration<double, std::milli>(now - clock_).count()});
         clock_ = now;
     }
-    March march() const { return opts_.march.value_or(s_.render.march); }
+    March march() const { return opts_.oracle ? March::Sphere : opts_.march.value_or(s_.render.march); }
     Normals normals() const { return opts_.normals.value_or(s_.render.normals); }
     double hit() const { return opts_.hit.value_or(s_.render.hit); }
     std::vector<ShaderInputs::Uniform> camera() const {
@@ -391,7 +391,9 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     // Segment tracing is sphere tracing with another step: one march function with both flags (sphere tracing
     // alone where the segment pass derived no bounds).
     if (!opts_.per_instance && march() == March::Segment) F.insert(segment_refused_ ? "MARCH_SPHERE" : "MARCH_SEGMENT");
-    F.insert(opts_.per_instance ? "PER_INSTANCE" : marches[int(march() == March::Segment ? March::Sphere : march())]);
+    F.insert(opts_.per_instance ? "PER_INSTANCE"
+             : opts_.oracle     ? "MARCH_ORACLE"
+                                : marches[int(march() == March::Segment ? March::Sphere : march())]);
     if (opts_.per_instance) F.insert("LIPSCHITZ");
     // The step cap's rules (iqc_cone, iqc_nearness): only the distance-bound marches use them.
     if (!opts_.per_instance && march() != March::Fixed) F.insert("STEP_CAP_CONE");

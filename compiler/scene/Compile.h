@@ -62,6 +62,11 @@ struct CompileOptions {
     std::optional<int> max_steps;
     // Benchmark baseline: I♥IQ's architecture (one march per instance, transforms inverted per instance).
     bool per_instance = false;
+    // Benchmark floor (`oracle` in `iqc bench`): the fewest scene evaluations any march whose steps are
+    // certified by overlapping unbounding spheres (sphere tracing, over-relaxation, auto-relaxation) can take
+    // on each ray; it searches with evaluations it does not count (docs/accuracy.md). Sphere tracing's
+    // settings otherwise.
+    bool oracle = false;
     // Benchmark build: the hit tolerance, the step cap and the output (colour, counts, geometry) are
     // uniforms (IQC_HIT, IQC_MAX_STEPS, iqc_mode), so one program serves a whole sweep.
     bool bench = false;
