@@ -281,6 +281,17 @@ TEST_CASE("find_instance_lattice: full and partly filled lattices in any member 
     CHECK(p.n == std::array<int, 3>{10, 10, 1});
     CHECK(p.stride[2] == 0);
     check(plane, p);
+    // Its centres mapped through the tori's tilts come out at z = ±2.2·10⁻¹⁶: the origin is 0 there, not the
+    // rounding (the scene function subtracted it from p at every evaluation), and a real offset stays.
+    std::vector<BoundingSphere> rounding = plane;
+    for (int k = 0; k < 100; ++k) rounding[size_t(k)].center[2] = k % 3 ? -2.220446e-16 : 1.1e-16;
+    InstanceLattice z0 = find_instance_lattice(rounding);
+    REQUIRE(z0.found());
+    CHECK(z0.origin[2] == 0.0);
+    CHECK(z0.origin[0] == -4.5);
+    std::vector<BoundingSphere> lifted = plane;
+    for (auto& m : lifted) m.center[2] = 0.25;
+    CHECK(find_instance_lattice(lifted).origin[2] == 0.25);
     // Not lattices: jittered centres, two members in one cell, an order not affine in the cells (a serpentine),
     // most cells empty, an empty cell inside the filled range.
     std::vector<BoundingSphere> jitter = rings(100, 10);

@@ -193,7 +193,9 @@ InstanceLattice find_instance_lattice(const std::vector<BoundingSphere>& members
         std::vector<double> distinct = {v[0]};
         for (double x : v)
             if (x - distinct.back() > tol) distinct.push_back(x);
-        L.origin[a] = distinct.front();
+        // A coordinate that is 0 but for rounding (a centre mapped through a rotation: −2.2e−16) is 0: else the
+        // scene function subtracts it from p at every evaluation (x − c is not x for a constant c ≠ 0).
+        L.origin[a] = std::fabs(distinct.front()) <= 1e-3 * tol ? 0.0 : distinct.front();
         L.n[a] = int(distinct.size());
         if (distinct.size() > 1) {
             L.spacing[a] = (distinct.back() - distinct.front()) / double(distinct.size() - 1);
