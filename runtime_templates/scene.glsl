@@ -412,6 +412,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         t_prev = t;
         r_prev = abs(d);
         step_len = omega * d;
+{{#if INSIDE_START}}
+        if (s < 0.0) step_len = d;  // inside a shape: plain steps (see the auto march)
+{{/if}}
         omega = IQC_RELAXATION;
         t += step_len;
         if (t > {{T_FAR}}) {
@@ -515,6 +518,12 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
                 continue;
             }
         }
+{{#if INSIDE_START}}
+        // Inside a shape, on the way to its wall, the distance along the ray is concave for a convex shape (a
+        // ball or a room seen from within: R − ‖o + t·d‖): the secant over-predicts, relaxed steps fail, and
+        // auto took 18% more evaluations than sphere tracing inside a ball. Steps there are plain.
+        if (s < 0.0) m = -1.0;
+{{/if}}
         step_len = d * (1.0 + g * (1.0 + m) / (1.0 - m));
         t += step_len;
         if (t > {{T_FAR}}) {

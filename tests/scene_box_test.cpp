@@ -213,10 +213,12 @@ TEST_CASE("clipping rays to the box changes no pixel and saves evaluations, with
             text.replace(text.find("[camera]"), 8, std::string("far = \"\"\"\nshape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n\"\"\"\n\n") +
                                                      "[camera]");
             std::string boxed_text = text;
-            // The march method: a [render] table of its own where the scene has none, else a key in it.
+            // The march method: a [render] table of its own where the scene has none, else a key in it. Fixed
+            // steps are set: by default they depend on the box (its diagonal over the step cap).
+            std::string keys = std::string("march = \"") + march + "\"\n" + (std::string(march) == "fixed" ? "step = 0.1\n" : "");
             size_t render = boxed_text.find("[render]\n");
-            if (render == std::string::npos) boxed_text += std::string("\n[render]\nmarch = \"") + march + "\"\n";
-            else boxed_text.insert(render + 9, std::string("march = \"") + march + "\"\n");
+            if (render == std::string::npos) boxed_text += "\n[render]\n" + keys;
+            else boxed_text.insert(render + 9, keys);
             std::string unboxed_text = boxed_text + "\n[[shapes]]\ntype = \"far\"\ntransform = \"T((0, 1000 + time, 0))\"\n";
             INFO(scene << ", march " << march);
             auto [boxed_code, boxed] = draw("box_a.iq", boxed_text, false, true);
@@ -452,4 +454,44 @@ TEST_CASE("a ray that enters the box only beyond the far plane takes no step", "
     for (int x = 0; x < W; ++x) CHECK(r.image.pixel(x, 45)[1] == 0.0f);
     // Far below the horizon the rays do march.
     CHECK(r.image.pixel(W / 2, H - 6)[1] > 0.0f);
+}
+
+// Found by a new-user trial: `fixed` stepped max_dist / max_steps by default (156 units for a camera 12,000
+// units away, max_dist 20,000), through a box 2.8 wide, and drew nothing. Marches start and end at the box,
+// so the default step is its diagonal over the step cap where that is shorter.
+TEST_CASE("fixed steps by default cover the scene's box, not max_dist, over the step cap", "[scene][box][render]") {
+    const std::string far = "[camera]\nposition = [10000, 3000, -8000]\ntarget = [0, 0, 0]\nfov = 0.02\n[render]\nmarch = \"MARCH\"\n"
+                            "max_dist = 20000\n[[shapes]]\ntype = \"torus\"\ntransform = \"`R_x`(0.7)\"\n[[shapes]]\ntype = \"sphere\"\n"
+                            "transform = \"T((1.3, 0, 0))\"\nshape_params = { r = 0.3 }\n";
+    auto draw = [&](const std::string& march) {
+        std::string text = far;
+        text.replace(text.find("MARCH"), 5, march);
+        Compiled c = compile_text("fixed_far_" + march + ".iq", text);
+        INFO(c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        render::RenderResult r = render_compiled(c.result, 96, 54);
+        INFO(r.error);
+        REQUIRE(r.ok);
+        return std::make_pair(c.result.code, r);
+    };
+    auto [fixed_code, fixed] = draw("fixed");
+    auto [sphere_code, sphere] = draw("sphere");
+    auto b = box_of(fixed_code);
+    REQUIRE(b);
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) d2 += std::pow(b->second[k] - b->first[k], 2);
+    std::smatch m;
+    REQUIRE(std::regex_search(fixed_code, m, std::regex(R"(const float IQC_FIXED_STEP = ([0-9.e+-]+);)")));
+    CHECK(std::stod(m[1]) == Approx(std::sqrt(d2) / 128).epsilon(1e-4));  // the default step cap
+    int drawn = 0, differ = 0;
+    const float* bg = sphere.image.pixel(0, 0);
+    for (int y = 0; y < 54; ++y)
+        for (int x = 0; x < 96; ++x) {
+            const float *a = fixed.image.pixel(x, y), *s = sphere.image.pixel(x, y);
+            drawn += std::fabs(s[0] - bg[0]) + std::fabs(s[1] - bg[1]) + std::fabs(s[2] - bg[2]) > 0.05f;
+            differ += std::fabs(a[0] - s[0]) + std::fabs(a[1] - s[1]) + std::fabs(a[2] - s[2]) > 0.1f;
+        }
+    INFO(drawn << " pixels show the shapes (sphere tracing), " << differ << " differ with fixed steps");
+    CHECK(drawn > 150);
+    CHECK(differ < drawn / 20);
 }

@@ -338,7 +338,21 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     V["CAMERA_POSITION"] = vec3_literal(s_.camera.position);
     V["CAMERA_TARGET"] = vec3_literal(s_.camera.target);
     V["CAMERA_FOCAL"] = glsl::float_literal(focal);
-    V["FIXED_STEP"] = glsl::float_literal(render.step > 0 ? render.step : render.max_dist / max_steps);
+    // `fixed`'s step by default: the longest way a march can go over the step cap. Marches start where the ray
+    // enters the scene's box and end where it leaves, so where the box is closed on every side that way is at
+    // most its diagonal: a camera 12,000 units from a torus took steps of 156 (max_dist / max_steps) through a
+    // box 2.8 wide and drew nothing.
+    double fixed_reach = render.max_dist;
+    if (const auto& box = scene.box; box && !opts_.per_instance) {
+        double d2 = 0;
+        bool closed = true;
+        for (size_t k = 0; k < 3; ++k) {
+            closed &= std::isfinite(box->first[k]) && std::isfinite(box->second[k]);
+            d2 += (box->second[k] - box->first[k]) * (box->second[k] - box->first[k]);
+        }
+        if (closed) fixed_reach = std::min(fixed_reach, std::sqrt(d2));
+    }
+    V["FIXED_STEP"] = glsl::float_literal(render.step > 0 ? render.step : fixed_reach / max_steps);
     V["RELAXATION"] = glsl::float_literal(render.relaxation);
     V["SHADOW_K"] = glsl::float_literal(fx.shadow_softness);
     V["FOG"] = glsl::float_literal(fx.fog);
