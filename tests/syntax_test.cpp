@@ -7,6 +7,7 @@
 #include "syntax/Parser.h"
 
 using namespace iqc;
+using namespace iqc::test;
 
 static std::vector<Token> lex_text(SourceManager& sm, const std::string& text) {
     FileId f = sm.add("t", text);
@@ -82,4 +83,29 @@ TEST_CASE("parser: matrix rows on several lines, items separated by spaces", "[s
     CHECK(mat.rows.size() == 2);
     CHECK(mat.rows[0].size() == 2);
     CHECK(mat.rows[0][1]->kind == ast::ExprKind::Negate);
+}
+
+TEST_CASE("parser: `||` opens two absolute values where a single bar closes first, else a norm", "[syntax]") {
+    // Found by a new-user trial: Quilez's onion, ||‖p‖ - 0.6| - 0.1| - 0.03, read `||` as the ASCII norm and
+    // failed ("expected '||' to close the norm, found '|'").
+    auto eval = [](const std::string& name, const std::string& d, const std::string& at) {
+        auto f = write_temp(name + ".iql", "shape\nD = " + d + "\nwhere\np ∈ ℝ³\n");
+        RunResult r = run_iqc("eval " + f.string() + " --set 'p=" + at + "'");
+        INFO(r.err);
+        return r;
+    };
+    RunResult onion = eval("onion", "||‖p‖ - 0.6| - 0.1| - 0.03", "(0, 0, 0)");
+    CHECK(onion.exit_code == 0);
+    CHECK_THAT(onion.out, Catch::Contains("D = 0.47"));  // ||0 - 0.6| - 0.1| - 0.03
+    CHECK_THAT(eval("onion_shell", "||‖p‖ - 0.6| - 0.1| - 0.03", "(0.6, 0, 0)").out, Catch::Contains("D = 0.07"));
+    // Two closed at once too: ||x| + |y|| is |(|x| + |y|)|.
+    CHECK_THAT(eval("bars_sum", "||p_1| + |p_2|| - 1", "(-3, 4, 0)").out, Catch::Contains("D = 6"));
+    // The ASCII norm stays a norm, also around absolute values inside ‖…‖ or brackets.
+    CHECK_THAT(eval("ascii_norm", "||p|| - 1", "(3, 4, 0)").out, Catch::Contains("D = 4"));
+    CHECK_THAT(eval("ascii_norm_abs", "||(|p_1|, p_2, p_3)|| - 1", "(-3, 4, 0)").out, Catch::Contains("D = 4"));
+    // Unclosed: the message says which bar is missing, and where it opened.
+    RunResult bad = eval("bars_open", "||p_1| - 5", "(0, 0, 0)");
+    CHECK(bad.exit_code == 1);
+    CHECK_THAT(bad.err, Catch::Contains("error: expected '|' to close the absolute value"));
+    CHECK_THAT(bad.err, Catch::Contains("bars_open.iql:2:5: note: opened here"));
 }

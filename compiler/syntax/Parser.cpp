@@ -365,6 +365,8 @@ private:
     ExprPtr parse_sum(Span start);
     ExprPtr parse_sized_block(ExprPtr symbol);
     bool ascii_inner_ahead() const;
+    bool double_bar_opens_abs() const;
+    void split_double_bar();
     void parse_norm_subscript(Expr& norm);
     ExprPtr parse_delimited(ExprKind kind, Tok close, Span open, const char* what);
     bool starts_juxtaposed_operand();
@@ -1495,6 +1497,8 @@ ExprPtr Parser::parse_delimited(ExprKind kind, Tok close, Span open, const char*
     ctx_.push_back(kind == ExprKind::Norm || kind == ExprKind::Abs ? Ctx::Bars : Ctx::Paren);
     ExprPtr inner = parse_expr();
     ctx_.pop_back();
+    // `|y||` closing two absolute values at once (`||x| + |y||`): the first bar closes this one.
+    if (close == Tok::Bar && at(Tok::DoubleBar)) split_double_bar();
     if (!at(close)) {
         if (kind == ExprKind::Norm && at(Tok::DoubleBar)) {
         } else {
@@ -1637,6 +1641,40 @@ ExprPtr Parser::parse_sized_block(ExprPtr symbol) {
 
 // Whether the `<` at the current token opens <u, v>: a comma and then a `>` follow on the line, outside
 // any bracket opened after the `<`.
+// At a `||` that opens an operand: whether it opens two absolute values (`||x| - a|`) rather than a norm
+// (`||x||`, the ASCII ‖): the first bar after it outside brackets and ‖…‖ decides, a `||` for the norm, a `|`
+// for two absolute values. Undecided (the line ends) is a norm, whose error says what closes it.
+bool Parser::double_bar_opens_abs() const {
+    int depth = 0;
+    bool in_norm = false;
+    for (size_t k = pos_ + 1; k < toks_.size(); ++k) {
+        switch (toks_[k].kind) {
+            case Tok::LParen: case Tok::LBracket: case Tok::LBrace: case Tok::LFloor: case Tok::LCeil: ++depth; break;
+            case Tok::RParen: case Tok::RBracket: case Tok::RBrace: case Tok::RFloor: case Tok::RCeil:
+                if (--depth < 0) return false;
+                break;
+            case Tok::Norm: in_norm = !in_norm; break;
+            case Tok::DoubleBar: if (depth == 0 && !in_norm) return false; break;
+            case Tok::Bar: if (depth == 0 && !in_norm) return true; break;
+            case Tok::Newline: case Tok::End: case Tok::Eq: return false;
+            default: break;
+        }
+    }
+    return false;
+}
+
+// Splits the `||` at the cursor into two `|` tokens, one byte each.
+void Parser::split_double_bar() {
+    Token first = toks_[pos_], second = toks_[pos_];
+    first.kind = second.kind = Tok::Bar;
+    first.span.end = first.span.begin + 1;
+    second.span.begin = first.span.end;
+    second.space_before = false;
+    second.line_start = false;
+    toks_[pos_] = first;
+    toks_.insert(toks_.begin() + std::ptrdiff_t(pos_) + 1, second);
+}
+
 bool Parser::ascii_inner_ahead() const {
     int depth = 0;
     bool comma = false;
@@ -1874,7 +1912,13 @@ ExprPtr Parser::parse_primary() {
             if (ascii_inner_ahead()) return parse_inner(advance());
             fail(t.span, fmt::format("expected an expression, found {}", describe(t)));
         case Tok::Norm: return parse_delimited(ExprKind::Norm, Tok::Norm, advance().span, "the norm");
-        case Tok::DoubleBar: return parse_delimited(ExprKind::Norm, Tok::DoubleBar, advance().span, "the norm");
+        case Tok::DoubleBar:
+            // `||‖p‖ - 0.6| - 0.1|` (Quilez's onion): two absolute values opened at once, not a norm.
+            if (double_bar_opens_abs()) {
+                split_double_bar();
+                return parse_delimited(ExprKind::Abs, Tok::Bar, advance().span, "the absolute value");
+            }
+            return parse_delimited(ExprKind::Norm, Tok::DoubleBar, advance().span, "the norm");
         case Tok::Bar: return parse_delimited(ExprKind::Abs, Tok::Bar, advance().span, "the absolute value");
         case Tok::LFloor: return parse_delimited(ExprKind::Floor, Tok::RFloor, advance().span, "the floor");
         case Tok::LCeil: return parse_delimited(ExprKind::Ceil, Tok::RCeil, advance().span, "the ceiling");
