@@ -48,6 +48,9 @@ struct Setting {
     std::string normals;
 };
 
+// A row's frame time as text: "-" where it was not timed (the oracle).
+std::string frame_text(const Row& x) { return std::isnan(x.frame_ms) ? "-" : fmt::format("{:.2f}", x.frame_ms); }
+
 struct Geometry {
     std::vector<float> t;      // -1: no hit
     std::vector<float> n;      // 3 per pixel
@@ -333,7 +336,7 @@ std::string table(const Report& r) {
                                   "normal p99", "PSNR");
     for (const auto& x : r.rows)
         out += fmt::format("{:<13} {:>7} {:>6} {:<12} {:>9} {:>10.2f} {:>9.0f} {:>9.3f} {:>10.3g} {:>9.3g}° {:>7.1f}\n", x.method,
-                           x.hit, x.max_steps, x.normals, std::isnan(x.frame_ms) ? "-" : fmt::format("{:.2f}", x.frame_ms),
+                           x.hit, x.max_steps, x.normals, frame_text(x),
                            x.evals_mean, x.evals_p99, x.hit_mismatch_pct, x.depth_err_p99, x.normal_err_deg_p99, x.psnr_db);
     return out;
 }
@@ -406,7 +409,7 @@ std::string svg(const Report& r, const std::string& title) {
         std::string c = colours.count(x.method) ? colours[x.method] : "black";
         s += fmt::format("<g><title>{}: {} ms, depth p99 {:.3g}, {:.1f} evals/px</title>"
                          "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3.5\" fill=\"{}\" fill-opacity=\"0.75\"/></g>\n",
-                         setting(x), std::isnan(x.frame_ms) ? "-" : fmt::format("{:.2f}", x.frame_ms), x.depth_err_p99,
+                         setting(x), frame_text(x), x.depth_err_p99,
                          x.evals_mean, X(evals(x)), Y(err(x)), c);
     }
     for (size_t k = 0; k < front.size(); ++k)  // the front's settings by name, above and below in turn
