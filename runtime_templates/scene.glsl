@@ -434,22 +434,17 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 // the step is d·(1 + γ(1 + m)/(1 − m)): at γ = 1 that is 2d/(1 − m), whose next unbounding sphere just
 // touches this one where the distance is linear along the ray. Across samples of different instances (or a
 // `bound` sphere's distance, then its shape's) the secant is no slope of either, and the step is plain (m = −1).
-// When two unbounding spheres stop overlapping the step may have skipped a surface:
-// - if the new sample is outside every shape, its own sphere is clear too and only the gap between the two
-//   spheres is unknown: the march samples the gap's middle (a shorter step from the previous sample, checked
-//   the same way); where that sample's sphere covers the gap it reaches both, and the march goes on from the
-//   failed sample without evaluating it again (a failure costs one evaluation, not the way back);
-// - else (inside a shape, or the gap's sample failed too) it retries once from the previous sample with the
-//   slope measured across the failed step, then falls back to a plain step.
-// Each failure lowers γ for the rest of the ray (×0.9, not below 0.8) and each good step raises it by 0.01
-// (up to 0.95). Tuned on bench/*.iq (docs/accuracy.md).
+// When two unbounding spheres stop overlapping (the step may have skipped a surface) the march retries once
+// from the previous sample with the slope measured across the failed step (a shorter step, checked the same
+// way), then falls back to a plain step. Each failure lowers γ for the rest of the ray (×0.9, not below 0.8)
+// and each good step raises it by 0.01 (up to 0.95). Tuned on bench/*.iq (docs/accuracy.md). Keeping a failed
+// sample that lies outside every shape and sampling only the gap before it saved 3–7% of the evaluations but
+// cost 10–15% of llvmpipe's frame (its lanes march in step: stop 33), and is not done.
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, m = -1.0, g = 0.95, t_prev = 0.0, r_prev = 0.0, d_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
     float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
-    float t_f = -1.0;  // a failed sample outside every shape while the gap before it is sampled (-1: none)
-    vec2 h_f = vec2(0.0);  // its scene value
-    bool retried = false, reuse = false;
+    bool retried = false;
     id = -1;
     steps = 0;
 {{#if SCENE_BOX}}
@@ -457,32 +452,20 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     if (t_far < 0.0) return -1.0;
 {{/if}}
     for (int i = 0; i < IQC_MAX_STEPS; i++) {
-        vec2 h;
-        if (reuse) {
-            h = h_f;  // the failed sample the gap's sample reached: evaluated already
-        } else {
-            h = iqc_scene(ro + t * rd);
-            steps++;
-        }
-        reuse = false;
+        vec2 h = iqc_scene(ro + t * rd);
+        steps++;
 {{#if INSIDE_START}}
         if (i == 0 && h.x < 0.0) s = -1.0;
 {{/if}}
         float d = s * h.x;
         if (step_len > 0.0 && abs(d) + r_prev < step_len) {
             g = max(0.9 * g, 0.8);
-            if (t_f < 0.0 && d > 0.0) {
-                t_f = t;
-                h_f = h;
-                step_len = r_prev + 0.5 * ((t - d) - (t_prev + r_prev));  // to the middle of the gap
-            } else if (!retried) {
-                t_f = -1.0;
+            if (!retried) {
                 retried = true;
                 m = clamp((d - d_prev) / step_len, -1.0, 0.8);
                 step_len = r_prev * (1.0 + g * (1.0 + m) / (1.0 - m));
             } else {
                 // A plain step from the previous sample: its sphere covers it, so the check passes.
-                t_f = -1.0;
                 retried = false;
                 m = -1.0;
                 step_len = r_prev;
@@ -508,16 +491,6 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         r_prev = abs(d);
         d_prev = d;
         g = min(g + 0.01, 0.95);
-        if (t_f > 0.0) {
-            // The gap's sample: where its sphere reaches the failed sample's, the way there is clear.
-            reuse = abs(d) + s * h_f.x >= t_f - t;
-            step_len = t_f - t;
-            t_f = -1.0;
-            if (reuse) {
-                t += step_len;
-                continue;
-            }
-        }
 {{#if INSIDE_START}}
         // Inside a shape, on the way to its wall, the distance along the ray is concave for a convex shape (a
         // ball or a room seen from within: R − ‖o + t·d‖): the secant over-predicts, relaxed steps fail, and

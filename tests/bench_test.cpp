@@ -218,9 +218,8 @@ TEST_CASE("the oracle row: no march certified by overlapping unbounding spheres 
 TEST_CASE("auto-relaxed marching saves evaluations at sphere tracing's accuracy, on bumpy terrain too", "[bench][march]") {
     // The sine terrain is where a relaxed step fails most (the slope along the ray changes sign over each
     // bump): auto took 1.10x sphere tracing's evaluations there before failed steps were retried with the
-    // measured slope and each failure made the rest of the ray more cautious, 0.78x at 160x90 before a failed
-    // sample outside every shape was kept and only the gap before it sampled (now 0.70x and 0.61x at 64x36,
-    // the terrain and a few shapes at 1e-3).
+    // measured slope and each failure made the rest of the ray more cautious (0.78x at 160x90; now 0.75x and
+    // 0.61x at 64x36, the terrain and a few shapes at 1e-3, with a plain step across instances).
     // The bench scenes' other figures are in docs/accuracy.md; these two bound the worst ones.
     fewer_evaluations_at_equal_accuracy("auto", {"sine_terrain", "few_shapes"}, 0.85);
 }
