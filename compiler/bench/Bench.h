@@ -2,10 +2,11 @@
 //
 // Renders the scene headlessly under a sweep of march methods × hit tolerances × step caps × normal
 // methods, plus I♥IQ's architecture (`per_instance`: one march per instance, transforms inverted per
-// instance per pixel) and the floor of the marches certified by overlapping unbounding spheres (`oracle`), and compares each with a reference: depth and normals from the double-precision
-// evaluator where that is feasible at the chosen size (else the most accurate setting on the GPU), colour
-// from the most accurate setting. Reports frame time (median of timed frames after a warm-up), distance
-// evaluations per pixel (an instrumented build), hit mismatches, depth and normal errors, and PSNR.
+// instance per pixel) and the floor of the marches certified by overlapping unbounding spheres (`oracle`),
+// and compares each with a reference: depth and normals from the double-precision evaluator where that is
+// feasible at the chosen size (else the most accurate setting on the GPU), colour from the most accurate
+// setting. Reports frame time (median of timed frames after a warm-up), distance evaluations per pixel (an
+// instrumented build), hit mismatches, depth and normal errors, and PSNR.
 #pragma once
 
 #include <functional>

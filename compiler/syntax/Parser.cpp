@@ -1639,8 +1639,6 @@ ExprPtr Parser::parse_sized_block(ExprPtr symbol) {
     return e;
 }
 
-// Whether the `<` at the current token opens <u, v>: a comma and then a `>` follow on the line, outside
-// any bracket opened after the `<`.
 // At a `||` that opens an operand: whether it opens two absolute values (`||x| - a|`) rather than a norm
 // (`||x||`, the ASCII ‖): the first bar after it outside brackets and ‖…‖ decides, a `||` for the norm, a `|`
 // for two absolute values. Undecided (the line ends) is a norm, whose error says what closes it.
@@ -1675,6 +1673,8 @@ void Parser::split_double_bar() {
     toks_.insert(toks_.begin() + std::ptrdiff_t(pos_) + 1, second);
 }
 
+// Whether the `<` at the current token opens <u, v>: a comma and then a `>` follow on the line, outside
+// any bracket opened after the `<`.
 bool Parser::ascii_inner_ahead() const {
     int depth = 0;
     bool comma = false;
