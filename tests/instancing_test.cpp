@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include "TestUtil.h"
+#include "ir/Eval.h"
+#include "scene/Reference.h"
 
 using namespace iqc;
 using namespace iqc::test;
@@ -555,6 +557,45 @@ TEST_CASE("a lattice of members that differ (tilts, sizes) reads each member's d
         CHECK(a.disagree <= a.samples / 50);
         CHECK(a.rings > a.samples / 20);
     }
+}
+
+TEST_CASE("a lattice member's own distance (the normal's taps) is computed at its cell's centre, the cell from the id", "[instancing][lattice]") {
+    // 10 × 10 tori in a plane, each tilted about x by its own angle (bench/instances_100.iq): their offsets are
+    // no arithmetic on the index, so iqc_distance_of evaluates member k at p minus its cell's centre, the cell
+    // from k by integer division (no vec3[100] of offsets), and gives each member's own distance: the torus's
+    // in that member's frame, evaluated here in double precision for every member at points around it.
+    std::string s = rings_scene(0, false, 0);
+    for (int k = 0; k < 100; ++k)
+        s += fmt::format("[[shapes]]\ntype = \"ring\"\nmaterial = \"lambert\"\ntransform = \"T(({}, {}, 0))⋅`R_x`({:.1f})\"\nbound = 0.4\n",
+                         (k % 10) - 4.5, (k / 10) - 4.5, 0.4 * (k % 7));
+    Compiled c = compile_path(write_temp("lattice_tilts.iq", s));
+    INFO(c.diagnostics);
+    REQUIRE(c.result.exit_code == 0);
+    const std::string& code = c.result.code;
+    CHECK_THAT(code, Catch::Contains("100 instances on a 10×10×1 lattice"));
+    CHECK_THAT(code, !Catch::Contains("offset"));  // no offset table, in iqc_scene or iqc_distance_of
+    const size_t from = code.find("float iqc_distance_of(");
+    REQUIRE(from != std::string::npos);
+    const std::string dist = code.substr(from, code.find("\n}\n", from) - from);
+    CHECK_THAT(dist, Catch::Contains("% 10") && Catch::Contains("/ 10"));
+    const ir::Module& m = c.result.model->ir;
+    int fn = m.find(ir::names::kDistanceOf);
+    REQUIRE(fn >= 0);
+    double worst = 0;
+    for (int k = 0; k < 100; ++k) {
+        const double cx = (k % 10) - 4.5, cy = (k / 10) - 4.5, a = 0.4 * (k % 7);
+        for (int j = 0; j < 8; ++j) {
+            const double p[3] = {cx + 0.37 * std::cos(j), cy + 0.29 * std::sin(1.7 * j), 0.21 * std::cos(2.3 * j)};
+            // The object point: R_x(a)⁻¹ (p − centre), the torus (0.3, 0.08) about its y axis.
+            const double x = p[0] - cx, y = p[1] - cy, z = p[2];
+            const double qy = std::cos(a) * y + std::sin(a) * z, qz = -std::sin(a) * y + std::cos(a) * z;
+            const double want = std::hypot(std::hypot(x, qz) - 0.3, qy) - 0.08;
+            ir::Value got = ir::evaluate(m, fn, {ir::Value{Type::vector(3), {p[0], p[1], p[2]}}, ir::Value{Type::integer(), {double(k + 1)}}});
+            REQUIRE(got.v.size() >= 1);
+            worst = std::max(worst, std::fabs(got.v[0] - want));
+        }
+    }
+    CHECK(worst < 1e-9);
 }
 
 TEST_CASE("a lattice in a plane loops over its two axes only: the reference's picture", "[instancing][render][lattice]") {

@@ -1434,6 +1434,42 @@ private:
         return outer.named(outer.construct(Type::vector(width), out), "res");
     }
 
+    // Member k's lattice cell (ℝ³, whole numbers) from k (ℤ, the member's index in its group), by integer
+    // division by the lattice's strides, largest first: k = base + cell·stride (InstanceLattice). -1 where `it`
+    // is no lattice group with centred members (Item::centred_fn), or where that division does not give every
+    // member's cell back (checked here for every k: a stride that is not a mixed radix, or negative).
+    ValueId lattice_cell_of(Builder& b, const Item& it, ValueId k) {
+        const InstanceLattice& L = it.lattice;
+        if (!it.group || !L.found() || it.centred_fn < 0) return ValueId(-1);
+        std::vector<size_t> axes;
+        for (size_t a = 0; a < 3; ++a)
+            if (L.n[a] > 1) axes.push_back(a);
+        std::sort(axes.begin(), axes.end(), [&](size_t x, size_t y) { return L.stride[x] > L.stride[y]; });
+        for (size_t a : axes)
+            if (L.stride[a] <= 0) return ValueId(-1);
+        for (long long m = 0; m < (long long)it.members.size(); ++m) {
+            long long r = m - L.base, back = L.base;
+            if (r < 0) return ValueId(-1);
+            for (size_t a : axes) {
+                long long c = r / L.stride[a];
+                if (c >= L.n[a]) return ValueId(-1);
+                back += c * L.stride[a];
+                r -= c * L.stride[a];
+            }
+            if (r != 0 || back != m) return ValueId(-1);
+        }
+        std::vector<ValueId> c(3, ValueId(-1));
+        ValueId r = b.op(Op::Sub, {k, b.integer(L.base)});
+        for (size_t i = 0; i < axes.size(); ++i) {
+            ValueId s = b.integer(L.stride[axes[i]]);
+            c[axes[i]] = i + 1 < axes.size() || L.stride[axes[i]] != 1 ? b.op(Op::IntDiv, {r, s}) : r;
+            if (i + 1 < axes.size()) r = b.op(Op::IntMod, {r, s});
+        }
+        for (auto& x : c)
+            if (x == ValueId(-1)) x = b.scalar(0);
+        return b.construct(Type::vector(3), c);
+    }
+
     // iqc_distance_of(p, id): the instance's own distance (what the analytic normal differentiates, and what
     // finite-difference normals take their taps of), and, for analytic normals, the placeholder iqc_gradient
     // that the gradient pass replaces.
@@ -1451,7 +1487,22 @@ private:
             bool blend_first = it.blend >= 0 && &items_[blend_items_[size_t(it.blend)][0]] == &it;
             // With glows, the distance without the bound sphere (equal to it near the surface, where normals tap).
             int fn = o_.distance_of && it.unbounded_fn >= 0 ? it.unbounded_fn : it.distance_fn;
-            ValueId d = blend_first ? blend_distance(b, it.blend, p, true, o_.instrument, nullptr) : b.call(fn, args);
+            // A lattice's member whose own turn makes its offset no arithmetic on the index (the tables pass makes
+            // the offsets of members alike but for their place arithmetic) is evaluated as iqc_scene evaluates it,
+            // at p minus its cell's centre (the cell computed from the id): no table of per-member offsets (100
+            // instances: a vec3[100] that only this function read, 3-4% of llvmpipe's driver compile).
+            ValueId cell = !blend_first && fn == it.distance_fn ? lattice_cell_of(b, it, args.back()) : ValueId(-1);
+            ValueId d;
+            if (blend_first) {
+                d = blend_distance(b, it.blend, p, true, o_.instrument, nullptr);
+            } else if (cell != ValueId(-1) && it.centred_fn >= 0) {  // member k at p − its cell's centre
+                const InstanceLattice& L = it.lattice;
+                ValueId centre = b.op(Op::Add, {b.constant(Type::vector(3), {L.origin[0], L.origin[1], L.origin[2]}),
+                                                b.op(Op::Hadamard, {cell, b.constant(Type::vector(3), {L.spacing[0], L.spacing[1], L.spacing[2]})})});
+                d = b.call(it.centred_fn, {b.op(Op::Sub, {p, centre}), args.back()});
+            } else {
+                d = b.call(fn, args);
+            }
             // Instrumented, the bounded distance (and a blend) also returns the shapes it evaluated; the distance
             // without its bound sphere (glows) does not.
             if (o_.instrument && (blend_first || fn == it.distance_fn)) d = b.op(Op::Extract, {d}, 0);
