@@ -802,7 +802,17 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
         res = min(res, IQC_SHADOW_K * h / max(t, 1.0e-4));
 {{/if}}
         t += e.x;
-        if (t > t_max) break;
+        if (t > t_max) {
+            // The last stretch, up to the light: the estimate there too. Without it the penumbra's value is
+            // that of wherever the last step before the light happened to land, and a surface near the light
+            // (a ceiling above a lamp) draws terraces on every wall the light falls on. The step's distance at
+            // the light is at least the overshoot t - t_max (1-Lipschitz), the value h / e.x times that: only
+            // where that bound could lower the estimate is the light's point evaluated (lights_and_effects'
+            // frame: 6.7% more with every ray evaluating it).
+            if (IQC_SHADOW_K * (h / e.x) * (t - t_max) < res * t_max)
+                res = min(res, IQC_SHADOW_K * iqc_scene_effects(ro + t_max * rd).y / t_max);
+            break;
+        }
     }
     res = clamp(res, 0.0, 1.0);
     return res * res * (3.0 - 2.0 * res);  // smoothstep: the penumbra's edges without a crease (after Quilez)

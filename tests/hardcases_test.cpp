@@ -191,3 +191,29 @@ TEST_CASE("soft shadows leave no black dot where the light is straight above a s
         CHECK(a.pixel(50, 50)[c] == Approx(a.pixel(51, 50)[c]).margin(0.02));
     }
 }
+
+TEST_CASE("soft shadows draw no terraces on walls lit by a lamp just below the ceiling", "[hardcases][render]") {
+    // A new user's trial: shadow rays from the walls run up to the lamp along the ceiling, 0.2 above it; the
+    // penumbra estimate is smallest at the ray's end, and was taken only where the last step before the light
+    // landed, which jumps from pixel to pixel: terraces (338 of 1,064 back-wall pixels had a second difference
+    // above 0.004 along the row, up to 0.13). With the estimate also taken at the light the wall is smooth.
+    Compiled c = compile_path(fs::path(IQC_SOURCE_DIR) / "tests" / "hardcases" / "41_lamp_under_ceiling.iq");
+    REQUIRE(c.result.exit_code == 0);
+    render::RenderResult r = render_compiled(c.result, 160, 90);
+    INFO(r.error);
+    REQUIRE(r.ok);
+    // The back wall above the box (rows 28-45 from the top, columns 52-107 of 160x90).
+    int jumps = 0, n = 0;
+    float worst = 0;
+    for (int y = 28; y <= 45; ++y)
+        for (int x = 52; x < 108; ++x) {
+            float d2 = std::fabs(r.image.pixel(x + 1, y)[0] - 2 * r.image.pixel(x, y)[0] + r.image.pixel(x - 1, y)[0]);
+            worst = std::max(worst, d2);
+            jumps += d2 > 0.004f;
+            ++n;
+        }
+    INFO(jumps << " of " << n << " pixels jump; the largest second difference " << worst);
+    CHECK(jumps == 0);
+    // The wall is lit: the lamp's light reaches it (the estimate at the light is not full shadow).
+    CHECK(r.image.pixel(80, 35)[0] > 0.5f);
+}
