@@ -598,6 +598,37 @@ TEST_CASE("a lattice member's own distance (the normal's taps) is computed at it
     CHECK(worst < 1e-9);
 }
 
+TEST_CASE("a lattice that fills the scene's box has no stand-in for far points unless effects read the scene there", "[instancing][render][lattice]") {
+    // bench/instances_100.iq: 100 tori on a 10×10 lattice and nothing else. Every march is clipped to the scene's
+    // box, which lies within a quarter spacing of the lattice's: the stand-in for points farther than that (the
+    // lattice's box distance, id -1) would never serve, and is left out. Ambient occlusion (or soft shadows)
+    // reads the scene anywhere, and a far sphere widens the box: the stand-in stays.
+    const std::string text = read_text(std::filesystem::path(IQC_SOURCE_DIR) / "bench" / "instances_100.iq");
+    const std::string stand_in = "distance to the box of the lattice's bounding spheres";
+    CompileOptions o;
+    o.ids = true;
+    Compiled c = compile_path(write_temp("lattice_alone.iq", text), o);
+    INFO(c.diagnostics);
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.result.code, Catch::Contains("100 instances on a 10×10×1 lattice"));
+    CHECK_THAT(c.result.code, !Catch::Contains(stand_in));
+    render::RenderResult r = render_compiled(c.result, 64, 36);
+    INFO(r.error);
+    REQUIRE(r.ok);
+    Agreement a = against_reference(c.result, r, 64, 36, 2);
+    CHECK(a.disagree <= a.samples / 50);
+    CHECK(a.rings > a.samples / 20);
+    Compiled ao = compile_text("lattice_ao.iq", text + "\n[effects]\nao = true\n");
+    REQUIRE(ao.result.exit_code == 0);
+    CHECK_THAT(ao.result.code, Catch::Contains(stand_in));
+    std::string far = text;
+    far.replace(far.find("[modules]\n"), 10, "[modules]\nball = \"\"\"\nshape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n\"\"\"\n");
+    Compiled wide = compile_text("lattice_wide.iq", far + "\n[[shapes]]\ntype = \"ball\"\ntransform = \"T((0, 0, 30))\"\n");
+    INFO(wide.diagnostics);
+    REQUIRE(wide.result.exit_code == 0);
+    CHECK_THAT(wide.result.code, Catch::Contains(stand_in));
+}
+
 TEST_CASE("a lattice in a plane loops over its two axes only: the reference's picture", "[instancing][render][lattice]") {
     // Rings on a 7×1×7 grid (a floor of them: y has one cell): a loop over y of 0 or 1 trips around the other two
     // made 100 instances' frame 13% slower. An axis of one cell is no loop; its cell counts only when in reach.

@@ -1364,9 +1364,17 @@ private:
             vals.push_back(count[size_t(a)]);
         }
         std::vector<ValueId> near = nest(b, 0, st1, vals);
-        const ValueId beyond = b.compare(CompareKind::Gt, box, b.scalar(far_from));
         const ValueId looked_up = b.construct(vt, near);
-        ValueId chosen = b.if_(beyond, far, looked_up);
+        // The stand-in serves only points beyond far_from of the lattice's box. Where every call of iqc_scene
+        // lies in the scene's box (marches are clipped to it; soft shadows and ambient occlusion, which read the
+        // scene anywhere, are off) and that box lies within far_from of the lattice's on every axis, it would
+        // never serve, and its test is left out (100 instances: 3% of llvmpipe's driver compile). The lookup
+        // is exact anywhere; a point a little outside (a relaxed step's overshoot) only visits more cells.
+        bool stand_in_serves = o_.unbounded_scene || !out_.box;
+        for (size_t a = 0; a < 3 && !stand_in_serves; ++a)
+            stand_in_serves = out_.box->first[a] < centre[a] - half[a] - far_from || out_.box->second[a] > centre[a] + half[a] + far_from;
+        ValueId chosen = looked_up;
+        if (stand_in_serves) chosen = b.if_(b.compare(CompareKind::Gt, box, b.scalar(far_from)), far, looked_up);
         std::vector<ValueId> out;
         for (size_t c = 0; c < st.size(); ++c) out.push_back(b.op(Op::Extract, {chosen}, int(c)));
         return out;
