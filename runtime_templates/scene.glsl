@@ -806,10 +806,12 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
             // The last stretch, up to the light: the estimate there too. Without it the penumbra's value is
             // that of wherever the last step before the light happened to land, and a surface near the light
             // (a ceiling above a lamp) draws terraces on every wall the light falls on. The step's distance at
-            // the light is at least the overshoot t - t_max (1-Lipschitz), the value h / e.x times that: only
-            // where that bound could lower the estimate is the light's point evaluated (lights_and_effects'
-            // frame: 6.7% more with every ray evaluating it).
-            if (IQC_SHADOW_K * (h / e.x) * (t - t_max) < res * t_max)
+            // the light is at least the overshoot t - t_max (it is 1-Lipschitz), and the value at least the step
+            // (a Lipschitz factor divides the value into the step, and every factor is at least 1; the last
+            // sample's factor is not the light's nearest instance's: a new user's trial, a twisted box with
+            // `bound` beside an exact canopy over the lamp, brought the terraces back with it): only where that
+            // bound could lower the estimate is the light's point evaluated.
+            if (IQC_SHADOW_K * (t - t_max) < res * t_max)
                 res = min(res, IQC_SHADOW_K * iqc_scene_effects(ro + t_max * rd).y / t_max);
             break;
         }
