@@ -74,6 +74,13 @@ Agreement against_reference(const CompileResult& c, const render::RenderResult& 
     return a;
 }
 
+// Compiles `text` for an `ids` render (per pixel the depth and the instance id: against_reference).
+Compiled compile_ids(const std::string& name, const std::string& text) {
+    CompileOptions o;
+    o.ids = true;
+    return compile_path(write_temp(name, text), o);
+}
+
 int count(const std::string& s, const std::string& what) {
     int n = 0;
     for (size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
@@ -214,9 +221,7 @@ TEST_CASE("a lattice of 1000 tori draws the reference with or without bound", "[
     const int W = 48, H = 27;
     std::vector<int> ids[2];
     for (int b = 0; b < 2; ++b) {
-        CompileOptions o;
-        o.ids = true;
-        Compiled c = compile_path(write_temp(fmt::format("lattice_{}.iq", b), lattice(b == 1)), o);
+        Compiled c = compile_ids(fmt::format("lattice_{}.iq", b), lattice(b == 1));
         REQUIRE(c.result.exit_code == 0);
         render::RenderResult r = render_compiled(c.result, W, H);
         INFO(r.error);
@@ -428,9 +433,7 @@ TEST_CASE("a hierarchy node standing in for its members is never a hit", "[insta
         s += fmt::format("[[shapes]]\ntype = \"torus\"\ntransform = \"T(({:.3f}, {:.3f}, {:.3f}))⋅`R_x`({:.2f})\"\nbound = 1.21\n", x, y, z,
                          0.37 * i);
     }
-    CompileOptions o;
-    o.ids = true;
-    Compiled c = compile_path(write_temp("behind.iq", s), o);
+    Compiled c = compile_ids("behind.iq", s);
     REQUIRE(c.result.exit_code == 0);
     REQUIRE_THAT(c.result.code, Catch::Contains("a bounding-box hierarchy of"));
     render::RenderResult r = render_compiled(c.result, 160, 90);
@@ -531,9 +534,7 @@ TEST_CASE("a lattice of members that differ (tilts, sizes) reads each member's d
                               : fmt::format("[[shapes]]\ntype = \"ring\"\nmaterial = \"lambert\"\ntransform = \"T(({}, {}, {}))\"\n"
                                             "shape_params = {{ t = [{:.2f}, 0.08] }}\nbound = 0.4\n", x, y, z, 0.2 + 0.03 * (i % 4));
         }
-        CompileOptions o;
-        o.ids = true;
-        Compiled c = compile_path(write_temp(fmt::format("lattice_differ_{}.iq", variant), s), o);
+        Compiled c = compile_ids(fmt::format("lattice_differ_{}.iq", variant), s);
         INFO(variant << "\n" << c.diagnostics);
         REQUIRE(c.result.exit_code == 0);
         CHECK_THAT(c.result.code, Catch::Contains("343 instances on a 7×7×7 lattice: the cells within reach"));
@@ -605,9 +606,7 @@ TEST_CASE("a lattice that fills the scene's box has no stand-in for far points u
     // reads the scene anywhere, and a far sphere widens the box: the stand-in stays.
     const std::string text = read_text(std::filesystem::path(IQC_SOURCE_DIR) / "bench" / "instances_100.iq");
     const std::string stand_in = "distance to the box of the lattice's bounding spheres";
-    CompileOptions o;
-    o.ids = true;
-    Compiled c = compile_path(write_temp("lattice_alone.iq", text), o);
+    Compiled c = compile_ids("lattice_alone.iq", text);
     INFO(c.diagnostics);
     REQUIRE(c.result.exit_code == 0);
     CHECK_THAT(c.result.code, Catch::Contains("100 instances on a 10×10×1 lattice"));
@@ -645,9 +644,7 @@ TEST_CASE("a lattice in a plane loops over its two axes only: the reference's pi
     for (int i = 0; i < 49; ++i)
         s += fmt::format("[[shapes]]\ntype = \"ring\"\nmaterial = \"lambert\"\ntransform = \"T(({}, 0.3, {}))⋅`R_x`({:.2f})\"\nbound = 0.4\n",
                          (i % 7) - 3.5, (i / 7) - 3.5, 0.3 * (i % 3));
-    CompileOptions o;
-    o.ids = true;
-    Compiled c = compile_path(write_temp("lattice_plane.iq", s), o);
+    Compiled c = compile_ids("lattice_plane.iq", s);
     INFO(c.diagnostics);
     REQUIRE(c.result.exit_code == 0);
     CHECK_THAT(c.result.code, Catch::Contains("49 instances on a 7×1×7 lattice: the cells within reach"));
@@ -660,7 +657,7 @@ TEST_CASE("a lattice in a plane loops over its two axes only: the reference's pi
     CHECK(a.disagree <= a.samples / 50);
     CHECK(a.rings > a.samples / 20);
     // A lattice of three axes keeps three loops.
-    Compiled cube = compile_path(write_temp("lattice_cube.iq", rings_scene(1000, false, 0)), o);
+    Compiled cube = compile_ids("lattice_cube.iq", rings_scene(1000, false, 0));
     REQUIRE(cube.result.exit_code == 0);
     CHECK_THAT(cube.result.code, Catch::Contains("1000 instances on a 10×10×10 lattice"));
     CHECK(loops_in_scene(cube.result.code) == 3);
