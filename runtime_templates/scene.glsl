@@ -803,14 +803,10 @@ float iqc_shadow(vec3 p, vec3 N, vec3 light) {
 {{/if}}
         t += e.x;
         if (t > t_max) {
-            // The last stretch, up to the light: the estimate there too. Without it the penumbra's value is
-            // that of wherever the last step before the light happened to land, and a surface near the light
-            // (a ceiling above a lamp) draws terraces on every wall the light falls on. The step's distance at
-            // the light is at least the overshoot t - t_max (it is 1-Lipschitz), and the value at least the step
-            // (a Lipschitz factor divides the value into the step, and every factor is at least 1; the last
-            // sample's factor is not the light's nearest instance's: a new user's trial, a twisted box with
-            // `bound` beside an exact canopy over the lamp, brought the terraces back with it): only where that
-            // bound could lower the estimate is the light's point evaluated.
+            // The estimate at the light too: else it is read wherever the last step before the light landed
+            // (terraces on the walls of a room lit by a lamp under its ceiling). Only where the overshoot
+            // t - t_max, a lower bound of the distance there (the value, a Lipschitz factor times the step, is
+            // at least the step), leaves room for the light's point to lower the estimate is it evaluated.
             if (IQC_SHADOW_K * (t - t_max) < res * t_max)
                 res = min(res, IQC_SHADOW_K * iqc_scene_effects(ro + t_max * rd).y / t_max);
             break;
