@@ -1210,6 +1210,13 @@ private:
     // cell centre lies, per axis, within the nearest distance so far plus the spheres' radius: the others'
     // spheres are no nearer than that distance, so their distances cannot lower it (Hart 1996 §4), and the
     // result is the loop over all members' (for distances no smaller than their sphere's) or a lower bound of it.
+    // p (ℝ³) moved to lattice cell `cell`'s centre (ℝ³, whole numbers): (p − origin) − cell·spacing, the point at
+    // which a member on its cell's centre is evaluated (Item::centred_fn), in iqc_scene and in iqc_distance_of.
+    ValueId to_cell_centre(Builder& b, const InstanceLattice& L, ValueId p, ValueId cell) {
+        auto vec = [&](const std::array<double, 3>& a) { return b.constant(Type::vector(3), {a[0], a[1], a[2]}); };
+        return b.op(Op::Sub, {b.op(Op::Sub, {p, vec(L.origin)}), b.op(Op::Hadamard, {cell, vec(L.spacing)})});
+    }
+
     std::vector<ValueId> lattice_lookup(Builder& b, const Item& it, ValueId p, const std::vector<ValueId>& st) {
         const InstanceLattice& L = it.lattice;
         const Type v3 = Type::vector(3);
@@ -1263,7 +1270,7 @@ private:
         // Member k at p as member `base` at p − cell·spacing (members_alike).
         auto moved = [&](Builder& lb, ValueId at, ValueId cellv) { return lb.op(Op::Sub, {at, lb.op(Op::Hadamard, {cellv, vec3c(lb, L.spacing)})}); };
         // p moved to member k's cell centre, origin + cell·spacing (lattice_centred).
-        auto to_centre = [&](Builder& lb, ValueId at, ValueId cellv) { return moved(lb, lb.op(Op::Sub, {at, vec3c(lb, L.origin)}), cellv); };
+        auto to_centre = [&](Builder& lb, ValueId at, ValueId cellv) { return to_cell_centre(lb, L, at, cellv); };
         ValueId c0used = c0;
         if ((alike || centred) && L.back_axis >= 0) {
             std::array<double, 3> e{0, 0, 0};
@@ -1503,11 +1510,8 @@ private:
             ValueId d;
             if (blend_first) {
                 d = blend_distance(b, it.blend, p, true, o_.instrument, nullptr);
-            } else if (cell != ValueId(-1) && it.centred_fn >= 0) {  // member k at p − its cell's centre
-                const InstanceLattice& L = it.lattice;
-                ValueId centre = b.op(Op::Add, {b.constant(Type::vector(3), {L.origin[0], L.origin[1], L.origin[2]}),
-                                                b.op(Op::Hadamard, {cell, b.constant(Type::vector(3), {L.spacing[0], L.spacing[1], L.spacing[2]})})});
-                d = b.call(it.centred_fn, {b.op(Op::Sub, {p, centre}), args.back()});
+            } else if (cell != ValueId(-1)) {  // member k at p moved to its cell's centre (lattice_cell_of: centred)
+                d = b.call(it.centred_fn, {to_cell_centre(b, it.lattice, p, cell), args.back()});
             } else {
                 d = b.call(fn, args);
             }
