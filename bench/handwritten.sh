@@ -4,12 +4,14 @@
 #
 # For every bench scene with a same-picture reference (bench/reference/X.frag beside bench/X.iq, written by
 # hand in Quilez's style), iqc compiles bench/X.iq to a Shadertoy shader and both shaders are drawn by the
-# same harness (`iqc render FILE.frag`, Mesa's llvmpipe without a GPU, its shader cache off). Rounds are
+# same harness (`iqc render FILE.frag`: Mesa's llvmpipe without a GPU, its shader cache off; on a GPU machine
+# (bench/gpu.sh) the GPU's driver, with NVIDIA's shader disk cache off). Rounds are
 # interleaved (iqc, hand, iqc, hand, ...) so that machine load falls on both alike; each round draws
 # FRAMES frames at SIZE, then, in a fresh process, 3 frames at 8x8, and per shader the script takes the median
 # over the rounds of
 #   frame:   the median of the frames after the first at SIZE (drawing only);
-#   compile: the first 8x8 frame minus the median of the later ones (llvmpipe compiles at the first draw; at
+#   compile: the program's link plus the first 8x8 frame minus the median of the later ones (llvmpipe compiles
+#            at the first draw, a GPU's driver mostly at the link; at
 #            8x8 that frame is nearly all compile: measured as the first frame at 640x360 minus the later ones,
 #            one shader's compile varied by 15-30% between runs, 100 instances' ratio from 0.89 to 1.12).
 # It prints the PSNR of the two pictures (the references must stay at or above 50 dB; `inf` is identical)
@@ -47,7 +49,28 @@ draw() {
     awk '{ c = $1 + $2 - $3; if (c < $1) c = $1; print c, $3 }'
 }
 
+# psnr A.png B.png: ImageMagick's PSNR (dB, `inf` if identical); where it is not installed (a GPU machine),
+# the same figure from Python's Pillow (NumPy if there): 10·log10(1/MSE) over the RGBA channels scaled to
+# [0, 1]; `?` without Pillow.
+psnr() {
+  if [ -x /usr/bin/compare ]; then /usr/bin/compare -metric PSNR "$1" "$2" null: 2>&1 || true; return; fi
+  python3 - "$1" "$2" 2>/dev/null <<'PY' || echo "?"
+import sys, math
+from PIL import Image
+a, b = (Image.open(f).convert("RGBA").tobytes() for f in sys.argv[1:3])
+try:
+    import numpy as np
+    d = np.frombuffer(a, np.uint8).astype(np.float64) - np.frombuffer(b, np.uint8)
+    sse = float(np.dot(d, d))
+except ImportError:
+    sse = float(sum((x - y) ** 2 for x, y in zip(a, b)))
+mse = sse / (255.0 ** 2 * len(a))
+print("inf" if mse == 0 else f"{10 * math.log10(1 / mse):.4g}")
+PY
+}
+
 status=0
+"$IQC" render bench/few_shapes.iq --size 8x8 -o "$tmp/r.png" 2>&1 | sed -n 's/.*(8x8, \(.*\), shader compile.*/renderer: \1/p'
 printf '%-16s %-9s %-12s %-12s %-7s %-14s %-14s %s\n' scene "PSNR dB" "iqc frame" "hand frame" ratio "iqc compile" "hand compile" ratio
 worst_frame=0; worst_compile=0
 for s in "${scenes[@]}"; do
@@ -56,8 +79,8 @@ for s in "${scenes[@]}"; do
   "$IQC" "$scene" -o "$tmp/iqc.frag" 2>/dev/null
   "$IQC" render "$tmp/iqc.frag" --size "$size" -o "$tmp/iqc.png" -q
   "$IQC" render "$hand" --size "$size" -o "$tmp/hand.png" -q
-  psnr=$(/usr/bin/compare -metric PSNR "$tmp/iqc.png" "$tmp/hand.png" null: 2>&1 || true)
-  if [ "$psnr" != inf ] && awk -v p="$psnr" 'BEGIN { exit !(p + 0 < 50) }'; then status=1; fi
+  psnr=$(psnr "$tmp/iqc.png" "$tmp/hand.png")
+  if [ "$psnr" != inf ] && [ "$psnr" != "?" ] && awk -v p="$psnr" 'BEGIN { exit !(p + 0 < 50) }'; then status=1; fi
   : > "$tmp/iqc.t"; : > "$tmp/hand.t"; : > "$tmp/iqc.c"; : > "$tmp/hand.c"
   for ((r = 0; r < rounds; r++)); do
     draw "$tmp/iqc.frag" >> "$tmp/iqc.t"

@@ -4,9 +4,9 @@
 # and, for comparison, the same rings without `bound` (every member evaluated at every step).
 #
 # Prints per N: shape evaluations per scene evaluation (`iqc render --stats`), and the frame time on the
-# headless renderer (llvmpipe without a GPU) at 160x90: the median over ROUNDS (default 7) interleaved
-# rounds of the median of 3 frames after the first (which includes the driver's compile), and its ratio to
-# the frame at the first N.
+# headless renderer (llvmpipe without a GPU) at SIZE (default 160x90): the median over ROUNDS (default 7)
+# interleaved rounds of the median of the FRAMES - 1 (default 3) frames after the first (which includes the
+# driver's compile), and its ratio to the frame at the first N.
 #
 #   bench/hierarchy.sh                  # N = 10 100 1000 2000, Shadertoy target
 #   TARGET=webgl2 ROUNDS=3 bench/hierarchy.sh 10 1000 10000
@@ -19,12 +19,14 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 target=${TARGET:-shadertoy}
 rounds=${ROUNDS:-7}
+size=${SIZE:-160x90}
+frames=${FRAMES:-4}
 sizes=(${@:-10 100 1000 2000})
 
 median() { sort -n | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'; }
 
 frame() {  # frame FILE: the median of the frames after the first, ms
-  MESA_SHADER_CACHE_DISABLE=true ./build/iqc render "$1" --target "$target" --size 160x90 --frames 4 -o "$tmp/f.png" 2>&1 |
+  MESA_SHADER_CACHE_DISABLE=true ./build/iqc render "$1" --target "$target" --size "$size" --frames "$frames" -o "$tmp/f.png" 2>&1 |
     sed -n 's/.*later frames \([0-9.]*\) ms median.*/\1/p'
 }
 

@@ -159,6 +159,7 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
         ro.progress = [&](int done, int total) { std::fprintf(stderr, "\riqc: rendering %3d%%", 100 * done / total); };
     iqc::render::RenderResult last;
     std::vector<double> frame_ms;
+    double first_compile_ms = 0;
     // The output's folder is made as needed (`--frames 8 -o frames/a.png` into a new frames/).
     if (auto dir = std::filesystem::path(output).parent_path(); !dir.empty()) {
         std::error_code ec;
@@ -189,6 +190,7 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
             return 1;
         }
         frame_ms.push_back(last.frame_ms);
+        if (k == 0) first_compile_ms = last.compile_ms;
         std::string path = frame_path(output, k, frames);
         if (!iqc::render::write_png(path, last.image, &err)) {
             std::fprintf(stderr, "iqc: error: %s\n", err.c_str());
@@ -202,12 +204,16 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
     std::vector<double> later(frame_ms.begin() + 1, frame_ms.end());
     std::sort(later.begin(), later.end());
     std::sort(frame_ms.begin(), frame_ms.end());
-    std::string later_text = later.empty() ? "" : fmt::format(", later frames {:.1f} ms median", later[later.size() / 2]);
+    // Milliseconds to three decimals below 10 ms (a GPU draws a frame in well under one), else to one.
+    auto ms = [](double v) { return v < 10 ? fmt::format("{:.3f}", v) : fmt::format("{:.1f}", v); };
+    std::string later_text = later.empty() ? "" : ", later frames " + ms(later[later.size() / 2]) + " ms median";
+    // The compile is the first frame's (the later frames reuse its program; before, the last frame's ~0 ms
+    // was printed and a driver's link time was left out of every figure).
     if (!quiet)
-    std::fprintf(stderr, "iqc: rendered %s (%dx%d%s, %s, shader compile %.1f ms, frame %.1f ms%s)\n",
+    std::fprintf(stderr, "iqc: rendered %s (%dx%d%s, %s, shader compile %s ms, frame %s ms%s)\n",
                  frame_path(output, 0, frames).c_str(), ro.width, ro.height,
-                 frames > 1 ? fmt::format(", {} frames", frames).c_str() : "", last.renderer.c_str(), last.compile_ms,
-                 first_ms, later_text.c_str());
+                 frames > 1 ? fmt::format(", {} frames", frames).c_str() : "", last.renderer.c_str(),
+                 ms(first_compile_ms).c_str(), ms(first_ms).c_str(), later_text.c_str());
     if (!stats) return 0;
     // NaN/Inf in the colour image, and the instrumented build's counts.
     long nan = 0;
