@@ -291,7 +291,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float seg = {{T_FAR}} - t;  // the candidate segment's length: the whole ray at first
     float d_prev = -1.0, t_prev = 0.0;  // the last sample's distance and where it was taken
 {{/if}}
-    for (int i = 0; i < IQC_MAX_STEPS; i++) {
+    for (int i = 0; i < IQC_MAX_STEPS && t <= {{T_FAR}}; i++) {
 {{#if MARCH_SEGMENT}}
         vec3 p = ro + t * rd, q = p + seg * rd;
         vec3 lo = min(p, q), hi = max(p, q);
@@ -318,19 +318,19 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         float e = iqc_eps(t);
         float dn = iqc_nearness(h);
 {{/if}}
-        if (dn < e) { id = int(h.y); return t; }
 {{#if MARCH_SEGMENT}}
         if (!clear) {  // the step cap's bookkeeping reads samples only
-{{/if}}
-{{#if EPS_CONSTANT}}
-        if (dn < best) { best = dn; best_t = t; best_id = h.y; }  // in tolerances at the end (a constant tolerance)
-{{#else}}
-        if (dn / e < best) { best = dn / e; best_t = t; best_id = h.y; }
 {{/if}}
         prev = last;
         last = dn;
         last_t = t;
         last_id = h.y;
+        if (dn < e) break;  // a hit (the loop's exits are breaks: returns inside it cost a GPU 12% of the frame)
+{{#if EPS_CONSTANT}}
+        if (dn < best) { best = dn; best_t = t; best_id = h.y; }  // in tolerances at the end (a constant tolerance)
+{{#else}}
+        if (dn / e < best) { best = dn / e; best_t = t; best_id = h.y; }
+{{/if}}
 {{#if MARCH_SEGMENT}}
         }
         float step = seg;
@@ -365,8 +365,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{#else}}
         t += d;
 {{/if}}
-        if (t > {{T_FAR}}) return -1.0;
     }
+    if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
+    if (t > {{T_FAR}}) return -1.0;
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
@@ -399,16 +400,16 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         }
         float e = iqc_eps(t);
         float dn = iqc_nearness(h);
-        if (dn < e) { id = int(h.y); return t; }
+        prev = last;
+        last = dn;
+        last_t = t;
+        last_id = h.y;
+        if (dn < e) break;  // a hit (the loop's exits are breaks: returns inside it cost a GPU 12% of the frame)
 {{#if EPS_CONSTANT}}
         if (dn < best) { best = dn; best_t = t; best_id = h.y; }  // in tolerances at the end (a constant tolerance)
 {{#else}}
         if (dn / e < best) { best = dn / e; best_t = t; best_id = h.y; }
 {{/if}}
-        prev = last;
-        last = dn;
-        last_t = t;
-        last_id = h.y;
         t_prev = t;
         r_prev = abs(d);
         step_len = omega * d;
@@ -420,11 +421,13 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         if (t > {{T_FAR}}) {
             // Past the end only by relaxing: a plain step stays short of it, so the long step is not yet known
             // to be safe. Sample at the end and check there (a failure steps back as anywhere else).
-            if (t_prev + r_prev > {{T_FAR}}) return -1.0;
+            if (t_prev + r_prev > {{T_FAR}}) break;  // t stays beyond the end: no hit
             t = {{T_FAR}};
             step_len = t - t_prev;
         }
     }
+    if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
+    if (t > {{T_FAR}}) return -1.0;
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
@@ -475,7 +478,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         }
         float e = iqc_eps(t);
         float dn = iqc_nearness(h);
-        if (dn < e) { id = int(h.y); return t; }
+        if (dn < e) { last = dn; last_t = t; last_id = h.y; break; }  // a hit (the loop's exits are breaks)
 {{#if EPS_CONSTANT}}
         if (dn < best) { best = dn; best_t = t; best_id = h.y; }  // in tolerances at the end (a constant tolerance)
 {{#else}}
@@ -502,11 +505,13 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         if (t > {{T_FAR}}) {
             // Past the end only by relaxing: a plain step stays short of it, so the long step is not yet known
             // to be safe. Sample at the end and check there (a failure steps back as anywhere else).
-            if (t_prev + r_prev > {{T_FAR}}) return -1.0;
+            if (t_prev + r_prev > {{T_FAR}}) break;  // t stays beyond the end: no hit
             t = {{T_FAR}};
             step_len = t - t_prev;
         }
     }
+    if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
+    if (t > {{T_FAR}}) return -1.0;
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
