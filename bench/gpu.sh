@@ -14,7 +14,7 @@
 #
 #   bench/gpu.sh /tmp/gpu          # after scripts/build.sh, on the machine with the GPU
 set -uo pipefail
-out=${1:?usage: bench/gpu.sh OUT}
+out=$(realpath -m "${1:?usage: bench/gpu.sh OUT}")  # before the cd: a relative OUT is the caller's
 cd "$(dirname "$0")/.."
 mkdir -p "$out"
 export __GL_SHADER_DISK_CACHE=0 MESA_SHADER_CACHE_DISABLE=true

@@ -133,8 +133,15 @@ TEST_CASE("the march loop's exits are breaks, its tests after the loop", "[scene
         CHECK_FALSE(std::regex_search(body, std::regex("\\breturn\\b")));  // (the comment's "returns" is no return)
         // After the loop: the hit, then the far end, then the step cap.
         const std::string after = code.substr(close, code.find("\n}\n", close) - close);
-        CHECK_THAT(after, Catch::Contains("if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }"));
-        CHECK_THAT(after, Catch::Contains("return iqc_at_step_cap("));
+        const size_t hit = after.find("if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }");
+        const size_t far = after.find("if (t > t_far) return -1.0;");
+        const size_t cap = after.find("return iqc_at_step_cap(");
+        CHECK(hit != std::string::npos);
+        CHECK(far != std::string::npos);
+        CHECK(cap != std::string::npos);
+        CHECK((hit < far && far < cap));
+        // (segment tracing's own loop, not the sphere-tracing one it falls back to)
+        if (std::string(m) == "segment") CHECK_THAT(body, Catch::Contains("iqc_segment_clear("));
     }
 }
 
