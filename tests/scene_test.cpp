@@ -206,6 +206,15 @@ TEST_CASE("the march tests its first sample's sign only where a march can start 
     REQUIRE(sponge.result.exit_code == 0);
     CHECK_THAT(sponge.result.code, Catch::Contains("mod("));
     CHECK_THAT(sponge.result.code, !Catch::Contains(test));
+    // A camera outside the scene's box: every march starts where its ray enters the box, where every instance's
+    // distance is above the box's level. 100 tori on a lattice (their cells' floors defeat the interval test
+    // around the camera) leave the test out; with the camera inside their box, between the tori, it stays.
+    const std::string tori = read_text(std::filesystem::path(IQC_SOURCE_DIR) / "bench" / "instances_100.iq");
+    REQUIRE(tori.find("position = [0, 0, -14]") != std::string::npos);
+    CHECK_THAT(code("tori.iq", tori), !Catch::Contains(test));
+    std::string between = tori;
+    between.replace(between.find("position = [0, 0, -14]"), 22, "position = [0, 0, 0.2]");
+    CHECK_THAT(code("tori_between.iq", between), Catch::Contains(test));
     // Glass: a refracted ray starts inside it.
     CHECK_THAT(code("glass.md", kBall + "```scene\n[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\n[effects]\nrefraction = true\n"
                                         "[[shapes]]\ntype = \"ball\"\nmaterial = \"glass\"\n```\n"),

@@ -226,6 +226,14 @@ void SceneCompiler::warn_idle_effects(const SceneIR& scene) {
 // The pass pipeline; range warnings become diagnostics (errors with --strict-ranges).
 bool SceneCompiler::march_may_start_inside(const SceneIR& scene, const std::set<std::string>& flags) const {
     if (opts_.target != Target::Shadertoy || s_.camera.orbit || flags.count("BOUNCES") || opts_.per_instance) return true;
+    // A camera outside the scene's box: every march starts where its ray enters the box (iqc_far), and there every
+    // instance's distance is at least the box's level (ten hit tolerances or more; SceneIR::box), so no march
+    // starts inside a shape, whatever the field does near the camera (100 tori on a lattice: its floors defeat
+    // the interval test below).
+    if (const auto& box = scene.box; box && flags.count("SCENE_BOX"))
+        for (int a = 0; a < 3; ++a)
+            if (s_.camera.position[size_t(a)] < box->first[size_t(a)] || s_.camera.position[size_t(a)] > box->second[size_t(a)])
+                return false;
     const ir::Module& m = scene.module;
     bool steps = false;
     for (const ir::Function& f : m.functions)
