@@ -49,25 +49,6 @@ draw() {
     awk '{ c = $1 + $2 - $3; if (c < $1) c = $1; print c, $3 }'
 }
 
-# psnr A.png B.png: ImageMagick's PSNR (dB, `inf` if identical); where it is not installed (a GPU machine),
-# the same figure from Python's Pillow (NumPy if there): 10·log10(1/MSE) over the RGB channels scaled to
-# [0, 1] (iqc render's PNGs have no alpha: ImageMagick's figure); `?` without Pillow.
-psnr() {
-  if [ -x /usr/bin/compare ]; then /usr/bin/compare -metric PSNR "$1" "$2" null: 2>&1 || true; return; fi
-  python3 - "$1" "$2" 2>/dev/null <<'PY' || echo "?"
-import sys, math
-from PIL import Image
-a, b = (Image.open(f).convert("RGB").tobytes() for f in sys.argv[1:3])
-try:
-    import numpy as np
-    d = np.frombuffer(a, np.uint8).astype(np.float64) - np.frombuffer(b, np.uint8)
-    sse = float(np.dot(d, d))
-except ImportError:
-    sse = float(sum((x - y) ** 2 for x, y in zip(a, b)))
-mse = sse / (255.0 ** 2 * len(a))
-print("inf" if mse == 0 else f"{10 * math.log10(1 / mse):.4g}")
-PY
-}
 
 status=0
 "$IQC" render bench/few_shapes.iq --size 8x8 -o "$tmp/r.png" 2>&1 | sed -n 's/.*(8x8, \(.*\), shader compile.*/renderer: \1/p' || true
@@ -79,7 +60,7 @@ for s in "${scenes[@]}"; do
   "$IQC" "$scene" -o "$tmp/iqc.frag" 2>/dev/null
   "$IQC" render "$tmp/iqc.frag" --size "$size" -o "$tmp/iqc.png" -q
   "$IQC" render "$hand" --size "$size" -o "$tmp/hand.png" -q
-  psnr=$(psnr "$tmp/iqc.png" "$tmp/hand.png")
+  psnr=$(bash bench/psnr.sh "$tmp/iqc.png" "$tmp/hand.png")
   [ "$psnr" = "?" ] && echo "handwritten.sh: no PSNR for $s (neither ImageMagick's compare nor Python's Pillow): the 50 dB check is skipped" >&2
   if [ "$psnr" != inf ] && [ "$psnr" != "?" ] && awk -v p="$psnr" 'BEGIN { exit !(p + 0 < 50) }'; then status=1; fi
   : > "$tmp/iqc.t"; : > "$tmp/hand.t"; : > "$tmp/iqc.c"; : > "$tmp/hand.c"
