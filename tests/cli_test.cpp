@@ -4,6 +4,8 @@
 #include <catch2/catch.hpp>
 
 #include <chrono>
+#include <cstdlib>
+#include <vector>
 
 #include "TestUtil.h"
 #include "render/Png.h"
@@ -409,6 +411,48 @@ TEST_CASE("every bench scene's hand-written reference draws iqc's picture (50 dB
         ++n;
     }
     CHECK(n >= 8);
+}
+
+TEST_CASE("bench/ablate's edited copies of iqc's shaders draw iqc's pictures", "[cli][render][ablate]") {
+    // bench/ablate.sh times each copy against iqc's shader: a comparison only while they draw the same picture,
+    // and only while the edits still find the code they change (a variant not written fails here).
+    namespace fs = std::filesystem;
+    const fs::path root = IQC_SOURCE_DIR;
+    struct Case {
+        const char* scene;
+        std::vector<const char*> variants;  // the ones that must be written (each pixel as iqc's)
+    };
+    const std::vector<Case> cases = {
+        {"bench/few_shapes.iq", {"hitid", "noid", "normal"}},
+        {"bench/grazing_thin.iq", {"hitid", "noid", "normal"}},
+        {"bench/displaced_torus.iq", {"hitid", "normal"}},  // (no noid: its nearness reads the instance's factor)
+        {"golden/effects/shadows_soft.iq", {"hitid", "noid", "normal", "shadow"}},
+        {"golden/effects/shadows_hard.iq", {"hitid", "noid", "normal", "shadow"}},
+    };
+    auto read = [](const fs::path& png) {
+        iqc::render::Image im;
+        REQUIRE(iqc::render::read_png(png.string(), im, nullptr));
+        return im;
+    };
+    for (const Case& c : cases) {
+        INFO(c.scene);
+        const std::string stem = fs::path(c.scene).stem().string();
+        const fs::path frag = temp_dir() / ("ablate_" + stem + ".frag"), png = temp_dir() / ("ablate_" + stem + ".png");
+        REQUIRE(run_iqc((root / c.scene).string() + " -o " + frag.string()).exit_code == 0);
+        const fs::path prefix = temp_dir() / ("ablate_" + stem);
+        REQUIRE(std::system(("python3 '" + (root / "bench" / "ablate" / "variants.py").string() + "' '" + frag.string() + "' '" +
+                             prefix.string() + "'").c_str()) == 0);
+        REQUIRE(run_iqc("render " + frag.string() + " --size 160x90 -q -o " + png.string()).exit_code == 0);
+        const iqc::render::Image ref = read(png);
+        for (const char* v : c.variants) {
+            INFO(v);
+            const fs::path vf = prefix.string() + "_" + v + ".frag", vp = prefix.string() + "_" + v + ".png";
+            REQUIRE(fs::exists(vf));
+            REQUIRE(run_iqc("render " + vf.string() + " --size 160x90 -q -o " + vp.string()).exit_code == 0);
+            const iqc::render::Image im = read(vp);
+            CHECK(im.rgba == ref.rgba);
+        }
+    }
 }
 
 TEST_CASE("the hand-written references in bench/handwritten render without NaN", "[cli][render]") {
