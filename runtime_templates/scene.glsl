@@ -288,7 +288,10 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     if (t_far < 0.0) return -1.0;
 {{/if}}
 {{#if MARCH_SEGMENT}}
-    float seg = {{T_FAR}} - t;  // the candidate segment's length: the whole ray at first
+    // The candidate segment's length: the whole ray at first, and never 0 (a ray that starts at its far end,
+    // a camera on the box's face looking out: a clear segment of 0 stepped 0 and doubled to 0 until the step
+    // cap; one tolerance beyond the end ends the march as background, or samples the end).
+    float seg = max({{T_FAR}} - t, iqc_eps(t));
     float d_prev = -1.0, t_prev = 0.0;  // the last sample's distance and where it was taken
 {{/if}}
     for (int i = 0; i < IQC_MAX_STEPS && t <= {{T_FAR}}; i++) {

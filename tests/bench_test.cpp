@@ -386,6 +386,32 @@ type = "menger"
     CHECK_THAT(read_text(frag), !Catch::Contains("segment"));
 }
 
+TEST_CASE("segment tracing from the scene box's face, looking out, takes one step, not the step cap", "[march][segment]") {
+    // A ray that starts at its far end (the camera exactly on the box's face, looking away: t_enter = t_far = 0)
+    // had a candidate segment of length 0: clear, a step of 0, the next segment twice 0, until max_steps (a new
+    // user's trial: 128 steps and 128 bounds per pixel to draw background; the camera 0.01 further out: 0).
+    const std::string ball = "[[shapes]]\ntype = \"sphere\"\n[render]\nmarch = \"segment\"\n";
+    auto far = temp_dir() / "face_probe.frag";
+    REQUIRE(run_iqc(write_temp("face_probe.iq", ball).string() + " -o " + far.string()).exit_code == 0);
+    const std::string code = read_text(far);
+    const std::string key = "const vec3 IQC_BOX_LO = vec3(";
+    auto at = code.find(key);
+    REQUIRE(at != std::string::npos);
+    const std::string lo = code.substr(at + key.size(), code.find(')', at) - at - key.size());  // one value: a ball's box is a cube
+    REQUIRE(lo.find(',') == std::string::npos);
+    for (const char* march : {"segment", "sphere"}) {
+        auto scene = write_temp(std::string("face_") + march + ".iq",
+                                "[[shapes]]\ntype = \"sphere\"\n[camera]\nposition = [0, 0, " + lo + "]\ntarget = [0, 0, -5]\n"
+                                "[render]\nmarch = \"" + march + "\"\n");
+        RunResult s = run_iqc("render " + scene.string() + " -o " + (temp_dir() / "face.png").string() + " --size 48x27 --stats -q");
+        INFO(march << s.err);
+        REQUIRE(s.exit_code == 0);
+        auto st = s.out.find("steps_mean: ");
+        REQUIRE(st != std::string::npos);
+        CHECK(std::stod(s.out.substr(st + 12)) <= 1.0);
+    }
+}
+
 TEST_CASE("iqc bench usage errors", "[bench]") {
     CHECK(run_iqc("bench").exit_code == 2);
     RunResult size = run_iqc("bench " + std::string(IQC_SOURCE_DIR) + "/examples/two_tori.md --size 0x-3");
