@@ -24,6 +24,7 @@ if [ $MAIN_ONLY -eq 0 ]; then
     imagemagick libmagickcore-6.q16-6-extra fonts-dejavu-core  # the accuracy plots render in ImageMagick too (its SVG coder, the plots' font)
     nodejs chromium
     clang libclang-rt-14-dev   # the sanitizer build and libFuzzer (scripts/sanitize.sh, scripts/fuzz.sh)
+    python3                    # scripts/fuzz.sh's dictionary check, bench/ablate/variants.py (test [ablate])
   )
   # npm: Debian's package, unless a node distribution that bundles npm is already installed.
   if ! command -v npm >/dev/null 2>&1; then PKGS+=(npm); fi
