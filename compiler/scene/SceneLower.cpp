@@ -303,8 +303,9 @@ private:
                 hi[a] = std::max(hi[a], w[a].hi);
             }
         };
-        // Instances of one shape: analysed together (over their parameters' hull) when many, else each alone.
-        std::map<const CheckedModule*, std::vector<size_t>> kinds;
+        // Instances of one shape: analysed together (over their parameters' hull) when many, else each alone. In
+        // order of the shapes' first appearance (not of their modules' addresses, which vary from run to run).
+        std::vector<std::pair<const CheckedModule*, std::vector<size_t>>> kinds;
         // An instance with a bound sphere: the sphere's world box, narrowed by the shape's own box where the
         // analysis finds one (inside the sphere the nearness is the shape's).
         std::map<size_t, std::array<ir::Interval, 3>> sphere_box;
@@ -320,7 +321,9 @@ private:
                 for (size_t a = 0; a < 3; ++a) w[a] = {b.center[a] - b.half[a], b.center[a] + b.half[a]};
                 sphere_box[i] = w;
             }
-            kinds[p.shape].push_back(i);
+            auto kind = std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == p.shape; });
+            if (kind == kinds.end()) kind = kinds.insert(kinds.end(), {p.shape, {}});
+            kind->second.push_back(i);
         }
         // An instance's world box: its sphere's narrowed by `shape` (nothing: the sphere's; without a sphere,
         // nothing means no scene box).
@@ -350,6 +353,9 @@ private:
             else
                 for (auto& [values, same] : by_values) sets.push_back(same);
         }
+        // Every instance's own box is found even where another's is not (segment tracing skips an instance's
+        // bounds outside its box: Module::instance_boxes); the scene's box needs them all.
+        bool every = true;
         for (const auto& members : sets) {
             const InstancePlan& first = plan(members[0]);
             int fn = lower_module_cached(*first.shape, ctx_);
@@ -363,14 +369,14 @@ private:
             for (size_t mi : members) {
                 const InstancePlan& p = plan(mi);
                 if (!box) {
-                    if (!place(mi, std::nullopt)) return;
+                    every &= place(mi, std::nullopt);
                     continue;
                 }
                 // object = L·world + o, so world = L⁻¹(object − o): each world axis an interval sum over the box.
                 bool singular = false;
                 std::vector<double> Li = ir::mat_inverse(p.inv_linear, 3, &singular);
                 if (singular) {
-                    if (!place(mi, std::nullopt)) return;
+                    every &= place(mi, std::nullopt);
                     continue;
                 }
                 std::array<ir::Interval, 3> w;
@@ -386,6 +392,7 @@ private:
                 place(mi, w);
             }
         }
+        if (!every) return;
         bool bounded = false;
         for (size_t a = 0; a < 3; ++a) bounded |= std::isfinite(lo[a]) || std::isfinite(hi[a]);
         if (!bounded) return;
