@@ -10,7 +10,7 @@
 #   bench/ablate.sh                                   # the default scenes (below)
 #   SIZE=640x360 ROUNDS=5 bench/ablate.sh bench/few_shapes.iq
 #
-# Written for the GPU leases (bench/gpu.sh runs it last): stop 35 found the GPU ranks the code differently
+# Written for the GPU leases (bench/gpu.sh's part `ablate`): stop 35 found the GPU ranks the code differently
 # from llvmpipe (docs/accuracy.md, "On a GPU"). Run after scripts/build.sh.
 set -uo pipefail
 cd "$(dirname "$0")/.."

@@ -54,4 +54,4 @@ part instances 50 env LLVMPIPE_SIZES="10 100 1000" bench/instances.sh 10 100 100
 part bench 110 bash -c 'for s in "$@"; do
     ./build/iqc bench "bench/$s.iq" --size 320x180 --csv "$0/$s.csv" > "$0/$s.txt" 2>&1 || echo "bench $s: exit $?"
   done' "$out.bench" few_shapes displaced_torus twisted_bar fractal instances_100 grazing_thin sine_terrain twisted
-[[ "$parts" == *" bench "* ]] && tar -C "$out.bench" -czf "$out/bench.tar.gz" .
+if [[ "$parts" == *" bench "* ]]; then tar -C "$out.bench" -czf "$out/bench.tar.gz" .; fi

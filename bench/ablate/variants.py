@@ -42,7 +42,7 @@ def scene_distance_only(s):
 
 
 MARCH = '''float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
-    float s = 1.0, t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20, prev = 1.0e20, hit_id = -1.0;
+    float t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20, prev = 1.0e20, hit_id = -1.0;
     id = -1;
     steps = 0;
     float t_far = FAR;

@@ -1211,12 +1211,6 @@ private:
         return next;
     }
 
-    // A group over a lattice (InstanceLattice) in iqc_scene. Farther than a quarter cell from the box of its spheres, that
-    // box's distance stands in for every member (a lower bound, id -1: no hit test accepts it, as with the
-    // hierarchy's boxes). Nearer, the member of the nearest cell is evaluated first, then every other member whose
-    // cell centre lies, per axis, within the nearest distance so far plus the spheres' radius: the others'
-    // spheres are no nearer than that distance, so their distances cannot lower it (Hart 1996 §4), and the
-    // result is the loop over all members' (for distances no smaller than their sphere's) or a lower bound of it.
     // p (ℝ³) moved to lattice cell `cell`'s centre (ℝ³, whole numbers): (p − origin) − cell·spacing, the point at
     // which a member on its cell's centre is evaluated (Item::centred_fn), in iqc_scene and in iqc_distance_of.
     ValueId to_cell_centre(Builder& b, const InstanceLattice& L, ValueId p, ValueId cell) {
@@ -1224,6 +1218,12 @@ private:
         return b.op(Op::Sub, {b.op(Op::Sub, {p, vec(L.origin)}), b.op(Op::Hadamard, {cell, vec(L.spacing)})});
     }
 
+    // A group over a lattice (InstanceLattice) in iqc_scene. Farther than a quarter cell from the box of its spheres, that
+    // box's distance stands in for every member (a lower bound, id -1: no hit test accepts it, as with the
+    // hierarchy's boxes). Nearer, the member of the nearest cell is evaluated first, then every other member whose
+    // cell centre lies, per axis, within the nearest distance so far plus the spheres' radius: the others'
+    // spheres are no nearer than that distance, so their distances cannot lower it (Hart 1996 §4), and the
+    // result is the loop over all members' (for distances no smaller than their sphere's) or a lower bound of it.
     std::vector<ValueId> lattice_lookup(Builder& b, const Item& it, ValueId p, const std::vector<ValueId>& st) {
         const InstanceLattice& L = it.lattice;
         const Type v3 = Type::vector(3);
