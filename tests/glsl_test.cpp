@@ -6,6 +6,8 @@
 #include "glsl/Emit.h"
 #include "glsl/Names.h"
 #include "glsl/Validate.h"
+#include "ir/Builder.h"
+#include "source/Source.h"
 
 using namespace iqc;
 using namespace iqc::glsl;
@@ -62,4 +64,39 @@ TEST_CASE("glslang validation accepts good shaders and rejects bad ones", "[glsl
                                  Profile::Es300);
     CHECK_FALSE(bad.ok);
     CHECK_THAT(bad.log, Catch::Contains("ERROR"));
+}
+
+TEST_CASE("int(floor(x)) of a value that is already an integer is int(x)", "[glsl]") {
+    // A lattice's cell range is clamp(ceil(...), 0, n - 1): the floor of it was code for the driver to compile.
+    ir::Module m;
+    ir::Function f;
+    f.name = "cells";
+    f.glsl_name = "cells";
+    f.entry = true;
+    {
+        ir::Builder b(m, f);
+        ir::ValueId x = b.param("x", Type::vector(3));
+        ir::ValueId cell = b.builtin("clamp", {b.builtin("ceil", {x}), b.constant(Type::vector(3), {0, 0, 0}),
+                                               b.constant(Type::vector(3), {9, 9, 0})});
+        ir::ValueId a = b.op(ir::Op::FloorInt, {b.op(ir::Op::Extract, {cell}, 0)});
+        // Not integral: clamp's bound is not an integer, a sum is not looked into, a plain parameter.
+        ir::ValueId half = b.builtin("clamp", {b.builtin("floor", {x}), b.constant(Type::vector(3), {0, 0, 0}),
+                                               b.constant(Type::vector(3), {9.5, 9, 0})});
+        ir::ValueId c = b.op(ir::Op::FloorInt, {b.op(ir::Op::Extract, {half}, 1)});
+        ir::ValueId s = b.op(ir::Op::FloorInt, {b.op(ir::Op::Add, {b.op(ir::Op::Extract, {x}, 2), b.scalar(0.5)})});
+        ir::ValueId e = b.op(ir::Op::FloorInt, {b.op(ir::Op::Extract, {x}, 1)});
+        f.result = b.op(ir::Op::Add, {b.op(ir::Op::Add, {a, c}), b.op(ir::Op::Add, {s, e})});
+    }
+    m.functions.push_back(std::move(f));
+    SourceManager sm;
+    Diagnostics diags(sm);
+    Namer names;
+    Emitter em(m, names, diags);
+    const std::string code = em.function(0);
+    INFO(code);
+    CHECK_FALSE(diags.has_errors());
+    CHECK_THAT(code, Catch::Contains("int(clamp(ceil(x), vec3(0.0), vec3(9.0, 9.0, 0.0)).x)"));
+    CHECK_THAT(code, Catch::Contains("int(floor(clamp(floor(x), vec3(0.0), vec3(9.5, 9.0, 0.0)).y))"));
+    CHECK_THAT(code, Catch::Contains("int(floor(x.z + 0.5))"));
+    CHECK_THAT(code, Catch::Contains("int(floor(x.y))"));
 }

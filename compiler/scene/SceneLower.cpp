@@ -1328,13 +1328,13 @@ private:
                                          vec({0, 0, 0}), vec(last)});
         ValueId hi = b.builtin("clamp", {b.builtin("floor", {b.op(Op::Hadamard, {b.op(Op::Sub, {b.op(Op::Add, {p, reach}), vec(L.origin)}), vec(inv)})}),
                                          vec({0, 0, 0}), vec(last)});
-        std::vector<ValueId> from, count;
+        // span: the last cell's offset from the first (negative: no cell in reach), a loop's inclusive bound as it is.
+        std::vector<ValueId> from, span;
         for (int a = 0; a < 3; ++a) {
             ValueId l = b.op(Op::FloorInt, {b.op(Op::Extract, {lo}, a)});
             ValueId h = b.op(Op::FloorInt, {b.op(Op::Extract, {hi}, a)});
-            ValueId c = b.op(Op::Add, {b.op(Op::Sub, {h, l}), b.integer(1)});
             from.push_back(l);
-            count.push_back(b.op(Op::Select, {b.compare(CompareKind::Lt, h, l), b.integer(0), c}));
+            span.push_back(b.op(Op::Sub, {h, l}));
         }
         // One loop per axis of more than one cell, layers (z), rows (y), cells (x) from the outside in: no integer
         // division (scalarised on SIMD CPUs). An axis of one cell (a lattice in a plane: 10×10×1) is no loop: its
@@ -1353,13 +1353,13 @@ private:
                 continue;
             }
             k_fixed = stride(b, a, k_fixed, from[size_t(a)], b.integer(0));
-            ValueId some = b.compare(CompareKind::Gt, count[size_t(a)], b.integer(0));
+            ValueId some = b.compare(CompareKind::Ge, span[size_t(a)], b.integer(0));
             gate = gate == ValueId(-1) ? some : b.op(Op::And, {gate, some});
         }
         static const char* kLevel[] = {"cells", "rows", "layers"};
         static const char* kAxis[] = {"x", "y", "z"};
         // vals: p, k so far, the cell's x, y, z (ints: looped axes' are set by their loops), then the first cell
-        // and count of each axis still to loop.
+        // and span of each axis still to loop.
         std::function<std::vector<ValueId>(Builder&, size_t, const std::vector<ValueId>&, const std::vector<ValueId>&)> nest =
             [&](Builder& lb, size_t level, const std::vector<ValueId>& s, const std::vector<ValueId>& vals) -> std::vector<ValueId> {
             if (level == axes.size()) {
@@ -1389,9 +1389,9 @@ private:
                                                                      {"cx", vals[2]}, {"cy", vals[3]}, {"cz", vals[4]}};
             for (size_t j = level; j < axes.size(); ++j) {
                 captures.push_back({std::string("first_") + kAxis[axes[j]], vals[5 + 2 * (j - level)]});
-                captures.push_back({std::string("n_") + kAxis[axes[j]], vals[6 + 2 * (j - level)]});
+                captures.push_back({std::string("span_") + kAxis[axes[j]], vals[6 + 2 * (j - level)]});
             }
-            ValueId hi = lb.op(Op::Sub, {vals[6], lb.integer(1)});
+            ValueId hi = vals[6];
             std::string source;
             if (level == 0) {
                 if (gate != ValueId(-1)) hi = lb.op(Op::Select, {gate, hi, lb.integer(-1)});  // no cell of a one-cell axis in reach
@@ -1410,7 +1410,7 @@ private:
         std::vector<ValueId> vals = {p, k_fixed, from[0], from[1], from[2]};
         for (int a : axes) {
             vals.push_back(from[size_t(a)]);
-            vals.push_back(count[size_t(a)]);
+            vals.push_back(span[size_t(a)]);
         }
         std::vector<ValueId> near = nest(b, 0, st1, vals);
         const ValueId looked_up = b.construct(vt, near);
