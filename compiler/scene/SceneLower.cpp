@@ -1329,33 +1329,33 @@ private:
         ValueId hi = b.builtin("clamp", {b.builtin("floor", {b.op(Op::Hadamard, {b.op(Op::Sub, {b.op(Op::Add, {p, reach}), vec(L.origin)}), vec(inv)})}),
                                          vec({0, 0, 0}), vec(last)});
         // span: the last cell's offset from the first (negative: no cell in reach), a loop's inclusive bound as it is.
+        // An axis of one cell: its cell is 0 (lo and hi are clamped to [0, 0]), a constant for the compiler.
         std::vector<ValueId> from, span;
         for (int a = 0; a < 3; ++a) {
+            if (L.n[size_t(a)] == 1) {
+                from.push_back(b.integer(0));
+                span.push_back(b.integer(0));
+                continue;
+            }
             ValueId l = b.op(Op::FloorInt, {b.op(Op::Extract, {lo}, a)});
             ValueId h = b.op(Op::FloorInt, {b.op(Op::Extract, {hi}, a)});
             from.push_back(l);
             span.push_back(b.op(Op::Sub, {h, l}));
         }
         // One loop per axis of more than one cell, layers (z), rows (y), cells (x) from the outside in: no integer
-        // division (scalarised on SIMD CPUs). An axis of one cell (a lattice in a plane: 10×10×1) is no loop: its
-        // cell is the one in reach, if any (a loop of 0 or 1 trips around the others made 100 instances' frame 13%
-        // slower).
+        // division (scalarised on SIMD CPUs). An axis of one cell (a lattice in a plane: 10×10×1) is no loop and no
+        // test: its one cell holds the nearest member, whose distance sets the reach, so it is always in reach (a loop
+        // of 0 or 1 trips around the others made 100 instances' frame 13% slower; a test of its span, always true
+        // as lo and hi are clamped to that cell, cost 100 instances' compile ~1%).
         auto stride = [&](Builder& lb, int a, ValueId k, ValueId first, ValueId step) {
             if (L.stride[size_t(a)] == 0) return k;
             return lb.op(Op::Add, {k, lb.op(Op::Mul, {lb.integer(L.stride[size_t(a)]), lb.op(Op::Add, {first, step})})});
         };
         const std::string name = "iqc_scene." + it.name;
         std::vector<int> axes;  // looped, outer to inner
-        ValueId k_fixed = b.integer(L.base), gate = ValueId(-1);
-        for (int a : {2, 1, 0}) {
-            if (L.n[size_t(a)] > 1) {
-                axes.push_back(a);
-                continue;
-            }
-            k_fixed = stride(b, a, k_fixed, from[size_t(a)], b.integer(0));
-            ValueId some = b.compare(CompareKind::Ge, span[size_t(a)], b.integer(0));
-            gate = gate == ValueId(-1) ? some : b.op(Op::And, {gate, some});
-        }
+        ValueId k_fixed = b.integer(L.base);
+        for (int a : {2, 1, 0})
+            if (L.n[size_t(a)] > 1) axes.push_back(a);
         static const char* kLevel[] = {"cells", "rows", "layers"};
         static const char* kAxis[] = {"x", "y", "z"};
         // vals: p, k so far, the cell's x, y, z (ints: looped axes' are set by their loops), then the first cell
@@ -1394,7 +1394,6 @@ private:
             ValueId hi = vals[6];
             std::string source;
             if (level == 0) {
-                if (gate != ValueId(-1)) hi = lb.op(Op::Select, {gate, hi, lb.integer(-1)});  // no cell of a one-cell axis in reach
                 source = fmt::format("{}: {} instances on a {}×{}×{} lattice: the cells within reach (each member within {} of its centre{})",
                                      it.name, it.members.size(), L.n[0], L.n[1], L.n[2], glsl::float_literal(bound_of(it.members[0])),
                                      it.derived_bound ? ", derived from the shape" : "");
