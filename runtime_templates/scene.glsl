@@ -442,12 +442,14 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 // `bound` sphere's distance, then its shape's) the secant is no slope of either, and the step is plain (m = −1).
 // When two unbounding spheres stop overlapping (the step may have skipped a surface) the march retries once
 // from the previous sample with the slope measured across the failed step (a shorter step, checked the same
-// way), then falls back to a plain step. Each failure lowers γ for the rest of the ray (×0.9, not below 0.8)
-// and each good step raises it by 0.01 (up to 0.95). Tuned on bench/*.iq (docs/accuracy.md). Keeping a failed
+// way), then falls back to a plain step. Each failure sets γ to 0.8 and each good step raises it by 0.01 (up to
+// 0.98, where it starts). Tuned on bench/*.iq (docs/accuracy.md; from a cap of 0.95 and ×0.9 a failure, not
+// below 0.8: a few shapes 0.653 → 0.648 of sphere tracing's evaluations, the grazing plane 0.641 → 0.635, the
+// twisted box 0.718 → 0.725, the others within ±0.004; a cap of 1 failed on planes by rounding). Keeping a failed
 // sample that lies outside every shape and sampling only the gap before it saved 3–7% of the evaluations but
-// cost 10–15% of llvmpipe's frame (its lanes march in step: stop 33), and is not done.
+// cost 10–15% of llvmpipe's frame (its lanes march in step: stops 33 and 36), and is not done.
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
-    float s = 1.0, t = 0.0, m = -1.0, g = 0.95, t_prev = 0.0, r_prev = 0.0, d_prev = 0.0, step_len = 0.0;
+    float s = 1.0, t = 0.0, m = -1.0, g = 0.98, t_prev = 0.0, r_prev = 0.0, d_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
     float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
     bool retried = false;
@@ -465,7 +467,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{/if}}
         float d = s * h.x;
         if (step_len > 0.0 && abs(d) + r_prev < step_len) {
-            g = max(0.9 * g, 0.8);
+            g = 0.8;
             if (!retried) {
                 retried = true;
                 m = clamp((d - d_prev) / step_len, -1.0, 0.8);
@@ -496,7 +498,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         t_prev = t;
         r_prev = abs(d);
         d_prev = d;
-        g = min(g + 0.01, 0.95);
+        g = min(g + 0.01, 0.98);
 {{#if INSIDE_START}}
         // Inside a shape, on the way to its wall, the distance along the ray is concave for a convex shape (a
         // ball or a room seen from within: R − ‖o + t·d‖): the secant over-predicts, relaxed steps fail, and
