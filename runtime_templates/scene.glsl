@@ -440,19 +440,24 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 // the step is d·(1 + γ(1 + m)/(1 − m)): at γ = 1 that is 2d/(1 − m), whose next unbounding sphere just
 // touches this one where the distance is linear along the ray. Across samples of different instances (or a
 // `bound` sphere's distance, then its shape's) the secant is no slope of either, and the step is plain (m = −1).
-// When two unbounding spheres stop overlapping (the step may have skipped a surface) the march retries once
-// from the previous sample with the slope measured across the failed step (a shorter step, checked the same
-// way), then falls back to a plain step. Each failure sets γ to 0.8 and each good step raises it by 0.01 (up to
-// 0.98, where it starts). Tuned on bench/*.iq (docs/accuracy.md; from a cap of 0.95 and ×0.9 a failure, not
-// below 0.8: a few shapes 0.653 → 0.648 of sphere tracing's evaluations, the grazing plane 0.641 → 0.635, the
-// twisted box 0.718 → 0.725, the others within ±0.004; a cap of 1 failed on planes by rounding). Keeping a failed
-// sample that lies outside every shape and sampling only the gap before it saved 3–7% of the evaluations but
-// cost 10–15% of llvmpipe's frame (its lanes march in step: stops 33 and 36), and is not done.
+// When two unbounding spheres stop overlapping (the step may have skipped a surface) and the new sample lies
+// outside every shape, its sphere is clear too: only the gap between the two spheres is unproven, and one sample
+// at the gap's middle whose sphere reaches both proves it, and the march goes on from the far sample (a sample
+// that does not reach both, or a failed sample inside a shape, is followed by a plain step from the last good
+// sample: its sphere covers that step). Each failure sets γ to 0.8 and each good step raises it by 0.01 (up to
+// 0.98, where it starts). Tuned on bench/*.iq (docs/accuracy.md). Stop 36: the gap's sample where a retry from
+// the last good sample with the slope across the failed step (then a plain step) threw the far sample away:
+// evaluations per pixel 0.737 -> 0.691 of sphere tracing's on the displaced torus, 0.787 -> 0.744 on the terrain,
+// 0.847 -> 0.836 on the sponge, 0.832 -> 0.825 on 100 instances, the others within 0.01; llvmpipe's frame +1-3%
+// (its lanes run both paths). A first version that kept the retry beside it cost 8-15% (stop 33 too). The γ
+// schedule was a cap of 0.95 and ×0.9 a failure, not below 0.8 (a few shapes 0.653 -> 0.648, the twisted box
+// 0.718 -> 0.725); a cap of 1 failed on planes by rounding.
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, m = -1.0, g = 0.98, t_prev = 0.0, r_prev = 0.0, d_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
     float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
-    bool retried = false;
+    bool fill = false;                       // this sample is a gap's middle, before the far sample kept here:
+    float t_k = 0.0, d_k = 0.0, id_k = -1.0;  // where, its distance (times s) and its id
     id = -1;
     steps = 0;
 {{#if SCENE_BOX}}
@@ -466,19 +471,28 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         if (i == 0 && h.x < 0.0) s = -1.0;
 {{/if}}
         float d = s * h.x;
-        if (step_len > 0.0 && abs(d) + r_prev < step_len) {
-            g = 0.8;
-            if (!retried) {
-                retried = true;
-                m = clamp((d - d_prev) / step_len, -1.0, 0.8);
-                step_len = r_prev * (1.0 + g * (1.0 + m) / (1.0 - m));
+        if (fill) {
+            fill = false;
+            if (t - abs(d) <= t_prev + r_prev && t + abs(d) >= t_k - d_k) {  // the gap is clear: on from the far sample
+                m = h.y == id_k ? clamp((d_k - d) / (t_k - t), -1.0, 0.8) : -1.0;
+                t = t_k; h = vec2(d_k * s, id_k); d = d_k; step_len = -1.0;
             } else {
-                // A plain step from the previous sample: its sphere covers it, so the check passes.
-                retried = false;
                 m = -1.0;
                 step_len = r_prev;
+                t = t_prev + step_len;
+                continue;
             }
-            t = t_prev + step_len;
+        } else if (step_len > 0.0 && abs(d) + r_prev < step_len) {
+            g = 0.8;
+            m = -1.0;
+            if (d > 0.0) {  // not past a surface (s·distance > 0): keep it, sample the gap's middle
+                fill = true;
+                t_k = t; d_k = d; id_k = h.y;
+                t = 0.5 * (t_prev + r_prev + t - d);
+            } else {
+                step_len = r_prev;
+                t = t_prev + step_len;
+            }
             continue;
         }
         float e = iqc_eps(t);
@@ -494,7 +508,6 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         last = dn;
         last_t = t;
         last_id = h.y;
-        retried = false;
         t_prev = t;
         r_prev = abs(d);
         d_prev = d;
