@@ -569,3 +569,22 @@ TEST_CASE("Lipschitz pragmas: each said once, no exact distance with a factor, a
                            " --set \"p=(2, 0, 0)\"");
     CHECK(ok.exit_code == 0);
 }
+
+TEST_CASE("the reference counts its work in evaluator steps, the same in every run", "[numerics][bench]") {
+    // `iqc bench` chooses its geometry reference (the CPU evaluator, or the renderer's most accurate setting)
+    // by the evaluator's work on a sample of pixels: a time estimate chose the other one on a loaded machine
+    // (a run beside the test suite reported other errors for the sine terrain than a run alone).
+    Compiled c = compile_path(std::filesystem::path(IQC_SOURCE_DIR) / "bench" / "few_shapes.iq");
+    REQUIRE(c.result.exit_code == 0);
+    SceneModel model = *c.result.model;
+    model.init();
+    REQUIRE(model.work() == 0);
+    std::array<double, 3> ro, rd;
+    model.ray(40, 30, 160, 90, ro, rd);
+    double t = model.trace(ro, rd);
+    const uint64_t once = model.work();
+    CHECK(t > 0);
+    CHECK(once > 1000);  // a march of dozens of scene evaluations, each of dozens of steps
+    CHECK(model.trace(ro, rd) == t);
+    CHECK(model.work() == 2 * once);
+}

@@ -458,6 +458,7 @@ void Evaluator::call(int fn, const double* const* args, double* out) {
     steps_ = 0;
     Frame fr(*this, fn, args);
     fr.run_region(0);
+    work_ += steps_;
     const Function& f = m_.functions[size_t(fn)];
     if (f.body.empty()) return;
     const double* r = fr.at[f.result];
@@ -492,6 +493,7 @@ std::vector<Value> Evaluator::call_all(int fn, const std::vector<Value>& args) {
     steps_ = 0;
     Frame fr(*this, fn, a.data());
     fr.run_region(0);
+    work_ += steps_;
     std::vector<Value> out(f.body.size());
     for (size_t i = 0; i < f.body.size(); ++i) {
         if (!fr.at[i] || f.body[i].op == Op::Loop) continue;

@@ -61,6 +61,9 @@ public:
     std::vector<Value> call_all(int fn, const std::vector<Value>& args);
     // Fast path: arguments as component arrays; the result's components are written to `out`.
     void call(int fn, const double* const* args, double* out);
+    // Evaluator steps taken by every call so far (the same unit as EvalInputs::max_steps): a measure of work
+    // that, unlike time, is the same on every machine and under any load.
+    uint64_t work() const { return work_; }
 
     struct Plan;  // per function: schedule and value layout (Eval.cpp)
 
@@ -69,6 +72,7 @@ private:
     EvalInputs inputs_;
     std::vector<std::vector<double>> globals_;
     uint64_t steps_ = 0;  // work of the current call (EvalInputs::max_steps)
+    uint64_t work_ = 0;   // of the finished calls
     mutable std::vector<std::unique_ptr<Plan>> plans_;
     const Plan& plan(int fn) const;
     void prepare();

@@ -32,6 +32,8 @@ struct SceneModel {
     double trace(const std::array<double, 3>& ro, const std::array<double, 3>& rd, int* id = nullptr, double step = 1) const;
     // Unit normal by central differences in double precision.
     std::array<double, 3> normal(const std::array<double, 3>& p) const;
+    // Evaluator steps taken so far by every distance, trace and normal (ir::Evaluator::work).
+    uint64_t work() const { return eval_ ? eval_->work() : 0; }
 
 private:
     std::shared_ptr<ir::Evaluator> eval_;
