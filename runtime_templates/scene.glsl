@@ -187,9 +187,9 @@ float iqc_value(vec2 h) {
 {{/if}}
 {{#if STEP_CAP_CONE}}
 // The radius of a pixel's cone at distance t along a primary ray: half a pixel's angle at the image centre
-// (Amanatides 1984, cone tracing). When the step cap stops a ray within that radius of a surface (a grazing
-// ray over a plane converges only geometrically: the far ground at the horizon; a ray skimming a crest crawls),
-// the pixel shows that surface, not the background behind it.
+// (Amanatides 1984, cone tracing). When the step cap stops a ray that is still closing in on a surface
+// within that radius (a grazing ray over a plane converges only geometrically: the far ground at the
+// horizon), the pixel shows that surface, not the background behind it.
 float iqc_cone(float t) {
     return t / (iResolution.y * {{#if SHADERTOY}}IQC_CAMERA_FOCAL{{#else}}iqc_camera_focal{{/if}});
 }
@@ -198,17 +198,15 @@ float iqc_cone(float t) {
 // divided an instance's distance by its Lipschitz factor K (a safe step), the factor is multiplied back:
 // the divided value is K times too small to say how near the surface is (the surface would thicken by K
 // tolerances, and at the step cap every pixel within K cones of it would count).
-// What a ray that reached the step cap shows: the last sample if it lies within the pixel's cone (a grazing
-// ray converging on a plane, or one still skimming a surface: the pixel's footprint meets it there), else the
-// closest approach (in tolerances) if it came within 10 and the ray did not go on from there by more than the
-// pixel's cone (a ray stalled at a silhouette), else nothing. A ray that passed near a surface and went on is
-// not a hit: it would draw that surface in front of what the ray was reaching (a torus 3–6 units in front of
-// the floor it grazed past). Nor is a sample without an instance (id -1: a bounding-volume node standing in for
-// its members, or nothing at all). Until stop 36 the last sample counted only while the ray was still closing
-// in on it: a ray skimming a terrain's crest 1.5 tolerances above it for 150 steps, past the crest when the cap
-// of 256 came, was background in the middle of the ground (a new user's trial).
-float iqc_at_step_cap(float best, float best_t, int best_id, float last, float last_t, int last_id, out int id) {
-    if (last < iqc_cone(last_t) && last_id >= 0) { id = last_id; return last_t; }
+// What a ray that reached the step cap shows: the last sample if it lies within the pixel's cone and the ray
+// was still closing in on it (a grazing ray converging on a plane), else the closest approach (in
+// tolerances) if it came within 10 and the ray did not go on from there by more than the pixel's cone (a ray
+// stalled at a silhouette), else nothing. A ray that passed near a surface and went on is not a hit: it
+// would draw that surface in front of what the ray was reaching (a torus 3–6 units in front of the floor it
+// grazed past). Nor is a sample without an instance (id -1: a bounding-volume node standing in for its
+// members, or nothing at all).
+float iqc_at_step_cap(float best, float best_t, int best_id, float last, float last_t, int last_id, bool closing, out int id) {
+    if (last < iqc_cone(last_t) && closing && last_id >= 0) { id = last_id; return last_t; }
     if (best < 10.0 && best_id >= 0 && last_t - best_t <= max(10.0 * iqc_eps(best_t), iqc_cone(best_t))) { id = best_id; return best_t; }
     id = -1;
     return -1.0;
@@ -282,7 +280,7 @@ float iqc_far(vec3 ro, vec3 rd, out float t_enter) {
 // angles; a ray that only passed near a surface on its way is not a hit).
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20;
-    float best_id = -1.0, last_id = -1.0;  // ids as the scene returns them (converted once, at the end)
+    float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
     id = -1;
     steps = 0;
 {{#if SCENE_BOX}}
@@ -326,6 +324,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{#if MARCH_SEGMENT}}
         if (!clear) {  // the step cap's bookkeeping reads samples only
 {{/if}}
+        prev = last;
         last = dn;
         last_t = t;
         last_id = h.y;
@@ -372,7 +371,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     }
     if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
     if (t > {{T_FAR}}) return -1.0;
-    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), id);
+    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
 {{#if MARCH_RELAXED}}
@@ -382,7 +381,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, omega = IQC_RELAXATION, t_prev = 0.0, r_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
-    float best_id = -1.0, last_id = -1.0;  // ids as the scene returns them (converted once, at the end)
+    float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
     id = -1;
     steps = 0;
 {{#if SCENE_BOX}}
@@ -404,6 +403,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         }
         float e = iqc_eps(t);
         float dn = iqc_nearness(h);
+        prev = last;
         last = dn;
         last_t = t;
         last_id = h.y;
@@ -431,7 +431,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     }
     if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
     if (t > {{T_FAR}}) return -1.0;
-    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), id);
+    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
 {{#if MARCH_AUTO}}
@@ -455,7 +455,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float s = 1.0, t = 0.0, m = -1.0, g = 0.98, t_prev = 0.0, r_prev = 0.0, d_prev = 0.0, step_len = 0.0;
     float best = 1.0e20, best_t = -1.0, last_t = 0.0, last = 1.0e20;
-    float best_id = -1.0, last_id = -1.0;  // ids as the scene returns them (converted once, at the end)
+    float best_id = -1.0, last_id = -1.0, prev = 1.0e20;  // ids as the scene returns them (converted once, at the end)
     bool fill = false;                       // this sample is a gap's middle, before the far sample kept here:
     float t_k = 0.0, d_k = 0.0, id_k = -1.0;  // where, its distance (times s) and its id
     id = -1;
@@ -504,6 +504,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         if (dn / e < best) { best = dn / e; best_t = t; best_id = h.y; }
 {{/if}}
         if (step_len > 0.0) m = h.y == last_id ? clamp((d - d_prev) / step_len, -1.0, 0.8) : -1.0;
+        prev = last;
         last = dn;
         last_t = t;
         last_id = h.y;
@@ -529,7 +530,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     }
     if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
     if (t > {{T_FAR}}) return -1.0;
-    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), id);
+    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
 }
 {{/if}}
 {{#if MARCH_ORACLE}}

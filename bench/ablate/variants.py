@@ -42,7 +42,7 @@ def scene_distance_only(s):
 
 
 MARCH = '''float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
-    float t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20, hit_id = -1.0;
+    float t = 0.0, best_t = -1.0, best = 1.0e20, last_t = 0.0, last = 1.0e20, prev = 1.0e20, hit_id = -1.0;
     id = -1;
     steps = 0;
     float t_far = FAR;
@@ -51,6 +51,7 @@ MARCH = '''float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         EVAL
         steps++;
         float e = iqc_eps(t);
+        prev = last;
         last = DN;
         last_t = t;
         if (last < e) { HIT break; }
@@ -60,7 +61,7 @@ MARCH = '''float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     if (last < iqc_eps(last_t)) { id = int(HITID); return last_t; }
     if (t > t_far) return -1.0;
     return iqc_at_step_cap(best / IQC_HIT, best_t, int(iqc_scene(ro + best_t * rd).y), last, last_t,
-                           int(iqc_scene(ro + last_t * rd).y), id);
+                           int(iqc_scene(ro + last_t * rd).y), last <= prev, id);
 }
 '''
 

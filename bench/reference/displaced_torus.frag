@@ -9,7 +9,7 @@
 //    step instead would thicken the surface by 8.7 tolerances.
 //  - sphere tracing from where the ray enters the box (below), at most 128 steps, far plane 100. With steps this short, rays grazing
 //    the bumps run out of steps (about 1,400 pixels at 640x360); like iqc, such a ray still hits if it
-//    ended within its pixel's cone, or came within 10 tolerances and stalled there.
+//    was closing in within its pixel's cone, or came within 10 tolerances and stalled there.
 //    The eye is outside the shape, so there is no inside-start case to handle.
 //  - tetrahedron normals, offset 0.0005 (half the tolerance); colour 0.5 + 0.5 n (n facing the eye) on a
 //    (0.05, 0.05, 0.08) background, sRGB-encoded; eye (0, 2.2, -3), 60 degree vertical field of view.
@@ -40,19 +40,20 @@ float raymarch(vec3 ro, vec3 rd)
     float t = max(tN, 0.0);  // from where the ray enters the box
     float dm = 1e20, tm = 0.0;  // closest approach
     float dl = 1e20, tl = 0.0;  // last sample
+    float dp = 1e20;            // the one before it
     for (int i = 0; i < 128 && t <= tmax; i++)
     {
         float h = map(ro + t*rd);
-        dl = abs(h*8.688827); tl = t;  // the field itself
+        dp = dl; dl = abs(h*8.688827); tl = t;  // the field itself
         if (dl < 0.001) break;
         if (dl < dm) { dm = dl; tm = t; }
         t += h;
     }
     if (dl < 0.001) return tl;
     if (t > tmax) return -1.0;
-    // out of steps: within the pixel's cone, or stalled near a silhouette
+    // out of steps: closing in within the pixel's cone, or stalled near a silhouette
     float px = iResolution.y*1.7320508;
-    if (dl < tl/px) return tl;
+    if (dl <= dp && dl < tl/px) return tl;
     if (dm < 0.01 && tl - tm <= max(0.01, tm/px)) return tm;
     return -1.0;
 }

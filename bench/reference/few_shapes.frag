@@ -6,7 +6,7 @@
 //  - camera: look-at from (0,2,-6) to the origin, 60 degree vertical fov (focal 1/tan(30deg)).
 //  - plain sphere tracing, at most 128 steps, hit when |d| < 0.001, miss beyond t = 100. The step
 //    sequence must be the same, or rays find slightly different hits at the silhouettes.
-//  - out of steps, a ray whose last sample is within its pixel's footprint of a surface is a hit: the
+//  - out of steps, a ray still closing in on a surface within its pixel's footprint is a hit: the
 //    ground near the horizon converges only geometrically and would otherwise show holes. (iqc also
 //    accepts a ray stalled near a silhouette; no ray in this scene needs that, so it is left out.)
 //  - tetrahedron normals with a 0.0005 offset, flipped to face the viewer.
@@ -55,18 +55,19 @@ float raymarch(vec3 ro, vec3 rd)
     float top = 1.2411047;
     if (ro.y > top && rd.y >= 0.0) return -1.0;
     float t = ro.y > top ? (top - ro.y) / rd.y : 0.0, tl = 0.0;    // current and last sample's distance along the ray
-    float h = 1e20;             // last |d|
+    float h = 1e20, hp;         // last and previous |d|
     for (int i = 0; i < 128; i++)
     {
         float d = map(ro + t*rd);
+        hp = h;
         h = abs(d);
         if (h < 0.001) return t;
         tl = t;
         t += d;
         if (t > 100.0) return -1.0;
     }
-    // out of steps: within the pixel's cone (half a pixel's angle)?
-    return h < tl/(iResolution.y*1.7320508) ? tl : -1.0;
+    // out of steps: still closing in, and within the pixel's cone (half a pixel's angle)?
+    return (h <= hp && h < tl/(iResolution.y*1.7320508)) ? tl : -1.0;
 }
 
 vec3 calcNormal(vec3 p)

@@ -8,7 +8,7 @@
 //  - plain sphere tracing, at most 128 steps, hit when |d| < 0.001, miss beyond t = 60. The step
 //    sequence must be the same, or rays find slightly different hits along the thin edges.
 //  - out of steps (about 6% of the pixels here), a ray is still a hit if
-//      its last sample is within its pixel's cone of a surface (the ground towards the horizon), or
+//      it is still closing in on a surface within its pixel's cone (the ground towards the horizon), or
 //      it came within 0.01 of a surface and has moved on by no more than max(0.01, the cone) since
 //      (a ray stalled along a plate's edge);
 //    else it is a miss.
@@ -50,11 +50,12 @@ float map(vec3 p)
 float raymarch(vec3 ro, vec3 rd)
 {
     float t = 0.0, tl = 0.0;    // current and last sample's distance along the ray
-    float h = 1e20;             // last |d|
+    float h = 1e20, hp;         // last and previous |d|
     float hm = 1e20, tm = 0.0;  // closest approach, and where
     for (int i = 0; i < 128; i++)
     {
         float d = map(ro + t*rd);
+        hp = h;
         h = abs(d);
         if (h < 0.001) return t;
         if (h < hm) { hm = h; tm = t; }
@@ -64,7 +65,7 @@ float raymarch(vec3 ro, vec3 rd)
     }
     // out of steps
     float cone = 1.0/(iResolution.y*1.7320508);     // half a pixel's angle
-    if (h < tl*cone) return tl;                      // within the pixel's cone
+    if (h <= hp && h < tl*cone) return tl;           // still converging within the pixel
     if (hm < 0.01 && tl - tm <= max(0.01, tm*cone)) return tm;  // stalled near an edge
     return -1.0;
 }

@@ -7,8 +7,8 @@
 // - p.y - h(x, z) is not a distance (its gradient reaches 2.06), so each step is divided by
 //   iqc's Lipschitz factor 2.734959 while the hit test reads the undivided value: |d| < 0.001,
 //   at most 128 steps, miss past t = 30;
-// - at the step cap the far, grazing rays decide as iqc does: the last sample counts if it
-//   lies within the pixel's cone of the surface (t / (res.y * focal)), else the
+// - at the step cap the far, grazing rays decide as iqc does: the last sample counts if the ray
+//   was still closing in and it lies within the pixel's cone (t / (res.y * focal)), else the
 //   closest sample if it came within 10 tolerances and the ray went on by no more than
 //   max(10 tolerances, its cone), else background. Every part of this shows in the picture;
 // - tetrahedron normal (taps 0.0005 away) of the divided field, flipped to face the eye;
@@ -35,20 +35,22 @@ float raymarch(vec3 ro, vec3 rd)
     float t = max((0.6484375 - ro.y) / rd.y, 0.0);
     float tl = 0.0, hl = 1e20;   // last sample
     float tb = 0.0, hb = 1e20;   // closest sample
+    bool closing = true;
     for (int i = 0; i < 128; i++)
     {
         float h = map(ro + t * rd);
         float a = abs(h);
         if (a < 0.001) return t;
         if (a < hb) { hb = a; tb = t; }
+        closing = a <= hl;
         hl = a;
         tl = t;
         t += h / 2.734959;
         if (t > 30.0) return -1.0;
     }
 
-    // step cap: a grazing ray within its cone of the ground, or one stalled at a silhouette
-    if (hl < tl / (iResolution.y * 1.7320508)) return tl;
+    // step cap: a grazing ray still converging on the ground, or one stalled at a silhouette
+    if (closing && hl < tl / (iResolution.y * 1.7320508)) return tl;
     if (hb < 0.01 && tl - tb <= max(0.01, tb / (iResolution.y * 1.7320508))) return tb;
     return -1.0;
 }
