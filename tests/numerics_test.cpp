@@ -119,6 +119,38 @@ TEST_CASE("a declared Lipschitz factor below what the gradient reaches is warned
     REQUIRE(c.result.exit_code == 0);
     CHECK_THAT(c.diagnostics, Catch::Contains("declared_low.iq:18:8: warning: shape 'dtorus' declares '# lipschitz: 2', but its "
                                               "gradient reaches"));
+    // `# lipschitz: 1` is a declaration as well (a new user's trial: it was taken for no pragma, and the derived
+    // 8.7 replaced it without a word): applied as written, and warned.
+    std::string one = test::read_text(scene("displaced_torus.iq"));
+    one.replace(one.find("shape\n"), 6, "shape\n# lipschitz: 1\n");
+    Compiled o = compile_text("declared_one.iq", one);
+    REQUIRE(o.result.exit_code == 0);
+    CHECK_THAT(o.diagnostics, Catch::Contains("declared_one.iq:18:8: warning: shape 'dtorus' declares '# lipschitz: 1', but its "
+                                              "gradient reaches"));
+    REQUIRE(o.result.lipschitz.size() == 1);
+    CHECK_THAT(o.result.lipschitz[0], Catch::EndsWith("1 applied (declared)"));
+    // On a box (1-Lipschitz, derived 2 by intervals) it says what is true: applied, no warning.
+    std::string box = R"(title = "declared box"
+[modules]
+box = """
+shape
+# lipschitz: 1
+D = ‖(max(q_1, 0), max(q_2, 0), max(q_3, 0))‖ + min(max(q_1, q_2, q_3), 0)
+q = (|p_1|, |p_2|, |p_3|) - (0.5, 0.5, 0.5)
+where
+p ∈ ℝ³
+"""
+[camera]
+position = [0, 1, -4]
+target = [0, 0, 0]
+[[shapes]]
+type = "box"
+)";
+    Compiled b = compile_text("declared_box.iq", box);
+    REQUIRE(b.result.exit_code == 0);
+    CHECK_THAT(b.diagnostics, !Catch::Contains("warning"));
+    REQUIRE(b.result.lipschitz.size() == 1);
+    CHECK_THAT(b.result.lipschitz[0], Catch::EndsWith("1 applied (declared)"));
 }
 
 TEST_CASE("the exponential smooth minimum as papers print it draws its surface (stable rewrite)", "[numerics][render][stable]") {

@@ -258,7 +258,7 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
                         d_.error(at, "'# lipschitz: K' needs a number K ≥ 1 (how much D can change per unit of distance), within "
                                      "32-bit floats (at most about 3.4e38)");
                     else if (pragma(at, "lipschitz"))
-                        m->lipschitz = v;
+                        m->lipschitz = v, m->lipschitz_declared = true;
                 }
             }
             pos = eol + 1;

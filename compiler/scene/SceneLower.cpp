@@ -1049,7 +1049,9 @@ private:
     ir::LipschitzSpec lipschitz_spec(const Item& it, int shape_fn) {
         const InstancePlan& first = plan(it.members[0]);
         ir::LipschitzSpec spec;
-        spec.declared = first.shape->lipschitz != 1 ? first.shape->lipschitz : 0;
+        // `# lipschitz: 1` is a declaration too: applied as written (no derived bound replaces it), warned where
+        // the gradient's samples exceed it (it was taken for no pragma, and a derived 3.5 replaced it silently).
+        spec.declared = first.shape->lipschitz_declared ? first.shape->lipschitz : 0;
         spec.trusted = first.shape->exactness == "exact" || first.shape->exactness == "bound";
         spec.where = first.desc->type_span;
         spec.shape = first.shape->ast.name;

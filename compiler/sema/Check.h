@@ -136,6 +136,7 @@ struct CheckedModule {
     // From the module's comment lines: `# lipschitz: K` (D changes at most K per unit: the renderer divides
     // by K so marching stays safe) and `# exact` / `# bound` (what D is; for documentation and tests).
     double lipschitz = 1;
+    bool lipschitz_declared = false;  // the pragma was written (`# lipschitz: 1` too: then no derived bound replaces it)
     std::vector<std::shared_ptr<const ast::Module>> bound_functions;  // keeps given definitions alive
     std::string exactness;
     Type primary_type;
