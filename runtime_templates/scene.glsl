@@ -199,14 +199,17 @@ float iqc_cone(float t) {
 // the divided value is K times too small to say how near the surface is (the surface would thicken by K
 // tolerances, and at the step cap every pixel within K cones of it would count).
 // What a ray that reached the step cap shows: the last sample if it lies within the pixel's cone and the ray
-// was still closing in on it (a grazing ray converging on a plane), else the closest approach (in
+// was still closing in on it (a grazing ray converging on a plane) or is within 10 tolerances of it (a ray
+// skimming a crest: 1.5 tolerances above a terrain's for ~190 steps, just past it when the cap of 256 came, was
+// background in the middle of the ground; stop 36. Within the cone alone drew rays receding from a plane as
+// the ground above the horizon, and rods the ray had skimmed), else the closest approach (in
 // tolerances) if it came within 10 and the ray did not go on from there by more than the pixel's cone (a ray
 // stalled at a silhouette), else nothing. A ray that passed near a surface and went on is not a hit: it
 // would draw that surface in front of what the ray was reaching (a torus 3–6 units in front of the floor it
 // grazed past). Nor is a sample without an instance (id -1: a bounding-volume node standing in for its
 // members, or nothing at all).
 float iqc_at_step_cap(float best, float best_t, int best_id, float last, float last_t, int last_id, bool closing, out int id) {
-    if (last < iqc_cone(last_t) && closing && last_id >= 0) { id = last_id; return last_t; }
+    if (last < iqc_cone(last_t) && (closing || last < 10.0 * iqc_eps(last_t)) && last_id >= 0) { id = last_id; return last_t; }
     if (best < 10.0 && best_id >= 0 && last_t - best_t <= max(10.0 * iqc_eps(best_t), iqc_cone(best_t))) { id = best_id; return best_t; }
     id = -1;
     return -1.0;

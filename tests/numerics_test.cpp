@@ -369,6 +369,57 @@ type = "ball"
     CHECK(px[0] != Approx(3).margin(0.1));
 }
 
+TEST_CASE("a ray skimming a surface within 10 tolerances at the step cap draws it", "[numerics][render]") {
+    // Found by a new-user trial (a sine terrain to the horizon, 320x180, max_steps 256): a ray skimming a crest
+    // 1.5 tolerances above it crawls for ~190 sphere-tracing steps; the cap came just past the crest (2 tolerances,
+    // going away, 4 cones beyond its closest approach) and the pixel was background in the middle of the ground.
+    // Here the centre pixel's ray (181x181: its cone at t = 3 is 0.0096) passes 1.5 tolerances under a ball at
+    // t = 3 and crawls along it; at the cap of 60 steps it is ~0.045 past its closest approach, ~3.6 tolerances
+    // from the ball and going away, with a wall at t = 30 behind. Where it is farther than 10 tolerances (cap 75:
+    // 0.047 from the ball, within its cone) it is not drawn: within the cone alone drew receding rays.
+    auto centre = [](int cap) {
+        std::string text = R"(title = "skimming"
+[modules]
+ball = """
+shape
+D = ‖p - (0, 0.5015, 3)‖ - 0.5
+where
+p ∈ ℝ³
+"""
+wall = """
+shape
+D = 30 - p_3
+where
+p ∈ ℝ³
+"""
+[camera]
+position = [0, 0, 0]
+target = [0, 0, 10]
+[render]
+max_steps = )" + std::to_string(cap) + R"(
+[[shapes]]
+type = "wall"
+[[shapes]]
+type = "ball"
+)";
+        CompileOptions o;
+        o.ids = true;
+        Compiled c = compile_path(write_temp("skimming_" + std::to_string(cap) + ".iq", text), o);
+        REQUIRE(c.result.exit_code == 0);
+        render::RenderResult r = render_compiled(c.result, 181, 181);
+        REQUIRE(r.ok);
+        const float* px = r.image.pixel(90, 90);
+        return std::pair<long, float>(std::lround(px[1]), px[0]);
+    };
+    auto [id60, t60] = centre(60);
+    INFO("cap 60: id " << id60 << " at t = " << t60);
+    CHECK(id60 == 1);  // the ball, not background (-1)
+    CHECK(t60 == Approx(3.045).margin(0.02));
+    auto [id75, t75] = centre(75);
+    INFO("cap 75: id " << id75 << " at t = " << t75);
+    CHECK(id75 == -1);
+}
+
 TEST_CASE("reflected and refracted rays start on the surface, not a relative tolerance off it", "[numerics][render]") {
     // Found by a new-user trial: with hit_mode = "relative" (0.03 at the pane) the ray into a 0.02-thick glass
     // pane started 4 tolerances inside it — past its far side — and took the floor behind for the pane's

@@ -67,7 +67,7 @@ float raymarch(vec3 ro, vec3 rd)
         if (t > 100.0) return -1.0;
     }
     // out of steps: still closing in, and within the pixel's cone (half a pixel's angle)?
-    return (h <= hp && h < tl/(iResolution.y*1.7320508)) ? tl : -1.0;
+    return ((h <= hp || h < 0.01) && h < tl/(iResolution.y*1.7320508)) ? tl : -1.0;  // or within 10 tolerances
 }
 
 vec3 calcNormal(vec3 p)

@@ -65,7 +65,7 @@ float raymarch(vec3 ro, vec3 rd)
     }
     // out of steps
     float cone = 1.0/(iResolution.y*1.7320508);     // half a pixel's angle
-    if (h <= hp && h < tl*cone) return tl;           // still converging within the pixel
+    if ((h <= hp || h < 0.01) && h < tl*cone) return tl;  // converging, or within 10 tolerances, in the pixel
     if (hm < 0.01 && tl - tm <= max(0.01, tm*cone)) return tm;  // stalled near an edge
     return -1.0;
 }

@@ -50,7 +50,7 @@ float raymarch(vec3 ro, vec3 rd)
     }
 
     // step cap: a grazing ray still converging on the ground, or one stalled at a silhouette
-    if (closing && hl < tl / (iResolution.y * 1.7320508)) return tl;
+    if ((closing || hl < 0.01) && hl < tl / (iResolution.y * 1.7320508)) return tl;
     if (hb < 0.01 && tl - tb <= max(0.01, tb / (iResolution.y * 1.7320508))) return tb;
     return -1.0;
 }

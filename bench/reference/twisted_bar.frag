@@ -64,7 +64,7 @@ float raymarch(vec3 ro, vec3 rd)
     if (t > tmax) return -1.0;
     // out of steps: closing in within the pixel's cone, or stalled near a silhouette
     float px = iResolution.y*1.7320508;
-    if (dl <= dp && dl < tl/px) return tl;
+    if ((dl <= dp || dl < 0.01) && dl < tl/px) return tl;  // closing in, or within 10 tolerances
     if (dm < 0.01 && tl - tm <= max(0.01, tm/px)) return tm;
     return -1.0;
 }
