@@ -327,6 +327,23 @@ TEST_CASE("a discontinuous distance gets a located warning, a continuous repetit
     CHECK(centred.diagnostics.find("warning") == std::string::npos);
 }
 
+namespace {
+
+// The centre pixel of `text` rendered at size x size with instance ids (size odd: its ray is the camera's axis):
+// the instance it shows (-1: background) and its t.
+std::pair<long, float> centre_sample(const std::string& name, const std::string& text, int size) {
+    CompileOptions o;
+    o.ids = true;
+    Compiled c = compile_path(write_temp(name, text), o);
+    REQUIRE(c.result.exit_code == 0);
+    render::RenderResult r = render_compiled(c.result, size, size);
+    REQUIRE(r.ok);
+    const float* px = r.image.pixel(size / 2, size / 2);
+    return {std::lround(px[1]), px[0]};
+}
+
+}  // namespace
+
 TEST_CASE("a ray that reaches the step cap after passing near a surface does not draw it", "[numerics][render]") {
     // Found by a new-user trial (20 scaled tori on a floor): at the step cap the closest approach
     // counted when it came within 10 tolerances, even after the ray had gone on for units, so a torus the ray
@@ -357,16 +374,10 @@ type = "slope"
 [[shapes]]
 type = "ball"
 )";
-    CompileOptions o;
-    o.ids = true;
-    Compiled c = compile_path(write_temp("passing_near.iq", text), o);
-    REQUIRE(c.result.exit_code == 0);
-    render::RenderResult r = render_compiled(c.result, 9, 9);
-    REQUIRE(r.ok);
-    const float* px = r.image.pixel(4, 4);
-    INFO("id " << px[1] << " at t = " << px[0]);
-    CHECK(std::lround(px[1]) != 1);  // not the ball
-    CHECK(px[0] != Approx(3).margin(0.1));
+    auto [id, t] = centre_sample("passing_near.iq", text, 9);
+    INFO("id " << id << " at t = " << t);
+    CHECK(id != 1);  // not the ball
+    CHECK(t != Approx(3).margin(0.1));
 }
 
 TEST_CASE("a ray skimming a surface within 10 tolerances at the step cap draws it", "[numerics][render]") {
@@ -402,14 +413,7 @@ type = "wall"
 [[shapes]]
 type = "ball"
 )";
-        CompileOptions o;
-        o.ids = true;
-        Compiled c = compile_path(write_temp("skimming_" + std::to_string(cap) + ".iq", text), o);
-        REQUIRE(c.result.exit_code == 0);
-        render::RenderResult r = render_compiled(c.result, 181, 181);
-        REQUIRE(r.ok);
-        const float* px = r.image.pixel(90, 90);
-        return std::pair<long, float>(std::lround(px[1]), px[0]);
+        return centre_sample("skimming_" + std::to_string(cap) + ".iq", text, 181);
     };
     auto [id60, t60] = centre(60);
     INFO("cap 60: id " << id60 << " at t = " << t60);
