@@ -21,20 +21,12 @@ struct Range {
     bool unit = false;        // a unit vector (normalize, v/‖v‖)
 };
 
-Interval hull(Interval a, Interval b) { return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)}; }
-Interval add(Interval a, Interval b) { return {a.lo + b.lo, a.hi + b.hi}; }
-Interval neg(Interval a) { return {-a.hi, -a.lo}; }
-Interval mul(Interval a, Interval b) {
-    double p[4] = {a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi};
-    Interval r{kInf, -kInf};
-    for (double x : p) {
-        if (std::isnan(x)) x = 0;  // 0·∞: the product of a zero bound with an infinite one
-        r.lo = std::min(r.lo, x);
-        r.hi = std::max(r.hi, x);
-    }
-    return r;
-}
-bool contains_zero(Interval a) { return a.lo <= 0 && a.hi >= 0; }
+// The textbook interval rules are ir/Intervals.h's (a sum of opposite infinities is unbounded, not NaN).
+using iv::add;
+using iv::contains_zero;
+using iv::hull;
+using iv::mul;
+using iv::neg;
 Interval unknown() { return {}; }
 
 std::string fmt_interval(Interval a) {
