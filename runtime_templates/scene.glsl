@@ -122,6 +122,9 @@ float iqc_pixel_cone;  // the width of the pixel's filter cone per unit of dista
 {{DECLARATIONS}}// ---- the scene (compiled from its IR: modules, then iqc_scene and the functions the runtime calls) ----
 {{FUNCTIONS}}
 // ---- runtime ----
+{{#if INSIDE_START}}
+float iqc_side = 1.0;  // -1 where the last march started inside a shape (marching to its inner wall), else 1
+{{/if}}
 {{#if INSTRUMENT}}
 int iqc_evals = 0;           // scene evaluations in this pixel (instrumented build)
 int iqc_shape_evals = 0;     // instance shape evaluations (those skipped by `bound` are not counted)
@@ -372,6 +375,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         t += d;
 {{/if}}
     }
+{{#if INSIDE_START}}
+    iqc_side = s;
+{{/if}}
     if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
     if (t > {{T_FAR}}) return -1.0;
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
@@ -432,6 +438,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
             step_len = t - t_prev;
         }
     }
+{{#if INSIDE_START}}
+    iqc_side = s;
+{{/if}}
     if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
     if (t > {{T_FAR}}) return -1.0;
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
@@ -531,6 +540,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
             step_len = t - t_prev;
         }
     }
+{{#if INSIDE_START}}
+    iqc_side = s;
+{{/if}}
     if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
     if (t > {{T_FAR}}) return -1.0;
     return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
@@ -588,6 +600,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float best = -1.0;
     id = -1;
     steps = 0;
+{{#if INSIDE_START}}
+    iqc_side = -1.0;  // (back-facing normals are flipped, as they always were in this baseline)
+{{/if}}
     for (int i = 0; i < {{INSTANCES}}; i++) {
         mat4 inv = iqc_instance_inverse(i);
         vec3 o = (inv * vec4(ro, 1.0)).xyz;
@@ -627,6 +642,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     vec2 h = iqc_scene(ro + t * rd);
     steps++;
     if (h.x < 0.0) s = -1.0;
+{{#if INSIDE_START}}
+    iqc_side = s;
+{{/if}}
     for (int i = 1; i < IQC_MAX_STEPS; i++) {
         float t_next = t + IQC_FIXED_STEP;
         if (t_next > {{T_FAR}}) {
@@ -732,6 +750,23 @@ vec3 iqc_normal(vec3 p, float t, int id) {
     return dot(g, g) > 0.0 ? normalize(g) : vec3(0.0, 1.0, 0.0);
 }
 {{/if}}
+
+// The normal N as the viewer of a ray along rd sees it. Facing the ray: as it is. Facing away from a ray
+// that marched to a shape's inner wall from inside it: flipped (the wall's inside). Facing away from a ray
+// that came from outside: the sample lies beyond the visible side of the surface, a ray stopped on a crest's
+// or a silhouette's far slope (by the step cap, or within the hit tolerance as it skimmed past); the surface
+// the pixel shows there is seen edge-on, so its normal is taken perpendicular to the ray. Flipped, it
+// pointed into the ground, away from every light: black dots along the ridges of a terrain seen to the
+// horizon (a new user's trial, stop 37). Where N lies along the ray it is flipped (no direction is better).
+vec3 iqc_face(vec3 N, vec3 rd) {
+    float c = dot(N, rd);
+    if (c <= 0.0) return N;
+{{#if INSIDE_START}}
+    if (iqc_side < 0.0) return -N;
+{{/if}}
+    vec3 q = N - c * rd;
+    return dot(q, q) > 1.0e-4 ? normalize(q) : -N;
+}
 
 {{#if SCENE_EFFECTS}}
 // What soft shadows and ambient occlusion read: (the step, the field's value). They use the value (a
@@ -986,8 +1021,7 @@ vec3 iqc_glance(vec3 p, vec3 N, vec3 rd{{#if PATH}}, float travelled{{/if}}) {
     if (id < 0) return {{#if FOG}}iqc_fog({{/if}}{{#if SKY}}iqc_background(rd){{#else}}IQC_BACKGROUND{{/if}}{{#if FOG}}, travelled){{/if}};
 {{/if}}
     vec3 q = ro + t * rd;
-    vec3 Nq = iqc_normal(q, t, id);
-    if (dot(Nq, rd) > 0.0) Nq = -Nq;
+    vec3 Nq = iqc_face(iqc_normal(q, t, id), rd);
     vec3 c = iqc_colour(id, q, Nq, ro{{#if FOOTPRINT}}, iqc_footprint(Nq, rd, iqc_pixel_cone * (travelled + t)){{/if}});
 {{#if FOG}}
     c = iqc_fog(c, travelled + t);
@@ -1090,8 +1124,7 @@ vec3 iqc_trace(vec3 ro, vec3 rd) {
             iqc_hit_point = p;
         }
 {{/if}}
-        vec3 N = iqc_normal(p, t, id);
-        if (dot(N, rd) > 0.0) N = -N;  // face the viewer (also from inside a shape)
+        vec3 N = iqc_face(iqc_normal(p, t, id), rd);
 {{#if DEBUG_NORMALS}}
         return 0.5 + 0.5 * N;
 {{/if}}

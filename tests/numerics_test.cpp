@@ -424,6 +424,53 @@ type = "ball"
     CHECK(id75 == -1);
 }
 
+TEST_CASE("a sample past a crest is shaded with the crest's edge-on normal, not its far slope's flipped", "[numerics][render]") {
+    // Found by a new-user trial (a sine terrain seen to the horizon): rays that skim a crest stop (at the step
+    // cap, or within the hit tolerance) on its far slope, where the normal faces away from the viewer. Flipped
+    // to face the viewer it pointed into the ground: black dots along every ridge under a sun. A height field
+    // seen from above shows only its upper side, so every hit pixel's normal (colour 0.5 + 0.5·N, sRGB-encoded)
+    // must point up; 17 pixels of this 160x90 picture pointed down (N_y -0.6 to -0.97) when they were flipped.
+    std::string text = R"(title = "ridges"
+[modules]
+terrain = """
+shape
+sin from trigonometry
+D = p_2 - 0.6 sin(3p_1) sin(3p_3)
+where
+p ∈ ℝ³
+"""
+[camera]
+position = [0, 1.6, -4]
+target = [0, 0, 4]
+[render]
+max_dist = 30
+[[shapes]]
+type = "terrain"
+)";
+    const int W = 160, H = 90;
+    std::filesystem::path path = write_temp("ridges.iq", text);
+    Compiled colour = compile_path(path);
+    REQUIRE(colour.result.exit_code == 0);
+    CompileOptions io;
+    io.ids = true;
+    Compiled ids = compile_path(path, io);
+    REQUIRE(ids.result.exit_code == 0);
+    render::RenderResult c = render_compiled(colour.result, W, H), g = render_compiled(ids.result, W, H);
+    REQUIRE(c.ok);
+    REQUIRE(g.ok);
+    auto linear = [](float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); };
+    int hits = 0, down = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            if (g.image.pixel(x, y)[1] < 0) continue;  // background
+            ++hits;
+            down += 2 * linear(c.image.pixel(x, y)[1]) - 1 < -0.05f;
+        }
+    INFO(down << " of " << hits << " hit pixels have a normal pointing down");
+    CHECK(hits > W * H / 3);
+    CHECK(down == 0);
+}
+
 TEST_CASE("reflected and refracted rays start on the surface, not a relative tolerance off it", "[numerics][render]") {
     // Found by a new-user trial: with hit_mode = "relative" (0.03 at the pane) the ray into a 0.02-thick glass
     // pane started 4 tolerances inside it — past its far side — and took the floor behind for the pane's

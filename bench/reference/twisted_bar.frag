@@ -81,12 +81,22 @@ vec3 calcNormal(vec3 p)
     return normalize(n);
 }
 
+// a normal that faces away from the ray: the hit sits just past a silhouette or a crest, where the
+// surface is seen edge-on, so take it perpendicular to the ray (flipped, it would point into the surface)
+vec3 faceViewer(vec3 n, vec3 rd)
+{
+    float c = dot(n, rd);
+    if (c <= 0.0) return n;
+    vec3 q = n - c*rd;
+    return dot(q, q) > 1e-4 ? normalize(q) : -n;
+}
+
 vec3 render(vec3 ro, vec3 rd)
 {
     float t = raymarch(ro, rd);
     if (t < 0.0) return vec3(0.05, 0.05, 0.08);
     vec3 n = calcNormal(ro + t*rd);
-    if (dot(n, rd) > 0.0) n = -n;
+    n = faceViewer(n, rd);
     return 0.5 + 0.5*n;
 }
 
