@@ -434,6 +434,31 @@ TEST_CASE("a ℤ parameter stays an integer: an int uniform and int in --meta an
     CHECK(mean_abs_diff(a.image, b.image) < 1e-4);
 }
 
+TEST_CASE("a shape whose distance is an integer (D ∈ ℤ) is a real distance for every target", "[scene][render]") {
+    // Found by a new-user trial: `D = n` with n ∈ ℤ passed the type check (ℤ where ℝ is asked) and the
+    // shape function returned an int where the runtime reads a float: glslang rejected the shader (exit 3, an
+    // internal error) for every target. The distance is converted where it leaves the module.
+    const std::string scene = "[modules]\nfar = \"\"\"\nshape\nD = n⋅n\nwhere\np ∈ ℝ³\nn ∈ ℤ default = 2\n\"\"\"\n"
+                              "[[shapes]]\ntype = \"far\"\n";
+    auto path = write_temp("int_distance.iq", scene);
+    for (Target t : {Target::Shadertoy, Target::WebGL2, Target::GLSL330, Target::SPIRV, Target::HLSL, Target::ThreeJS, Target::WGSL}) {
+        CompileOptions o;
+        o.target = t;
+        Compiled c = compile_path(path, o);
+        INFO(int(t) << "\n" << c.diagnostics << c.result.internal);
+        CHECK(c.result.exit_code == 0);
+    }
+    // The field is 4 everywhere: nothing to hit, every pixel background (id -1).
+    CompileOptions g;
+    g.ids = true;
+    Compiled c = compile_path(path, g);
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.result.code, Catch::Contains("return float(D);"));
+    render::RenderResult r = render_compiled(c.result, 9, 9);
+    REQUIRE(r.ok);
+    CHECK(r.image.pixel(4, 4)[1] == -1);
+}
+
 TEST_CASE("an effect nothing in the scene can show is a located warning", "[scene]") {
     // Shadows without lights, reflections and refraction without a material that has k_r, k_t (issue 12).
     Compiled c = compile_text("idle_effects.iq", "[effects]\nshadows = \"soft\"\nreflections = 2\nrefraction = true\n"

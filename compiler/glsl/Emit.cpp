@@ -340,6 +340,8 @@ struct FunctionEmitter {
             for (size_t i = 0; i < in.args.size(); ++i) items.push_back(plain(i));
             return fmt::format("{}{}({})", tn, array_suffix(in.type), fmt::join(items, ", "));
         }
+        // A real number from one integer: float(n), once (the operand reads as a float already).
+        if (in.type == Type::scalar() && in.args.size() == 1) return plain(0);
         // vec3(x, x, x) -> vec3(x)
         bool same = in.args.size() > 1;
         for (ValueId x : in.args) same &= (x == in.args[0]);

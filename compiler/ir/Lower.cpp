@@ -872,6 +872,16 @@ int lower_module_unchecked(const CheckedModule& m, const std::string& name, cons
         }
     }
     if (!have_result) result = fn.scalar(0.0);
+    // A shape's distance that is an integer (D = n, n ∈ ℤ; sema allows ℤ where ℝ is asked) is a real number
+    // like any other: converted here, where it leaves the module (the runtime reads a float).
+    if (m.primary_type == Type::scalar() && fn.body[result].type.kind == Type::Integer) {
+        Instr c;
+        c.op = Op::Construct;
+        c.type = Type::scalar();
+        c.args = {result};
+        c.span = fn.body[result].span;
+        result = fn.add(std::move(c));
+    }
     fn.result = result;
     ctx.module.functions[size_t(idx)] = std::move(fn);
     return idx;
