@@ -623,6 +623,40 @@ TEST_CASE("outputs may not be the input or each other, and render refuses silly 
     CHECK(junk.run.exit_code == 2);
     Bounded nan = run_bounded("render " + s + " -o " + (dir / "r.png").string() + " --size 8x8 --time nan");
     CHECK(nan.run.exit_code == 2);
+    Bounded huge = run_bounded("bench " + s + " --size 5000x5000");  // ran for hours (a new user's trial)
+    CHECK(huge.run.exit_code == 2);
+    CHECK_THAT(huge.run.err, Catch::Contains("--size 5000x5000 is too large for bench: at most 1920x1080 pixels"));
+}
+
+TEST_CASE("no output replaces a file the command reads: the scene, a module it includes, a rendered shader", "[hostile]") {
+    // Found by a new user's trial: only `iqc X -o X` was refused; `render scene.iq -o scene.iq` replaced the
+    // scene with its PNG, `-o` onto an included module replaced it with the shader, `bench --csv` onto the
+    // scene replaced it with the table.
+    fs::path dir = temp_dir() / "clobber";
+    fs::create_directories(dir);
+    const std::string module = "shape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n";
+    const std::string scene = "include = [\"ball.iql\"]\n[[shapes]]\ntype = \"ball\"\n";
+    std::ofstream(dir / "ball.iql") << module;
+    std::ofstream(dir / "s.iq") << scene;
+    std::ofstream(dir / "h.frag") << "void mainImage(out vec4 c, in vec2 f) { c = vec4(1.0); }\n";
+    std::string s = (dir / "s.iq").string(), m = (dir / "ball.iql").string(), h = (dir / "h.frag").string();
+    struct Case {
+        std::string args, flag, out;
+    };
+    for (const Case& c : {Case{"render " + s + " --size 8x8 -o " + s, "-o", s}, Case{s + " -o " + m, "-o", m},
+                          Case{s + " -o " + (dir / "x.frag").string() + " --meta " + m, "--meta", m},
+                          Case{"render " + s + " --size 8x8 -o " + m, "-o", m}, Case{"render " + h + " --size 8x8 -o " + h, "-o", h},
+                          Case{"bench " + s + " --size 8x8 --csv " + s, "--csv", s}}) {
+        Bounded r = run_bounded(c.args);
+        INFO(c.args << "\n" << r.run.err);
+        CHECK(r.run.exit_code == 2);
+        CHECK_THAT(r.run.err, Catch::Contains("iqc: error: " + c.flag + " '" + c.out + "' is a file this command reads"));
+    }
+    CHECK(read_text(dir / "ball.iql") == module);
+    CHECK(read_text(dir / "s.iq") == scene);
+    CHECK_THAT(read_text(dir / "h.frag"), Catch::StartsWith("void mainImage"));
+    // A new output beside them is written as before.
+    CHECK(run_bounded("render " + s + " --size 8x8 -q -o " + (dir / "s.png").string()).run.exit_code == 0);
 }
 
 TEST_CASE("many lights and long descriptions are capped", "[hostile]") {

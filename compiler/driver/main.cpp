@@ -114,6 +114,27 @@ std::string frame_path(const std::string& out, int k, int frames) {
     return fmt::format("{}_{:04d}{}", stem, k, ext);
 }
 
+// Whether writing `out` (given as `flag`) would overwrite a file the compile read (`inputs`: the scene, the
+// modules and documents it includes, a rendered shader): the same file by path, or by identity (a link). Prints
+// the error and returns true: the user's sources are never replaced by an output (a scene by its PNG, an
+// included module by the shader; found by a new user's trial).
+bool overwrites_input(const std::string& flag, const std::string& out, const std::vector<std::string>& inputs) {
+    namespace fs = std::filesystem;
+    if (out.empty() || out == "-") return false;
+    std::error_code ec;
+    if (!fs::exists(out, ec) || !fs::is_regular_file(out, ec)) return false;  // nothing there yet, or a device
+    for (const auto& in : inputs) {
+        std::error_code e2;
+        if (fs::equivalent(out, in, e2) && !e2) {
+            std::fprintf(stderr, "iqc: error: %s '%s' is a file this command reads ('%s'): it would be overwritten; give "
+                                 "another output path\n",
+                         flag.c_str(), printable(out).c_str(), printable(in).c_str());
+            return true;
+        }
+    }
+    return false;
+}
+
 double percentile(std::vector<float> v, double q) {
     if (v.empty()) return 0;
     std::sort(v.begin(), v.end());
@@ -486,7 +507,7 @@ static int run(int argc, char** argv) {
                                          "mainImage, as pasted into Shadertoy) to render as it is, e.g. one written by hand")
         ->required();
     render->add_option("-o,--output", r_output, "the PNG to write (with --frames: numbered, out_0000.png, ...)")->required();
-    render->add_option("--size", r_size, "image size WxH (default 640x360)");
+    render->add_option("--size", r_size, "image size WxH (default 640x360; at most 4096x4096)");
     render->add_option("--time", r_time, "iTime in seconds (default 0)");
     render->add_option("--frames", r_frames, "render an animation of N frames")->check(CLI::Range(1, 100000));
     render->add_option("--fps", r_fps, "frames per second of the animation (default 30)")->check(CLI::PositiveNumber);
@@ -501,7 +522,7 @@ static int run(int argc, char** argv) {
     std::string b_input, b_size = "160x90", b_csv, b_plot;
     int b_frames = 5;
     bench->add_option("input", b_input, "scene (.iq), document (.md) or shape module (.iql)")->required();
-    bench->add_option("--size", b_size, "image size WxH (default 160x90)");
+    bench->add_option("--size", b_size, "image size WxH (default 160x90; at most 1920x1080 pixels)");
     bench->add_option("--csv", b_csv, "write the results as CSV");
     bench->add_option("--plot", b_plot, "write an SVG plot of scene evaluations per pixel against depth error (log axes, the "
                                         "Pareto front and its settings named)");
@@ -604,8 +625,16 @@ static int run(int argc, char** argv) {
         iqc::bench::Options bo;
         bo.input = b_input;
         bo.frames = b_frames;
-        if (std::sscanf(b_size.c_str(), "%dx%d", &bo.width, &bo.height) != 2 || bo.width < 1 || bo.height < 1) {
+        char rest = 0;
+        if (std::sscanf(b_size.c_str(), "%dx%d%c", &bo.width, &bo.height, &rest) != 2 || bo.width < 1 || bo.height < 1) {
             std::fprintf(stderr, "iqc: error: --size must look like 160x90\n");
+            return 2;
+        }
+        // Each of the ~120 settings draws the picture several times, and the reference marches 4,000 steps a
+        // pixel: at most as many pixels as 1920x1080 (a bench of 5000x5000 ran for hours; 640x360 takes a minute).
+        if (bo.width > 4096 || bo.height > 4096 || double(bo.width) * bo.height > 1920.0 * 1080.0) {
+            std::fprintf(stderr, "iqc: error: --size %dx%d is too large for bench: at most 1920x1080 pixels (and 4096 a side)\n",
+                         bo.width, bo.height);
             return 2;
         }
         bool tty = isatty(2);
@@ -614,6 +643,7 @@ static int run(int argc, char** argv) {
             if (tty) std::fprintf(stderr, "\r\033[Kiqc bench: [%d/%d] %s", done, total, what.c_str());
             else if (done == total) std::fprintf(stderr, "iqc bench: %d settings measured\n", total);
         };
+        if (overwrites_input("--csv", b_csv, {b_input}) || overwrites_input("--plot", b_plot, {b_input})) return 2;
         iqc::bench::Report rep = iqc::bench::run(bo);
         if (tty) std::fprintf(stderr, "\r\033[K");
         if (!rep.error.empty()) {
@@ -626,6 +656,7 @@ static int run(int argc, char** argv) {
         for (const auto& line : rep.lipschitz) std::printf("lipschitz: %s\n", line.c_str());
         std::printf("\n");
         std::fputs(iqc::bench::table(rep).c_str(), stdout);
+        if (overwrites_input("--csv", b_csv, rep.inputs) || overwrites_input("--plot", b_plot, rep.inputs)) return 2;
         OutputSet outs;
         if (!b_csv.empty()) outs.add(b_csv, iqc::bench::csv(rep));
         if (!b_plot.empty()) outs.add(b_plot, iqc::bench::svg(rep, b_input));
@@ -665,6 +696,8 @@ static int run(int argc, char** argv) {
                              printable(r_input).c_str());
                 return 2;
             }
+            for (int k = 0; k < std::max(r_frames, 1); ++k)
+                if (overwrites_input("-o", frame_path(r_output, k, r_frames), {r_input})) return 2;
             std::string code, err;
             if (!iqc::read_source_file(r_input, 0, code, err)) {
                 std::fprintf(stderr, "iqc: error: cannot read '%s': %s\n", printable(r_input).c_str(), err.c_str());
@@ -802,6 +835,16 @@ static int run(int argc, char** argv) {
     if (r.exit_code != 0) {
         if (diags.error_count() > 1) std::fprintf(stderr, "%zu errors\n", diags.error_count());
         return 1;
+    }
+    {
+        std::vector<std::string> read = sm.disk_files();
+        if (render->parsed()) {
+            for (int k = 0; k < std::max(r_frames, 1); ++k)
+                if (overwrites_input("-o", frame_path(r_output, k, r_frames), read)) return 2;
+        } else if (overwrites_input("-o", output, read) || overwrites_input("--meta", meta, read) ||
+                   overwrites_input("--depfile", depfile, read)) {
+            return 2;
+        }
     }
     if (render->parsed()) return render_command(r.code, r.inputs, opts.target != iqc::Target::Shadertoy, r_output, r_size, r_time, r_frames, r_fps, r_stats, quiet,
                                                 [&]() {
