@@ -644,8 +644,20 @@ TEST_CASE("Lipschitz pragmas: each said once, no exact distance with a factor, a
         {"exact_factor.iql", "# exact\n# lipschitz: 5\n",
          "exact_factor.iql:3:1: error: '# lipschitz' contradicts '# exact': an exact distance is 1-Lipschitz"},
         {"exact_bound.iql", "# bound\n# exact\n", "exact_bound.iql:3:1: error: '# exact' contradicts '# bound'"},
-        {"huge.iql", "# lipschitz: 1e39\n", "huge.iql:2:1: error: '# lipschitz: K' needs a number K ≥ 1 (how much D can change per "
+        {"huge.iql", "# lipschitz: 1e39\n", "huge.iql:2:14: error: '# lipschitz: K' needs a number K ≥ 1 (how much D can change per "
                                             "unit of distance), within 32-bit floats"},
+        {"empty.iql", "# lipschitz:\n", "empty.iql:2:1: error: '# lipschitz: K' needs a number K ≥ 1"},
+        // A second new-user trial: K was read from its first digit on, so these were taken as 1, 1, 2, 2, 16, and a
+        // missing colon or a value after `# bound` passed without a word.
+        {"fraction.iql", "# lipschitz: 1/0.3\n", "fraction.iql:2:14: error: '# lipschitz: K' needs a decimal number K ≥ 1 (how much D "
+                                                  "can change per unit of distance, e.g. 2.5 or 1e3), not '1/0.3'"},
+        {"underscore.iql", "# lipschitz: 1_000\n", "underscore.iql:2:14: error: '# lipschitz: K' needs a decimal number K ≥ 1"},
+        {"minus.iql", "# lipschitz: -2\n", "minus.iql:2:14: error: '# lipschitz: K' needs a decimal number K ≥ 1"},
+        {"root.iql", "# lipschitz: √2\n", "root.iql:2:14: error: '# lipschitz: K' needs a decimal number K ≥ 1"},
+        {"hex.iql", "# lipschitz: 0x10\n", "hex.iql:2:14: error: '# lipschitz: K' needs a decimal number K ≥ 1"},
+        {"trailing.iql", "# lipschitz: 2 or so\n", "trailing.iql:2:14: error: '# lipschitz: K' needs a decimal number K ≥ 1"},
+        {"nocolon.iql", "# lipschitz 2\n", "nocolon.iql:2:1: error: a Lipschitz pragma is written '# lipschitz: K'"},
+        {"bound_value.iql", "# bound: 3\n", "bound_value.iql:2:8: error: '# bound' takes no value"},
     };
     for (const Case& c : cases) {
         auto path = write_temp(c.name, std::string("shape\n") + c.pragmas + "D = ‖p‖ - 1\nwhere\np ∈ ℝ³\n");
@@ -654,6 +666,15 @@ TEST_CASE("Lipschitz pragmas: each said once, no exact distance with a factor, a
         CHECK(r.exit_code == 1);
         CHECK_THAT(r.err, Catch::Contains(c.message));
     }
+    // Prose that begins with a pragma's word is a comment ("# bound (its slope…)" in stdlib/noise.iql was taken
+    // for `# bound`), and a decimal K with an exponent or spaces around it is read as written.
+    RunResult prose = run_iqc("eval " + write_temp("prose.iql", "shape\n# exactly Quilez's sphere\n# bound (its slope) is 1\n"
+                                                                "# lipschitz:  2.5e0  \n# exact\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n").string() +
+                              " --set \"p=(2, 0, 0)\"");
+    CHECK(prose.exit_code == 1);  // only the real `# exact` and `# lipschitz` clash: neither prose line is a pragma
+    CHECK_THAT(prose.err, Catch::Contains("prose.iql:5:1: error: '# exact' contradicts '# lipschitz'"));
+    CHECK_THAT(prose.err, !Catch::Contains("said twice"));
+    CHECK_THAT(prose.err, !Catch::Contains("contradicts '# bound'"));
     // A K-Lipschitz bound: `# bound` with `# lipschitz: K` (examples/christmas_tree.iq's tree).
     RunResult ok = run_iqc("eval " + write_temp("bound_factor.iql", "shape\n# bound\n# lipschitz: 1.5\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n").string() +
                            " --set \"p=(2, 0, 0)\"");

@@ -1,8 +1,10 @@
 #include "scene/Modules.h"
 
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <regex>
 #include <filesystem>
 #include <fmt/format.h>
 
@@ -246,19 +248,45 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
                 std::string_view body = line.substr(h + 1);
                 while (!body.empty() && body.front() == ' ') body.remove_prefix(1);
                 Span at = {src.file, uint32_t(r.begin + pos + h), uint32_t(r.begin + eol)};
-                if (body.rfind("exact", 0) == 0) {
-                    if (pragma(at, "exact")) m->exactness = "exact";
-                } else if (body.rfind("bound", 0) == 0) {
-                    if (pragma(at, "bound")) m->exactness = "bound";
-                } else if (body.rfind("lipschitz", 0) == 0) {
-                    std::string rest(body.substr(9));
-                    size_t k = rest.find_first_of("0123456789.");
-                    double v = k == std::string::npos ? 0 : std::atof(rest.c_str() + k);
-                    if (!(v >= 1) || !(v <= limits::kFloatMax))
-                        d_.error(at, "'# lipschitz: K' needs a number K ≥ 1 (how much D can change per unit of distance), within "
-                                     "32-bit floats (at most about 3.4e38)");
+                // The first word of the comment, whole ("# exactly as…" and "# bound (its slope…)" are prose).
+                size_t w = 0;
+                while (w < body.size() && (std::isalnum(static_cast<unsigned char>(body[w])) || body[w] == '_')) ++w;
+                std::string_view word = body.substr(0, w), after = body.substr(w);
+                auto blank = [](std::string_view v) { return v.find_first_not_of(" \t\r") == std::string_view::npos; };
+                uint32_t after_at = uint32_t(r.begin + eol - after.size());
+                if (word == "exact" || word == "bound") {
+                    // Alone on its line; a value after a colon is a mistake worth saying ("# bound: 3").
+                    std::string_view a = after.substr(std::min(after.find_first_not_of(" \t"), after.size()));
+                    if (blank(after)) {
+                        if (pragma(at, std::string(word))) m->exactness = std::string(word);
+                    } else if (!a.empty() && a.front() == ':') {
+                        d_.error({src.file, after_at, uint32_t(r.begin + eol)},
+                                 fmt::format("'# {}' takes no value (a K-Lipschitz bound is '# bound' on one line and "
+                                             "'# lipschitz: K' on another)", word));
+                    }
+                } else if (word == "lipschitz") {
+                    // `# lipschitz: K`, K a decimal number (digits, a point, an exponent) and nothing else on the line:
+                    // "1/0.3" read as 1 and "1_000" as 1 made marching unsafe (a new user's trial).
+                    size_t c = after.find_first_not_of(" \t");
+                    std::string_view v = c == std::string_view::npos || after[c] != ':' ? std::string_view() : after.substr(c + 1);
+                    size_t v0 = v.find_first_not_of(" \t");
+                    v = v0 == std::string_view::npos ? std::string_view() : v.substr(v0);
+                    while (!v.empty() && (v.back() == ' ' || v.back() == '\t' || v.back() == '\r')) v.remove_suffix(1);
+                    static const std::regex number(R"(([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?)");
+                    bool ok = !v.empty() && std::regex_match(v.begin(), v.end(), number);
+                    double k = ok ? std::strtod(std::string(v).c_str(), nullptr) : 0;
+                    Span vat = v.empty() ? at : Span{src.file, uint32_t(r.begin + (v.data() - text.data())),
+                                                        uint32_t(r.begin + (v.data() - text.data()) + v.size())};
+                    if (c == std::string_view::npos || after[c] != ':')
+                        d_.error(at, "a Lipschitz pragma is written '# lipschitz: K' (a colon, then the number K ≥ 1)");
+                    else if (!ok && !v.empty())
+                        d_.error(vat, fmt::format("'# lipschitz: K' needs a decimal number K ≥ 1 (how much D can change per unit "
+                                                  "of distance, e.g. 2.5 or 1e3), not '{}'", escape_controls(std::string(v))));
+                    else if (!(k >= 1) || !(k <= limits::kFloatMax))
+                        d_.error(vat, "'# lipschitz: K' needs a number K ≥ 1 (how much D can change per unit of distance), within "
+                                      "32-bit floats (at most about 3.4e38)");
                     else if (pragma(at, "lipschitz"))
-                        m->lipschitz = v, m->lipschitz_declared = true;
+                        m->lipschitz = k, m->lipschitz_declared = true;
                 }
             }
             pos = eol + 1;
