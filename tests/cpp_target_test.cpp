@@ -25,6 +25,16 @@ TEST_CASE("cpp target: headers of every example compile and hold the webgl2 shad
     std::string title = "x)iqc\" ; int injected = 1; R\"iqc( \\ \" */ ?? ☃";
     nlohmann::json t = title;
     inputs.push_back(write_temp("cpp_hostile_title.iq", "title = " + t.dump() + "\n[[shapes]]\ntype = \"sphere\"\n"));
+    // 4,200 spheres with their own radius and colour: a data texture of ~280,000 base64 characters and 8,400
+    // parameters. A constexpr string_view of a bare literal is measured by a loop that g++ stops past 262,144
+    // steps, and clang's step limit was hit by the parameters' names from ~1,700 instances (a new user's trial):
+    // every view now has its length written out.
+    std::string many = "[camera]\nposition = [0, 40, -60]\ntarget = [0, 0, 0]\n[[lights]]\nposition = [-5, 8, -6]\n";
+    for (int i = 0; i < 4200; ++i)
+        many += fmt::format("[[shapes]]\ntype = \"sphere\"\nmaterial = \"lambert\"\nmaterial_params = {{ k_d = [{:.3f}, {:.3f}, {:.3f}] }}\n"
+                            "shape_params = {{ r = {:.2f} }}\ntransform = \"T(({}, 0, {}))\"\n",
+                            (i % 7) / 7.0, (i % 11) / 11.0, (i % 13) / 13.0, 0.3 + 0.01 * (i % 9), i % 70 - 35, i / 70 - 30);
+    inputs.push_back(write_temp("cpp_many_members.iq", many));
     std::string includes, checks;
     for (const auto& in : inputs) {
         std::string stem = in.stem().string();
@@ -40,6 +50,9 @@ TEST_CASE("cpp target: headers of every example compile and hold the webgl2 shad
         checks += fmt::format("    ok &= same(iqc_{0}::kFragmentShader, read(dir + \"/{0}.frag\"), \"{0}\");\n", stem);
         checks += fmt::format("    ok &= expect(iqc_{}::kParameters.size() == {}, \"{} parameters\");\n", stem, j["parameters"].size(), stem);
         checks += fmt::format("    ok &= expect(iqc_{}::kTitle == {}, \"{} title\");\n", stem, nlohmann::json(j["title"].get<std::string>()).dump(), stem);
+        if (j["texture"].is_object())
+            checks += fmt::format("    ok &= expect(iqc_{}::kTextureBase64.size() == {}, \"{} texture\");\n", stem,
+                                  j["texture"]["data"].get<std::string>().size(), stem);
         if (!j["parameters"].empty()) {
             const auto& p = j["parameters"][0];
             checks += fmt::format("    ok &= expect(iqc_{}::kParameters[0].name == {} && iqc_{}::kParameters[0].components == {}"

@@ -4,6 +4,8 @@
 // targets (Shadertoy constants; webgl2 uniform blocks or the data texture).
 #include <catch2/catch.hpp>
 
+#include <set>
+
 #include <cmath>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -178,6 +180,37 @@ TEST_CASE("webgl2 puts per-instance data in uniform blocks, or past 16 KiB a dat
             CHECK(p["offsets"].size() == 3);
         }
     CHECK(rings == 1000);
+}
+
+TEST_CASE("Shadertoy --meta names each member's element of a group's constant table", "[instancing]") {
+    // Found by a new-user trial: every member's k_d said "constant": "lambert_material_k_d", an array of 100 in the
+    // shader, with no index; a tool could not tell which element was whose (webgl2's block members had theirs).
+    std::string scene = "[[lights]]\nposition = [-5, 8, -6]\n";
+    for (int i = 0; i < 100; ++i)
+        scene += fmt::format("[[shapes]]\nname = \"s{}\"\ntype = \"sphere\"\nmaterial = \"lambert\"\ntransform = \"T(({}, 0, {}))\"\n"
+                             "material_params = {{ k_d = [{:.2f}, 0.5, 0.5] }}\n",
+                             i, i % 10 - 5, i / 10 - 5, 0.01 * i);
+    Compiled c = compile_path(write_temp("members_100_meta.iq", scene));
+    REQUIRE(c.result.exit_code == 0);
+    auto meta = nlohmann::json::parse(c.result.meta);
+    std::set<std::string> elements;
+    std::string table;
+    for (const auto& p : meta["parameters"])
+        if (p["name"] == "k_d") {
+            REQUIRE(p["storage"] == "constant");
+            std::string at = p["constant"];
+            size_t open = at.find('[');
+            REQUIRE(open != std::string::npos);
+            table = at.substr(0, open);
+            elements.insert(at);
+            CHECK(p["type"] == "vec3");
+        }
+    CHECK(elements.size() == 100);  // each its own element
+    CHECK(elements.count(table + "[0]") == 1);
+    CHECK(elements.count(table + "[99]") == 1);
+    for (const auto& p : meta["parameters"])  // s37's element holds its colour
+        if (p["name"] == "k_d" && p["instance"] == "s37") CHECK(p["default"][0] == Approx(0.37));
+    CHECK_THAT(c.result.code, Catch::Contains("const vec3 " + table + "[100]"));
 }
 
 TEST_CASE("100 and 1000 rings draw the reference's instances at the reference's depths on both targets", "[instancing][render]") {

@@ -365,8 +365,15 @@ nlohmann::ordered_json describe(const ir::Module& m, const Layout& lay, const Sh
             j["role"] = p.role;
             j["name"] = p.name;
             switch (s.kind) {
-                case Kind::Const: j["storage"] = "constant"; j["constant"] = s.name; break;
-                case Kind::Uniform: j["storage"] = "uniform"; j["uniform"] = s.name; break;
+                // A member of a group: its element of the array (a tool edits that one, as with a block's member).
+                case Kind::Const:
+                    j["storage"] = "constant";
+                    j["constant"] = g.type.is_array() ? fmt::format("{}[{}]", s.name, elem) : s.name;
+                    break;
+                case Kind::Uniform:
+                    j["storage"] = "uniform";
+                    j["uniform"] = g.type.is_array() ? fmt::format("{}[{}]", s.name, elem) : s.name;
+                    break;
                 case Kind::BlockMember:
                     j["storage"] = "block";
                     j["block"] = in.blocks[size_t(lay.block_of[i])].name;

@@ -15,14 +15,26 @@ namespace {
 
 // A C++ string literal of `s`: printable ASCII as it is, '"', '\' and every other byte as a 3-digit octal
 // escape (which, unlike \x, cannot swallow the characters after it). '?' is escaped too (trigraphs).
+// Long text is split into adjacent literals of at most 4,000 source characters (compilers limit one literal's length).
 std::string literal(std::string_view s) {
     std::string out = "\"";
+    size_t piece = 0;
     for (unsigned char c : s) {
-        if (c >= 0x20 && c < 0x7f && c != '"' && c != '\\' && c != '?') out += char(c);
-        else out += fmt::format("\\{:03o}", unsigned(c));
+        if (piece >= 4000) {
+            out += "\"\n    \"";
+            piece = 0;
+        }
+        if (c >= 0x20 && c < 0x7f && c != '"' && c != '\\' && c != '?') out += char(c), piece += 1;
+        else out += fmt::format("\\{:03o}", unsigned(c)), piece += 4;
     }
     return out + "\"";
 }
+
+// A std::string_view of `s` with its length written out: a constexpr view of a bare literal measures it with
+// char_traits::length, a loop that g++ stops past 262,144 steps (a data texture's base64 past 256 KiB: ~3,000
+// instances) and clang past its step limit summed over thousands of parameters (~1,700 instances; a new
+// user's trial).
+std::string view(std::string_view s) { return fmt::format("std::string_view({}, {})", literal(s), s.size()); }
 
 std::string number(double x) {
     if (std::isinf(x)) return x > 0 ? "std::numeric_limits<float>::infinity()" : "-std::numeric_limits<float>::infinity()";
@@ -70,8 +82,9 @@ std::string cpp_header(std::string_view shader, std::string_view meta_json, std:
            "// every parameter lives where `storage` says (docs/scene.md, \"Targets\"). Do not edit: regenerate with iqc.\n"
            "#pragma once\n\n#include <array>\n#include <cstdint>\n#include <limits>\n#include <string_view>\n\n";
     out += fmt::format("namespace {} {{\n\n", ns);
-    out += fmt::format("inline constexpr std::string_view kTitle = {};\n\n", literal(j.value("title", std::string())));
-    out += "inline constexpr std::string_view kFragmentShader =\n" + raw_pieces(shader) + "    ;\n\n";
+    out += fmt::format("inline constexpr std::string_view kTitle = {};\n\n", view(j.value("title", std::string())));
+    out += "inline constexpr std::string_view kFragmentShader = std::string_view(\n" + raw_pieces(shader) +
+           fmt::format("    , {});\n\n", shader.size());
     out += "struct Parameter {\n"
            "    std::string_view instance, module, role, name;  // whose parameter, as the scene names it\n"
            "    std::string_view storage;   // uniform | block | texture | constant\n"
@@ -109,20 +122,20 @@ std::string cpp_header(std::string_view shader, std::string_view meta_json, std:
         std::string offs = "{";
         for (int k = 0; k < 16; ++k) offs += (k ? ", " : "") + (k < int(offsets.size()) ? off(offsets[size_t(k)]) : std::string("-1"));
         offs += "}";
-        out += fmt::format("    {{{}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}}},\n", literal(p.value("instance", std::string())),
-                           literal(p.value("module", std::string())), literal(p.value("role", std::string())),
-                           literal(p.value("name", std::string())), literal(storage), literal(location),
-                           literal(p.value("type", std::string())), components,
+        out += fmt::format("    {{{}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}}},\n", view(p.value("instance", std::string())),
+                           view(p.value("module", std::string())), view(p.value("role", std::string())),
+                           view(p.value("name", std::string())), view(storage), view(location),
+                           view(p.value("type", std::string())), components,
                            array16(p.contains("default") ? p["default"] : nlohmann::json::array(), num), array16(lo, num),
-                           array16(hi, num), binding, offs, literal(p.value("description", std::string())));
+                           array16(hi, num), binding, offs, view(p.value("description", std::string())));
     }
     out += "}};\n\n";
     out += "struct Block {  // a std140 uniform block: bind a buffer holding `data_base64` (decoded) to `binding`\n"
            "    std::string_view name;\n    int binding;\n    int bytes;\n    std::string_view data_base64;\n};\n\n";
     out += fmt::format("inline constexpr std::array<Block, {}> kBlocks = {{{{\n", j["blocks"].size());
     for (const auto& b : j["blocks"])
-        out += fmt::format("    {{{}, {}, {}, {}}},\n", literal(b.value("name", std::string())), b.value("binding", -1), b.value("bytes", 0),
-                           literal(b.value("data", std::string())));
+        out += fmt::format("    {{{}, {}, {}, {}}},\n", view(b.value("name", std::string())), b.value("binding", -1), b.value("bytes", 0),
+                           view(b.value("data", std::string())));
     out += "}};\n\n";
     const auto& tex = j["texture"];
     out += "// The RGBA32F data texture `iqc_data` (width × height texels, base64 floats), when the parameters need one.\n";
@@ -130,7 +143,7 @@ std::string cpp_header(std::string_view shader, std::string_view meta_json, std:
     out += fmt::format("inline constexpr int kTextureWidth = {}, kTextureHeight = {};\n", tex.is_object() ? tex.value("width", 0) : 0,
                        tex.is_object() ? tex.value("height", 0) : 0);
     out += fmt::format("inline constexpr std::string_view kTextureBase64 = {};\n\n",
-                       literal(tex.is_object() ? tex.value("data", std::string()) : std::string()));
+                       view(tex.is_object() ? tex.value("data", std::string()) : std::string()));
     // The scene's camera as the shader's camera uniforms take it (a host with its own camera sets its own).
     if (j.contains("camera") && j["camera"].contains("defaults")) {
         const auto& c = j["camera"]["defaults"];
