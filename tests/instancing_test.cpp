@@ -182,6 +182,27 @@ TEST_CASE("webgl2 puts per-instance data in uniform blocks, or past 16 KiB a dat
     CHECK(rings == 1000);
 }
 
+TEST_CASE("a group without bound that no hierarchy can cull on a slider target is a located warning", "[instancing]") {
+    // Found by a new-user trial: on webgl2 the rings' derived sphere must hold over their sliders' ranges (t up
+    // to (2, 2): 4 units wide on a grid of 1) and was refused, so every step evaluated all 100 rings, silently.
+    auto path = write_temp("rings_100_sliders.iq", rings_scene(100, false));
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled web = compile_path(path, o);
+    REQUIRE(web.result.exit_code == 0);
+    CHECK_THAT(web.diagnostics, Catch::Contains("rings_100_sliders.iq:"));
+    CHECK_THAT(web.diagnostics, Catch::Contains("warning: 100 instances of 'ring' without `bound` are all evaluated at every step on "
+                                                "this target"));
+    // Shadertoy's constants give the rings a derived sphere, hence a hierarchy: no warning.
+    Compiled toy = compile_path(path);
+    REQUIRE(toy.result.exit_code == 0);
+    CHECK_THAT(toy.diagnostics, !Catch::Contains("without `bound`"));
+    // With `bound`, webgl2 has its hierarchy: no warning.
+    Compiled bounded = compile_path(write_temp("rings_100_bound.iq", rings_scene(100, false, 0.4)), o);
+    REQUIRE(bounded.result.exit_code == 0);
+    CHECK_THAT(bounded.diagnostics, !Catch::Contains("without `bound`"));
+}
+
 TEST_CASE("Shadertoy --meta names each member's element of a group's constant table", "[instancing]") {
     // Found by a new-user trial: every member's k_d said "constant": "lambert_material_k_d", an array of 100 in the
     // shader, with no index; a tool could not tell which element was whose (webgl2's block members had theirs).
