@@ -148,6 +148,24 @@ TEST_CASE("defaults and bounds may be any constant expression, evaluated by the 
     CHECK_THAT(b.err, Catch::Contains("bad_default.iql:3:22: error: a default must be a constant (numbers, π, and arithmetic and "
                                       "functions of them, such as √2 or sin(π/8))\n  r ∈ [0, 2] default = q + 1\n"
                                       "                       ^~~~~"));
+    // time and the mouse are inputs, not constants: they were evaluated as 0 (a new user's trial).
+    auto t = write_temp("time_default.iql", "y = r\nwhere\nr ∈ [0, 2] default = 1 + time\n");
+    RunResult tr = run_iqc("eval " + t.string());
+    CHECK(tr.exit_code == 1);
+    CHECK_THAT(tr.err, Catch::Contains("time_default.iql:3:22: error: a default must be a constant"));
+    auto m = write_temp("mouse_bound.iql", "y = r\nwhere\nr ∈ [0, mouse_1] default = 0\n");
+    RunResult mr = run_iqc("eval " + m.string());
+    CHECK(mr.exit_code == 1);
+    CHECK_THAT(mr.err, Catch::Contains("mouse_bound.iql:3:9: error: an interval bound must be a constant number"));
+    RunResult sr = run_iqc("eval " + f.string() + " --set 'r=0.5 + time'");
+    CHECK(sr.exit_code == 1);
+    CHECK_THAT(sr.err, Catch::Contains("error: the value of '--set r' must be a constant: it reads time, which changes while the "
+                                       "shader runs"));
+    auto scene = write_temp("time_override.iq", "[[shapes]]\ntype = \"sphere\"\nshape_params = { r = \"0.5 + 0.1 sin(time)\" }\n");
+    RunResult or_ = run_iqc(scene.string() + " -o -");
+    CHECK(or_.exit_code == 1);
+    CHECK_THAT(or_.err, Catch::Contains("time_override.iq:3:22: error: 'r' must be a number, an array, or a constant expression"));
+    CHECK_THAT(or_.err, Catch::Contains("it reads time"));
 }
 
 TEST_CASE("eval means what the shader computes: guarded values, not NaN", "[eval]") {

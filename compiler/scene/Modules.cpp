@@ -156,6 +156,16 @@ std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& nam
         LowerContext ctx{irm, {}, {}};
         int fn = lower_module(*m, "value", "value", ctx);
         irm.functions[size_t(fn)].entry = true;
+        // time and the mouse are inputs, not constants: evaluated here they were 0, so `default = time` or
+        // shape_params = { r = "time" } became 0 without a word (a new user's trial).
+        for (const ir::Function& g : irm.functions)
+            for (const ir::Instr& in : g.body)
+                if (in.op == ir::Op::Input) {
+                    d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
+                            fmt::format("the value of '{}' must be a constant: it reads {}, which changes while the shader runs",
+                                        name, in.aux == 0 ? "time" : "the mouse"));
+                    return std::nullopt;
+                }
         ir::run_pipeline(irm, {});
         ir::Value v = ir::evaluate(irm, irm.find("value"), {});
         for (double x : v.v) {
