@@ -27,6 +27,20 @@ TEST_CASE("a division by a slider range containing 0 is warned, located", "[rang
     CHECK_THAT(r.err, Catch::Contains("error: division by a value that can be 0"));
 }
 
+TEST_CASE("--strict-ranges: a parameter value outside its slider bounds is an error", "[ranges]") {
+    // Found by a new-user trial: a vesica's width overridden to 0 (its sliders start at 0.05) made the distance
+    // NaN at every pixel, and --strict-ranges passed it: range analysis proves its guards within the bounds only.
+    auto f = write_temp("outside_bounds.md", "❤: s\n```iheartla\nshape\nD = ‖p‖ - 1/r\nwhere\np ∈ ℝ³\nr ∈ [0.5,2] default = 1\n```\n"
+                                             "```scene\n[[shapes]]\ntype = \"s\"\nshape_params = { r = 0 }\n```\n");
+    RunResult warned = run_iqc(f.string() + " -o -");
+    CHECK(warned.exit_code == 0);
+    CHECK_THAT(warned.err, Catch::Contains("outside_bounds.md:12:18: warning: the value 0 of 'r' is outside its slider bounds [0.5, 2]"));
+    RunResult strict = run_iqc("--strict-ranges " + f.string() + " -o -");
+    CHECK(strict.exit_code == 1);
+    CHECK_THAT(strict.err, Catch::Contains("outside_bounds.md:12:18: error: the value 0 of 'r' is outside its slider bounds [0.5, 2], "
+                                           "where range analysis proves nothing (--strict-ranges)"));
+}
+
 TEST_CASE("sqrt, acos and pow get guards: warnings only for slider ranges", "[ranges]") {
     // acos of a dot product of unknown vectors: guarded (a rounding error can exceed 1), no warning. (The
     // shapes declare a Lipschitz factor: intervals cannot bound acos(p_1/‖p‖)'s gradient, and |p_1|^0.5 has

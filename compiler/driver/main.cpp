@@ -490,7 +490,7 @@ static int run(int argc, char** argv) {
     bool strict_ranges = false;
     app.add_flag("--strict-ranges", strict_ranges,
                  "treat range-analysis warnings (a slider can push an operation out of its domain, e.g. a division by "
-                 "a value that can be 0) as errors");
+                 "a value that can be 0), and parameter values outside their slider bounds, as errors");
     int repeat = 0;
     app.add_option("--repeat", repeat,
                    "benchmark: compile N more times in this process and print the median time (the first compile "

@@ -641,7 +641,7 @@ CompileResult SceneCompiler::run_checked() {
     size_t before = d_.error_count();
     for (const auto& m : s_.modules) lib_.add(m);  // a document's blocks with one name are already one module
     std::vector<InstancePlan> plans;
-    bool planned = plan_instances(s_, lib_, sm_, d_, plans);
+    bool planned = plan_instances(s_, lib_, sm_, d_, plans, opts_.strict_ranges);
     lap("parse + check + transforms");
     if (!planned || d_.error_count() != before) return std::move(res_);
     try {

@@ -89,6 +89,7 @@ struct Planner {
     ModuleLibrary& lib;
     SourceManager& sm;
     Diagnostics& d;
+    bool strict_ranges = false;  // --strict-ranges: a value outside its slider bounds is an error
 
     std::set<const CheckedModule*> warned_footprint_;
 
@@ -143,8 +144,17 @@ struct Planner {
             if (p.bounded)
                 for (size_t i = 0; i < ov.value.size(); ++i)
                     if (ov.value[i] < p.lo[i] || ov.value[i] > p.hi[i]) {
-                        d.warning(ov.span, fmt::format("the value {} of '{}' is outside its slider bounds [{}, {}]", ov.value[i],
-                                                       ov.name, p.lo[i], p.hi[i]));
+                        // Range analysis proves its guards within the slider bounds only: past them a division
+                        // by the value or a root of it may be NaN at every point (a vesica of width 0). Under
+                        // --strict-ranges that is an error, as the analysis' own warnings are.
+                        std::string msg = fmt::format("the value {} of '{}' is outside its slider bounds [{}, {}]", ov.value[i],
+                                                      ov.name, p.lo[i], p.hi[i]);
+                        if (strict_ranges) {
+                            d.error(ov.span, msg + ", where range analysis proves nothing (--strict-ranges)");
+                            ok = false;
+                        } else {
+                            d.warning(ov.span, msg);
+                        }
                         break;
                     }
             values[size_t(pi)] = ov.value;
@@ -318,9 +328,10 @@ struct Planner {
 }  // namespace
 
 bool plan_instances(const SceneDesc& scene, ModuleLibrary& lib, SourceManager& sm, Diagnostics& d,
-                    std::vector<InstancePlan>& plans) {
+                    std::vector<InstancePlan>& plans, bool strict_ranges) {
     size_t before = d.error_count();
     Planner planner{scene, lib, sm, d};
+    planner.strict_ranges = strict_ranges;
     plans.assign(scene.instances.size(), {});
     // Explicit names first, so that generated ones (`<type>_<n>`) avoid them.
     std::map<std::string, Span> explicit_names;

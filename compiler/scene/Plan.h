@@ -57,7 +57,8 @@ struct InstancePlan {
 };
 
 // Plans every instance of the scene (and resolves [[blends]] to them); returns false after reporting errors.
+// strict_ranges (--strict-ranges): a parameter value outside its slider bounds is an error, not a warning.
 bool plan_instances(const SceneDesc& scene, ModuleLibrary& lib, SourceManager& sm, Diagnostics& d,
-                    std::vector<InstancePlan>& plans);
+                    std::vector<InstancePlan>& plans, bool strict_ranges = false);
 
 }  // namespace iqc
