@@ -659,6 +659,31 @@ TEST_CASE("no output replaces a file the command reads: the scene, a module it i
     CHECK(run_bounded("render " + s + " --size 8x8 -q -o " + (dir / "s.png").string()).run.exit_code == 0);
 }
 
+TEST_CASE("long titles and names are capped, and eval's --time and --mouse are checked as render's are", "[hostile]") {
+    // Found by a new-user trial: a 3 MB title made a 6 MB HTML page, a 5 MB instance name a 10 MB shader; eval
+    // took --time nan and --mouse 1e40, and render's --fps 0 printed a range ending in a 300-digit number.
+    fs::path title = generated("long_title.iq", "title = \"" + std::string(1001, 't') + "\"\n[[shapes]]\ntype = \"sphere\"\n");
+    require_located(run_bounded(title.string() + " -o -"), title.string() + ":1:9", "the title has 1001 bytes: at most 1000");
+    fs::path name = generated("long_name.iq", "[[shapes]]\nname = \"" + std::string(257, 'n') + "\"\ntype = \"sphere\"\n");
+    require_located(run_bounded(name.string() + " -o -"), name.string() + ":2:8", "an instance name has 257 bytes: at most 256");
+    fs::path light = generated("long_light.iq", "[[lights]]\nname = \"" + std::string(300, 'l') + "\"\nposition = [1, 2, 3]\n"
+                                                "[[shapes]]\ntype = \"sphere\"\n");
+    require_located(run_bounded(light.string() + " -o -"), light.string() + ":2:8", "a light's name has 300 bytes: at most 256");
+    fs::path ok = generated("fine_title.iq", "title = \"" + std::string(1000, 't') + "\"\n[[shapes]]\ntype = \"sphere\"\n");
+    CHECK(run_bounded(ok.string() + " -o -").run.exit_code == 0);
+    std::string sphere = (fs::path(IQC_SOURCE_DIR) / "stdlib" / "sphere.iql").string();
+    Bounded tnan = run_bounded("eval " + sphere + " --set 'p=(1,0,0)' --time nan");
+    CHECK(tnan.run.exit_code == 2);
+    CHECK_THAT(tnan.run.err, Catch::Contains("--time must be a finite number"));
+    Bounded mouse = run_bounded("eval " + sphere + " --set 'p=(1,0,0)' --mouse 1e40 0");
+    CHECK(mouse.run.exit_code == 2);
+    CHECK_THAT(mouse.run.err, Catch::Contains("--mouse takes two numbers in [0, 1]"));
+    CHECK(run_bounded("eval " + sphere + " --set 'p=(1,0,0)' --mouse 0.5 1 --time 2").run.exit_code == 0);
+    Bounded fps = run_bounded("render " + ok.string() + " -o " + (temp_dir() / "fps.png").string() + " --size 8x8 --frames 2 --fps 0");
+    CHECK(fps.run.exit_code == 2);
+    CHECK_THAT(fps.run.err, Catch::Contains("--fps: must be a number of frames per second in (0, 1e6]"));
+}
+
 TEST_CASE("many lights and long descriptions are capped", "[hostile]") {
     std::string lights;
     for (int i = 0; i < 300; ++i) lights += fmt::format("[[lights]]\nposition = [{}, 5, 0]\n", i);

@@ -510,7 +510,14 @@ static int run(int argc, char** argv) {
     render->add_option("--size", r_size, "image size WxH (default 640x360; at most 4096x4096)");
     render->add_option("--time", r_time, "iTime in seconds (default 0)");
     render->add_option("--frames", r_frames, "render an animation of N frames")->check(CLI::Range(1, 100000));
-    render->add_option("--fps", r_fps, "frames per second of the animation (default 30)")->check(CLI::PositiveNumber);
+    render->add_option("--fps", r_fps, "frames per second of the animation (default 30)")
+        ->check(CLI::Validator(
+            [](std::string& v) {
+                char* end = nullptr;
+                double x = std::strtod(v.c_str(), &end);
+                return end != v.c_str() && *end == 0 && x > 0 && x <= 1e6 ? std::string() : "must be a number of frames per second in (0, 1e6]";
+            },
+            "FPS"));
     render->add_option("--target", r_target, "which shader to run: shadertoy (default) or webgl2 (its uniforms at their defaults)")
         ->check(CLI::IsMember({"shadertoy", "webgl2"}));
     render->add_flag("-q,--quiet", quiet, "print only diagnostics and --stats (no 'rendered' line)");
@@ -566,6 +573,16 @@ static int run(int argc, char** argv) {
         req.inject_fault = inject_fault;
         req.path = e_input;
         req.module = e_module;
+        // As render checks --time: a value the shader could not be given is refused, not evaluated into NaN.
+        if (!std::isfinite(e_time) || std::fabs(e_time) > 3.4e38) {
+            std::fprintf(stderr, "iqc: error: --time must be a finite number of seconds (within 32-bit floats)\n");
+            return 2;
+        }
+        for (double m : e_mouse)
+            if (!(m >= 0 && m <= 1)) {
+                std::fprintf(stderr, "iqc: error: --mouse takes two numbers in [0, 1] (the pointer's place in the view), not %g\n", m);
+                return 2;
+            }
         req.inputs.time = e_time;
         if (e_mouse.size() == 2) {
             req.inputs.mouse[0] = e_mouse[0];

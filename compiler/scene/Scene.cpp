@@ -357,7 +357,11 @@ void SceneReader::read(std::string_view text) {
     }
     check_keys(root, kTopKeys, " in the scene");
     if (auto* n = root.get("title"))
-        if (auto v = get_string(*n, "title")) s_.title = *v;
+        if (auto v = get_string(*n, "title")) {
+            // Written into every output's comments (and an HTML page twice): a 3 MB title made a 6 MB page.
+            if (v->size() > 1000) d_.error(span_of(*n), fmt::format("the title has {} bytes: at most 1000", v->size()));
+            else s_.title = *v;
+        }
     read_includes(root);
     read_modules(root);
     read_camera(root);
@@ -640,7 +644,10 @@ void SceneReader::read_lights(const toml::table& root) {
                 l.span = span_of(item);
                 l.name = fmt::format("light_{}", s_.lights.size() + 1);
                 if (auto* x = t.get("name"))
-                    if (auto v = get_string(*x, "name")) l.name = *v;
+                    if (auto v = get_string(*x, "name")) {
+                        if (v->size() > 256) d_.error(span_of(*x), fmt::format("a light's name has {} bytes: at most 256", v->size()));
+                        else l.name = *v;
+                    }
                 auto* pos = t.get("position");
                 auto* dir = t.get("direction");
                 // The kind: `type`, else a sun where only a direction is given, else a point light.
@@ -703,6 +710,8 @@ std::optional<InstanceDesc> SceneReader::read_shape(const toml::node& item) {
             inst.name = *v;
             inst.name_span = span_of(*x);
             if (v->empty()) d_.error(inst.name_span, "an instance name cannot be empty");
+            // Named in the shader's comments and --meta (a 5 MB name made a 10 MB shader: a new user's trial).
+            else if (v->size() > 256) d_.error(inst.name_span, fmt::format("an instance name has {} bytes: at most 256", v->size()));
         }
     if (auto* x = t.get("type")) {
         if (auto v = get_string(*x, "type")) {
