@@ -664,11 +664,11 @@ TEST_CASE("long titles and names are capped, and eval's --time and --mouse are c
     // took --time nan and --mouse 1e40, and render's --fps 0 printed a range ending in a 300-digit number.
     fs::path title = generated("long_title.iq", "title = \"" + std::string(1001, 't') + "\"\n[[shapes]]\ntype = \"sphere\"\n");
     require_located(run_bounded(title.string() + " -o -"), title.string() + ":1:9", "the title has 1001 bytes: at most 1000");
-    fs::path name = generated("long_name.iq", "[[shapes]]\nname = \"" + std::string(257, 'n') + "\"\ntype = \"sphere\"\n");
-    require_located(run_bounded(name.string() + " -o -"), name.string() + ":2:8", "an instance name has 257 bytes: at most 256");
-    fs::path light = generated("long_light.iq", "[[lights]]\nname = \"" + std::string(300, 'l') + "\"\nposition = [1, 2, 3]\n"
+    fs::path name = generated("long_name.iq", "[[shapes]]\nname = \"" + std::string(8193, 'n') + "\"\ntype = \"sphere\"\n");
+    require_located(run_bounded(name.string() + " -o -"), name.string() + ":2:8", "an instance name has 8193 bytes: at most 8192");
+    fs::path light = generated("long_light.iq", "[[lights]]\nname = \"" + std::string(9000, 'l') + "\"\nposition = [1, 2, 3]\n"
                                                 "[[shapes]]\ntype = \"sphere\"\n");
-    require_located(run_bounded(light.string() + " -o -"), light.string() + ":2:8", "a light's name has 300 bytes: at most 256");
+    require_located(run_bounded(light.string() + " -o -"), light.string() + ":2:8", "a light's name has 9000 bytes: at most 8192");
     fs::path ok = generated("fine_title.iq", "title = \"" + std::string(1000, 't') + "\"\n[[shapes]]\ntype = \"sphere\"\n");
     CHECK(run_bounded(ok.string() + " -o -").run.exit_code == 0);
     std::string sphere = (fs::path(IQC_SOURCE_DIR) / "stdlib" / "sphere.iql").string();

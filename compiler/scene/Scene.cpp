@@ -645,7 +645,7 @@ void SceneReader::read_lights(const toml::table& root) {
                 l.name = fmt::format("light_{}", s_.lights.size() + 1);
                 if (auto* x = t.get("name"))
                     if (auto v = get_string(*x, "name")) {
-                        if (v->size() > 256) d_.error(span_of(*x), fmt::format("a light's name has {} bytes: at most 256", v->size()));
+                        if (v->size() > 8192) d_.error(span_of(*x), fmt::format("a light's name has {} bytes: at most 8192", v->size()));
                         else l.name = *v;
                     }
                 auto* pos = t.get("position");
@@ -711,7 +711,7 @@ std::optional<InstanceDesc> SceneReader::read_shape(const toml::node& item) {
             inst.name_span = span_of(*x);
             if (v->empty()) d_.error(inst.name_span, "an instance name cannot be empty");
             // Named in the shader's comments and --meta (a 5 MB name made a 10 MB shader: a new user's trial).
-            else if (v->size() > 256) d_.error(inst.name_span, fmt::format("an instance name has {} bytes: at most 256", v->size()));
+            else if (v->size() > 8192) d_.error(inst.name_span, fmt::format("an instance name has {} bytes: at most 8192", v->size()));
         }
     if (auto* x = t.get("type")) {
         if (auto v = get_string(*x, "type")) {
