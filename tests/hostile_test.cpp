@@ -336,6 +336,30 @@ TEST_CASE("comment_text: one line, no comment delimiters, no continuation, valid
     CHECK(glsl::comment_text("a\u202Eb\u2066c\u200Dd\uFEFFe") == "a<U+202E>b<U+2066>c<U+200D>d<U+FEFF>e");
 }
 
+TEST_CASE("invisible characters in source are errors, spelled in the message and never echoed raw", "[hostile]") {
+    // Found by a new-user trial: a stray combining mark and a zero-width space read as whitespace, so `3 ́ 4` was
+    // 3·4 = 12 and `a​b` was a·b, silently; a right-to-left override was echoed raw and flipped the terminal's line.
+    fs::path mark = generated("stray_mark.iql", "y = 3 \u0301 4\n");
+    require_located(run_bounded("eval " + mark.string()), mark.string() + ":1:7", "unexpected character '<U+0301>'");
+    fs::path zw = generated("zero_width.iql", "y = a\u200Bb\nwhere\na ∈ ℝ default = 2\nb ∈ ℝ default = 5\n");
+    require_located(run_bounded("eval " + zw.string()), zw.string() + ":1:6", "unexpected character '<U+200B>'");
+    fs::path bidi = generated("bidi.iql", "y = 1 - \u202Er\nwhere\nr ∈ ℝ default = 2\n");
+    Bounded b = run_bounded("eval " + bidi.string());
+    require_located(b, bidi.string() + ":1:9", "unexpected character '<U+202E>'");
+    CHECK(b.run.err.find("\u202E") == std::string::npos);  // not echoed: U+FFFD stands in the source line
+    CHECK_THAT(b.run.err, Catch::Contains("  y = 1 - \uFFFDr\n          ^"));
+    fs::path nbsp = generated("nbsp.iql", "y = 1\u00A0+ 2\n");
+    require_located(run_bounded("eval " + nbsp.string()), nbsp.string() + ":1:6", "unexpected character '<U+00A0>'");
+    fs::path bad = generated("bad_byte.iql", "y = 1 \xFF 2\n");
+    require_located(run_bounded("eval " + bad.string()), bad.string() + ":1:7", "unexpected character '<byte 0xFF>'");
+    // A combining mark after a letter is part of the name (x̂), and a BOM is whitespace.
+    fs::path hat = generated("hat.iql", "\uFEFFy = x\u0302 + 1\nwhere\nx\u0302 ∈ ℝ default = 2\n");
+    Bounded h = run_bounded("eval " + hat.string());
+    INFO(h.run.err);
+    CHECK(h.run.exit_code == 0);
+    CHECK(h.run.out == "y = 3\n");
+}
+
 TEST_CASE("literals outside float's range are located errors: folded overflow is not an internal error", "[hostile]") {
     require_located(run_bounded(hostile("float_range.iql") + " -o -"), hostile("float_range.iql") + ":2:11",
                     "the number 1e39 is outside the range of 32-bit floats");

@@ -57,6 +57,11 @@ void append(std::string& out, char32_t c) {
     }
 }
 
+bool is_invisible(char32_t c) {
+    return c == 0xAD || c == 0x61C || c == 0x180E || (c >= 0x200B && c <= 0x200F) || (c >= 0x2028 && c <= 0x202E) ||
+           (c >= 0x2060 && c <= 0x2064) || (c >= 0x2066 && c <= 0x206F) || c == 0xFEFF;
+}
+
 bool is_combining(char32_t c) {
     return (c >= 0x0300 && c <= 0x036F) || (c >= 0x1AB0 && c <= 0x1AFF) || (c >= 0x1DC0 && c <= 0x1DFF) ||
            (c >= 0x20D0 && c <= 0x20FF) || (c >= 0xFE20 && c <= 0xFE2F);
@@ -246,13 +251,36 @@ std::string escape_controls(std::string_view s) {
 // Text as shown in a diagnostic: control characters (a NUL, an escape sequence) become their visible
 // pictures (U+2400 + c, ␡ for DEL), one column each like the byte they stand for; tabs and (in messages)
 // newlines stay.
+// Invisible formatting characters (a bidirectional override would reorder the terminal's line: Trojan Source)
+// are shown as U+FFFD in a source line (one column, as counted for the caret) and spelled <U+202E> in a
+// message, where a stray combining mark is spelled too (it would combine with the quote before it).
 static std::string printable(std::string_view text, bool keep_newlines) {
     std::string out;
     out.reserve(text.size());
-    for (char ch : text) {
-        unsigned char c = static_cast<unsigned char>(ch);
-        if ((c < 0x20 && c != '\t' && !(keep_newlines && c == '\n')) || c == 0x7F) utf8::append(out, c == 0x7F ? 0x2421 : 0x2400 + c);
-        else out += ch;
+    for (size_t i = 0; i < text.size();) {
+        unsigned char c = static_cast<unsigned char>(text[i]);
+        if (c < 0x80) {
+            if ((c < 0x20 && c != '\t' && !(keep_newlines && c == '\n')) || c == 0x7F) utf8::append(out, c == 0x7F ? 0x2421 : 0x2400 + c);
+            else out += char(c);
+            ++i;
+            continue;
+        }
+        size_t from = i;
+        char32_t cp = utf8::decode(text, i);
+        if (i == from) ++i;  // (never stalls)
+        if (utf8::is_invisible(cp)) {
+            if (keep_newlines) out += fmt::format("<U+{:04X}>", unsigned(cp));
+            else utf8::append(out, 0xFFFD);
+        } else if (keep_newlines && ((utf8::is_combining(cp) && (from == 0 || text[from - 1] == '\'' || text[from - 1] == ' ')) ||
+                                     cp == 0xA0 || (cp >= 0x2000 && cp <= 0x200A) || cp == 0x202F || cp == 0x205F || cp == 0x3000)) {
+            out += fmt::format("<U+{:04X}>", unsigned(cp));  // a space that is not one, a mark that would combine
+        } else if (cp == 0xFFFD && i - from == 1) {
+            // A byte that is not UTF-8: spelled in a message, the replacement character in a source line.
+            if (keep_newlines) out += fmt::format("<byte 0x{:02X}>", unsigned(c));
+            else utf8::append(out, 0xFFFD);
+        } else {
+            out.append(text.substr(from, i - from));
+        }
     }
     return out;
 }

@@ -123,6 +123,9 @@ namespace utf8 {
 char32_t decode(std::string_view text, size_t& i);
 void append(std::string& out, char32_t c);
 bool is_combining(char32_t c);
+// An invisible formatting or separator character: zero-width spaces and joiners, bidirectional embeddings,
+// overrides and isolates (Trojan Source), line and paragraph separators, the BOM, the soft hyphen.
+bool is_invisible(char32_t c);
 // Display width of a string in columns (combining marks are 0, everything else 1).
 size_t width(std::string_view s);
 }  // namespace utf8

@@ -262,7 +262,10 @@ struct Lexer {
                 case 0xB1: k = Tok::PlusMinus; break;
                 default: break;
             }
-            if (utf8::is_combining(cp) || cp == 0xFEFF || cp == 0x200B) {  // stray mark or BOM: whitespace
+            // A BOM reads as whitespace. A stray combining mark (after a space or a digit: one after a letter is
+            // part of the name) and a zero-width space are errors: as whitespace they made `3 ́ 4` read as 3·4 and
+            // `a​b` as a·b without a word (a new user's trial).
+            if (cp == 0xFEFF) {
                 i = j;
                 space = true;
                 continue;
