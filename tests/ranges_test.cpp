@@ -27,7 +27,7 @@ TEST_CASE("a division by a slider range containing 0 is warned, located", "[rang
     CHECK_THAT(r.err, Catch::Contains("error: division by a value that can be 0"));
 }
 
-TEST_CASE("--strict-ranges: a parameter value outside its slider bounds is an error", "[ranges]") {
+TEST_CASE("a parameter value outside its slider bounds is an error under --strict-ranges", "[ranges]") {
     // Found by a new-user trial: a vesica's width overridden to 0 (its sliders start at 0.05) made the distance
     // NaN at every pixel, and --strict-ranges passed it: range analysis proves its guards within the bounds only.
     auto f = write_temp("outside_bounds.md", "❤: s\n```iheartla\nshape\nD = ‖p‖ - 1/r\nwhere\np ∈ ℝ³\nr ∈ [0.5,2] default = 1\n```\n"
