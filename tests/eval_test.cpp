@@ -148,6 +148,11 @@ TEST_CASE("defaults and bounds may be any constant expression, evaluated by the 
     CHECK_THAT(b.err, Catch::Contains("bad_default.iql:3:22: error: a default must be a constant (numbers, π, and arithmetic and "
                                       "functions of them, such as √2 or sin(π/8))\n  r ∈ [0, 2] default = q + 1\n"
                                       "                       ^~~~~"));
+    // A value past the sliders is evaluated and warned, as a scene's override is (it was silent).
+    RunResult past = run_iqc("eval " + f.string() + " --set r=5");
+    CHECK(past.exit_code == 0);
+    CHECK(value(past.out) == Approx(5.5));
+    CHECK_THAT(past.err, Catch::Contains("--set r:1:1: warning: the value 5 of 'r' is outside its slider bounds [0, 2]"));
     // time and the mouse are inputs, not constants: they were evaluated as 0 (a new user's trial).
     auto t = write_temp("time_default.iql", "y = r\nwhere\nr ∈ [0, 2] default = 1 + time\n");
     RunResult tr = run_iqc("eval " + t.string());

@@ -165,6 +165,16 @@ bool evaluate_checked(const EvalRequest& req, SourceManager& sm, Diagnostics& d,
                                                     "-2147483648 … 2147483647)", sname, v.v[0]));
             continue;
         }
+        // As a scene's override is: a value past the sliders is evaluated, and warned (the guards range analysis
+        // proved hold within the bounds only). It was silent here (a new user's trial).
+        const auto& par = m->params[size_t(pi)];
+        if (par.bounded)
+            for (size_t i = 0; i < v.v.size() && i < par.lo.size(); ++i)
+                if (v.v[i] < par.lo[i] || v.v[i] > par.hi[i]) {
+                    d.warning(given_spans[sname], fmt::format("the value {} of '{}' is outside its slider bounds [{}, {}]", v.v[i],
+                                                              sname, par.lo[i], par.hi[i]));
+                    break;
+                }
         args[size_t(pi)] = {want, v.v};
     }
     if (d.error_count() != before) return false;
