@@ -330,7 +330,8 @@ TEST_CASE("comment_text: one line, no comment delimiters, no continuation, valid
     CHECK(glsl::comment_text("a */ b /* c") == "a * / b / * c");
     CHECK(glsl::comment_text("ends \\") == "ends");
     CHECK(glsl::comment_text("ends \\ \\\\  ") == "ends");
-    CHECK(glsl::comment_text("bad \xFF byte, overlong \xC0\xAF slash") == "bad \xEF\xBF\xBD byte, overlong \xEF\xBF\xBD slash");
+    // (C0 can start no well-formed sequence: each of its bytes is replaced, as Unicode's "maximal subpart" rule says)
+    CHECK(glsl::comment_text("bad \xFF byte, overlong \xC0\xAF slash") == "bad \xEF\xBF\xBD byte, overlong \xEF\xBF\xBD\xEF\xBF\xBD slash");
     CHECK(glsl::comment_text("‖p‖ - r: keeps math") == "‖p‖ - r: keeps math");
     // Invisible format characters are spelled out (Trojan Source): bidi override and isolate, zero-width, BOM.
     CHECK(glsl::comment_text("a\u202Eb\u2066c\u200Dd\uFEFFe") == "a<U+202E>b<U+2066>c<U+200D>d<U+FEFF>e");
@@ -352,6 +353,16 @@ TEST_CASE("invisible characters in source are errors, spelled in the message and
     require_located(run_bounded("eval " + nbsp.string()), nbsp.string() + ":1:6", "unexpected character '<U+00A0>'");
     fs::path bad = generated("bad_byte.iql", "y = 1 \xFF 2\n");
     require_located(run_bounded("eval " + bad.string()), bad.string() + ":1:7", "unexpected character '<byte 0xFF>'");
+    // Not UTF-8: an overlong '/' (C0 AF was read as a division) and a surrogate are bytes of their own; a BOM
+    // within a line is a zero-width no-break space; an invisible filler is named.
+    fs::path overlong = generated("overlong.iql", "y = 6 \xC0\xAF 2\n");
+    require_located(run_bounded("eval " + overlong.string()), overlong.string() + ":1:7", "unexpected character '<byte 0xC0>'");
+    fs::path surrogate = generated("surrogate.iql", "y = 1 \xED\xA0\x80 2\n");
+    require_located(run_bounded("eval " + surrogate.string()), surrogate.string() + ":1:7", "unexpected character '<byte 0xED>'");
+    fs::path midbom = generated("mid_bom.iql", "y = 1 \uFEFF+ 2\n");
+    require_located(run_bounded("eval " + midbom.string()), midbom.string() + ":1:7", "unexpected character '<U+FEFF>'");
+    fs::path filler = generated("filler.iql", "y = 1 \u115F 2\n");
+    require_located(run_bounded("eval " + filler.string()), filler.string() + ":1:7", "unexpected character '<U+115F>'");
     // A combining mark after a letter is part of the name (x̂), and a BOM is whitespace.
     fs::path hat = generated("hat.iql", "\uFEFFy = x\u0302 + 1\nwhere\nx\u0302 ∈ ℝ default = 2\n");
     Bounded h = run_bounded("eval " + hat.string());
@@ -681,6 +692,35 @@ TEST_CASE("no output replaces a file the command reads: the scene, a module it i
     CHECK_THAT(read_text(dir / "h.frag"), Catch::StartsWith("void mainImage"));
     // A new output beside them is written as before.
     CHECK(run_bounded("render " + s + " --size 8x8 -q -o " + (dir / "s.png").string()).run.exit_code == 0);
+    // bench --replot (a second trial: --plot onto the scene, a module or the CSV became an SVG) and --csv and
+    // --plot onto one file (refused only after the whole bench) are refused before anything runs.
+    std::ofstream(dir / "r.csv") << "method,hit,max_steps,normals,frame_ms,evals_per_pixel_mean,evals_per_pixel_p99,hit_mismatch_pct,"
+                                    "depth_err_p99,normal_err_deg_p99,psnr_db\nsphere,0.001,64,tetrahedron,1,2,3,0,0,0,50\n";
+    std::string csv = (dir / "r.csv").string(), both = (dir / "both.csv").string();
+    for (const Case& c : {Case{"bench " + s + " --replot " + csv + " --plot " + s, "--plot", s},
+                          Case{"bench " + s + " --replot " + csv + " --plot " + m, "--plot", m},
+                          Case{"bench " + s + " --replot " + csv + " --plot " + csv, "--plot", csv}}) {
+        Bounded r = run_bounded(c.args);
+        INFO(c.args << "\n" << r.run.err);
+        CHECK(r.run.exit_code == 2);
+        CHECK_THAT(r.run.err, Catch::Contains("iqc: error: " + c.flag + " '" + c.out + "' is a file this command reads"));
+    }
+    Bounded same = run_bounded("bench " + s + " --size 8x8 --csv " + both + " --plot " + both);
+    CHECK(same.run.exit_code == 2);
+    CHECK_THAT(same.run.err, Catch::Contains("--csv and --plot are the same file"));
+    CHECK(read_text(dir / "s.iq") == scene);
+    CHECK(read_text(dir / "ball.iql") == module);
+    // Frames are numbered before the file name's extension, not the path's last dot, and render writes no '-'.
+    fs::create_directories(dir / "v1.2");
+    CHECK(run_bounded("render " + s + " --size 8x8 -q --frames 2 -o " + (dir / "v1.2" / "x").string()).run.exit_code == 0);
+    CHECK(fs::exists(dir / "v1.2" / "x_0000.png"));
+    CHECK(fs::exists(dir / "v1.2" / "x_0001.png"));
+    Bounded dash = run_bounded("render " + s + " --size 8x8 -o -");
+    CHECK(dash.run.exit_code == 2);
+    CHECK_THAT(dash.run.err, Catch::Contains("render writes PNG files"));
+    Bounded late = run_bounded("render " + s + " --size 8x8 --frames 2 --fps 1e-38 --time 3e38 -o " + (dir / "late.png").string());
+    CHECK(late.run.exit_code == 2);
+    CHECK_THAT(late.run.err, Catch::Contains("past 32-bit floats"));
 }
 
 TEST_CASE("long titles and names are capped, and eval's --time and --mouse are checked as render's are", "[hostile]") {

@@ -675,6 +675,18 @@ TEST_CASE("Lipschitz pragmas: each said once, no exact distance with a factor, a
     CHECK_THAT(prose.err, Catch::Contains("prose.iql:5:1: error: '# exact' contradicts '# lipschitz'"));
     CHECK_THAT(prose.err, !Catch::Contains("said twice"));
     CHECK_THAT(prose.err, !Catch::Contains("contradicts '# bound'"));
+    // Any case, and a comment after the pragma (a third trial: `# Lipschitz: 5` and `# EXACT` went unused).
+    for (const char* pragma : {"# Lipschitz: 2.5", "# LIPSCHITZ: 2.5  # measured"}) {
+        RunResult r = run_iqc(write_temp("cased.iql", std::string("shape\n") + pragma + "\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n").string() +
+                              " --dump-ir -o /dev/null");
+        INFO(pragma << "\n" << r.err);
+        CHECK(r.exit_code == 0);
+        CHECK_THAT(r.err, Catch::Contains("2.5 applied (declared)"));
+    }
+    RunResult upper = run_iqc(write_temp("upper.iql", "shape\n# EXACT  # Quilez's sphere\n# lipschitz: 2\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n").string() +
+                              " -o /dev/null");
+    CHECK(upper.exit_code == 1);
+    CHECK_THAT(upper.err, Catch::Contains("upper.iql:3:1: error: '# lipschitz' contradicts '# exact'"));
     // A K-Lipschitz bound: `# bound` with `# lipschitz: K` (examples/christmas_tree.iq's tree).
     RunResult ok = run_iqc("eval " + write_temp("bound_factor.iql", "shape\n# bound\n# lipschitz: 1.5\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n").string() +
                            " --set \"p=(2, 0, 0)\"");

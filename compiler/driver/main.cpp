@@ -107,11 +107,16 @@ int report_compiler_crash(const std::string& path, const char* compiler, const s
 }
 
 std::string frame_path(const std::string& out, int k, int frames) {
+    namespace fs = std::filesystem;
     if (frames <= 1) return out;
-    size_t dot = out.rfind('.');
-    std::string stem = dot == std::string::npos ? out : out.substr(0, dot);
-    std::string ext = dot == std::string::npos ? ".png" : out.substr(dot);
-    return fmt::format("{}_{:04d}{}", stem, k, ext);
+    std::error_code ec;
+    if (fs::exists(out, ec) && !fs::is_regular_file(out, ec) && !fs::is_directory(out, ec)) return out;  // a device: every frame to it
+    // The number goes before the file name's extension, not the path's last dot (`-o v1.2/x` wrote into
+    // `v1_0000.2/`, `-o ./anim` tried `_0000./anim`; a new user's trial).
+    fs::path p(out);
+    std::string ext = p.extension().string();
+    std::string name = p.stem().string() + fmt::format("_{:04d}", k) + (ext.empty() ? ".png" : ext);
+    return (p.parent_path() / name).string();
 }
 
 // Whether writing `out` (given as `flag`) would overwrite a file the compile read (`inputs`: the scene, the
@@ -158,6 +163,15 @@ int render_command(const std::string& code, const iqc::ShaderInputs& inputs, boo
     }
     if (!std::isfinite(time) || !std::isfinite(fps)) {
         std::fprintf(stderr, "iqc: error: --time and --fps must be finite numbers\n");
+        return 2;
+    }
+    // Each finite, they could still give the last frame a time past 32-bit floats (iTime = ∞: --fps 1e-45).
+    if (double last = double(time) + double(std::max(frames, 1) - 1) / double(fps); !(std::fabs(last) <= 3.4e38)) {
+        std::fprintf(stderr, "iqc: error: --time, --frames and --fps put the last frame at %g s, past 32-bit floats\n", last);
+        return 2;
+    }
+    if (output.empty() || output == "-") {  // it wrote a file named '-'
+        std::fprintf(stderr, "iqc: error: render writes PNG files: give one with -o (standard output is not one)\n");
         return 2;
     }
     for (const auto& u : inputs.all_uniforms()) {
@@ -617,6 +631,28 @@ static int run(int argc, char** argv) {
         return 0;
     }
     if (serve->parsed()) return iqc::serve(s_input, s_port, s_poll);
+    if (bench->parsed()) {
+        // Before any measuring: no output may be a file the bench reads (the scene, what it includes, the CSV
+        // being replotted) or the other output (--replot --plot onto the scene turned it into an SVG; --csv and
+        // --plot onto one file ran the whole bench first; a new user's trial). The files are the scene's compile's.
+        std::vector<std::string> read = {b_input};
+        {
+            iqc::SourceManager sm;
+            iqc::Diagnostics quiet(sm);
+            iqc::compile_file(b_input, sm, quiet, iqc::CompileOptions{});
+            for (const auto& f : sm.disk_files()) read.push_back(f);
+        }
+        if (!b_replot.empty()) read.push_back(b_replot);
+        if (overwrites_input("--csv", b_csv, read) || overwrites_input("--plot", b_plot, read)) return 2;
+        if (!b_csv.empty() && !b_plot.empty() && b_csv != "-" && b_plot != "-") {
+            namespace fs = std::filesystem;
+            std::error_code e1, e2;
+            if (fs::weakly_canonical(b_csv, e1) == fs::weakly_canonical(b_plot, e2) && !e1 && !e2) {
+                std::fprintf(stderr, "iqc: error: --csv and --plot are the same file '%s'\n", printable(b_csv).c_str());
+                return 2;
+            }
+        }
+    }
     if (bench->parsed() && !b_replot.empty()) {
         if (b_plot.empty()) {
             std::fprintf(stderr, "iqc: error: --replot needs --plot FILE.svg\n");

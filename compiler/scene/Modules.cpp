@@ -261,20 +261,28 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
                 // The first word of the comment, whole ("# exactly as…" and "# bound (its slope…)" are prose).
                 size_t w = 0;
                 while (w < body.size() && (std::isalnum(static_cast<unsigned char>(body[w])) || body[w] == '_')) ++w;
-                std::string_view word = body.substr(0, w), after = body.substr(w);
+                std::string word(body.substr(0, w));
+                std::string_view after = body.substr(w);
+                // Any case (`# Lipschitz: 5` was prose, so the factor went unused without a word), and a comment of
+                // its own after the pragma (`# exact  # Quilez's sdBox`).
+                for (char& ch : word) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+                if (size_t hash = after.find('#'); hash != std::string_view::npos) after = after.substr(0, hash);
                 auto blank = [](std::string_view v) { return v.find_first_not_of(" \t\r") == std::string_view::npos; };
-                uint32_t after_at = uint32_t(r.begin + eol - after.size());
+                uint32_t after_at = uint32_t(r.begin + (after.data() - text.data()));
                 if (word == "exact" || word == "bound") {
                     // Alone on its line; a value after a colon is a mistake worth saying ("# bound: 3").
                     std::string_view a = after.substr(std::min(after.find_first_not_of(" \t"), after.size()));
                     if (blank(after)) {
-                        if (pragma(at, std::string(word))) m->exactness = std::string(word);
+                        if (pragma(at, word)) m->exactness = word;
                     } else if (!a.empty() && a.front() == ':') {
-                        d_.error({src.file, after_at, uint32_t(r.begin + eol)},
+                        d_.error({src.file, after_at, uint32_t(after_at + after.size())},
                                  fmt::format("'# {}' takes no value (a K-Lipschitz bound is '# bound' on one line and "
                                              "'# lipschitz: K' on another)", word));
                     }
-                } else if (word == "lipschitz") {
+                } else if (word == "lipschitz" &&
+                           (body.substr(0, w) == "lipschitz" || after.find_first_not_of(" \t") != std::string_view::npos &&
+                                                                    after[after.find_first_not_of(" \t")] == ':')) {
+                    // Lower case, or any case with a colon: `# Lipschitz factors: …` is prose.
                     // `# lipschitz: K`, K a decimal number (digits, a point, an exponent) and nothing else on the line:
                     // "1/0.3" read as 1 and "1_000" as 1 made marching unsafe (a new user's trial).
                     size_t c = after.find_first_not_of(" \t");

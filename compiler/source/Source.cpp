@@ -22,17 +22,22 @@ char32_t decode(std::string_view t, size_t& i) {
         return (b & 0xC0) == 0x80 ? (b & 0x3F) : -1;
     };
     if (c < 0x80) { i += 1; return c; }
+    // Well-formed UTF-8 only (RFC 3629): an overlong form (C0 AF for '/'), a surrogate (ED A0 80) or a code point
+    // past U+10FFFF is one invalid byte, like any other.
     if ((c & 0xE0) == 0xC0) {
         int b1 = cont(1);
-        if (b1 >= 0) { i += 2; return char32_t(((c & 0x1F) << 6) | b1); }
+        char32_t cp = b1 >= 0 ? char32_t(((c & 0x1F) << 6) | b1) : 0;
+        if (b1 >= 0 && cp >= 0x80) { i += 2; return cp; }
     } else if ((c & 0xF0) == 0xE0) {
         int b1 = cont(1), b2 = cont(2);
-        if (b1 >= 0 && b2 >= 0) { i += 3; return char32_t(((c & 0x0F) << 12) | (b1 << 6) | b2); }
+        char32_t cp = b1 >= 0 && b2 >= 0 ? char32_t(((c & 0x0F) << 12) | (b1 << 6) | b2) : 0;
+        if (b1 >= 0 && b2 >= 0 && cp >= 0x800 && (cp < 0xD800 || cp > 0xDFFF)) { i += 3; return cp; }
     } else if ((c & 0xF8) == 0xF0) {
         int b1 = cont(1), b2 = cont(2), b3 = cont(3);
-        if (b1 >= 0 && b2 >= 0 && b3 >= 0) {
+        char32_t cp = b1 >= 0 && b2 >= 0 && b3 >= 0 ? char32_t(((c & 0x07) << 18) | (b1 << 12) | (b2 << 6) | b3) : 0;
+        if (b1 >= 0 && b2 >= 0 && b3 >= 0 && cp >= 0x10000 && cp <= 0x10FFFF) {
             i += 4;
-            return char32_t(((c & 0x07) << 18) | (b1 << 12) | (b2 << 6) | b3);
+            return cp;
         }
     }
     i += 1;
@@ -58,8 +63,10 @@ void append(std::string& out, char32_t c) {
 }
 
 bool is_invisible(char32_t c) {
-    return c == 0xAD || c == 0x61C || c == 0x180E || (c >= 0x200B && c <= 0x200F) || (c >= 0x2028 && c <= 0x202E) ||
-           (c >= 0x2060 && c <= 0x2064) || (c >= 0x2066 && c <= 0x206F) || c == 0xFEFF;
+    return c == 0xAD || c == 0x61C || c == 0x115F || c == 0x1160 || c == 0x180E || (c >= 0x200B && c <= 0x200F) ||
+           (c >= 0x2028 && c <= 0x202E) || (c >= 0x2060 && c <= 0x2064) || (c >= 0x2066 && c <= 0x206F) || c == 0x3164 ||
+           (c >= 0xFE00 && c <= 0xFE0F) || c == 0xFEFF || c == 0xFFA0 || (c >= 0xFFF9 && c <= 0xFFFB) ||
+           (c >= 0xE0000 && c <= 0xE0FFF);
 }
 
 bool is_combining(char32_t c) {

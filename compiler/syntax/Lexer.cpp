@@ -265,7 +265,7 @@ struct Lexer {
             // A BOM reads as whitespace. A stray combining mark (after a space or a digit: one after a letter is
             // part of the name) and a zero-width space are errors: as whitespace they made `3 ́ 4` read as 3·4 and
             // `a​b` as a·b without a word (a new user's trial).
-            if (cp == 0xFEFF) {
+            if (cp == 0xFEFF && b == 0) {  // a BOM starts the file; elsewhere it is a zero-width no-break space
                 i = j;
                 space = true;
                 continue;
