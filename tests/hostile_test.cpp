@@ -648,6 +648,9 @@ TEST_CASE("outputs may not be the input or each other, and render refuses silly 
     CHECK_THAT(read_text(dir / "s.iq"), Catch::StartsWith("[[shapes]]"));  // not overwritten
     Bounded meta = run_bounded(s + " -o " + (dir / "x").string() + " --meta " + (dir / "x").string());
     CHECK(meta.run.exit_code == 2);
+    Bounded both = run_bounded(s + " -o - --meta -");  // the shader and its JSON interleaved on standard output
+    CHECK(both.run.exit_code == 2);
+    CHECK_THAT(both.run.err, Catch::Contains("the shader goes to standard output: give --meta and --depfile a file"));
     Bounded pct = run_bounded(s + " -o '" + (dir / "o%.frag").string() + "' --depfile " + (dir / "d.d").string());
     CHECK(pct.run.exit_code == 1);
     CHECK_THAT(pct.run.err, Catch::Contains("cannot write the depfile"));

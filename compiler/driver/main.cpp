@@ -721,8 +721,13 @@ static int run(int argc, char** argv) {
         return 2;
     }
     {
-        // No output may be the input or another output (the scene would be overwritten by its shader).
+        // No output may be the input or another output (the scene would be overwritten by its shader), and
+        // standard output takes one of them (-o - --meta - interleaved the shader and its JSON).
         namespace fs = std::filesystem;
+        if (!render->parsed() && (output.empty() || output == "-") && (meta == "-" || depfile == "-")) {
+            std::fprintf(stderr, "iqc: error: the shader goes to standard output: give --meta and --depfile a file\n");
+            return 2;
+        }
         std::vector<std::pair<std::string, std::string>> files;
         if (!render->parsed()) files.push_back({"the input", input});
         if (!output.empty() && output != "-") files.push_back({"-o", output});
