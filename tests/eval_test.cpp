@@ -148,6 +148,13 @@ TEST_CASE("defaults and bounds may be any constant expression, evaluated by the 
     CHECK_THAT(b.err, Catch::Contains("bad_default.iql:3:22: error: a default must be a constant (numbers, π, and arithmetic and "
                                       "functions of them, such as √2 or sin(π/8))\n  r ∈ [0, 2] default = q + 1\n"
                                       "                       ^~~~~"));
+    // Bounds are checked in the shader's 32-bit floats: 0.1 + 0.2 (0.30000000000000004 in doubles) is within
+    // [0, 0.3], 0.30001 is not (a second trial of this stop's fixes).
+    RunResult sum = run_iqc("eval " + write_temp("float_bound.iql", "y = r\nwhere\nr ∈ [0, 0.3] default = 0.1 + 0.2\n").string());
+    CHECK(sum.exit_code == 0);
+    RunResult past_float = run_iqc("eval " + write_temp("past_bound.iql", "y = r\nwhere\nr ∈ [0, 0.3] default = 0.30001\n").string());
+    CHECK(past_float.exit_code == 1);
+    CHECK_THAT(past_float.err, Catch::Contains("past_bound.iql:3:24: error: the default 0.30001 of 'r' is outside its bounds [0, 0.3]"));
     // A value past the sliders is evaluated and warned, as a scene's override is (it was silent).
     RunResult past = run_iqc("eval " + f.string() + " --set r=5");
     CHECK(past.exit_code == 0);

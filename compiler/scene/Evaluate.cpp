@@ -170,7 +170,7 @@ bool evaluate_checked(const EvalRequest& req, SourceManager& sm, Diagnostics& d,
         const auto& par = m->params[size_t(pi)];
         if (par.bounded)
             for (size_t i = 0; i < v.v.size() && i < par.lo.size(); ++i)
-                if (v.v[i] < par.lo[i] || v.v[i] > par.hi[i]) {
+                if (float(v.v[i]) < float(par.lo[i]) || float(v.v[i]) > float(par.hi[i])) {  // as the shader's floats
                     d.warning(given_spans[sname], fmt::format("the value {} of '{}' is outside its slider bounds [{}, {}]", v.v[i],
                                                               sname, par.lo[i], par.hi[i]));
                     break;

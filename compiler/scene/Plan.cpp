@@ -143,7 +143,7 @@ struct Planner {
             }
             if (p.bounded)
                 for (size_t i = 0; i < ov.value.size(); ++i)
-                    if (ov.value[i] < p.lo[i] || ov.value[i] > p.hi[i]) {
+                    if (float(ov.value[i]) < float(p.lo[i]) || float(ov.value[i]) > float(p.hi[i])) {  // as the shader's floats
                         // Range analysis proves its guards within the slider bounds only: past them a division
                         // by the value or a root of it may be NaN at every point (a vesica of width 0). Under
                         // --strict-ranges that is an error, as the analysis' own warnings are.

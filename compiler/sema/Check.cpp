@@ -456,7 +456,9 @@ void Checker::collect_declarations() {
                     p.has_default = true;
                     if (p.bounded)
                         for (int i = 0; i < n; ++i)
-                            if (p.value[i] < p.lo[i] || p.value[i] > p.hi[i]) {
+                            // In the shader's 32-bit floats: 0.1 + 0.2 is 0.30000000000000004 in doubles, past a
+                            // bound of 0.3, but the same float (a second new-user trial).
+                            if (float(p.value[i]) < float(p.lo[i]) || float(p.value[i]) > float(p.hi[i])) {
                                 d_.error(decl.default_value->span,
                                          fmt::format("the default {} of '{}' is outside its bounds [{}, {}]", p.value[i],
                                                      name, p.lo[i], p.hi[i]));
