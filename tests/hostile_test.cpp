@@ -350,7 +350,9 @@ TEST_CASE("invisible characters in source are errors, spelled in the message and
     CHECK(b.run.err.find("\u202E") == std::string::npos);  // not echoed: U+FFFD stands in the source line
     CHECK_THAT(b.run.err, Catch::Contains("  y = 1 - \uFFFDr\n          ^"));
     fs::path nbsp = generated("nbsp.iql", "y = 1\u00A0+ 2\n");
-    require_located(run_bounded("eval " + nbsp.string()), nbsp.string() + ":1:6", "unexpected character '<U+00A0>'");
+    Bounded nb = run_bounded("eval " + nbsp.string());
+    require_located(nb, nbsp.string() + ":1:6", "unexpected character '<U+00A0>'");
+    CHECK_THAT(nb.run.err, Catch::Contains("  y = 1\uFFFD+ 2\n       ^"));  // shown, not a space that looks like one
     fs::path bad = generated("bad_byte.iql", "y = 1 \xFF 2\n");
     require_located(run_bounded("eval " + bad.string()), bad.string() + ":1:7", "unexpected character '<byte 0xFF>'");
     // Not UTF-8: an overlong '/' (C0 AF was read as a division) and a surrogate are bytes of their own; a BOM

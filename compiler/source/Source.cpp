@@ -275,11 +275,11 @@ static std::string printable(std::string_view text, bool keep_newlines) {
         size_t from = i;
         char32_t cp = utf8::decode(text, i);
         if (i == from) ++i;  // (never stalls)
-        if (utf8::is_invisible(cp)) {
+        const bool odd_space = cp == 0xA0 || (cp >= 0x2000 && cp <= 0x200A) || cp == 0x202F || cp == 0x205F || cp == 0x3000;
+        if (utf8::is_invisible(cp) || (odd_space && !keep_newlines)) {  // (a space that is not ' ' looks like one)
             if (keep_newlines) out += fmt::format("<U+{:04X}>", unsigned(cp));
             else utf8::append(out, 0xFFFD);
-        } else if (keep_newlines && ((utf8::is_combining(cp) && (from == 0 || text[from - 1] == '\'' || text[from - 1] == ' ')) ||
-                                     cp == 0xA0 || (cp >= 0x2000 && cp <= 0x200A) || cp == 0x202F || cp == 0x205F || cp == 0x3000)) {
+        } else if (keep_newlines && (odd_space || (utf8::is_combining(cp) && (from == 0 || text[from - 1] == '\'' || text[from - 1] == ' ')))) {
             out += fmt::format("<U+{:04X}>", unsigned(cp));  // a space that is not one, a mark that would combine
         } else if (cp == 0xFFFD && i - from == 1) {
             // A byte that is not UTF-8: spelled in a message, the replacement character in a source line.
