@@ -90,7 +90,6 @@ Report run(const Options& o) {
             co.max_steps = s.max_steps;
         }
         CompileResult r = compile_file(o.input, sm, d, co);
-        if (rep.inputs.empty()) rep.inputs = sm.disk_files();
         if (r.exit_code != 0) err = d.render() + r.internal;
         return r;
     };

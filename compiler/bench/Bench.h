@@ -52,7 +52,6 @@ struct Report {
     std::string colour_reference;
     std::vector<std::string> lipschitz;  // the scene's Lipschitz bounds (CompileResult::lipschitz)
     std::string error;               // non-empty: the bench could not run
-    std::vector<std::string> inputs;  // the files the scene's compile read (the scene, what it includes)
 };
 
 Report run(const Options& o);

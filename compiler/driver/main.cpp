@@ -696,7 +696,6 @@ static int run(int argc, char** argv) {
             if (tty) std::fprintf(stderr, "\r\033[Kiqc bench: [%d/%d] %s", done, total, what.c_str());
             else if (done == total) std::fprintf(stderr, "iqc bench: %d settings measured\n", total);
         };
-        if (overwrites_input("--csv", b_csv, {b_input}) || overwrites_input("--plot", b_plot, {b_input})) return 2;
         iqc::bench::Report rep = iqc::bench::run(bo);
         if (tty) std::fprintf(stderr, "\r\033[K");
         if (!rep.error.empty()) {
@@ -709,7 +708,6 @@ static int run(int argc, char** argv) {
         for (const auto& line : rep.lipschitz) std::printf("lipschitz: %s\n", line.c_str());
         std::printf("\n");
         std::fputs(iqc::bench::table(rep).c_str(), stdout);
-        if (overwrites_input("--csv", b_csv, rep.inputs) || overwrites_input("--plot", b_plot, rep.inputs)) return 2;
         OutputSet outs;
         if (!b_csv.empty()) outs.add(b_csv, iqc::bench::csv(rep));
         if (!b_plot.empty()) outs.add(b_plot, iqc::bench::svg(rep, b_input));

@@ -168,13 +168,7 @@ bool evaluate_checked(const EvalRequest& req, SourceManager& sm, Diagnostics& d,
         // As a scene's override is: a value past the sliders is evaluated, and warned (the guards range analysis
         // proved hold within the bounds only). It was silent here (a new user's trial).
         const auto& par = m->params[size_t(pi)];
-        if (par.bounded)
-            for (size_t i = 0; i < v.v.size() && i < par.lo.size(); ++i)
-                if (float(v.v[i]) < float(par.lo[i]) || float(v.v[i]) > float(par.hi[i])) {  // as the shader's floats
-                    d.warning(given_spans[sname], fmt::format("the value {} of '{}' is outside its slider bounds [{}, {}]", v.v[i],
-                                                              sname, par.lo[i], par.hi[i]));
-                    break;
-                }
+        if (int i = par.outside_bounds(v.v); i >= 0) d.warning(given_spans[sname], par.outside_bounds_message(v.v, i, sname));
         args[size_t(pi)] = {want, v.v};
     }
     if (d.error_count() != before) return false;

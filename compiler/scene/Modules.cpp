@@ -267,26 +267,23 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
                 // its own after the pragma (`# exact  # Quilez's sdBox`).
                 for (char& ch : word) ch = char(std::tolower(static_cast<unsigned char>(ch)));
                 if (size_t hash = after.find('#'); hash != std::string_view::npos) after = after.substr(0, hash);
-                auto blank = [](std::string_view v) { return v.find_first_not_of(" \t\r") == std::string_view::npos; };
+                const size_t c = after.find_first_not_of(" \t\r");  // what follows the word: nothing, a colon, prose
+                const bool colon = c != std::string_view::npos && after[c] == ':';
                 uint32_t after_at = uint32_t(r.begin + (after.data() - text.data()));
                 if (word == "exact" || word == "bound") {
                     // Alone on its line; a value after a colon is a mistake worth saying ("# bound: 3").
-                    std::string_view a = after.substr(std::min(after.find_first_not_of(" \t"), after.size()));
-                    if (blank(after)) {
+                    if (c == std::string_view::npos) {
                         if (pragma(at, word)) m->exactness = word;
-                    } else if (!a.empty() && a.front() == ':') {
+                    } else if (colon) {
                         d_.error({src.file, after_at, uint32_t(after_at + after.size())},
                                  fmt::format("'# {}' takes no value (a K-Lipschitz bound is '# bound' on one line and "
                                              "'# lipschitz: K' on another)", word));
                     }
-                } else if (word == "lipschitz" &&
-                           (body.substr(0, w) == "lipschitz" || after.find_first_not_of(" \t") != std::string_view::npos &&
-                                                                    after[after.find_first_not_of(" \t")] == ':')) {
+                } else if (word == "lipschitz" && (colon || body.substr(0, w) == "lipschitz")) {
                     // Lower case, or any case with a colon: `# Lipschitz factors: …` is prose.
                     // `# lipschitz: K`, K a decimal number (digits, a point, an exponent) and nothing else on the line:
                     // "1/0.3" read as 1 and "1_000" as 1 made marching unsafe (a new user's trial).
-                    size_t c = after.find_first_not_of(" \t");
-                    std::string_view v = c == std::string_view::npos || after[c] != ':' ? std::string_view() : after.substr(c + 1);
+                    std::string_view v = colon ? after.substr(c + 1) : std::string_view();
                     size_t v0 = v.find_first_not_of(" \t");
                     v = v0 == std::string_view::npos ? std::string_view() : v.substr(v0);
                     while (!v.empty() && (v.back() == ' ' || v.back() == '\t' || v.back() == '\r')) v.remove_suffix(1);
@@ -295,7 +292,7 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
                     double k = ok ? std::strtod(std::string(v).c_str(), nullptr) : 0;
                     Span vat = v.empty() ? at : Span{src.file, uint32_t(r.begin + (v.data() - text.data())),
                                                         uint32_t(r.begin + (v.data() - text.data()) + v.size())};
-                    if (c == std::string_view::npos || after[c] != ':')
+                    if (!colon)
                         d_.error(at, "a Lipschitz pragma is written '# lipschitz: K' (a colon, then the number K ≥ 1)");
                     else if (!ok && !v.empty())
                         d_.error(vat, fmt::format("'# lipschitz: K' needs a decimal number K ≥ 1 (how much D can change per unit "

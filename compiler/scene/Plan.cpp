@@ -141,22 +141,18 @@ struct Planner {
                 ok = false;
                 continue;
             }
-            if (p.bounded)
-                for (size_t i = 0; i < ov.value.size(); ++i)
-                    if (float(ov.value[i]) < float(p.lo[i]) || float(ov.value[i]) > float(p.hi[i])) {  // as the shader's floats
-                        // Range analysis proves its guards within the slider bounds only: past them a division
-                        // by the value or a root of it may be NaN at every point (a vesica of width 0). Under
-                        // --strict-ranges that is an error, as the analysis' own warnings are.
-                        std::string msg = fmt::format("the value {} of '{}' is outside its slider bounds [{}, {}]", ov.value[i],
-                                                      ov.name, p.lo[i], p.hi[i]);
-                        if (strict_ranges) {
-                            d.error(ov.span, msg + ", where range analysis proves nothing (--strict-ranges)");
-                            ok = false;
-                        } else {
-                            d.warning(ov.span, msg);
-                        }
-                        break;
-                    }
+            // Range analysis proves its guards within the slider bounds only: past them a division by the value or
+            // a root of it may be NaN at every point (a vesica of width 0). Under --strict-ranges that is an error,
+            // as the analysis' own warnings are.
+            if (int i = p.outside_bounds(ov.value); i >= 0) {
+                std::string msg = p.outside_bounds_message(ov.value, i, ov.name);
+                if (strict_ranges) {
+                    d.error(ov.span, msg + ", where range analysis proves nothing (--strict-ranges)");
+                    ok = false;
+                } else {
+                    d.warning(ov.span, msg);
+                }
+            }
             values[size_t(pi)] = ov.value;
         }
         return ok;
@@ -330,8 +326,7 @@ struct Planner {
 bool plan_instances(const SceneDesc& scene, ModuleLibrary& lib, SourceManager& sm, Diagnostics& d,
                     std::vector<InstancePlan>& plans, bool strict_ranges) {
     size_t before = d.error_count();
-    Planner planner{scene, lib, sm, d};
-    planner.strict_ranges = strict_ranges;
+    Planner planner{scene, lib, sm, d, strict_ranges, {}};
     plans.assign(scene.instances.size(), {});
     // Explicit names first, so that generated ones (`<type>_<n>`) avoid them.
     std::map<std::string, Span> explicit_names;

@@ -454,16 +454,9 @@ void Checker::collect_declarations() {
                 } else {
                     p.value = *v;
                     p.has_default = true;
-                    if (p.bounded)
-                        for (int i = 0; i < n; ++i)
-                            // In the shader's 32-bit floats: 0.1 + 0.2 is 0.30000000000000004 in doubles, past a
-                            // bound of 0.3, but the same float (a second new-user trial).
-                            if (float(p.value[i]) < float(p.lo[i]) || float(p.value[i]) > float(p.hi[i])) {
-                                d_.error(decl.default_value->span,
-                                         fmt::format("the default {} of '{}' is outside its bounds [{}, {}]", p.value[i],
-                                                     name, p.lo[i], p.hi[i]));
-                                break;
-                            }
+                    if (int i = p.outside_bounds(p.value); i >= 0)
+                        d_.error(decl.default_value->span, fmt::format("the default {} of '{}' is outside its bounds [{}, {}]",
+                                                                       p.value[size_t(i)], name, p.lo[size_t(i)], p.hi[size_t(i)]));
                 }
             }
             if (p.value.empty()) {
@@ -2128,6 +2121,10 @@ void Checker::run() {
 }
 
 }  // namespace
+
+std::string ParamInfo::outside_bounds_message(const std::vector<double>& v, int i, const std::string& as) const {
+    return fmt::format("the value {} of '{}' is outside its slider bounds [{}, {}]", v[size_t(i)], as, lo[size_t(i)], hi[size_t(i)]);
+}
 
 std::unique_ptr<CheckedModule> check_module(ast::Module module, const ModuleLookup& lookup, const CheckOptions& opts,
                                             Diagnostics& diags) {

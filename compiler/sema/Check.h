@@ -69,6 +69,17 @@ struct ParamInfo {
     std::string description;
     std::string seq_index;    // a sequence x_i ∈ ℝ³: its index letter (the type is then an array)
     bool zero_based = false;  // `b ∈ ℤ index`: an index counting from 0
+
+    // The first component of `v` outside the slider bounds, compared as the shader's 32-bit floats (0.1 + 0.2
+    // is 0.30000000000000004 in doubles, past a bound of 0.3, but the same float); -1 when none is (or unbounded).
+    int outside_bounds(const std::vector<double>& v) const {
+        if (!bounded) return -1;
+        for (size_t i = 0; i < v.size() && i < lo.size(); ++i)
+            if (float(v[i]) < float(lo[i]) || float(v[i]) > float(hi[i])) return int(i);
+        return -1;
+    }
+    // "the value X of 'name' is outside its slider bounds [lo, hi]" for component i (a scene's override, eval's --set).
+    std::string outside_bounds_message(const std::vector<double>& v, int i, const std::string& as) const;
 };
 
 struct CheckedModule;
