@@ -6,6 +6,7 @@
 #
 #   bench/instances.sh                 # 1 10 100 1000 10000, grid layout
 #   LAYOUT=irregular bench/instances.sh 10 100 1000   # jittered, tilted rings (their tables stay tables)
+#   LAYOUT=moving LLVMPIPE_SIZES="10 100" bench/instances.sh 10 100 1000 10000   # rings tilting with time
 #
 # Run after scripts/build.sh.
 set -euo pipefail

@@ -3,7 +3,9 @@
 #
 # The many-instances benchmark scene (bench/instances.sh, bench/hierarchy.sh): a ground and N rings on a
 # grid of 10-ring layers, one shape and one material, each ring with its own constant transform. LAYOUT
-# `grid` (default) places them on a lattice; `irregular` jitters and tilts them (their tables stay tables).
+# `grid` (default) places them on a lattice; `irregular` jitters and tilts them (their tables stay tables);
+# `moving` tilts each on the grid by an angle that changes with time (instances of their own, each
+# inverted once per pixel: no group).
 # BOUND > 0 gives every ring `bound = BOUND` (from 16 rings on, a bounding-volume hierarchy).
 set -euo pipefail
 awk -v n="$1" -v layout="${2:-grid}" -v bound="${3:-0}" 'BEGIN {
@@ -17,7 +19,9 @@ awk -v n="$1" -v layout="${2:-grid}" -v bound="${3:-0}" 'BEGIN {
   srand(12345)
   for (i = 0; i < n; i++) {
     x = (i % side) - side / 2; z = int(i / side) % side - side / 2; y = int(i / (side * side)) * 0.5 - 0.7
-    if (layout == "irregular")
+    if (layout == "moving")
+      t = sprintf("T((%g, %g, %g))⋅`R_x`(0.5 time + %.3f)", x, y, z, 0.4 * (i % 7))
+    else if (layout == "irregular")
       t = sprintf("T((%.4f, %.4f, %.4f))⋅`R_x`(%.3f)", x + 0.3 * (rand() - 0.5), y, z + 0.3 * (rand() - 0.5), 0.4 * (i % 7))
     else
       t = sprintf("T((%g, %g, %g))", x, y, z)

@@ -2,7 +2,9 @@
 // modules in process.
 #pragma once
 
+#include <catch2/catch.hpp>
 #include <cstdio>
+#include <functional>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -27,13 +29,17 @@ inline std::string read_text(const std::filesystem::path& p) {
     return ss.str();
 }
 
+// A directory of this process's own, one per test case: a file one case writes (a module `torus.iql`) must not
+// be found by the next (a scene beside it whose `type = "torus"` would take that module for the standard
+// library's: run in one process, "a bound too small…" failed after the eval tests had written their torus).
 inline std::filesystem::path temp_dir() {
-    static std::filesystem::path dir = [] {
-        auto d = std::filesystem::temp_directory_path() / ("iqc_tests_" + std::to_string(::getpid()));
-        std::filesystem::create_directories(d);
-        return d;
-    }();
-    return dir;
+    static const std::filesystem::path root = std::filesystem::temp_directory_path() / ("iqc_tests_" + std::to_string(::getpid()));
+    std::string name = Catch::getResultCapture().getCurrentTestName();
+    char tag[32];
+    std::snprintf(tag, sizeof tag, "case_%016zx", std::hash<std::string>{}(name));
+    auto d = root / tag;
+    std::filesystem::create_directories(d);
+    return d;
 }
 
 inline std::filesystem::path write_temp(const std::string& name, const std::string& text) {

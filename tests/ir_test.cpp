@@ -4,6 +4,7 @@
 #include "TestUtil.h"
 #include "ir/Eval.h"
 #include "ir/IR.h"
+#include "ir/Parse.h"
 
 using namespace iqc;
 using namespace iqc::ir;
@@ -70,4 +71,56 @@ TEST_CASE("evaluator: inverse and determinant, singular matrices", "[ir]") {
     CHECK(mat_det(a, 4) == Approx(24.0));
     mat_inverse({1, 2, 2, 4}, 2, &singular);
     CHECK(singular);
+}
+
+TEST_CASE("evaluator: prepared globals are computed at their first read, again after set_global", "[ir]") {
+    // The Lipschitz pass makes an evaluator per instance and calls only the shape's own function, which reads
+    // no prepared global: preparing every moving instance's transform in each evaluator made n moving
+    // instances n² work (2,000 moving spheres with `bound`: 88 s). An iqc_prepare that exceeds the budget
+    // shows whether it ran: a function that reads no prepared global must not start it.
+    const std::string text =
+        "global @0 scale: ℝ prepared\n"
+        "global @1 k: ℝ parameter = 2\n"
+        "function iqc_prepare() -> ℝ {\n"
+        "  %0 = ℝ Global @1 k\n"
+        "  %1 = ℝ Mul %0, %0\n"
+        "  %2 = ℝ Mul %1, %0\n"
+        "  %3 = ℝ Mul %2, %0\n"
+        "  %4 = ℝ Mul %3, %0\n"
+        "  %5 = ℝ Mul %4, %0\n"
+        "  %6 = ℝ Mul %5, %0\n"
+        "  %7 = ℝ Mul %6, %0\n"
+        "  return %7\n"
+        "  output scale = %7\n"
+        "}\n"
+        "entry function shape(q: ℝ) -> ℝ {\n"
+        "  %0 = ℝ Param #0 q  ; q\n"
+        "  %1 = ℝ Const 1\n"
+        "  %2 = ℝ Sub %0, %1\n"
+        "  return %2\n"
+        "}\n"
+        "entry function scene(q: ℝ) -> ℝ {\n"
+        "  %0 = ℝ Param #0 q  ; q\n"
+        "  %1 = ℝ Global @0 scale\n"
+        "  %2 = ℝ Mul %0, %1\n"
+        "  return %2\n"
+        "}\n";
+    Module m;
+    std::string error;
+    REQUIRE(parse_module(text, m, error));
+    REQUIRE(verify(m).empty());
+    int shape = m.find("shape"), scene = m.find("scene");
+    Value q{Type::scalar(), {3}};
+    {
+        EvalInputs tight;
+        tight.max_steps = 12;  // the shape's 4 instructions fit (8 steps); iqc_prepare's 8 (16) do not
+        Evaluator ev(m, tight);
+        CHECK(ev.call(shape, {q}).v == std::vector<double>{2});
+        CHECK_THROWS_AS(ev.call(scene, {q}), EvalLimit);
+    }
+    Evaluator ev(m);
+    CHECK(ev.call(scene, {q}).v == std::vector<double>{3 * 256});  // k⁸ = 256
+    ev.set_global(1, {3});
+    CHECK(ev.call(scene, {q}).v == std::vector<double>{3 * 6561});  // 3⁸
+    CHECK(ev.call(shape, {q}).v == std::vector<double>{2});
 }

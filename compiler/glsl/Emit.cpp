@@ -6,6 +6,8 @@
 #include <fmt/format.h>
 #include <functional>
 #include <set>
+#include <string_view>
+#include <unordered_map>
 
 #include "ir/Schedule.h"
 #include "sema/Builtins.h"
@@ -804,9 +806,11 @@ struct FunctionEmitter {
         if (!comment.empty()) out += "// " + comment_text(comment) + "\n";
         out += fmt::format("void {}() {{\n", name);
         out += region(0, "    ", ValueId(-1));
+        std::unordered_map<std::string_view, int> index;  // globals by name (a search per output: n² in instances)
+        for (size_t g = 0; g < m.globals.size(); ++g) index.emplace(m.globals[g].name, int(g));
         for (const auto& [gname, v] : f.outputs) {
-            int g = m.find_global(gname);
-            const GlobalStorage* s = g >= 0 ? storage(g) : nullptr;
+            auto g = index.find(gname);
+            const GlobalStorage* s = g != index.end() ? storage(g->second) : nullptr;
             out += fmt::format("    {} = {};\n", s ? s->name : identifier(gname), expr(v));
         }
         return out + "}\n";

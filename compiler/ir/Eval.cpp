@@ -1,5 +1,8 @@
 #include "ir/Eval.h"
 
+#include <string_view>
+#include <unordered_map>
+
 #include <cmath>
 #include <fmt/format.h>
 
@@ -313,7 +316,7 @@ struct Frame {
         if (ev.steps_ > ev.inputs_.max_steps) throw EvalLimit{in.span};
         switch (in.op) {
             case Op::Param: at[i] = args[in.aux]; return;
-            case Op::Global: at[i] = ev.globals_[size_t(in.aux)].data(); return;
+            case Op::Global: at[i] = ev.read_global(in.aux).data(); return;
             case Op::Copy: at[i] = at[in.args[0]]; return;
             case Op::Index: {
                 double k = at[in.args[1]][0];
@@ -410,7 +413,6 @@ struct Frame {
 Evaluator::Evaluator(const Module& m, const EvalInputs& inputs) : m_(m), inputs_(inputs) {
     for (const auto& g : m.globals) globals_.push_back(g.kind == Global::Kind::Prepared ? std::vector<double>(slots(g.type), 0.0) : g.value);
     plans_.resize(m.functions.size());
-    prepare();
 }
 
 Evaluator::~Evaluator() = default;
@@ -433,17 +435,32 @@ const Evaluator::Plan& Evaluator::plan(int fn) const {
     return *p;
 }
 
+const std::vector<double>& Evaluator::read_global(int g) {
+    if (!prepared_ && m_.globals[size_t(g)].kind == Global::Kind::Prepared) prepare();
+    return globals_[size_t(g)];
+}
+
 void Evaluator::prepare() {
+    prepared_ = true;  // first: iqc_prepare's own reads of globals must not start it again
     int fn = m_.find(names::kPrepare);
     if (fn < 0) return;
     const Function& f = m_.functions[size_t(fn)];
+    std::unordered_map<std::string_view, int> index;  // globals by name (a lookup per output was n² in instances)
+    for (size_t g = 0; g < m_.globals.size(); ++g) index.emplace(m_.globals[g].name, int(g));
+    uint64_t caller = steps_;  // the work of the call that read a prepared global goes on after this
     steps_ = 0;
     Frame fr(*this, fn, nullptr);
-    fr.run_region(0);
+    try {
+        fr.run_region(0);
+    } catch (...) {
+        prepared_ = false;  // not prepared: the next read tries again (and meets the same limit)
+        throw;
+    }
+    steps_ = caller;
     for (const auto& [name, v] : f.outputs) {
-        int g = m_.find_global(name);
-        if (g < 0) internal_error("evaluator: iqc_prepare computes '" + name + "', which is no global");
-        globals_[size_t(g)].assign(fr.at[v], fr.at[v] + fr.plan.size[v]);
+        auto g = index.find(name);
+        if (g == index.end()) internal_error("evaluator: iqc_prepare computes '" + name + "', which is no global");
+        globals_[size_t(g->second)].assign(fr.at[v], fr.at[v] + fr.plan.size[v]);
     }
 }
 
@@ -451,7 +468,7 @@ void Evaluator::set_global(int g, std::vector<double> value) {
     if (g < 0 || size_t(g) >= globals_.size() || value.size() != globals_[size_t(g)].size())
         internal_error(fmt::format("evaluator: bad value for global #{}", g));
     globals_[size_t(g)] = std::move(value);
-    prepare();
+    prepared_ = false;
 }
 
 void Evaluator::call(int fn, const double* const* args, double* out) {
