@@ -8,9 +8,13 @@ struct Inliner {
     const Module& m;
     bool only_marked;
     int inlined = 0;
+    const std::function<bool(const Function&)>* keep = nullptr;
 
     bool wanted(const Instr& in) const {
-        return in.op == Op::Call && (!only_marked || m.functions[size_t(in.aux)].inline_hint);
+        if (in.op != Op::Call) return false;
+        const Function& callee = m.functions[size_t(in.aux)];
+        if (keep && (*keep)(callee)) return false;
+        return !only_marked || callee.inline_hint;
     }
 
     // Appends callee's body to `out` with its parameters bound to `args`; returns the result's new id.
@@ -42,8 +46,19 @@ struct Inliner {
 
 }  // namespace
 
+static Function inline_some(const Module& m, const Function& f, const std::function<bool(const Function&)>* keep, bool only_marked);
+
 Function inline_calls(const Module& m, const Function& f, bool only_marked) {
+    return inline_some(m, f, nullptr, only_marked);
+}
+
+Function inline_calls_except(const Module& m, const Function& f, const std::function<bool(const Function&)>& keep) {
+    return inline_some(m, f, &keep, false);
+}
+
+static Function inline_some(const Module& m, const Function& f, const std::function<bool(const Function&)>* keep, bool only_marked) {
     Inliner il{m, only_marked};
+    il.keep = keep;
     Function out = f;
     out.body.clear();
     out.outputs.clear();

@@ -7,6 +7,8 @@
 // copy. Loops are copied as they are (their bodies stay functions of their own).
 #pragma once
 
+#include <functional>
+
 #include "ir/IR.h"
 
 namespace iqc::ir {
@@ -14,6 +16,9 @@ namespace iqc::ir {
 // A copy of `f` with every call (only_marked: every call of an `inline_hint` function) replaced by the
 // callee's body, recursively.
 Function inline_calls(const Module& m, const Function& f, bool only_marked = false);
+// A copy of `f` with every call replaced by the callee's body, recursively, except calls of the functions
+// `keep` accepts (their arguments are still inlined).
+Function inline_calls_except(const Module& m, const Function& f, const std::function<bool(const Function&)>& keep);
 
 // Inlines the `inline_hint` functions into their callers, in every function; returns the calls inlined.
 int inline_marked(Module& m);

@@ -62,6 +62,10 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
                                      const std::vector<std::vector<Interval>>& others, double ball = 0,
                                      int samples = 1000, int boxes = 128, bool refine = true, double* split_work = nullptr);
 
+// A standard-library combinator of two distances (stdlib/operators.iql: "operators.smooth_union", …) and its
+// Lipschitz factor in them: ‖∇F(a, b)‖ ≤ factor · max(‖∇a‖, ‖∇b‖). 0 for any other function name.
+double combinator_factor(const std::string& function_name);
+
 // The pass: every function with a LipschitzSpec. Returns the warnings (located at the instances) and, in
 // `report`, one line per item ("shape 'twisted': K ≤ 7.6 derived, 3.9 sampled, 7.6 applied").
 std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::string>* report = nullptr);
