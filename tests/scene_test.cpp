@@ -231,6 +231,35 @@ TEST_CASE("a division by a constant is emitted as a multiplication by its recipr
     CHECK_THAT(c.result.code, !Catch::Contains("length(p) / 3.0"));
 }
 
+TEST_CASE("a transform must be affine at every moment and slider value", "[scene]") {
+    // The shader inverts a transform as an affine map and never reads its last row. Checked at the parameters'
+    // values only, [1 0 0 0; 0 1 0 0; 0 0 1 0; time 0 0 1] (affine at time 0) was accepted and drew as if
+    // time were 0 (a new user's trial, stop 38); so was a slider that makes the row (s, 0, 0, 1) at s ≠ 0.
+    auto scene = [](const std::string& transform) {
+        return "[[shapes]]\ntype = \"sphere\"\ntransform = \"\"\"" + transform + "\"\"\"\n";
+    };
+    Compiled fixed = compile_text("fixed_projective.iq", scene("[1 0 0 0; 0 1 0 0; 0 0 1 0; 0.5 0 0 1]"));
+    CHECK(fixed.result.exit_code == 1);
+    CHECK_THAT(fixed.diagnostics, Catch::Contains("fixed_projective.iq:3:16: error: the transform's last row is (0.5, 0, 0, 1), not (0, 0, 0, 1)"));
+    Compiled timed = compile_text("timed_projective.iq", scene("[1 0 0 0; 0 1 0 0; 0 0 1 0; time 0 0 1]"));
+    CHECK(timed.result.exit_code == 1);
+    CHECK_THAT(timed.diagnostics, Catch::Contains("timed_projective.iq:3:16: error: the transform's last row is (0.37, 0, 0, 1) at "
+                                                  "time = 0.37, mouse = (0.13, 0.91), not (0, 0, 0, 1)"));
+    CHECK_THAT(timed.diagnostics, Catch::Contains("at every moment and slider value"));
+    std::string slider = scene("[1 0 0 0; 0 1 0 0; 0 0 1 0; s 0 0 1]\nwhere\ns ∈ [-1, 1] default = 0");
+    for (Target target : {Target::Shadertoy, Target::WebGL2}) {
+        CompileOptions o;
+        o.target = target;
+        Compiled c = compile_path(write_temp("slider_projective_" + std::to_string(int(target)) + ".iq", slider), o);
+        INFO(int(target));
+        CHECK(c.result.exit_code == 1);
+        CHECK_THAT(c.diagnostics, Catch::Contains(":3:16: error: the transform's last row is (-1, 0, 0, 1) at s = -1, not (0, 0, 0, 1)"));
+    }
+    // Affine at every moment: accepted.
+    Compiled moving = compile_text("moving_affine.iq", scene("T((time, 0, 0))⋅`R_y`(time)⋅S((1 + time, 1, 1))"));
+    CHECK(moving.result.exit_code == 0);
+}
+
 TEST_CASE("a transform that uses time is evaluated per pixel, even on Shadertoy", "[scene][render]") {
     auto c = compile_text("timed.md", kBall + "```scene\n[[shapes]]\ntype = \"ball\"\ntransform = \"T((time, 0, 5))\"\n"
                                                "shape_params = { r = 0.5 }\n```\n");

@@ -208,6 +208,46 @@ struct Planner {
                                 "supported", v[12], v[13], v[14], v[15]));
             return false;
         }
+        // A transform that moves (time, the mouse) or has sliders is inverted at run time as an affine map: its
+        // last row is taken to be (0, 0, 0, 1) and never read. It must be so at other moments and slider values
+        // too: [1 0 0 0; 0 1 0 0; 0 0 1 0; time 0 0 1], affine at time 0 only, was accepted and drew as if time
+        // were 0 (a new user's trial, stop 38). Checked at six moments, the sliders at their ends in turn.
+        bool sliders = false;
+        for (const auto& p : m->params) sliders |= p.bounded;
+        if (plan.transform_uses_inputs || sliders) {
+            const double moments[] = {0.37, 1, 2.5, 10, 41.3, 117};
+            for (int k = 0; k < 6; ++k) {
+                ir::EvalInputs in;
+                in.time = moments[k];
+                in.mouse[0] = 0.13 + 0.15 * k;
+                in.mouse[1] = 0.91 - 0.15 * k;
+                std::vector<ir::Value> at;
+                std::vector<std::string> where;
+                if (plan.transform_uses_inputs) where.push_back(fmt::format("time = {:g}, mouse = ({:g}, {:g})", in.time, in.mouse[0], in.mouse[1]));
+                for (const auto& p : m->params) {
+                    std::vector<double> x = p.bounded ? (k % 2 ? p.hi : p.lo) : p.value;
+                    if (p.bounded) where.push_back(fmt::format("{} = {}", p.name, join_values(x)));
+                    at.push_back({p.type, x});
+                }
+                std::vector<double> w;
+                try {
+                    w = ir::evaluate(scratch, fn, at, in).v;
+                } catch (const ir::EvalLimit&) {
+                    break;  // (the default's evaluation fit the budget: these differ only in values)
+                }
+                bool finite = true;
+                for (double x : w) finite &= std::isfinite(x);
+                if (!finite) continue;  // a singular moment (a scale through 0): the run time copes
+                if (std::fabs(w[12]) > 1e-9 || std::fabs(w[13]) > 1e-9 || std::fabs(w[14]) > 1e-9 || std::fabs(w[15] - 1) > 1e-9) {
+                    d.error(m->ret->value->span,
+                            fmt::format("the transform's last row is ({}, {}, {}, {}) at {}, not (0, 0, 0, 1): only affine transforms "
+                                        "are supported, at every moment and slider value (the shader never reads the last row, and "
+                                        "would draw it as if it were (0, 0, 0, 1))",
+                                        w[12], w[13], w[14], w[15], fmt::join(where, ", ")));
+                    return false;
+                }
+            }
+        }
         // Invertible when the linear part L is: its condition number ‖L‖_F·‖L⁻¹‖_F, L⁻¹ = adj(L)/det(L) (cofactors),
         // at most 10¹² (past that, neither the inverse nor float32 arithmetic with it means anything).
         const double a = v[0], b = v[1], c = v[2], e = v[4], f = v[5], g = v[6], h = v[8], i = v[9], j = v[10];
