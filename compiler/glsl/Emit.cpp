@@ -6,8 +6,6 @@
 #include <fmt/format.h>
 #include <functional>
 #include <set>
-#include <string_view>
-#include <unordered_map>
 
 #include "ir/Schedule.h"
 #include "sema/Builtins.h"
@@ -806,8 +804,7 @@ struct FunctionEmitter {
         if (!comment.empty()) out += "// " + comment_text(comment) + "\n";
         out += fmt::format("void {}() {{\n", name);
         out += region(0, "    ", ValueId(-1));
-        std::unordered_map<std::string_view, int> index;  // globals by name (a search per output: n² in instances)
-        for (size_t g = 0; g < m.globals.size(); ++g) index.emplace(m.globals[g].name, int(g));
+        const auto index = m.global_index();
         for (const auto& [gname, v] : f.outputs) {
             auto g = index.find(gname);
             const GlobalStorage* s = g != index.end() ? storage(g->second) : nullptr;

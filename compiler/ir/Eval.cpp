@@ -1,8 +1,5 @@
 #include "ir/Eval.h"
 
-#include <string_view>
-#include <unordered_map>
-
 #include <cmath>
 #include <fmt/format.h>
 
@@ -445,8 +442,7 @@ void Evaluator::prepare() {
     int fn = m_.find(names::kPrepare);
     if (fn < 0) return;
     const Function& f = m_.functions[size_t(fn)];
-    std::unordered_map<std::string_view, int> index;  // globals by name (a lookup per output was n² in instances)
-    for (size_t g = 0; g < m_.globals.size(); ++g) index.emplace(m_.globals[g].name, int(g));
+    const auto index = m_.global_index();
     uint64_t caller = steps_;  // the work of the call that read a prepared global goes on after this
     steps_ = 0;
     Frame fr(*this, fn, nullptr);

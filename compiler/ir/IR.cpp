@@ -76,6 +76,12 @@ int Module::find_global(const std::string& name) const {
     return -1;
 }
 
+std::unordered_map<std::string_view, int> Module::global_index() const {
+    std::unordered_map<std::string_view, int> index;
+    for (size_t g = 0; g < globals.size(); ++g) index.emplace(globals[g].name, int(g));
+    return index;
+}
+
 Type result_type(Op op, const std::vector<Type>& a, int aux) {
     auto is_num = [](const Type& t) { return t.is_numeric(); };
     switch (op) {

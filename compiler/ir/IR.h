@@ -18,6 +18,8 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <string_view>
+#include <unordered_map>
 #include <vector>
 
 #include "sema/Type.h"
@@ -187,6 +189,9 @@ struct Module {
     std::map<long long, std::array<double, 6>> instance_boxes;
     int find(const std::string& name) const;
     int find_global(const std::string& name) const;
+    // Every global's index by name (views of the names: valid while `globals` is unchanged): for a lookup per
+    // item, where find_global's search would make the lookups quadratic in instances.
+    std::unordered_map<std::string_view, int> global_index() const;
 };
 
 // The scene's fixed function names: the runtime (runtime_templates/scene.glsl) calls these.

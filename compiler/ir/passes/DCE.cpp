@@ -1,8 +1,6 @@
 #include "ir/passes/DCE.h"
 
 #include <functional>
-#include <string_view>
-#include <unordered_map>
 
 namespace iqc::ir {
 
@@ -57,10 +55,9 @@ int eliminate_dead_code(Module& m) {
     if (prep >= 0 && !fn_live[size_t(prep)]) {
         Function& p = m.functions[size_t(prep)];
         std::vector<std::pair<std::string, ValueId>> kept;
-        std::unordered_map<std::string_view, size_t> index;  // globals by name (a search per output: n² in instances)
-        for (size_t g = 0; g < m.globals.size(); ++g) index.emplace(m.globals[g].name, g);
+        const auto index = m.global_index();
         for (const auto& o : p.outputs)
-            if (auto g = index.find(o.first); g != index.end() && g_live[g->second]) kept.push_back(o);
+            if (auto g = index.find(o.first); g != index.end() && g_live[size_t(g->second)]) kept.push_back(o);
         if (!kept.empty()) {
             p.outputs = std::move(kept);
             p.result = p.outputs[0].second;
