@@ -202,12 +202,17 @@ struct Planner {
                 d.error(m->ret->value->span, "the transform evaluates to a matrix with non-finite entries");
                 return false;
             }
-        if (std::fabs(v[12]) > 1e-9 || std::fabs(v[13]) > 1e-9 || std::fabs(v[14]) > 1e-9 || std::fabs(v[15] - 1) > 1e-9) {
+        // The last row (0, 0, 0, 1); `where` names the moment or slider values when not the parameters' defaults.
+        auto affine = [&](const std::vector<double>& w, const std::string& where) {
+            if (std::fabs(w[12]) <= 1e-9 && std::fabs(w[13]) <= 1e-9 && std::fabs(w[14]) <= 1e-9 && std::fabs(w[15] - 1) <= 1e-9) return true;
             d.error(m->ret->value->span,
-                    fmt::format("the transform's last row is ({}, {}, {}, {}), not (0, 0, 0, 1): only affine transforms are "
-                                "supported", v[12], v[13], v[14], v[15]));
+                    fmt::format("the transform's last row is ({}, {}, {}, {}){}, not (0, 0, 0, 1): only affine transforms are "
+                                "supported{}", w[12], w[13], w[14], w[15], where.empty() ? "" : " at " + where,
+                                where.empty() ? "" : ", at every moment and slider value (the shader never reads the last row, "
+                                                     "and would draw it as if it were (0, 0, 0, 1))"));
             return false;
-        }
+        };
+        if (!affine(v, "")) return false;
         // A transform that moves (time, the mouse) or has sliders is inverted at run time as an affine map: its
         // last row is taken to be (0, 0, 0, 1) and never read. It must be so at other moments and slider values
         // too: [1 0 0 0; 0 1 0 0; 0 0 1 0; time 0 0 1], affine at time 0 only, was accepted and drew as if time
@@ -238,14 +243,7 @@ struct Planner {
                 bool finite = true;
                 for (double x : w) finite &= std::isfinite(x);
                 if (!finite) continue;  // a singular moment (a scale through 0): the run time copes
-                if (std::fabs(w[12]) > 1e-9 || std::fabs(w[13]) > 1e-9 || std::fabs(w[14]) > 1e-9 || std::fabs(w[15] - 1) > 1e-9) {
-                    d.error(m->ret->value->span,
-                            fmt::format("the transform's last row is ({}, {}, {}, {}) at {}, not (0, 0, 0, 1): only affine transforms "
-                                        "are supported, at every moment and slider value (the shader never reads the last row, and "
-                                        "would draw it as if it were (0, 0, 0, 1))",
-                                        w[12], w[13], w[14], w[15], fmt::join(where, ", ")));
-                    return false;
-                }
+                if (!affine(w, fmt::format("{}", fmt::join(where, ", ")))) return false;
             }
         }
         // Invertible when the linear part L is: its condition number ‖L‖_F·‖L⁻¹‖_F, L⁻¹ = adj(L)/det(L) (cofactors),

@@ -37,6 +37,17 @@ constexpr size_t kSplitMaxInstructions = 2000;  // a function larger than this i
 // samples stop at the first evaluation past this, with what was seen so far).
 constexpr uint64_t kSampleSteps = 1000000;
 
+constexpr size_t kMaxFlat = 20000;  // a flattened function larger than this is not taken apart
+
+// A copy of `f` with its calls inlined (every call, or all but those of the functions `keep` accepts) and its
+// common subexpressions merged (`twist(p, k)` written four times is one value): the form the refinements
+// below take apart.
+Function flattened(const Module& m, const Function& f, const std::function<bool(const Function&)>& keep = nullptr) {
+    Function flat = keep ? inline_calls_except(m, f, keep) : inline_calls(m, f);
+    eliminate_common_subexpressions(flat);
+    return flat;
+}
+
 EvalInputs sample_inputs() {
     EvalInputs in;
     in.max_steps = kSampleSteps;
@@ -462,10 +473,9 @@ double split_derive(Module& m, int grad, const std::vector<Interval>& region, co
                     double ball, int budget, bool query_point = true) {
     // Case splitting needs a function without calls: `grad` is replaced by its flattened copy (calls inlined,
     // common subexpressions merged, dead code dropped).
-    Function flat = inline_calls(m, m.functions[size_t(grad)]);
-    eliminate_common_subexpressions(flat);
+    Function flat = flattened(m, m.functions[size_t(grad)]);
     eliminate_dead_code(flat);
-    if (flat.body.empty() || flat.body.size() > 20000) return kInf;
+    if (flat.body.empty() || flat.body.size() > kMaxFlat) return kInf;
     m.functions[size_t(grad)] = std::move(flat);
     constexpr int kSplitPasses = 1500;
     double size = double(std::max<size_t>(1, m.functions[size_t(grad)].body.size()));
@@ -546,10 +556,9 @@ double chain_rule_bound(const Module& m, int fn, const std::vector<Interval>& re
                         double ball, int budget) {
     constexpr int kMaxCandidates = 64, kMaxCuts = 4;
     Module work = m;
-    Function flat = inline_calls(work, work.functions[size_t(fn)]);
-    eliminate_common_subexpressions(flat);  // `twist(p, k)` written four times is one value
+    Function flat = flattened(work, work.functions[size_t(fn)]);
     const size_t n = flat.body.size();
-    if (n == 0 || n > 20000) return kInf;
+    if (n == 0 || n > kMaxFlat) return kInf;
     auto depends = [&](ValueId blocked) {  // which values depend on p without passing through `blocked`
         std::vector<char> dep(n, 0);
         for (size_t i = 0; i < n; ++i) {
@@ -753,9 +762,8 @@ double bound_added(Module& work, Function f, const std::vector<Interval>& region
 double union_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
                    double ball, int budget) {
     Module work = m;
-    Function flat = inline_calls(work, work.functions[size_t(fn)]);
-    eliminate_common_subexpressions(flat);
-    if (flat.body.empty() || flat.body.size() > 20000) return kInf;
+    Function flat = flattened(work, work.functions[size_t(fn)]);
+    if (flat.body.empty() || flat.body.size() > kMaxFlat) return kInf;
     std::vector<ValueId> terms;
     union_terms(flat, flat.result, terms, 8);
     if (terms.size() < 2) return kInf;
@@ -806,10 +814,9 @@ namespace {
 double combinator_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
                         double ball, int budget) {
     Module work = m;
-    Function flat = inline_calls_except(work, work.functions[size_t(fn)], [](const Function& f) { return combinator_factor(f.name) > 0; });
-    eliminate_common_subexpressions(flat);
+    Function flat = flattened(work, work.functions[size_t(fn)], [](const Function& f) { return combinator_factor(f.name) > 0; });
     const size_t n = flat.body.size();
-    if (n == 0 || n > 20000) return kInf;
+    if (n == 0 || n > kMaxFlat) return kInf;
     std::vector<char> dep(n, 0), combines(n, 0);  // depends on the point; has a combinator of such values in it
     for (size_t i = 0; i < n; ++i) {
         const Instr& in = flat.body[i];
@@ -932,8 +939,7 @@ ValueId root_of_square(Builder& b, const std::vector<Instr>& old, const std::vec
 // A copy of `f` (calls inlined, common subexpressions merged) with every √ of a square form taken as the
 // root itself (root_of_square). For the estimate only: the emitted code is the user's.
 Function roots_taken(const Module& m, const Function& fn, bool* changed = nullptr) {
-    Function flat = inline_calls(m, fn);
-    eliminate_common_subexpressions(flat);
+    Function flat = flattened(m, fn);
     std::vector<Instr> old = std::move(flat.body);
     flat.body.clear();
     std::vector<ValueId> map(old.size());
