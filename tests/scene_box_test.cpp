@@ -499,3 +499,25 @@ TEST_CASE("fixed steps by default cover the scene's box, not max_dist, over the 
     CHECK(drawn > 150);
     CHECK(differ < drawn / 20);
 }
+
+TEST_CASE("an open scene box costs one analysis per shape, not one per round", "[scene][box]") {
+    // With the camera known, the box's level is found in rounds from the hit tolerance up; a shape without a
+    // box (a ground plane) leaves it open, and then only the last round's boxes (at the widest level) are kept.
+    // The first round stops at the first open shape and analyses shapes a quick test finds open first: here the
+    // ground (listed last), then the ball and the ground once each at the widest level. Every round in full was
+    // 4 analyses here, and half of lowering examples/christmas_tree.iq and examples/menger.iq.
+    const std::string scene = kBall + "[camera]\nposition = [0, 1, -6]\ntarget = [0, 0, 0]\n"
+                                      "[[shapes]]\ntype = \"ball\"\n[[shapes]]\ntype = \"ground\"\n";
+    std::filesystem::path path = write_temp("box_rounds.iq", scene);
+    RunResult r = run_iqc(path.string() + " --dump-ir -o " + (temp_dir() / "box_rounds.frag").string());
+    INFO(r.err.substr(0, 2000));
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("; scene box: open (3 analyses of shapes' boxes)"));
+    // A closed box: the ball alone, in as many rounds as its level needs (two here: the tolerance, then the
+    // pixel cone at its farthest corner).
+    RunResult closed = run_iqc(write_temp("box_closed.iq", kBall + "[camera]\nposition = [0, 1, -6]\ntarget = [0, 0, 0]\n"
+                                                                   "[[shapes]]\ntype = \"ball\"\n").string() +
+                               " --dump-ir -o " + (temp_dir() / "box_closed.frag").string());
+    REQUIRE(closed.exit_code == 0);
+    CHECK_THAT(closed.err, Catch::Contains("; scene box: closed (2 analyses of shapes' boxes)"));
+}

@@ -111,7 +111,7 @@ Interval comp(const Bounds& b, size_t k) { return b.c.size() == 1 ? b.c[0] : b.c
 Interval monotone(Interval a, double (*f)(double)) { return {f(a.lo), f(a.hi)}; }
 
 Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
-    std::string n = builtin(in.aux).name;
+    std::string_view n = builtin(in.aux).name;
     Bounds x = unknown(in.type);
     size_t comps = x.c.size();
     auto each = [&](auto fn) {
@@ -426,6 +426,7 @@ std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const 
                                       const IntervalHook& hook, int loop_trips, long* work) {
     std::vector<Bounds> r(f.body.size());
     std::map<size_t, std::vector<Bounds>> loop_states;  // a Loop's final states (read by Member)
+    std::vector<const Bounds*> a;                        // an instruction's operands (one buffer for all)
     for (size_t i = 0; i < f.body.size(); ++i) {
         if (i > 0 && hook && !hook(i - 1, r)) return r;
         const Instr& in = f.body[i];
@@ -505,7 +506,7 @@ std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const 
             r[i] = it != loop_states.end() && size_t(in.aux) < it->second.size() ? it->second[size_t(in.aux)] : unknown(in.type);
             continue;
         }
-        std::vector<const Bounds*> a;
+        a.clear();
         for (ValueId x : in.args) a.push_back(&r[x]);
         r[i] = bounds_of(m, f, in, a);
     }

@@ -318,8 +318,13 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
 
 namespace {
 
-// support_box's search, side by side, for a distance whose interval over a box `range` gives (spending `work`).
-SupportBox box_sides(const std::function<Interval(const Box&)>& range, double level, int per_proof, long& work) {
+using BoxRange = std::function<Interval(const Box&)>;  // the distance's interval over a box
+constexpr double kUnboundedAt = 1048576.0;              // 2^20: beyond this, a side is unbounded
+
+// Whether no point of `start` has a distance ≤ level (false: not proven, or a point found that has): the boxes
+// where `range` may reach the level are split at their widest side (an unbounded one first) up to `per_proof`
+// times, spending `work`; a box's centre at or below the level ends the proof at once.
+bool free_of(const BoxRange& range, const Box& start, double level, int per_proof, long& work) {
     // A point inside an interval, and its halves (an unbounded side grows geometrically).
     auto centre = [](double lo, double hi) {
         if (std::isinf(lo) && std::isinf(hi)) return 0.0;
@@ -327,46 +332,48 @@ SupportBox box_sides(const std::function<Interval(const Box&)>& range, double le
         if (std::isinf(lo)) return hi - std::max(1.0, std::fabs(hi));
         return 0.5 * (lo + hi);
     };
-    // Whether no point of `b` has a distance ≤ level (false: not proven, or a point found that has).
-    auto free_of = [&](const Box& start) {
-        std::vector<Box> stack = {start};
-        int left = per_proof;
-        while (!stack.empty()) {
-            if (work <= 0) return false;
-            Box b = stack.back();
-            stack.pop_back();
-            if (range(b).lo > level) continue;
-            if (--left < 0) return false;
-            Box c;
-            for (size_t a = 0; a < 3; ++a) c.lo[a] = c.hi[a] = centre(b.lo[a], b.hi[a]);
-            if (range(c).hi <= level) return false;
-            // Split the widest side (an unbounded one first) at its centre.
-            size_t w = 0;
-            double widest = -1;
-            for (size_t a = 0; a < 3; ++a) {
-                double len = b.hi[a] - b.lo[a];
-                if (len > widest) widest = len, w = a;
-            }
-            if (!(widest > 0)) return false;
-            Box lo = b, hi = b;
-            lo.hi[w] = hi.lo[w] = c.lo[w];
-            stack.push_back(lo);
-            stack.push_back(hi);
+    std::vector<Box> stack = {start};
+    int left = per_proof;
+    while (!stack.empty()) {
+        if (work <= 0) return false;
+        Box b = stack.back();
+        stack.pop_back();
+        if (range(b).lo > level) continue;
+        if (--left < 0) return false;
+        Box c;
+        for (size_t a = 0; a < 3; ++a) c.lo[a] = c.hi[a] = centre(b.lo[a], b.hi[a]);
+        if (range(c).hi <= level) return false;
+        size_t w = 0;
+        double widest = -1;
+        for (size_t a = 0; a < 3; ++a) {
+            double len = b.hi[a] - b.lo[a];
+            if (len > widest) widest = len, w = a;
         }
-        return true;
-    };
-    constexpr double R = 1048576.0;  // 2^20: beyond this, a side is unbounded
+        if (!(widest > 0)) return false;
+        Box lo = b, hi = b;
+        lo.hi[w] = hi.lo[w] = c.lo[w];
+        stack.push_back(lo);
+        stack.push_back(hi);
+    }
+    return true;
+}
+
+// The half-space beyond the plane at c along axis a (above it when `upper`, else below).
+Box half_space(size_t a, bool upper, double c) {
+    Box b{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
+    if (upper) b.lo[a] = c;
+    else b.hi[a] = c;
+    return b;
+}
+
+// support_box's search, side by side, for a distance whose interval over a box `range` gives (spending `work`).
+SupportBox box_sides(const BoxRange& range, double level, int per_proof, long& work) {
+    constexpr double R = kUnboundedAt;
     SupportBox out;
     // One side's edge: the nearest plane c (along axis a, from below or above) beyond which nothing is ≤ level;
     // ±∞ where the half-space beyond R is not proven free.
     auto edge_of = [&](size_t a, bool upper) {
-        // The half-space beyond the plane c on this side.
-        auto beyond = [&](double c) {
-            Box b{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
-            if (upper) b.lo[a] = c;
-            else b.hi[a] = c;
-            return free_of(b);
-        };
+        auto beyond = [&](double c) { return free_of(range, half_space(a, upper, c), level, per_proof, work); };
         const double sgn = upper ? 1 : -1;
         if (!beyond(sgn * R)) return sgn * INFINITY;
         // A plane that is not proven (in) and one that is (out): planes ±1, ±2, ±4, … from 0 outward (or
@@ -405,19 +412,46 @@ SupportBox box_sides(const std::function<Interval(const Box&)>& range, double le
 
 }  // namespace
 
-std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
-                                      double level, int per_proof, int loop_trips, long work) {
-    if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
+namespace {
+
+// The first component of a result's interval ([-∞, ∞] where unknown or NaN).
+Interval first_component(const Bounds& r) {
+    Interval x = r.c.empty() ? Interval{} : r.c[0];
+    if (std::isnan(x.lo)) x.lo = -INFINITY;
+    if (std::isnan(x.hi)) x.hi = INFINITY;
+    return x;
+}
+
+// Whether support_box can use function `fn`: a scalar distance, or a scene's (distance, id) whose first
+// component is the distance, and a query parameter that exists.
+bool boxable(const Module& m, int fn, int query, size_t params) {
+    if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params) return false;
     const Function& f = m.functions[size_t(fn)];
     const Type& rt = f.body[f.result].type;
-    if (!rt.is_scalar() && !rt.is_vector()) return std::nullopt;  // a scene's (distance, id): the first component
-    // The first component of the result's interval ([-∞, ∞] where unknown or NaN).
-    auto first = [](const Bounds& r) {
-        Interval x = r.c.empty() ? Interval{} : r.c[0];
-        if (std::isnan(x.lo)) x.lo = -INFINITY;
-        if (std::isnan(x.hi)) x.hi = INFINITY;
-        return x;
+    return rt.is_scalar() || rt.is_vector();
+}
+
+}  // namespace
+
+bool support_box_open(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params, double level,
+                      int per_proof, int loop_trips, long work) {
+    if (!boxable(m, fn, query, params.size())) return true;
+    const Function& f = m.functions[size_t(fn)];
+    auto range = [&](const Box& b) {
+        params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
+        return first_component(interval_analysis(m, fn, params, {}, loop_trips, &work)[f.result]);
     };
+    for (size_t a = 0; a < 3; ++a)
+        for (bool upper : {false, true})
+            if (!free_of(range, half_space(a, upper, upper ? kUnboundedAt : -kUnboundedAt), level, per_proof, work)) return true;
+    return false;
+}
+
+std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
+                                      double level, int per_proof, int loop_trips, long work) {
+    if (!boxable(m, fn, query, params.size())) return std::nullopt;
+    const Function& f = m.functions[size_t(fn)];
+    auto first = first_component;
     // The distance's interval over a box.
     auto range = [&](const Box& b) {
         params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};

@@ -43,4 +43,11 @@ struct SupportBox {
 std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
                                       double level, int per_proof = 48, int loop_trips = 16, long work = 1500000);
 
+// A quick test, for ordering work: whether support_box's first step, on the axes as they are, leaves a side
+// open (the half-space beyond 2²⁰ units on some side is not proven free of points at or below `level`, or the
+// function cannot be boxed, or `work` instructions analysed do not decide): six proofs of up to `per_proof`
+// boxes. support_box's rotated pairs may still close such a side.
+bool support_box_open(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params, double level,
+                      int per_proof = 48, int loop_trips = 16, long work = 300000);
+
 }  // namespace iqc::ir

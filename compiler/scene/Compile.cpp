@@ -292,6 +292,9 @@ bool SceneCompiler::optimize(SceneIR& scene) {
         res_.ir = opts_.dump_after.empty() ? ir::print(scene.module) : pr.dump;
         std::string notes;
         for (const auto& line : pr.lipschitz) notes += "; lipschitz: " + line + "\n";
+        bool open = !scene.box;
+        for (size_t a = 0; a < 3 && scene.box; ++a) open |= std::isinf(scene.box->first[a]) || std::isinf(scene.box->second[a]);
+        notes += fmt::format("; scene box: {} ({} analyses of shapes' boxes)\n", !scene.box ? "none" : open ? "open" : "closed", scene.box_analyses);
         for (const auto& rw : pr.rewrites)
             notes += fmt::format("; stable: {} in {}{}\n", rw.what, rw.function, rw.where.valid() ? " at " + sm_.location(rw.where) : "");
         res_.ir = notes + res_.ir;

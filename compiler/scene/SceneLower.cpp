@@ -274,7 +274,9 @@ private:
         // box at a level holds every sample a march takes within it, and a march ends where it leaves the box.
         double tau = o_.box_level_floor;
         for (int round = 0; round < 3; ++round) {
-            scene_box_at(tau);
+            // An open scene box ends the rounds, and this round's boxes are recomputed at box_level: stop at the
+            // first instance that opens it (examples/christmas_tree.iq's open tree and hills: half of lowering).
+            scene_box_at(tau, true);
             if (!out_.box) break;
             double far = 0;
             for (int corner = 0; corner < 8; ++corner) {
@@ -293,7 +295,9 @@ private:
         scene_box_at(o_.box_level);
     }
 
-    void scene_box_at(double tau) {
+    // The boxes at level tau. `stop_when_open`: return without a scene box as soon as an instance leaves it
+    // open (no box, or an unbounded side), analysing first the shapes whose boxes a quick test finds open.
+    void scene_box_at(double tau, bool stop_when_open = false) {
         const double inf = INFINITY;
         out_.box.reset();
         for (auto& b : plan_box_) b.reset();
@@ -357,17 +361,46 @@ private:
         }
         // Every instance's own box is found even where another's is not (segment tracing skips an instance's
         // bounds outside its box: Module::instance_boxes); the scene's box needs them all.
+        // The object-space level of a set: the nearness is the object distance times the map's scale, within tau
+        // where the object distance is within tau / scale (the smallest scale of the members).
+        auto object_level = [&](const std::vector<size_t>& members) {
+            double scale = 1;
+            for (size_t mi : members) scale = std::min(scale, plan(mi).scale);
+            return tau / std::max(scale, 1e-9);
+        };
+        if (stop_when_open) {
+            // Sets without spheres whose boxes are likely open first (a stable order otherwise).
+            std::vector<char> open(sets.size(), 0);
+            for (size_t k = 0; k < sets.size(); ++k) {
+                bool spheres = true;
+                for (size_t mi : sets[k]) spheres &= sphere_box.count(mi) > 0;
+                if (spheres) continue;
+                auto params = shape_intervals(sets[k]);
+                const InstancePlan& first = plan(sets[k][0]);
+                open[k] = !params || ir::support_box_open(m_, lower_module_cached(*first.shape, ctx_), first.query,
+                                                          std::move(*params), object_level(sets[k]));
+            }
+            std::vector<size_t> order(sets.size());
+            for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+            std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return open[x] > open[y]; });
+            std::vector<std::vector<size_t>> sorted;
+            for (size_t k : order) sorted.push_back(std::move(sets[k]));
+            sets = std::move(sorted);
+        }
+        auto opened = [&] {
+            for (size_t a = 0; a < 3; ++a)
+                if (lo[a] == -inf || hi[a] == inf) return true;
+            return false;
+        };
         bool every = true;
         for (const auto& members : sets) {
+            if (stop_when_open && (!every || opened())) return;
             const InstancePlan& first = plan(members[0]);
             int fn = lower_module_cached(*first.shape, ctx_);
             auto params = shape_intervals(members);
-            // The nearness is the object distance times the map's scale: within tau where the object distance is
-            // within tau / scale (the smallest scale of the members).
-            double scale = 1;
-            for (size_t mi : members) scale = std::min(scale, plan(mi).scale);
             std::optional<ir::SupportBox> box;
-            if (params) box = ir::support_box(m_, fn, first.query, std::move(*params), tau / std::max(scale, 1e-9));
+            if (params) box = ir::support_box(m_, fn, first.query, std::move(*params), object_level(members));
+            ++out_.box_analyses;
             for (size_t mi : members) {
                 const InstancePlan& p = plan(mi);
                 if (!box) {

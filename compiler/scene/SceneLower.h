@@ -67,6 +67,7 @@ struct SceneIR {
     // within SceneLowerOptions::box_level lies in (lo, hi per axis; ±∞ on an unbounded side): rays are clipped to it.
     // Absent where no side is bounded or the compiler cannot tell (a transform that moves at run time, a blend).
     std::optional<std::pair<std::array<double, 3>, std::array<double, 3>>> box;
+    int box_analyses = 0;  // the shapes' boxes analysed for it (ir::support_box calls: a measure of the work)
     std::vector<std::string> group_notes;  // "torus with lambert: 1000 instances in one loop"
     std::vector<int> instance_ids;         // per plan: the id iqc_scene returns for it (and iqc_distance_of takes)
     std::vector<std::pair<Span, std::string>> warnings;  // what the lowering chose against the scene's wish, located
