@@ -10,7 +10,9 @@
 // periodic functions exactly on intervals shorter than a period.
 #pragma once
 
+#include <array>
 #include <functional>
+#include <initializer_list>
 #include <limits>
 #include <string>
 #include <vector>
@@ -37,11 +39,71 @@ Interval periodic(Interval a, bool is_sin);  // sin (or cos) over a: exact on sp
 std::string text(Interval a);            // "[0, 2]", "[-∞, 1]"
 }  // namespace iv
 
+// The components' intervals of one value: up to four in place (scalars and vectors), more in a heap block
+// (matrices). The interval analysis makes one per instruction of every box it bounds, and a heap block each
+// was a third of its time (perf, examples/christmas_tree.iq's scene box and Lipschitz bound). Converts to
+// and from std::vector<Interval> (parameters, calls' arguments).
+class IntervalVec {
+public:
+    IntervalVec() = default;
+    IntervalVec(size_t n, Interval v) { assign(n, v); }
+    IntervalVec(std::initializer_list<Interval> l) {
+        for (const Interval& x : l) push_back(x);
+    }
+    IntervalVec(const std::vector<Interval>& v) {  // NOLINT: implicit, as the vector it replaced
+        for (const Interval& x : v) push_back(x);
+    }
+    operator std::vector<Interval>() const { return {begin(), end()}; }  // NOLINT
+    size_t size() const { return n_; }
+    bool empty() const { return n_ == 0; }
+    Interval* data() { return n_ > kInPlace ? heap_.data() : in_place_.data(); }
+    const Interval* data() const { return n_ > kInPlace ? heap_.data() : in_place_.data(); }
+    Interval& operator[](size_t i) { return data()[i]; }
+    const Interval& operator[](size_t i) const { return data()[i]; }
+    Interval* begin() { return data(); }
+    Interval* end() { return data() + n_; }
+    const Interval* begin() const { return data(); }
+    const Interval* end() const { return data() + n_; }
+    Interval& back() { return data()[n_ - 1]; }
+    const Interval& back() const { return data()[n_ - 1]; }
+    void clear() {
+        n_ = 0;
+        heap_.clear();
+    }
+    void push_back(Interval x) {
+        if (n_ < kInPlace) in_place_[n_] = x;
+        else {
+            if (n_ == kInPlace) heap_.assign(in_place_.begin(), in_place_.end());
+            heap_.push_back(x);
+        }
+        ++n_;
+    }
+    void assign(const Interval* from, const Interval* to) {
+        clear();
+        for (; from != to; ++from) push_back(*from);
+    }
+    void assign(size_t n, Interval v) {
+        n_ = n;
+        if (n <= kInPlace) {
+            heap_.clear();
+            for (size_t k = 0; k < n; ++k) in_place_[k] = v;
+        } else {
+            heap_.assign(n, v);
+        }
+    }
+
+private:
+    static constexpr size_t kInPlace = 4;
+    std::array<Interval, kInPlace> in_place_;
+    std::vector<Interval> heap_;  // every component, when there are more than kInPlace
+    size_t n_ = 0;
+};
+
 // What is known of one value: its components' intervals and a bound of its norm (a vector's length, a
 // matrix's operator norm ‖A‖₂ — so that ‖Av‖ ≤ ‖A‖‖v‖ and a diagonal Jacobian's bound is its largest
 // entry, not the root of their squares).
 struct Bounds {
-    std::vector<Interval> c;  // per component (matrices row-major)
+    IntervalVec c;            // per component (matrices row-major)
     double norm = std::numeric_limits<double>::infinity();
     bool unit = false;        // exactly a unit vector (or zero): normalize, v/‖v‖
     int rows = 0, cols = 0;   // a matrix's shape (0: not a matrix)
