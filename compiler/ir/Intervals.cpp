@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <map>
+#include <memory>
 
 #include "sema/Builtins.h"
 
@@ -69,8 +70,12 @@ Interval periodic(Interval a, bool is_sin) {
 }  // namespace iv
 
 double Bounds::norm_from_components() const {
+    if (c.size() == 1) return iv::magnitude(c[0]);  // a scalar's (most values)
     double s = 0;
-    for (const auto& x : c) s += iv::magnitude(x) * iv::magnitude(x);
+    for (const auto& x : c) {
+        double m = iv::magnitude(x);
+        s += m * m;
+    }
     double frobenius = std::sqrt(s);
     if (rows < 2 || cols < 2 || c.size() != size_t(rows * cols)) return frobenius;
     // ‖A‖₂ ≤ √(‖A‖₁ ‖A‖∞): the largest column sum times the largest row sum of |entries|.
@@ -417,26 +422,62 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
     return finish(std::move(x));
 }
 
-std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params,
-                                      const IntervalHook& hook, int loop_trips, long* work) {
-    return interval_analysis(m, m.functions[size_t(fn)], params, hook, loop_trips, work);
-}
+namespace {
 
-std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
-                                      const IntervalHook& hook, int loop_trips, long* work) {
-    std::vector<Bounds> r(f.body.size());
+// Buffers for the callees' values and arguments, one per depth of calls: the support and Lipschitz searches
+// analyse one function over thousands of boxes, and fresh vectors per call (and per callee) were most of their
+// time under AddressSanitizer (its allocator fills and faults in each block) and a sixth of it without.
+struct CallBuffers {
+    std::vector<std::unique_ptr<std::vector<Bounds>>> values;
+    std::vector<std::unique_ptr<std::vector<IntervalVec>>> args;
+    size_t depth = 0;
+};
+thread_local CallBuffers t_calls;
+
+// interval_analysis into `r` (resized to f's values, every one written). `Params`: a vector of
+// std::vector<Interval> (the entry points) or of IntervalVec (calls and loop bodies).
+template <class Params>
+void analyse(std::vector<Bounds>& r, const Module& m, const Function& f, const Params& params, const IntervalHook& hook,
+             int loop_trips, long* work) {
+    r.resize(f.body.size());
     std::map<size_t, std::vector<Bounds>> loop_states;  // a Loop's final states (read by Member)
     std::vector<const Bounds*> a;                        // an instruction's operands (one buffer for all)
+    // A callee's (or loop body's) values, in the buffer of the next depth.
+    auto call = [&](int fn, const std::vector<IntervalVec>& args) -> std::vector<Bounds>& {
+        const size_t d = t_calls.depth;
+        struct Depth {
+            Depth() { ++t_calls.depth; }
+            ~Depth() { --t_calls.depth; }
+        } depth;
+        std::vector<Bounds>& values = *t_calls.values[d];
+        analyse(values, m, m.functions[size_t(fn)], args, {}, loop_trips, work);
+        return values;
+    };
+    auto args_buffer = [&]() -> std::vector<IntervalVec>& {
+        const size_t d = t_calls.depth;
+        while (t_calls.values.size() <= d) {
+            t_calls.values.push_back(std::make_unique<std::vector<Bounds>>());
+            t_calls.args.push_back(std::make_unique<std::vector<IntervalVec>>());
+        }
+        t_calls.args[d]->clear();
+        return *t_calls.args[d];
+    };
     for (size_t i = 0; i < f.body.size(); ++i) {
-        if (i > 0 && hook && !hook(i - 1, r)) return r;
+        if (i > 0 && hook && !hook(i - 1, r)) {
+            for (size_t j = i; j < f.body.size(); ++j) r[j] = Bounds{};  // not analysed (the buffer may hold old values)
+            return;
+        }
         const Instr& in = f.body[i];
         if (work && --*work < 0) {  // the budget is spent: this value and the rest are unbounded
             for (size_t j = i; j < f.body.size(); ++j) r[j] = f.body[j].op == Op::Loop ? Bounds{} : unknown(f.body[j].type);
-            return r;
+            return;
         }
         if (in.op == Op::Param) {
             r[i] = unknown(in.type);
-            if (size_t(in.aux) < params.size() && params[size_t(in.aux)].size() == r[i].c.size()) r[i].c = params[size_t(in.aux)];
+            if (size_t(in.aux) < params.size() && params[size_t(in.aux)].size() == r[i].c.size()) {
+                const auto& p = params[size_t(in.aux)];
+                for (size_t k = 0; k < p.size(); ++k) r[i].c[k] = p[k];
+            }
             r[i] = finish(std::move(r[i]));
             continue;
         }
@@ -473,10 +514,9 @@ std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const 
             continue;
         }
         if (in.op == Op::Call) {
-            std::vector<std::vector<Interval>> args;
-            for (ValueId a : in.args) args.push_back(r[a].c);
-            auto callee = interval_analysis(m, in.aux, args, {}, loop_trips, work);
-            r[i] = callee[m.functions[size_t(in.aux)].result];
+            std::vector<IntervalVec>& args = args_buffer();
+            for (ValueId x : in.args) args.push_back(r[x].c);
+            r[i] = call(in.aux, args)[m.functions[size_t(in.aux)].result];
             continue;
         }
         if (in.op == Op::Loop) {
@@ -491,10 +531,11 @@ std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const 
                        in.args.size() >= states + 1;
             for (size_t j = 0; j < states; ++j) s.push_back(run ? r[in.args[j + 1]] : unknown(body.body[body.outputs[j].second].type));
             for (double k = first; run && k <= last; k += 1) {
-                std::vector<std::vector<Interval>> args = {{{k, k}}};
+                std::vector<IntervalVec>& args = args_buffer();
+                args.push_back({{k, k}});
                 for (size_t j = 0; j < states; ++j) args.push_back(s[j].c);
                 for (size_t c = states + 1; c < in.args.size(); ++c) args.push_back(r[in.args[c]].c);
-                auto v = interval_analysis(m, in.aux, args, {}, loop_trips, work);
+                const std::vector<Bounds>& v = call(in.aux, args);
                 for (size_t j = 0; j < states; ++j) s[j] = v[body.outputs[j].second];
             }
             loop_states[i] = std::move(s);
@@ -511,7 +552,25 @@ std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const 
         r[i] = bounds_of(m, f, in, a);
     }
     if (!f.body.empty() && hook) hook(f.body.size() - 1, r);
+}
+
+}  // namespace
+
+std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector<std::vector<Interval>>& params,
+                                      const IntervalHook& hook, int loop_trips, long* work) {
+    return interval_analysis(m, m.functions[size_t(fn)], params, hook, loop_trips, work);
+}
+
+std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
+                                      const IntervalHook& hook, int loop_trips, long* work) {
+    std::vector<Bounds> r;
+    analyse(r, m, f, params, hook, loop_trips, work);
     return r;
+}
+
+void interval_analysis(std::vector<Bounds>& r, const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
+                       const IntervalHook& hook, int loop_trips, long* work) {
+    analyse(r, m, f, params, hook, loop_trips, work);
 }
 
 }  // namespace iqc::ir

@@ -131,6 +131,10 @@ std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector
 // and loops name functions of `m`.
 std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
                                       const IntervalHook& hook = {}, int loop_trips = 0, long* work = nullptr);
+// The same into `r` (resized; its storage is reused: the searches that analyse one function over thousands of
+// boxes keep one vector).
+void interval_analysis(std::vector<Bounds>& r, const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
+                       const IntervalHook& hook = {}, int loop_trips = 0, long* work = nullptr);
 
 // Whether `a k b` holds for every a, b in the intervals (1), for none (0), or is undecided (-1).
 int decided(CompareKind k, Interval a, Interval b);

@@ -60,10 +60,12 @@ struct LipschitzEstimate {
 // `ball` > 0: only points of the box within that distance of the origin count (a `bound` sphere).
 // `refine`: try the tighter bounds (chain rule at a warp, unions, roots of squares, case splitting) where the
 // direct one decides something; case splitting spends at most `*split_work` interval instruction evaluations
-// (decremented; null: 8·10⁶, about a second).
+// (decremented; null: 8·10⁶, about a second). `jumps`: look for a jump (LipschitzEstimate::jump) against the
+// bound derived.
 LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<Interval>& box,
                                      const std::vector<std::vector<Interval>>& others, double ball = 0,
-                                     int samples = 1000, int boxes = 128, bool refine = true, double* split_work = nullptr);
+                                     int samples = 1000, int boxes = 128, bool refine = true, double* split_work = nullptr,
+                                     bool jumps = true);
 
 // A standard-library combinator of two distances (stdlib/operators.iql: "operators.smooth_union", …) and its
 // Lipschitz factor in them: ‖∇F(a, b)‖ ≤ factor · max(‖∇a‖, ‖∇b‖). 0 for any other function name.
