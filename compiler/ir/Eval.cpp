@@ -287,18 +287,28 @@ struct Evaluator::Plan {
 };
 
 // One activation of a function: where each value's components are.
+// Its storage is the evaluator's buffer for its depth of calls (Evaluator::frames_), reused from call to call:
+// the Lipschitz pass's samples and jump search call one function thousands of times, and two fresh vectors
+// per call (and per callee) were most of that under AddressSanitizer.
 struct Frame {
     Evaluator& ev;
     const Module& m;
     const Function& f;
     const Evaluator::Plan& plan;
     const double* const* args;
-    std::vector<double> data;
-    std::vector<const double*> at;
+    Evaluator::FrameBuffers& buffers;
+    std::vector<double>& data;
+    std::vector<const double*>& at;
 
     Frame(Evaluator& e, int fn, const double* const* a)
-        : ev(e), m(e.m_), f(e.m_.functions[size_t(fn)]), plan(e.plan(fn)), args(a), data(plan.frame),
-          at(f.body.size(), nullptr) {}
+        : ev(e), m(e.m_), f(e.m_.functions[size_t(fn)]), plan(e.plan(fn)), args(a), buffers(e.frame_buffers()),
+          data(buffers.data), at(buffers.at) {
+        data.assign(plan.frame, 0.0);
+        at.assign(f.body.size(), nullptr);
+    }
+    ~Frame() { --ev.depth_; }
+    Frame(const Frame&) = delete;
+    Frame& operator=(const Frame&) = delete;
 
     Arg arg(ValueId v) const { return {at[v], &f.body[v].type, plan.size[v]}; }
     double* slot(ValueId v) { return data.data() + plan.offset[v]; }
@@ -337,10 +347,16 @@ struct Frame {
                 return;
             }
             case Op::Call: {
-                std::vector<const double*> a;
-                for (ValueId x : in.args) a.push_back(at[x]);
+                const double* few[8];
+                std::vector<const double*> many;
+                const double** a = few;
+                if (in.args.size() > 8) {
+                    many.resize(in.args.size());
+                    a = many.data();
+                }
+                for (size_t k = 0; k < in.args.size(); ++k) a[k] = at[in.args[k]];
                 double* r = slot(i);
-                ev.call(in.aux, a.data(), r);
+                ev.call(in.aux, a, r);
                 at[i] = r;
                 return;
             }
@@ -465,6 +481,11 @@ void Evaluator::set_global(int g, std::vector<double> value) {
         internal_error(fmt::format("evaluator: bad value for global #{}", g));
     globals_[size_t(g)] = std::move(value);
     prepared_ = false;
+}
+
+Evaluator::FrameBuffers& Evaluator::frame_buffers() {
+    while (frames_.size() <= depth_) frames_.push_back(std::make_unique<FrameBuffers>());
+    return *frames_[depth_++];
 }
 
 void Evaluator::call(int fn, const double* const* args, double* out) {

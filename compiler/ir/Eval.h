@@ -77,6 +77,14 @@ private:
     uint64_t work_ = 0;   // of the finished calls
     mutable std::vector<std::unique_ptr<Plan>> plans_;
     bool prepared_ = false;  // the prepared globals hold iqc_prepare's values for the current parameters
+    // A frame's values and their places, one per depth of calls (reused by every call at that depth).
+    struct FrameBuffers {
+        std::vector<double> data;
+        std::vector<const double*> at;
+    };
+    std::vector<std::unique_ptr<FrameBuffers>> frames_;
+    size_t depth_ = 0;
+    FrameBuffers& frame_buffers();  // the next depth's (the frame gives it back when it ends)
     const Plan& plan(int fn) const;
     const std::vector<double>& read_global(int g);  // prepares first where g is a prepared global
     void prepare();

@@ -424,43 +424,32 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
 
 namespace {
 
-// Buffers for the callees' values and arguments, one per depth of calls: the support and Lipschitz searches
-// analyse one function over thousands of boxes, and fresh vectors per call (and per callee) were most of their
-// time under AddressSanitizer (its allocator fills and faults in each block) and a sixth of it without.
-struct CallBuffers {
-    std::vector<std::unique_ptr<std::vector<Bounds>>> values;
-    std::vector<std::unique_ptr<std::vector<IntervalVec>>> args;
-    size_t depth = 0;
-};
-thread_local CallBuffers t_calls;
-
-// interval_analysis into `r` (resized to f's values, every one written). `Params`: a vector of
-// std::vector<Interval> (the entry points) or of IntervalVec (calls and loop bodies).
 template <class Params>
-void analyse(std::vector<Bounds>& r, const Module& m, const Function& f, const Params& params, const IntervalHook& hook,
-             int loop_trips, long* work) {
+void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, const Function& f, const Params& params,
+             const IntervalHook& hook, int loop_trips, long* work) {
     r.resize(f.body.size());
     std::map<size_t, std::vector<Bounds>> loop_states;  // a Loop's final states (read by Member)
     std::vector<const Bounds*> a;                        // an instruction's operands (one buffer for all)
     // A callee's (or loop body's) values, in the buffer of the next depth.
     auto call = [&](int fn, const std::vector<IntervalVec>& args) -> std::vector<Bounds>& {
-        const size_t d = t_calls.depth;
+        const size_t d = scratch.depth;
         struct Depth {
-            Depth() { ++t_calls.depth; }
-            ~Depth() { --t_calls.depth; }
-        } depth;
-        std::vector<Bounds>& values = *t_calls.values[d];
-        analyse(values, m, m.functions[size_t(fn)], args, {}, loop_trips, work);
+            size_t& depth;
+            explicit Depth(size_t& d) : depth(d) { ++depth; }
+            ~Depth() { --depth; }
+        } deeper(scratch.depth);
+        std::vector<Bounds>& values = *scratch.values[d];
+        analyse(values, scratch, m, m.functions[size_t(fn)], args, {}, loop_trips, work);
         return values;
     };
     auto args_buffer = [&]() -> std::vector<IntervalVec>& {
-        const size_t d = t_calls.depth;
-        while (t_calls.values.size() <= d) {
-            t_calls.values.push_back(std::make_unique<std::vector<Bounds>>());
-            t_calls.args.push_back(std::make_unique<std::vector<IntervalVec>>());
+        const size_t d = scratch.depth;
+        while (scratch.values.size() <= d) {
+            scratch.values.push_back(std::make_unique<std::vector<Bounds>>());
+            scratch.args.push_back(std::make_unique<std::vector<IntervalVec>>());
         }
-        t_calls.args[d]->clear();
-        return *t_calls.args[d];
+        scratch.args[d]->clear();
+        return *scratch.args[d];
     };
     for (size_t i = 0; i < f.body.size(); ++i) {
         if (i > 0 && hook && !hook(i - 1, r)) {
@@ -564,13 +553,15 @@ std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector
 std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
                                       const IntervalHook& hook, int loop_trips, long* work) {
     std::vector<Bounds> r;
-    analyse(r, m, f, params, hook, loop_trips, work);
+    IntervalScratch scratch;
+    analyse(r, scratch, m, f, params, hook, loop_trips, work);
     return r;
 }
 
-void interval_analysis(std::vector<Bounds>& r, const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
-                       const IntervalHook& hook, int loop_trips, long* work) {
-    analyse(r, m, f, params, hook, loop_trips, work);
+void interval_analysis(IntervalScratch& scratch, std::vector<Bounds>& r, const Module& m, const Function& f,
+                       const std::vector<std::vector<Interval>>& params, const IntervalHook& hook, int loop_trips, long* work) {
+    scratch.depth = 0;
+    analyse(r, scratch, m, f, params, hook, loop_trips, work);
 }
 
 }  // namespace iqc::ir

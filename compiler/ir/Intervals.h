@@ -14,6 +14,7 @@
 #include <functional>
 #include <initializer_list>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -131,10 +132,19 @@ std::vector<Bounds> interval_analysis(const Module& m, int fn, const std::vector
 // and loops name functions of `m`.
 std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
                                       const IntervalHook& hook = {}, int loop_trips = 0, long* work = nullptr);
-// The same into `r` (resized; its storage is reused: the searches that analyse one function over thousands of
-// boxes keep one vector).
-void interval_analysis(std::vector<Bounds>& r, const Module& m, const Function& f, const std::vector<std::vector<Interval>>& params,
-                       const IntervalHook& hook = {}, int loop_trips = 0, long* work = nullptr);
+// The callees' values and arguments, one vector of each per depth of calls: what one analysis needs besides
+// its result. The support and Lipschitz searches analyse one function over thousands of boxes; fresh vectors
+// per call and per callee were most of their time under AddressSanitizer (its allocator fills and faults in
+// each block) and a sixth of it without. Owned by the search, so nothing outlives it.
+struct IntervalScratch {
+    std::vector<std::unique_ptr<std::vector<Bounds>>> values;
+    std::vector<std::unique_ptr<std::vector<IntervalVec>>> args;
+    size_t depth = 0;
+};
+// The same into `r` (resized; every value written), with `scratch` reused from call to call.
+void interval_analysis(IntervalScratch& scratch, std::vector<Bounds>& r, const Module& m, const Function& f,
+                       const std::vector<std::vector<Interval>>& params, const IntervalHook& hook = {}, int loop_trips = 0,
+                       long* work = nullptr);
 
 // Whether `a k b` holds for every a, b in the intervals (1), for none (0), or is undecided (-1).
 int decided(CompareKind k, Interval a, Interval b);

@@ -438,9 +438,10 @@ bool support_box_open(const Module& m, int fn, int query, std::vector<std::vecto
     if (!boxable(m, fn, query, params.size())) return true;
     const Function& f = m.functions[size_t(fn)];
     std::vector<Bounds> values;  // one buffer for every box's analysis
+    IntervalScratch scratch;
     auto range = [&](const Box& b) {
         params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
-        interval_analysis(values, m, f, params, {}, loop_trips, &work);
+        interval_analysis(scratch, values, m, f, params, {}, loop_trips, &work);
         return first_component(values[f.result]);
     };
     for (size_t a = 0; a < 3; ++a)
@@ -455,10 +456,11 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
     const Function& f = m.functions[size_t(fn)];
     auto first = first_component;
     std::vector<Bounds> values;  // one buffer for every box's analysis
+    IntervalScratch scratch;
     // The distance's interval over a box.
     auto range = [&](const Box& b) {
         params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
-        interval_analysis(values, m, f, params, {}, loop_trips, &work);
+        interval_analysis(scratch, values, m, f, params, {}, loop_trips, &work);
         return first(values[f.result]);
     };
     const long budget = work;
@@ -495,7 +497,7 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
                 // p_a and p_b themselves are unknown (wherever else the shape reads them); p_o is the box's.
                 params[size_t(query)] = {{}, {}, {}};
                 params[size_t(query)][size_t(o)] = {b.lo[size_t(o)], b.hi[size_t(o)]};
-                interval_analysis(values, m, *g, params, hook, loop_trips, &rotated_work);
+                interval_analysis(scratch, values, m, *g, params, hook, loop_trips, &rotated_work);
                 return first(values[g->result]);
             };
             SupportBox v = box_sides(rotated, level, per_proof, rotated_work);

@@ -401,8 +401,13 @@ private:
 // The norm bound of the gradient (jacobian: of the Jacobian given by its rows) over one box of p; with
 // `split`, by case splitting (CaseSplit, for a function without calls) while its passes last.
 thread_local long t_boxes = 0;  // box_bound's evaluations in the current estimate (LipschitzEstimate::boxes)
-double box_bound(const Module& m, int grad, const std::vector<Interval>& box, const std::vector<std::vector<Interval>>& others,
-                 bool jacobian = false, SplitBudget* split = nullptr) {
+// The buffers of one search's interval analyses (IntervalScratch: reused from box to box).
+struct BoxScratch {
+    std::vector<Bounds> values;
+    IntervalScratch calls;
+};
+double box_bound(BoxScratch& scratch, const Module& m, int grad, const std::vector<Interval>& box,
+                 const std::vector<std::vector<Interval>>& others, bool jacobian = false, SplitBudget* split = nullptr) {
     ++t_boxes;
     std::vector<std::vector<Interval>> params = {box};
     params.insert(params.end(), others.begin(), others.end());
@@ -413,9 +418,8 @@ double box_bound(const Module& m, int grad, const std::vector<Interval>& box, co
         split->pool -= passes - cs.passes_left();
         return r;
     }
-    thread_local std::vector<Bounds> b;  // one buffer for every box
-    interval_analysis(b, m, m.functions[size_t(grad)], params);
-    return result_norm(b[m.functions[size_t(grad)].result], jacobian);
+    interval_analysis(scratch.calls, scratch.values, m, m.functions[size_t(grad)], params);
+    return result_norm(scratch.values[m.functions[size_t(grad)].result], jacobian);
 }
 
 struct Box {
@@ -443,7 +447,8 @@ bool meets_ball(const std::vector<Interval>& box, double ball) {
 double derive(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
               double ball, int budget, bool jacobian = false, SplitBudget* split = nullptr) {
     std::priority_queue<Box> q;
-    q.push({region, box_bound(m, grad, region, others, jacobian, split)});
+    BoxScratch scratch;
+    q.push({region, box_bound(scratch, m, grad, region, others, jacobian, split)});
     double seen = 0;  // the largest bound at a point
     for (int used = 1, pops = 0; used + 2 <= budget && !q.empty(); ++pops) {
         Box worst = q.top();
@@ -453,7 +458,7 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
             // off-centre: a symmetric region's centre is where shapes are singular (‖p‖'s gradient at 0) and
             // a comparison ties (|x|'s derivative at 0 is the hull of both signs, above any true value)
             for (Interval& c : mid) c.lo = c.hi = c.lo + 0.4617 * (c.hi - c.lo);
-            double here = box_bound(m, grad, mid, others, jacobian);
+            double here = box_bound(scratch, m, grad, mid, others, jacobian);
             if (std::isfinite(here)) seen = std::max(seen, here);  // (not counted: the budget's boxes stay)
             if (worst.bound <= seen) break;
         }
@@ -470,7 +475,7 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
             Box b = worst;
             (half ? b.c[axis].lo : b.c[axis].hi) = mid;
             if (!meets_ball(b.c, ball)) continue;
-            b.bound = box_bound(m, grad, b.c, others, jacobian, split);
+            b.bound = box_bound(scratch, m, grad, b.c, others, jacobian, split);
             q.push(std::move(b));
             ++used;
         }
