@@ -526,7 +526,9 @@ TEST_CASE("a bound too small for its shape gets a located warning", "[numerics]"
     for (int n : {1, 60}) {
         Compiled small = compile_text(fmt::format("small_bound_{}.iq", n), scene_with(0.6, n));
         REQUIRE(small.result.exit_code == 0);
-        CHECK_THAT(small.diagnostics, Catch::Contains(fmt::format("small_bound_{}.iq:5:8: warning: `bound = 0.6` is too small for shape 'torus'", n)));
+        // At the `bound` as written (a new user's trial: the caret was on the instance's `type`).
+        CHECK_THAT(small.diagnostics, Catch::Contains(fmt::format("small_bound_{}.iq:7:9: warning: `bound = 0.6` is too small for shape 'torus'", n)));
+        CHECK_THAT(small.diagnostics, Catch::Contains("  bound = 0.6\n          ^~~"));
         CHECK_THAT(small.diagnostics, Catch::Contains("give a larger `bound`"));
         Compiled fits = compile_text(fmt::format("fitting_bound_{}.iq", n), scene_with(1.3, n));
         REQUIRE(fits.result.exit_code == 0);
@@ -579,9 +581,9 @@ TEST_CASE("moving instances of one shape share its analysis and each keeps its o
                          i == 2 ? "shape_params = { t = [0.8, 0.1] }\n" : "");
     Compiled c = compile_text("moving_bounds.iq", s);
     REQUIRE(c.result.exit_code == 0);
-    for (int line : {5, 9})
-        CHECK_THAT(c.diagnostics, Catch::Contains(fmt::format("moving_bounds.iq:{}:8: warning: `bound = 1.1` is too small for shape 'torus'", line)));
-    CHECK_THAT(c.diagnostics, !Catch::Contains("moving_bounds.iq:13:8"));
+    for (int line : {7, 11})
+        CHECK_THAT(c.diagnostics, Catch::Contains(fmt::format("moving_bounds.iq:{}:9: warning: `bound = 1.1` is too small for shape 'torus'", line)));
+    CHECK_THAT(c.diagnostics, !Catch::Contains("moving_bounds.iq:15:9"));
     // Each transform is inlined into iqc_prepare, its one caller: no function per instance (glslang's
     // call-graph checks are quadratic in the calls between functions).
     CHECK_THAT(c.result.code, !Catch::Contains("_transform("));
@@ -793,4 +795,34 @@ TEST_CASE("a declared Lipschitz bound is applied without refining the derived on
     INFO(low.diagnostics);
     CHECK_THAT(low.diagnostics, Catch::Contains("declares '# lipschitz: 1.1', but its gradient reaches"));
     CHECK(derived(tree(low)) < 4);
+}
+
+TEST_CASE("a shape whose gradient is too long to evaluate is sampled by differences, not marched as 1-Lipschitz", "[numerics]") {
+    // A new user's trial: z_(k+1) = (z_k + p)/2 for 15,000 steps, D = 3(‖z‖ - 0.5), a sphere of slope 3. Its
+    // gradient's IR is beyond the evaluator's step limit at every point: the samples said 0 and the shape was
+    // marched with K = 1 ("samples reach only 0"). Central differences of the distance sample it now; where
+    // even the distance cannot be evaluated, the warning says so.
+    auto scene = [](int n) {
+        return fmt::format("[modules]\ns = \"\"\"\nshape\nz_1 = p\nz_(k+1) = 0.5(z_k + p) for k ∈ 1..{}\nD = 3(‖z_({})‖ - 0.5)\n"
+                           "where\np ∈ ℝ³\n\"\"\"\n[camera]\nposition = [0, 1.0, -4]\ntarget = [0, 0.8, 0]\n[[shapes]]\ntype = \"s\"\n",
+                           n, n + 1);
+    };
+    Compiled c = compile_text("long_recurrence.iq", scene(15000));
+    REQUIRE(c.result.exit_code == 0);
+    REQUIRE(c.result.lipschitz.size() == 1);
+    INFO(c.result.lipschitz[0] << "\n" << c.diagnostics);
+    CHECK_THAT(c.result.lipschitz[0], Catch::Contains("3 sampled, 3.75 applied"));
+    CHECK_THAT(c.diagnostics, !Catch::Contains("reach only 0"));
+    Compiled d = compile_text("longer_recurrence.iq", scene(100000));
+    REQUIRE(d.result.exit_code == 0);
+    INFO(d.diagnostics);
+    CHECK_THAT(d.diagnostics, Catch::Contains("neither its gradient nor its distance can be evaluated within"));
+}
+
+TEST_CASE("a shape whose gradient outgrows the IR's size limit is a located error", "[numerics]") {
+    Compiled c = compile_path(scene("gradient_past_size_limit.iq"));
+    INFO(c.diagnostics.substr(0, 2000));
+    CHECK(c.result.exit_code == 1);
+    CHECK_THAT(c.diagnostics, Catch::Contains("gradient_past_size_limit.iq:34:8: error: this expands to more than 1000000 IR instructions"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("  type = \"s\"\n         ^~~"));
 }

@@ -120,6 +120,7 @@ struct LipschitzSpec {
     // The `bound` radii of the first members (one for a single instance; up to 8 for a group, member k's at
     // k): the pass checks that the shape stays inside its sphere there. Empty: no `bound`.
     std::vector<double> bounds;
+    std::vector<Span> bound_where;  // per entry of `bounds`: where it is written (invalid: derived by the compiler)
     int group = 0;               // a group's size: k ∈ [0, group - 1] (0: no k)
     double declared = 0;         // `# lipschitz: K` of the shape (0: none)
     bool trusted = false;        // the shape says `# exact` or `# bound`: 1-Lipschitz by construction

@@ -1112,7 +1112,10 @@ private:
         for (int c = 0; c < 3; ++c) reach += std::fabs(cam.position[size_t(c)] - cam.target[size_t(c)]);  // an orbiting camera
         for (size_t mi : it.members) {
             const InstancePlan& p = plan(mi);
-            if (bound_of(mi) > 0 && spec.bounds.size() < 8) spec.bounds.push_back(bound_of(mi));
+            if (bound_of(mi) > 0 && spec.bounds.size() < 8) {
+                spec.bounds.push_back(bound_of(mi));
+                spec.bound_where.push_back(plan(mi).desc->bound > 0 ? plan(mi).desc->bound_span : Span{});
+            }
             for (int r = 0; r < 3; ++r) {
                 double lo, hi;
                 if (bound_of(mi) > 0) {

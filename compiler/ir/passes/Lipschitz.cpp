@@ -520,7 +520,7 @@ struct SplitMix64 {
 };
 
 double sample(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
-              double ball, int samples) {
+              double ball, int samples, int* evaluated = nullptr, bool differences = false) {
     // A field that moves (time, the mouse) is sampled at 16 moments over two minutes and mouse positions
     // over the view: its gradient at time 0 alone says nothing of time 40 (sin(time·p) steepens).
     std::vector<std::unique_ptr<Evaluator>> evs;
@@ -554,9 +554,30 @@ double sample(const Module& m, int grad, const std::vector<Interval>& region, co
         }
         Value r;
         try {
-            r = evs[size_t(s) % evs.size()]->call(grad, args);
+            Evaluator& ev = *evs[size_t(s) % evs.size()];
+            if (!differences) {
+                r = ev.call(grad, args);
+            } else {
+                // Central differences of the distance itself (`grad` is the distance function here): where the
+                // gradient's IR is too large to evaluate, the distance may still be.
+                double h = 1e-4 * std::max(1.0, std::sqrt(args[0].v[0] * args[0].v[0] + args[0].v[1] * args[0].v[1] +
+                                                          args[0].v[2] * args[0].v[2]));
+                r = {Type::vector(3), {0, 0, 0}};
+                for (int a = 0; a < 3; ++a) {
+                    std::vector<Value> hi = args, lo = args;
+                    hi[0].v[size_t(a)] += h;
+                    lo[0].v[size_t(a)] -= h;
+                    r.v[size_t(a)] = (ev.call(grad, hi).v.at(0) - ev.call(grad, lo).v.at(0)) / (2 * h);
+                }
+            }
         } catch (const EvalLimit&) {
             break;
+        }
+        if (evaluated) ++*evaluated;
+        if (differences) {  // a distance this large: as many points as 2·10⁷ evaluator steps allow (about 1 s)
+            uint64_t spent = 0;
+            for (const auto& ev : evs) spent += ev->work();
+            if (spent > 20000000) samples = s;  // this one is the last
         }
         double n = 0;
         for (double x : r.v) n += x * x;
@@ -1127,7 +1148,17 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     boxes = std::max(4, int(boxes * scale));
     samples = std::max(16, int(samples * scale));
     e.derived = derive(work, grad, box, others, ball, boxes);
-    e.sampled = sample(work, grad, box, others, ball, samples);
+    int evaluated = 0;
+    e.sampled = sample(work, grad, box, others, ball, samples, &evaluated);
+    if (evaluated == 0) {
+        // The gradient's IR is beyond the evaluator's step limit at every point (a 15,000-step recurrence): its
+        // samples said 0 and the shape was marched with K = 1 where its slope is 3 (a new user's trial). Central
+        // differences of the distance instead, at fewer points (six evaluations each).
+        e.sampled = sample(work, fn, box, others, ball, std::max(16, samples / 8), &evaluated, true);
+        if (evaluated == 0)
+            e.why = fmt::format("neither its gradient nor its distance can be evaluated within {} steps of iqc's evaluator",
+                                kSampleSteps);
+    }
     // The refinements only ever lower a bound that stands without them: one that cannot be built (a form the
     // differentiator has no rule for once a cut is a parameter) leaves the bound as it is. They run only where
     // the bound decides something: above 2, or above 1 where samples exceed 1 (within 2 with every sample
@@ -1295,10 +1326,18 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                     // exceed it (the Christmas tree's declared 1.55: 60 of the pass's 70 ms), and its jump search
                     // compares with the bound intervals give (a looser one: a jump must be larger to be proven).
                     const bool refine = analysed.size() < kMaxRefined;
-                    LipschitzEstimate est = estimate_lipschitz(m, spec.object_fn, region, others, spec.ball, 1000, 128,
-                                                               refine && spec.declared <= 0, &allowance, refine);
-                    if (refine && spec.declared > 0 && est.sampled > spec.declared * (1 + 1e-3))
-                        est = estimate_lipschitz(m, spec.object_fn, region, others, spec.ball, 1000, 128, true, &allowance);
+                    LipschitzEstimate est;
+                    try {
+                        est = estimate_lipschitz(m, spec.object_fn, region, others, spec.ball, 1000, 128,
+                                                 refine && spec.declared <= 0, &allowance, refine);
+                        if (refine && spec.declared > 0 && est.sampled > spec.declared * (1 + 1e-3))
+                            est = estimate_lipschitz(m, spec.object_fn, region, others, spec.ball, 1000, 128, true, &allowance);
+                    } catch (SizeLimit& limit) {
+                        // A gradient past the size limit is the input's (code that unrolls too far), an error
+                        // located where it grew, else at the instance (a new user's trial: it had no location).
+                        if (!limit.span.valid()) limit.span = spec.where;
+                        throw;
+                    }
                     same = analysed.emplace(cluster, std::move(est)).first;
                     split_work -= given - allowance;
                 }
@@ -1329,7 +1368,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                 how = fmt::format("no useful bound: {:g} times the steepest sample, not proven", kSampledMargin);
             }
             bool bounded = !spec.bounds.empty() || spec.ball > 0;
-            std::string reason = !e.why.empty() ? "iqc cannot differentiate it (" + e.why + ")"
+            std::string reason = !e.why.empty() ? (e.why.rfind("neither", 0) == 0 ? e.why : "iqc cannot differentiate it (" + e.why + ")")
                                  : e.sampled <= 1 + 1e-3
                                      ? fmt::format("samples of its gradient reach only {:.3g}, but iqc cannot bound it where the instance "
                                                    "is marched; if it is 1-Lipschitz, say `# bound` in the module", e.sampled)
@@ -1379,8 +1418,12 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             const std::vector<double>& at = found->second.at;
             double d = found->second.d;
             int member = found->second.member;
+            // At the `bound` as written (the instance's type where the compiler derived it).
+            Span bound_at = size_t(member) < spec.bound_where.size() && spec.bound_where[size_t(member)].valid()
+                                ? spec.bound_where[size_t(member)]
+                                : spec.where;
             if (!at.empty())
-                warnings.push_back({spec.where, fmt::format("`bound = {:g}` is too small for shape '{}'{}: the shape reaches past its "
+                warnings.push_back({bound_at, fmt::format("`bound = {:g}` is too small for shape '{}'{}: the shape reaches past its "
                                                             "sphere (its distance is {:.3g} at ({:.3g}, {:.3g}, {:.3g}), outside the sphere, "
                                                             "in its own space), so the bound clips it; give a larger `bound`",
                                                             spec.bounds[size_t(member)], spec.shape,
