@@ -856,8 +856,8 @@ namespace {
 // a combinator's bound is its factor times the larger of its distances' bounds, a min or max (or a Select)
 // the largest of its operands', a sum or difference the sum of its operands' (only those that depend on the
 // point), a negation or |x| its operand's, where a combinator lies below; any other value is a term bounded
-// on its own (bound_added: by intervals, the chain rule at a cut, term by term over unions). ∞ when D has no
-// combinator.
+// on its own (bound_added: by intervals, the chain rule at a cut, term by term over unions; at most 64 terms:
+// a chain of 30 smooth unions of spheres has 30). ∞ when D has no combinator.
 double combinator_bound(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
                         double ball, int budget) {
     Module work = m;
@@ -901,7 +901,7 @@ double combinator_bound(const Module& m, int fn, const std::vector<Interval>& re
             k = K(in.args[0]);
         }
         if (!std::isfinite(k)) {  // a term of its own (or a form the rules above do not take apart)
-            if (++terms > 16) return kInf;
+            if (++terms > 64) return kInf;
             Function term = flat;
             term.name = "lipschitz_combined_term";
             term.result = v;
