@@ -431,19 +431,31 @@ bool boxable(const Module& m, int fn, int query, size_t params) {
     return rt.is_scalar() || rt.is_vector();
 }
 
+// The distance's interval over a box of the query point (the other parameters as given), spending `work`;
+// one set of buffers for every box.
+struct DistanceRange {
+    const Module& m;
+    const Function& f;
+    int query;
+    std::vector<std::vector<Interval>>& params;
+    int loop_trips;
+    long& work;
+    std::vector<Bounds> values{};
+    IntervalScratch scratch{};
+    Interval operator()(const Box& b) {
+        params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
+        interval_analysis(scratch, values, m, f, params, {}, loop_trips, &work);
+        return first_component(values[f.result]);
+    }
+};
+
 }  // namespace
 
 bool support_box_open(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params, double level,
                       int per_proof, int loop_trips, long work) {
     if (!boxable(m, fn, query, params.size())) return true;
-    const Function& f = m.functions[size_t(fn)];
-    std::vector<Bounds> values;  // one buffer for every box's analysis
-    IntervalScratch scratch;
-    auto range = [&](const Box& b) {
-        params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
-        interval_analysis(scratch, values, m, f, params, {}, loop_trips, &work);
-        return first_component(values[f.result]);
-    };
+    DistanceRange distance{m, m.functions[size_t(fn)], query, params, loop_trips, work};
+    auto range = [&](const Box& b) { return distance(b); };
     for (size_t a = 0; a < 3; ++a)
         for (bool upper : {false, true})
             if (!free_of(range, half_space(a, upper, upper ? kUnboundedAt : -kUnboundedAt), level, per_proof, work)) return true;
@@ -455,15 +467,9 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
     if (!boxable(m, fn, query, params.size())) return std::nullopt;
     const Function& f = m.functions[size_t(fn)];
     auto first = first_component;
-    std::vector<Bounds> values;  // one buffer for every box's analysis
-    IntervalScratch scratch;
-    // The distance's interval over a box.
-    auto range = [&](const Box& b) {
-        params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
-        interval_analysis(scratch, values, m, f, params, {}, loop_trips, &work);
-        return first(values[f.result]);
-    };
     const long budget = work;
+    DistanceRange distance{m, f, query, params, loop_trips, work};
+    auto range = [&](const Box& b) { return distance(b); };
     SupportBox out = box_sides(range, level, per_proof, work);
 
     // Rotated pairs of the query's axes (see plane_pair): once more per plane, in the pair's coordinates, on a
@@ -497,8 +503,8 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
                 // p_a and p_b themselves are unknown (wherever else the shape reads them); p_o is the box's.
                 params[size_t(query)] = {{}, {}, {}};
                 params[size_t(query)][size_t(o)] = {b.lo[size_t(o)], b.hi[size_t(o)]};
-                interval_analysis(scratch, values, m, *g, params, hook, loop_trips, &rotated_work);
-                return first(values[g->result]);
+                interval_analysis(distance.scratch, distance.values, m, *g, params, hook, loop_trips, &rotated_work);
+                return first(distance.values[g->result]);
             };
             SupportBox v = box_sides(rotated, level, per_proof, rotated_work);
             // (p_a, p_b) from (u, w): the same norm (orthogonal), or M⁻¹ applied to the box.
