@@ -53,6 +53,7 @@ struct LipschitzEstimate {
     // The work spent: interval evaluations of a gradient (or a warp's Jacobian) over a box or at a point, the
     // refinements' included (a regression measure; a box is ~1-100 µs depending on the shape's size).
     long boxes = 0;
+    bool unevaluable = false;  // neither the gradient nor the distance evaluates within the step limit (`why` says)
 };
 
 // Bounds ‖∇f‖ with respect to parameter 0 (ℝ³) of function `fn` over `box` (its three components); other
