@@ -111,6 +111,17 @@ TEST_CASE("analytic gradients agree with central differences of the evaluator", 
         "s_(k+1) = 1.3s_k for k ∈ 1..4\nD = (‖z_5‖ - 1)/s_5\nwhere\np ∈ ℝ³\n",
         "shape\nw_1 = p\nw_(k+1) = { w_k if ‖w_k‖ > 3\n            w_k + 0.3(w_k_2, w_k_3, w_k_1) otherwise for k ∈ 1..3\nD = ‖w_4‖ - 1\nwhere\np ∈ ℝ³\n",
     };
+    const char* weights[] = {
+        // mix with a weight per component: a constant broadcast (0.3 of mix(p, 2p, 0.3)) and one that varies
+        // with p (a new user's trial, stop 39: "mix with a vector weight" had no rule)
+        "shape\nD = ‖mix(p, 2p, 0.3)‖ - 0.5\nwhere\np ∈ ℝ³\n",
+        "shape\nD = ‖mix(p, (1, 2, 0.5), w)‖ - 0.5\nw = (0.3, 0.5 + 0.1p_1, 0.2p_3)\nwhere\np ∈ ℝ³\n",
+    };
+    for (const char* s : weights) {
+        Angles a = gradient_angles(s, 400);
+        INFO(s << "\nmedian " << a.median() << "°, p99 " << a.p99() << "°");
+        CHECK(a.median() <= 0.01);
+    }
     for (const char* s : shapes) {
         Angles a = gradient_angles(s, 400);
         INFO(s << "\nmedian " << a.median() << "°, p99 " << a.p99() << "°");

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 
 #include "TestUtil.h"
 #include "ir/IR.h"
@@ -30,6 +31,26 @@ std::vector<fs::path> pass_cases() {
         if (e.path().extension() == ".ir") out.push_back(e.path());
     std::sort(out.begin(), out.end());
     return out;
+}
+
+// Evaluates the first function of `before` and of `after` at 200 random points (each parameter 1e-3 … 1e2 in
+// size, either sign, times `scale`) in double precision and hands each pair of values to `check`; returns 200.
+int compare_at_random_points(const ir::Module& before, const ir::Module& after, uint64_t seed, double scale,
+                             const std::function<void(double, double, const std::vector<ir::Value>&)>& check) {
+    ir::Evaluator eb(before), ea(after);
+    const ir::Function& f = before.functions[0];
+    uint64_t state = seed;
+    auto next = [&] {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return double(state >> 11) / double(1ull << 53);
+    };
+    for (int s = 0; s < 200; ++s) {
+        std::vector<ir::Value> args;
+        for (const auto& p : f.params) args.push_back({p.type, {scale * (next() - 0.5) * 2 * std::pow(10.0, -3 + 5 * next())}});
+        INFO("sample " << s);
+        check(eb.call(0, args).v[0], ea.call(0, args).v[0], args);
+    }
+    return 200;
 }
 
 }  // namespace
@@ -137,26 +158,13 @@ TEST_CASE("stable rewrites give the double evaluator's values of the forms they 
         ir::PipelineResult r;
         REQUIRE(ir::run_pass("stable", after, o, r));
         CHECK_FALSE(r.rewrites.empty());
-        ir::Evaluator eb(before), ea(after);
-        const ir::Function& f = before.functions[0];
-        uint64_t state = 12345;
-        auto next = [&] {
-            state = state * 6364136223846793005ull + 1442695040888963407ull;
-            return double(state >> 11) / double(1ull << 53);
-        };
-        for (int s = 0; s < 200; ++s) {
-            std::vector<ir::Value> args;
-            for (const auto& p : f.params) {
-                double x = (next() - 0.5) * 2 * std::pow(10.0, -3 + 5 * next());  // 1e-3 … 1e2 in size, either sign
-                if (path.filename() == "log_sum_exp.ir") x *= 6;                      // up to e^±600
-                args.push_back({p.type, {x}});
-            }
-            double vb = eb.call(0, args).v[0], va = ea.call(0, args).v[0];
-            INFO(path.filename().string() << " at sample " << s << ": " << vb << " against " << va);
+        // exponents up to e^±600 in log-sum-exp
+        compared += compare_at_random_points(before, after, 12345, path.filename() == "log_sum_exp.ir" ? 6 : 1,
+                                             [&](double vb, double va, const std::vector<ir::Value>&) {
+            INFO(path.filename().string() << ": " << vb << " against " << va);
             if (std::isnan(vb)) CHECK(std::isnan(va));  // sqrt(x² + xy) of x² + xy < 0, in both
             else CHECK(std::abs(va - vb) <= 1e-9 * std::max(1.0, std::abs(vb)));
-            ++compared;
-        }
+        });
     }
     CHECK(compared == 3 * 200);
 }
@@ -177,21 +185,10 @@ TEST_CASE("cancelled linear terms give the values of the forms they replace", "[
         for (auto& f : after.functions) rewritten += ir::cancel_linear_terms(f);
         CHECK(rewritten > 0);
         REQUIRE(ir::verify(after).empty());
-        ir::Evaluator eb(before), ea(after);
-        const ir::Function& f = before.functions[0];
-        uint64_t state = 777;
-        auto next = [&] {
-            state = state * 6364136223846793005ull + 1442695040888963407ull;
-            return double(state >> 11) / double(1ull << 53);
-        };
-        for (int s = 0; s < 200; ++s) {
-            std::vector<ir::Value> args;
-            for (const auto& p : f.params) args.push_back({p.type, {(next() - 0.5) * 2 * std::pow(10.0, -3 + 5 * next())}});
-            double vb = eb.call(0, args).v[0], va = ea.call(0, args).v[0];
-            INFO(path.filename().string() << " at sample " << s << ": " << vb << " against " << va);
+        compared += compare_at_random_points(before, after, 777, 1, [&](double vb, double va, const std::vector<ir::Value>& args) {
+            INFO(path.filename().string() << ": " << vb << " against " << va);
             CHECK(std::abs(va - vb) <= 1e-12 * std::max(1.0, std::abs(args[0].v[0]) + std::abs(args[1].v[0])));
-            ++compared;
-        }
+        });
     }
     CHECK(compared >= 200);
 }

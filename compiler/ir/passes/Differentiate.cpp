@@ -319,7 +319,20 @@ struct Differentiator {
                 if (n == "mix") {
                     // (1 - s) ∂a + s ∂b + (b - a) ⊗ ∂s
                     const Type& st = PT(2);
-                    if (!st.is_scalar() && !t.is_scalar()) return no_rule("mix with a vector weight");
+                    if (!st.is_scalar() && !t.is_scalar()) {
+                        // a weight per component (mix(p, 2p, 0.3) broadcasts 0.3): each row of the Jacobians is
+                        // scaled by its own weight, diag(1 - s) ∂a + diag(s) ∂b + diag(b - a) ∂s
+                        auto diag = [&](ValueId v) {
+                            std::vector<ValueId> parts;
+                            for (int i = 0; i < t.rows; ++i)
+                                for (int j = 0; j < t.rows; ++j)
+                                    parts.push_back(i == j ? emit(Op::Extract, Type::scalar(), {v}, i) : scalar(0));
+                            return emit(Op::Construct, Type::matrix(t.rows, t.rows), std::move(parts));
+                        };
+                        ValueId s = P(2), one_minus = op2(Op::Sub, g.constant(st, std::vector<double>(size_t(st.rows), 1.0)), s);
+                        ValueId r1 = add(T(0) == kZero ? kZero : mul(diag(one_minus), T(0)), T(1) == kZero ? kZero : mul(diag(s), T(1)));
+                        return add(r1, T(2) == kZero ? kZero : mul(diag(op2(Op::Sub, P(1), P(0))), T(2)));
+                    }
                     ValueId s = P(2), one_minus = op2(Op::Sub, scalar(1), s);
                     ValueId r1 = add(mul(one_minus, T(0)), mul(s, T(1)));
                     ValueId diff = op2(Op::Sub, P(1), P(0));

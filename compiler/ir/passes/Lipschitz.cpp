@@ -985,26 +985,30 @@ double blend_factor(Module& work, int callee, const std::vector<Interval>& range
             for (ValueId a : in.args) live[a] = 1;
         }
     }
+    // A function of q (and the other arguments) summing the partials of the arguments that depend on the
+    // point, each as `term` makes it of the partial's value and its slot.
+    auto sum_of_partials = [&](const char* name, const std::function<ValueId(Builder&, ValueId, size_t)>& term) {
+        Function S;
+        Builder b(work, S);
+        std::vector<ValueId> ps;
+        begin(S, b, name, ps);
+        ValueId g = b.call(grad, ps);
+        ValueId sum = ValueId(-1);
+        for (size_t j = 0; j < dims.size(); ++j) {
+            if (!dep[dims[j]]) continue;
+            ValueId part = term(b, b.op(Op::Extract, {g}, int(j)), j);
+            sum = sum == ValueId(-1) ? part : b.op(Op::Add, {sum, part});
+        }
+        S.result = sum;
+        return add(std::move(S));
+    };
     // The signed sums' gradients, per pattern of signs (bit j: the argument in slot j falls), built when needed.
     std::map<int, int> signed_grad;
     auto signed_sum_gradient = [&](int signs) -> int {
         if (auto it = signed_grad.find(signs); it != signed_grad.end()) return it->second;
-        Function S;
-        {
-            Builder b(work, S);
-            std::vector<ValueId> ps;
-            begin(S, b, "lipschitz_blend_sum", ps);
-            ValueId g = b.call(grad, ps);
-            ValueId sum = ValueId(-1);
-            for (size_t j = 0; j < dims.size(); ++j) {
-                if (!dep[dims[j]]) continue;
-                ValueId part = b.op(Op::Extract, {g}, int(j));
-                if (signs >> j & 1) part = b.op(Op::Neg, {part});
-                sum = sum == ValueId(-1) ? part : b.op(Op::Add, {sum, part});
-            }
-            S.result = sum;
-        }
-        int s_fn = add(std::move(S));
+        int s_fn = sum_of_partials("lipschitz_blend_sum", [&](Builder& b, ValueId part, size_t j) {
+            return (signs >> j & 1) ? b.op(Op::Neg, {part}) : part;
+        });
         int g = differentiate(work, s_fn, 0, "lipschitz_blend_sum_gradient", &why);
         if (g >= 0) flatten(g);
         signed_grad[signs] = g;
@@ -1012,23 +1016,8 @@ double blend_factor(Module& work, int callee, const std::vector<Interval>& range
     };
     // L(q, ...) = Σ_i |∂f/∂x_i|: the sum whose bound is sought, for case splitting (a blend's kinks, |a - b| =
     // k, are where the partials' branches meet; interval arithmetic hulls each term's branches apart).
-    int sum_fn;
-    {
-        Function L;
-        Builder b(work, L);
-        std::vector<ValueId> ps;
-        begin(L, b, "lipschitz_blend_l1", ps);
-        ValueId g = b.call(grad, ps);
-        ValueId sum = ValueId(-1);
-        for (size_t j = 0; j < dims.size(); ++j) {
-            if (!dep[dims[j]]) continue;
-            ValueId part = b.builtin("abs", {b.op(Op::Extract, {g}, int(j))});
-            sum = sum == ValueId(-1) ? part : b.op(Op::Add, {sum, part});
-        }
-        L.result = sum;
-        sum_fn = add(std::move(L));
-        flatten(sum_fn);
-    }
+    const int sum_fn = sum_of_partials("lipschitz_blend_l1", [](Builder& b, ValueId part, size_t) { return b.builtin("abs", {part}); });
+    flatten(sum_fn);
     BoxScratch scratch;
     auto analyse = [&](int fn, const std::vector<Interval>& box) -> const Bounds& {
         std::vector<std::vector<Interval>> ps = {box};
