@@ -628,6 +628,21 @@ TEST_CASE("smooth minima written in the module are bounded as blends of their di
         CHECK(derived(r) < c.below);
         CHECK_THAT(r.diagnostics, !Catch::Contains("slower than it may need"));
     }
+    // Quilez's smooth subtraction as he writes it weighs by b + a, not b - a (38.3 derived before the analysis
+    // also took a and b + a as its coordinates); a blend of blends written as one function of three distances
+    // (2·10⁴ as one function: it is inlined now, and its two calls bounded one by one). A new user's trial, stop 40.
+    const std::string sub = "clamp(0.5 - 0.5(b + a)/k, 0, 1)";
+    for (const Case& c : {Case{"subtraction", "m(a, b, k) = mix(b, -a, " + sub + ") + k " + sub + "(1 - " + sub + ")", 2, 1.05},
+                          Case{"nested", "t(a, b, c, k) = m(m(a, b, k), c, k) where a ∈ ℝ, b ∈ ℝ, c ∈ ℝ, k ∈ ℝ\nm(a, b, k) = mix(b, a, " +
+                                             h + ") - k " + h + "(1 - " + h + ")", 3, 1.05}}) {
+        std::string text = replaced(scene(c.m, c.spheres), "D = ", k + "D = ");
+        if (c.spheres == 3) text = replaced(text, "D = m(m(`d0`, `d1`, k), `d2`, k)", "D = t(`d0`, `d1`, `d2`, k)");
+        Compiled r = compile_text(std::string("smin_") + c.name + ".iq", text);
+        INFO(c.name << "\n" << text << "\n" << r.diagnostics);
+        REQUIRE(r.result.exit_code == 0);
+        CHECK(derived(r) >= 1);
+        CHECK(derived(r) < c.below);
+    }
     // The factor is the partials' sum (at least `below` here: the true slope), not 1 because it is a blend: a + b
     // has slope 2 where the spheres' gradients agree, and mix(b, a, h) without Quilez's correction -k h(1 - h)
     // has weights -1/2 and 3/2 at the band's edges (|a - b| = k): slope 2 between the spheres, where their
