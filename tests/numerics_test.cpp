@@ -657,6 +657,19 @@ TEST_CASE("smooth minima written in the module are bounded as blends of their di
         CHECK(derived(r) >= 1);
         CHECK(derived(r) < c.below);
     }
+    // The same blends written inline, with statements (h = clamp(...)): a scalar computed from two or three
+    // distances alone is outlined as a function of them (polynomial: 528.6, no useful bound, and exponential 3,
+    // before).
+    // (Only where the bound without refinements exceeds 2: within 2 and every sample within 1 it is not refined.)
+    for (const std::string& d : {"mix(`d1`, `d0`, h) - k h(1 - h)", "-log(exp(-`d0`/k) + exp(-`d1`/k))k"}) {
+        std::string text = replaced(scene("m(a, b, k) = a", 2), "D = m(`d0`, `d1`, k)", "k = 0.15\nh = " + h + "\nD = " + d);
+        text = replaced(replaced(text, "(b - a)", "(`d1` - `d0`)"), "m(a, b, k) = a where a ∈ ℝ, b ∈ ℝ, k ∈ ℝ\n", "");
+        Compiled r = compile_text("smin_inline.iq", text);
+        INFO(text << "\n" << r.diagnostics);
+        REQUIRE(r.result.exit_code == 0);
+        CHECK(derived(r) >= 1);
+        CHECK(derived(r) < 1.05);
+    }
     // The factor is the partials' sum (at least `below` here: the true slope), not 1 because it is a blend: a + b
     // has slope 2 where the spheres' gradients agree, and mix(b, a, h) without Quilez's correction -k h(1 - h)
     // has weights -1/2 and 3/2 at the band's edges (|a - b| = k): slope 2 between the spheres, where their
@@ -684,6 +697,18 @@ TEST_CASE("smooth minima written in the module are bounded as blends of their di
         INFO(line);
         CHECK(derived(r) >= 2 - 1e-6);
         CHECK_THAT(line, Catch::Contains("applied (derived)"));
+    }
+    // Half of Quilez's correction, mix(b, a, h) - 0.5k h(1 - h), has slope 1.36 in a band where |a - b| is near
+    // k: no uniform sample met it, the bound within 2 was not refined, and the shape was marched as 1-Lipschitz
+    // (a trial's, stop 40). The blend's analysis sees its partials sum to more than 1: the derived bound applies.
+    {
+        Compiled r = compile_text("smin_half.iq", replaced(scene("m(a, b, k) = mix(b, a, " + h + ") - 0.5k " + h + "(1 - " + h + ")", 2),
+                                                           "D = ", k + "D = "));
+        REQUIRE(r.result.exit_code == 0);
+        REQUIRE(r.result.lipschitz.size() == 1);
+        INFO(r.result.lipschitz[0]);
+        CHECK(derived(r) >= 1.25);
+        CHECK_THAT(r.result.lipschitz[0], Catch::Contains("applied (derived)"));
     }
     // A blend radius on a slider (WebGL2: the bound holds over the slider's range) is a dimension of the search.
     std::string slider = scene("m(a, b, k) = mix(b, a, " + h + ") - k " + h + "(1 - " + h + ")", 2, "k ∈ [0.05,0.6] default = 0.2: blend radius\n");

@@ -54,6 +54,10 @@ struct LipschitzEstimate {
     // refinements' included (a regression measure; a box is ~1-100 µs depending on the shape's size).
     long boxes = 0;
     bool unevaluable = false;  // neither the gradient nor the distance evaluates within the step limit (`why` says)
+    // The largest Σ|∂f/∂x_i| the analysis of a blend f of distances x_i (a smooth minimum written in the module)
+    // met at a point of its arguments: above 1, f is no convex combination of its distances' gradients, and a
+    // slope above 1 may hide in a band the samples miss (0: no blend analysed).
+    double blend_steepest = 0;
 };
 
 // Bounds ‖∇f‖ with respect to parameter 0 (ℝ³) of function `fn` over `box` (its three components); other
