@@ -948,6 +948,25 @@ TEST_CASE("a declared Lipschitz bound is applied without refining the derived on
     CHECK(derived(tree(low)) < 4);
 }
 
+TEST_CASE("a shape that says it is 1-Lipschitz is checked by samples", "[numerics]") {
+    // A new user's trial (stop 39): `# bound` or `# exact` on a sphere of slope 3 was taken at its word, where a
+    // `# lipschitz: 1` would have been checked. Its samples are checked once per shape now.
+    for (const char* pragma : {"# bound", "# exact"}) {
+        std::string text = fmt::format("[modules]\nsteep = \"\"\"\nshape\n{}\nD = 3(‖p‖ - 0.5)\nwhere\np ∈ ℝ³\n\"\"\"\n"
+                                       "[camera]\nposition = [0, 1, -4]\ntarget = [0, 0, 0]\n[[shapes]]\ntype = \"steep\"\n",
+                                       pragma);
+        Compiled c = compile_text("says_bound.iq", text);
+        INFO(c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        CHECK_THAT(c.diagnostics, Catch::Contains("says_bound.iq:13:8: warning: shape 'steep' says it is 1-Lipschitz (`# exact` or "
+                                                  "`# bound` in its module), but its gradient reaches 3 here"));
+        // The same shape honest about its slope, and the standard library's (all of them say # exact or # bound).
+        Compiled honest = compile_text("says_bound_honest.iq", replaced(text, "D = 3(‖p‖ - 0.5)", "D = ‖p‖ - 0.5"));
+        REQUIRE(honest.result.exit_code == 0);
+        CHECK(honest.diagnostics.find("warning") == std::string::npos);
+    }
+}
+
 TEST_CASE("a shape whose gradient is too long to evaluate is sampled by differences, not marched as 1-Lipschitz", "[numerics]") {
     // A new user's trial: z_(k+1) = (z_k + p)/2 for 15,000 steps, D = 3(‖z‖ - 0.5), a sphere of slope 3. Its
     // gradient's IR is beyond the evaluator's step limit at every point: the samples said 0 and the shape was
