@@ -475,11 +475,16 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
             Type e = g.type.is_array() ? g.type.element() : g.type;
             Bounds b = unknown(e);
             size_t n = b.c.size();
+            const bool fixed = g.kind == Global::Kind::Constant || (g.kind == Global::Kind::Parameter && m.constant_parameters);
             if (g.kind != Global::Kind::Prepared) {
                 bool slider = g.kind == Global::Kind::Parameter && !m.constant_parameters;
-                if (slider && g.bounds.lo.size() == n) {
-                    for (size_t k = 0; k < n; ++k) b.c[k] = {g.bounds.lo[k], g.bounds.hi[k]};
-                } else if (g.kind == Global::Kind::Constant && !g.value.empty()) {
+                // A group's per-member parameters (an array) are their values' hull where parameters are constants
+                // (four blobs in a group, each with its own amplitude, had no bound at all: a trial's, stop 39), and
+                // their sliders' hull elsewhere.
+                if (slider && !g.bounds.lo.empty() && g.bounds.lo.size() % n == 0 && g.bounds.hi.size() == g.bounds.lo.size()) {
+                    for (size_t k = 0; k < n; ++k) b.c[k] = {kInf, -kInf};
+                    for (size_t j = 0; j < g.bounds.lo.size(); ++j) b.c[j % n] = hull(b.c[j % n], {g.bounds.lo[j], g.bounds.hi[j]});
+                } else if (fixed && !g.value.empty() && g.value.size() % n == 0) {
                     for (size_t k = 0; k < n; ++k) b.c[k] = {kInf, -kInf};
                     for (size_t j = 0; j < g.value.size(); ++j) b.c[j % n] = hull(b.c[j % n], {g.value[j], g.value[j]});
                 } else if (!g.value.empty() && !g.type.is_array()) {  // a parameter without bounds: its value
@@ -490,14 +495,14 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
             else {
                 // An element's norm: the largest over the elements (constants), else from the components.
                 double worst = 0;
-                if (g.kind == Global::Kind::Constant)
+                if (fixed)
                     for (size_t e0 = 0; e0 + n <= g.value.size(); e0 += n) {
                         double s = 0;
                         for (size_t k = 0; k < n; ++k) s += g.value[e0 + k] * g.value[e0 + k];
                         worst = std::max(worst, std::sqrt(s));
                     }
                 b = finish(std::move(b));
-                if (g.kind == Global::Kind::Constant) b.norm = std::min(b.norm, worst);
+                if (fixed) b.norm = std::min(b.norm, worst);
             }
             r[i] = std::move(b);
             continue;
