@@ -977,6 +977,39 @@ TEST_CASE("a declared Lipschitz bound is applied without refining the derived on
     CHECK(derived(tree(low)) < 4);
 }
 
+TEST_CASE("samples walk to the surface and over the sliders' ranges", "[numerics]") {
+    // A new user's trial (stop 40): a thin shell whose distance steepens to 1.9 just outside it had every uniform
+    // sample within 1 (a unit-sized shape in a region of ±100) and was marched as 1-Lipschitz, derived 1.9:
+    // a ring of holes in its picture. Samples also walk to the surface by Newton steps now.
+    auto line = [](const Compiled& c) { return c.result.lipschitz.size() == 1 ? c.result.lipschitz[0] : std::string(); };
+    auto sampled = [&](const Compiled& c) {
+        std::string l = line(c);
+        size_t at = l.find(" derived, ");
+        return at == std::string::npos ? -1.0 : std::stod(l.substr(at + std::string(" derived, ").size()));
+    };
+    const std::string shell = "[modules]\ns = \"\"\"\nshape\na = |‖p - (0.13, 0.27, -0.11)‖ - 0.5| - 0.01\n"
+                              "D = a + 0.9max(0, 0.05 - |a - 0.05|)\nwhere\np ∈ ℝ³\n\"\"\"\n[camera]\nposition = [0, 1, -4]\n"
+                              "target = [0, 0.3, 0]\n[[shapes]]\ntype = \"s\"\n";
+    Compiled c = compile_text("shell_tent.iq", shell);
+    REQUIRE(c.result.exit_code == 0);
+    INFO(line(c));
+    CHECK(sampled(c) > 1.5);
+    CHECK_THAT(line(c), Catch::Contains("applied (derived)"));
+    // Where the sliders are uniforms the bound holds over their ranges, and the samples are taken over them
+    // too: a bump of height w ∈ [0, 0.9] on a plane, 0 by default, has slope 1.9 at w = 0.9 (it was marched as
+    // 1-Lipschitz on WebGL2: every sample at w = 0).
+    const std::string bump = "[modules]\ns = \"\"\"\nshape\nD = p_2 + w max(0, 0.05 - |p_2 - 0.05|)\nwhere\np ∈ ℝ³\n"
+                             "w ∈ [0,0.9] default = 0: bump\n\"\"\"\n[camera]\nposition = [0, 1, -4]\ntarget = [0, 0.3, 0]\n"
+                             "[[shapes]]\ntype = \"s\"\n";
+    CompileOptions webgl2;
+    webgl2.target = Target::WebGL2;
+    Compiled u = compile_path(write_temp("slider_bump.iq", bump), webgl2);
+    REQUIRE(u.result.exit_code == 0);
+    INFO(line(u));
+    CHECK(sampled(u) > 1.5);
+    CHECK_THAT(line(u), Catch::Contains("applied (derived)"));
+}
+
 TEST_CASE("a shape that says it is 1-Lipschitz is checked by samples", "[numerics]") {
     // A new user's trial (stop 39): `# bound` or `# exact` on a sphere of slope 3 was taken at its word, where a
     // `# lipschitz: 1` would have been checked. Its samples are checked once per shape now.
