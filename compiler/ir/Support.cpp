@@ -46,9 +46,6 @@ std::optional<Coefficient> coefficient(const Function& g, ValueId v, double sign
     if (in.op == Op::Neg) return coefficient(g, in.args[0], -sign, depth + 1);
     if (in.op == Op::Builtin && in.args.size() == 1) {
         const std::string& n = builtin(in.aux).name;
-        const Instr& x = g.body[in.args[0]];
-        if ((n == "cos" || n == "sin") && x.op == Op::Const && x.data.size() == 1)  // a constant angle: a constant
-            return Coefficient{Coefficient::Constant, sign * (n == "cos" ? std::cos(x.data[0]) : std::sin(x.data[0])), 0};
         if (n == "cos") return Coefficient{Coefficient::Cos, sign, in.args[0]};
         if (n == "sin") return Coefficient{Coefficient::Sin, sign, in.args[0]};
     }
@@ -101,9 +98,6 @@ bool linear_form(const Function& g, int query, ValueId v, int comp, double sign,
                     if (auto c = coefficient(g, in.args[size_t(k)], sign)) {
                         int a = query_axis(g, query, in.args[size_t(1 - k)]);
                         if (a >= 0) return add_term(f, a, *c);
-                        // a constant times a linear form (a rotation of a rotated point, by constant angles)
-                        if (c->kind == Coefficient::Constant)
-                            return linear_form(g, query, in.args[size_t(1 - k)], -1, c->value, f, depth + 1);
                     }
                 return false;
             }
@@ -138,11 +132,6 @@ bool linear_form(const Function& g, int query, ValueId v, int comp, double sign,
         int a = -1;
         if (x.op == Op::Param && x.aux == query && x.type.rows == 3) a = j;
         else if (x.op == Op::Construct && x.args.size() == size_t(cols)) a = query_axis(g, query, x.args[size_t(j)]);
-        if (a < 0 && c->kind == Coefficient::Constant && x.op == Op::Construct && x.args.size() == size_t(cols)) {
-            // a constant matrix times a vector of linear forms
-            if (!linear_form(g, query, x.args[size_t(j)], -1, c->value, f, depth + 1)) return false;
-            continue;
-        }
         if (!add_term(f, a, *c)) return false;
     }
     return true;
@@ -203,24 +192,16 @@ std::vector<PlanePair> plane_pairs(const Function& g, int query) {
             }
         }
     }
-    // Per plane the first pair found and the last: a rotation of a rotated point by constant angles is one
-    // constant map of p (the last pair), where the first, the inner rotation, leaves the outer one's mixing
-    // of its coordinates to intervals (a box turned twice was open).
-    std::array<std::optional<PlanePair>, 3> first, last;  // by the axis left out
+    std::vector<PlanePair> out;
+    std::array<bool, 3> plane_done{};  // by the axis left out
     for (size_t i = 0; i < c.size(); ++i)
         for (size_t j = i + 1; j < c.size(); ++j) {
             auto p = plane_pair(c[i].f, c[j].f);
-            if (!p) continue;
+            if (!p || plane_done[size_t(3 - p->a - p->b)]) continue;
             p->u = c[i].v, p->u_comp = c[i].comp, p->w = c[j].v, p->w_comp = c[j].comp;
-            size_t o = size_t(3 - p->a - p->b);
-            if (!first[o]) first[o] = p;
-            else if (p->u != first[o]->u || p->w != first[o]->w) last[o] = p;
+            plane_done[size_t(3 - p->a - p->b)] = true;
+            out.push_back(*p);
         }
-    std::vector<PlanePair> out;
-    for (size_t o = 0; o < 3; ++o) {
-        if (first[o]) out.push_back(*first[o]);
-        if (last[o]) out.push_back(*last[o]);
-    }
     return out;
 }
 
