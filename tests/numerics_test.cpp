@@ -670,6 +670,22 @@ TEST_CASE("smooth minima written in the module are bounded as blends of their di
         CHECK(derived(r) >= 1);
         CHECK(derived(r) < 1.05);
     }
+    // A chain written inline, link by link (r₂ = smin(r₁, d₂), …): each link a blend of the previous link and one
+    // distance (past two leaves, a named blend below is a leaf: 14.2 derived for five links before).
+    {
+        std::string text = "[modules]\nblob = \"\"\"\nshape\nk = 0.1\n";
+        for (int i = 0; i < 5; ++i)
+            text += fmt::format("`d{}` = ‖p - ({:.3f}, {:.3f}, {:.3f})‖ - 0.25\n", i, 0.9 * std::cos(1.3 * i), 0.3 * std::sin(2.1 * i), 0.9 * std::sin(1.3 * i));
+        text += "`r0` = `d0`\n";
+        for (int i = 1; i < 5; ++i)
+            text += fmt::format("`h{0}` = max(k - |`r{1}` - `d{0}`|, 0)/k\n`r{0}` = min(`r{1}`, `d{0}`) - `h{0}`²k/4\n", i, i - 1);
+        text += "D = `r4`\nwhere\np ∈ ℝ³\n\"\"\"\n[camera]\nposition = [0, 1, -4]\ntarget = [0, 0, 0]\n[[shapes]]\ntype = \"blob\"\n";
+        Compiled r = compile_text("smin_inline_chain.iq", text);
+        INFO(text << "\n" << r.diagnostics);
+        REQUIRE(r.result.exit_code == 0);
+        CHECK(derived(r) >= 1);
+        CHECK(derived(r) < 1.1);
+    }
     // The factor is the partials' sum (at least `below` here: the true slope), not 1 because it is a blend: a + b
     // has slope 2 where the spheres' gradients agree, and mix(b, a, h) without Quilez's correction -k h(1 - h)
     // has weights -1/2 and 3/2 at the band's edges (|a - b| = k): slope 2 between the spheres, where their

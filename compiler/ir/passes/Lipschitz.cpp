@@ -1296,16 +1296,52 @@ double combinator_bound(const Module& m, int fn, const std::vector<Interval>& re
         for (ValueId a : in.args) dep_args += dep[a] && flat.body[a].type.kind == Type::Scalar;
         nonlinear[i] = (in.op == Op::Mul && dep_args > 1) || (in.op == Op::Div && dep[in.args[1]]) ||
                        (in.op == Op::Builtin && name != "min" && name != "max" && name != "abs");
+        // The leaves: the arguments' (an internal one's own leaves); past two, an argument that is a blend of two
+        // or three leaves itself is one where that leaves fewer (a chain of smooth minima written inline: each
+        // link a blend of the previous link and one distance, two dimensions to search, not three or more).
+        auto root = [&](ValueId a) {
+            return internal[a] && nonlinear[a] && flat.body[a].type.kind == Type::Scalar && leaves[a].size() >= 2 && leaves[a].size() <= 3;
+        };
+        // Where to cut an argument: down through negations, copies, sums with and products by constants (-r/k of
+        // a link r of an exponential chain) to the first statement the user named that is a blend, else the blend
+        // those lead to (a cut at -r/k itself would weigh r's bound by 1/k). -1: none.
+        auto cut_at = [&](ValueId a) -> ValueId {
+            ValueId x = a;
+            for (int depth = 0; depth < 16; ++depth) {
+                const Instr& e = flat.body[x];
+                if (!e.name.empty() && root(x)) return x;
+                int deps = 0;
+                ValueId next = x;
+                for (ValueId y : e.args)
+                    if (dep[y]) ++deps, next = y;
+                bool linear = deps == 1 && (e.op == Op::Neg || e.op == Op::Copy || e.op == Op::Add || e.op == Op::Sub || e.op == Op::Mul ||
+                                            (e.op == Op::Div && dep[e.args[0]]));
+                if (!linear || !internal[next]) break;
+                x = next;
+            }
+            return root(x) ? x : ValueId(-1);
+        };
+        bool scalar_leaves = true;  // (a leaf must be a scalar)
         std::vector<ValueId> l;
-        for (ValueId a : in.args) {
-            if (!dep[a]) continue;
-            nonlinear[i] |= nonlinear[a];
-            if (!internal[a] && flat.body[a].type.kind != Type::Scalar) l.assign(4, a);  // (a leaf must be a scalar)
-            const std::vector<ValueId> own = internal[a] ? leaves[a] : std::vector<ValueId>{a};
-            for (ValueId x : own) l.push_back(x);
+        for (int cut = 0; cut < 2 && (cut == 0 || l.size() > 2); ++cut) {
+            std::vector<ValueId> c;
+            for (ValueId a : in.args) {
+                if (!dep[a]) continue;
+                nonlinear[i] |= nonlinear[a];
+                scalar_leaves &= internal[a] || flat.body[a].type.kind == Type::Scalar;
+                ValueId at = cut && internal[a] ? cut_at(a) : ValueId(-1);
+                const std::vector<ValueId> own = !internal[a] ? std::vector<ValueId>{a} : at != ValueId(-1) ? std::vector<ValueId>{at} : leaves[a];
+                for (ValueId x : own) c.push_back(x);
+            }
+            std::sort(c.begin(), c.end());
+            c.erase(std::unique(c.begin(), c.end()), c.end());
+            if (cut == 0 || c.size() < l.size()) l = std::move(c);  // (a chain: blends of two, link by link)
         }
-        std::sort(l.begin(), l.end());
-        l.erase(std::unique(l.begin(), l.end()), l.end());
+        if (!scalar_leaves) {
+            internal[i] = 0;
+            nonlinear[i] = 0;
+            continue;
+        }
         // A value computed from the query point's components is geometry, not a blend of distances (‖p - c‖
         // written as √((p₁ - c₁)² + …) sums its partials to √3; a box's ‖max(q, 0)‖ of q = |p| - b, √3 in
         // |p₁|, |p₂|, |p₃|): a leaf of the blends above it. Geometry is what reads p's components without a
@@ -1405,6 +1441,14 @@ double combinator_bound(const Module& m, int fn, const std::vector<Interval>& re
             if (!need[u]) continue;
             Instr in = flat.body[u];
             for (ValueId& a : in.args) a = map[a];
+            const std::vector<Bounds>& r = arg_ranges();
+            if (in.op == Op::Global && in.type.kind == Type::Scalar && r[u].c.size() == 1 && r[u].c[0].lo == r[u].c[0].hi &&
+                std::isfinite(r[u].c[0].lo)) {
+                // a slider that is a constant here (Shadertoy): its value, so that x/k is linear in x (Linear.h)
+                in.op = Op::Const;
+                in.data = {r[u].c[0].lo};
+                in.aux = 0;
+            }
             map[u] = g.add(std::move(in));
         }
         g.result = map[v];
@@ -1802,7 +1846,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     // half-corrected smooth minimum, slope 1.36 in a band no sample met: a new user's trial, stop 40).
     auto refine = [&](auto bound, bool within_too = false) {
         bool within = e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3;
-        if (!refine_bound || e.derived <= 1 + 1e-9 || (within && !within_too && !getenv("ALLW"))) return;
+        if (!refine_bound || e.derived <= 1 + 1e-9 || (within && !within_too)) return;
         try {
             e.derived = std::min(e.derived, bound(m, fn, box, others, ball, boxes));
         } catch (const InternalError&) {
