@@ -1011,6 +1011,15 @@ TEST_CASE("samples walk to the surface and over the sliders' ranges", "[numerics
     INFO(line(c));
     CHECK(sampled(c) > 1.5);
     CHECK_THAT(line(c), Catch::Contains("applied (derived)"));
+    // Quilez's circular blend of a distance with itself, max(k, d) - √(2 max(k - d, 0)²), has slope √2 in its band;
+    // the bound the refinements leave (1.414, 2.41 before them) decides whether the samples decide, so they come
+    // after the refinements (a trial's, stop 40: walks skipped, marched as 1-Lipschitz).
+    Compiled self = compile_text("circular_self.iq", replaced(shell, "D = a + 0.9max(0, 0.05 - |a - 0.05|)",
+                                                               "k = 0.2\nD = max(k, a) - √(max(k - a, 0)² + max(k - a, 0)²)"));
+    REQUIRE(self.result.exit_code == 0);
+    INFO(line(self));
+    CHECK(sampled(self) > 1.3);
+    CHECK_THAT(line(self), Catch::Contains("applied (derived)"));
     // Where the sliders are uniforms the bound holds over their ranges, and the samples are taken over them
     // too: a bump of height w ∈ [0, 0.9] on a plane, 0 by default, has slope 1.9 at w = 0.9 (it was marched as
     // 1-Lipschitz on WebGL2: every sample at w = 0).

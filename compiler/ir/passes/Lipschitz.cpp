@@ -1778,7 +1778,39 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     e.derived = derive(work, grad, box, others, ball, boxes, false, nullptr, &worst);
     int evaluated = 0;
     e.sampled = sample(work, grad, box, others, ball, samples, &evaluated);
-    // And where the bound is largest: a shape whose slope exceeds 1 only in a thin band (a blend whose weights
+    if (evaluated == 0) {
+        // The gradient's IR is beyond the evaluator's step limit at every point (a 15,000-step recurrence): its
+        // samples said 0 and the shape was marched with K = 1 where its slope is 3 (a new user's trial). Central
+        // differences of the distance instead, at fewer points (six evaluations each).
+        e.sampled = sample(work, fn, box, others, ball, std::max(16, samples / 8), &evaluated, true);
+        e.unevaluable = evaluated == 0;
+        if (e.unevaluable)
+            e.why = fmt::format("neither its gradient nor its distance can be evaluated within {} steps of iqc's evaluator",
+                                kSampleSteps);
+    }
+    // The refinements only ever lower a bound that stands without them: one that cannot be built (a form the
+    // differentiator has no rule for once a cut is a parameter) leaves the bound as it is. They run only where
+    // the bound decides something: above 2, or above 1 where samples exceed 1 (within 2 with every sample
+    // within 1, the distance is not divided at all).
+    // The combinators' bound runs within 2 too: a blend written in the module whose partials sum to more than 1
+    // somewhere (LipschitzEstimate::blend_steepest) is marched by its derived bound, not as 1-Lipschitz (a
+    // half-corrected smooth minimum, slope 1.36 in a band no sample met: a new user's trial, stop 40).
+    auto refine = [&](auto bound, bool within_too = false) {
+        bool within = e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3;
+        if (!refine_bound || e.derived <= 1 + 1e-9 || (within && !within_too)) return;
+        try {
+            e.derived = std::min(e.derived, bound(m, fn, box, others, ball, boxes));
+        } catch (const InternalError&) {
+        } catch (const SizeLimit&) {
+        }
+    };
+    refine(chain_rule_bound);
+    refine(union_bound);
+    refine(combinator_bound, true);
+    refine(roots_bound);
+    refine(split_bound);
+    // After the refinements (the bound they leave decides what the samples decide), samples where the bound
+    // is largest: a shape whose slope exceeds 1 only in a thin band (a blend whose weights
     // overshoot where |a - b| is near k: slope 1.36 there, derived 1.5) had every uniform sample within 1 and
     // was marched as 1-Lipschitz (a new user's trial, stop 40). 32 samples in each of the 8 worst boxes.
     // (Only where the samples decide what is applied: a bound within 2 whose samples stay within 1 is not
@@ -1827,37 +1859,6 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
             }
         }
     }
-    if (evaluated == 0) {
-        // The gradient's IR is beyond the evaluator's step limit at every point (a 15,000-step recurrence): its
-        // samples said 0 and the shape was marched with K = 1 where its slope is 3 (a new user's trial). Central
-        // differences of the distance instead, at fewer points (six evaluations each).
-        e.sampled = sample(work, fn, box, others, ball, std::max(16, samples / 8), &evaluated, true);
-        e.unevaluable = evaluated == 0;
-        if (e.unevaluable)
-            e.why = fmt::format("neither its gradient nor its distance can be evaluated within {} steps of iqc's evaluator",
-                                kSampleSteps);
-    }
-    // The refinements only ever lower a bound that stands without them: one that cannot be built (a form the
-    // differentiator has no rule for once a cut is a parameter) leaves the bound as it is. They run only where
-    // the bound decides something: above 2, or above 1 where samples exceed 1 (within 2 with every sample
-    // within 1, the distance is not divided at all).
-    // The combinators' bound runs within 2 too: a blend written in the module whose partials sum to more than 1
-    // somewhere (LipschitzEstimate::blend_steepest) is marched by its derived bound, not as 1-Lipschitz (a
-    // half-corrected smooth minimum, slope 1.36 in a band no sample met: a new user's trial, stop 40).
-    auto refine = [&](auto bound, bool within_too = false) {
-        bool within = e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3;
-        if (!refine_bound || e.derived <= 1 + 1e-9 || (within && !within_too)) return;
-        try {
-            e.derived = std::min(e.derived, bound(m, fn, box, others, ball, boxes));
-        } catch (const InternalError&) {
-        } catch (const SizeLimit&) {
-        }
-    };
-    refine(chain_rule_bound);
-    refine(union_bound);
-    refine(combinator_bound, true);
-    refine(roots_bound);
-    refine(split_bound);
     *split_work = t_split_work;
     t_split_work = 0;
     e.boxes = t_boxes;
