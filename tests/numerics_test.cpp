@@ -1035,6 +1035,18 @@ TEST_CASE("samples walk to the surface and over the sliders' ranges", "[numerics
     CHECK_THAT(line(u), Catch::Contains("applied (derived)"));
 }
 
+TEST_CASE("a shape too steep to march by its samples says it is marched as if 1-Lipschitz", "[numerics]") {
+    // Two new users' trials (stop 40): 70(‖p‖ - 1), slope 70, derived 70 (above 64, too many steps to march by) and
+    // 1.25 × 70 from its samples too: marched with K = 1, where the warning named no K at all.
+    std::string text = "[modules]\nsteep = \"\"\"\nshape\nD = 70(‖p‖ - 1)\nwhere\np ∈ ℝ³\n\"\"\"\n[camera]\n"
+                       "position = [0, 1, -4]\ntarget = [0, 0, 0]\n[[shapes]]\ntype = \"steep\"\n";
+    Compiled c = compile_text("steep70.iq", text);
+    REQUIRE(c.result.exit_code == 0);
+    INFO(c.diagnostics);
+    CHECK_THAT(c.diagnostics, Catch::Contains("steep70.iq:12:8: warning: shape 'steep' is not 1-Lipschitz (its gradient reaches 70"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("iqc marches it as if it were 1-Lipschitz: marching may step through its surface"));
+}
+
 TEST_CASE("a shape that says it is 1-Lipschitz is checked by samples", "[numerics]") {
     // A new user's trial (stop 39): `# bound` or `# exact` on a sphere of slope 3 was taken at its word, where a
     // `# lipschitz: 1` would have been checked. Its samples are checked once per shape now.

@@ -2076,9 +2076,12 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                    "{:.3g}, would take too many steps", e.sampled, e.derived)
                                      : fmt::format("its gradient reaches {:.4g} and iqc cannot bound it where the instance is marched",
                                                    e.sampled);
+            // (and where even the samples' K is too large to march by, it says that it marches with K = 1: two
+            // new users' trials, stop 40, read the warning as if some K were applied)
             std::string marched = applied > 1 ? fmt::format("iqc marches it with K = {:.3g}, {:g} times the steepest gradient its samples "
                                                             "reach, which is not a proven bound: ", applied, kSampledMargin)
-                                              : "";
+                                  : e.sampled > 1 + 1e-3 ? "iqc marches it as if it were 1-Lipschitz: "
+                                                         : "";
             std::string fix = bounded ? "declare `# lipschitz: K` in the module (the instance's `bound` does not make its gradient boundable)"
                                       : "give the instance `bound = R` (a sphere around the shape) so iqc can bound its gradient there, "
                                         "or declare `# lipschitz: K`";
