@@ -33,6 +33,15 @@ std::vector<fs::path> pass_cases() {
     return out;
 }
 
+// A pass case's input module (the text before `; expect:`), parsed twice: one to keep, one for the pass.
+void parse_case_twice(const fs::path& path, ir::Module& before, ir::Module& after) {
+    std::string text = test::read_text(path);
+    std::string input = text.substr(0, text.find(kExpect));
+    std::string error;
+    REQUIRE(ir::parse_module(input, before, error));
+    REQUIRE(ir::parse_module(input, after, error));
+}
+
 // Evaluates the first function of `before` and of `after` at 200 random points (each parameter 1e-3 … 1e2 in
 // size, either sign, times `scale`) in double precision and hands each pair of values to `check`; returns 200.
 int compare_at_random_points(const ir::Module& before, const ir::Module& after, uint64_t seed, double scale,
@@ -148,12 +157,8 @@ TEST_CASE("stable rewrites give the double evaluator's values of the forms they 
     int compared = 0;
     for (const auto& path : cases) {
         if (path.parent_path().filename() != "stable") continue;
-        std::string text = test::read_text(path);
-        std::string input = text.substr(0, text.find(kExpect));
         ir::Module before, after;
-        std::string error;
-        REQUIRE(ir::parse_module(input, before, error));
-        REQUIRE(ir::parse_module(input, after, error));
+        parse_case_twice(path, before, after);
         ir::PipelineOptions o;
         ir::PipelineResult r;
         REQUIRE(ir::run_pass("stable", after, o, r));
@@ -175,12 +180,8 @@ TEST_CASE("cancelled linear terms give the values of the forms they replace", "[
     int compared = 0;
     for (const auto& path : pass_cases()) {
         if (path.parent_path().filename() != "linear") continue;
-        std::string text = test::read_text(path);
-        std::string input = text.substr(0, text.find(kExpect));
         ir::Module before, after;
-        std::string error;
-        REQUIRE(ir::parse_module(input, before, error));
-        REQUIRE(ir::parse_module(input, after, error));
+        parse_case_twice(path, before, after);
         int rewritten = 0;
         for (auto& f : after.functions) rewritten += ir::cancel_linear_terms(f);
         CHECK(rewritten > 0);
