@@ -1844,19 +1844,23 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
             size_t size = 0;
             for (const auto& f : work.functions) size += f.body.size();
             SplitMix64 settings{0x94D049BB133111EBull};
+            // (the sliders' values set in `work` itself, restored after: a copy of the module per setting copied
+            // every function for a few values)
+            std::vector<std::vector<double>> defaults;
+            for (size_t gi : sliders) defaults.push_back(work.globals[gi].value);
             for (int v = 0; v < 8 && !sliders.empty() && size < 200000; ++v) {
-                Module variant = work;
                 for (size_t gi : sliders) {
-                    Global& gl = variant.globals[gi];
+                    Global& gl = work.globals[gi];
                     const size_t n = gl.bounds.lo.size();
                     for (size_t c = 0; c < gl.value.size() && n > 0 && gl.bounds.hi.size() == n; ++c) {
                         double lo = gl.bounds.lo[c % n], hi = gl.bounds.hi[c % n];
                         if (std::isfinite(lo) && std::isfinite(hi) && lo <= hi) gl.value[c] = lo + (hi - lo) * settings();
                     }
                 }
-                e.sampled = std::max(e.sampled, sample(variant, grad, box, others, ball, 64));
-                e.sampled = std::max(e.sampled, sample_towards_surface(variant, fn, grad, box, others, ball, 16));
+                e.sampled = std::max(e.sampled, sample(work, grad, box, others, ball, 64));
+                e.sampled = std::max(e.sampled, sample_towards_surface(work, fn, grad, box, others, ball, 16));
             }
+            for (size_t k = 0; k < sliders.size(); ++k) work.globals[sliders[k]].value = std::move(defaults[k]);
         }
     }
     *split_work = t_split_work;
