@@ -11,6 +11,7 @@
 #include "ir/passes/Inline.h"
 #include "ir/passes/IntervalExtension.h"
 #include "ir/passes/Lipschitz.h"
+#include "ir/passes/IfConvert.h"
 #include "ir/passes/MergeCalls.h"
 #include "ir/passes/Stable.h"
 #include "ir/passes/Tables.h"
@@ -285,6 +286,8 @@ const std::vector<Pass>& passes() {
          [](Module& m, const PipelineOptions&, PipelineResult&) { merge_switch_calls(m); }},
         {{"dispatch", "an instance's distance and gradient with a single case: no test of the id (the runtime passes only instances' ids)"},
          [](Module& m, const PipelineOptions&, PipelineResult&) { exhaustive_dispatch(m); }},
+        {{"select", "if-conversion: a call's switched argument whose arms are cheap and safe to compute becomes selects"},
+         [](Module& m, const PipelineOptions&, PipelineResult&) { convert_cheap_choices(m); }},
         {{"simplify", "fold and CSE again"},
          [](Module& m, const PipelineOptions&, PipelineResult&) {
              fold_all(m);
