@@ -1329,7 +1329,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
 {{#if INSTRUMENT}}
 {{#if BENCH}}
     if (iqc_mode == 0) {
-        fragColor = vec4(clamp({{#if OUTPUT}}iqc_output(col{{#if VIGNETTE}}, fragCoord / iResolution.xy{{/if}}){{#else}}col{{/if}}, 0.0, 1.0), 1.0);
+        fragColor = vec4({{#if OUTPUT_IN_RANGE}}iqc_output(col{{#if VIGNETTE}}, fragCoord / iResolution.xy{{/if}}){{#else}}clamp({{#if OUTPUT}}iqc_output(col{{#if VIGNETTE}}, fragCoord / iResolution.xy{{/if}}){{#else}}col{{/if}}, 0.0, 1.0){{/if}}, 1.0);
         return;
     }
 {{/if}}
@@ -1340,7 +1340,7 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord) {
     float flags = (bad ? 1.0 : 0.0) + (iqc_bad_distances > 0 ? 2.0 : 0.0) + 4.0 * float(iqc_bounds);
     fragColor = vec4(float(iqc_primary_steps), float(iqc_evals), flags, float(iqc_shape_evals));
 {{#else}}
-    fragColor = vec4(clamp({{#if OUTPUT}}iqc_output(col{{#if VIGNETTE}}, fragCoord / iResolution.xy{{/if}}){{#else}}col{{/if}}, 0.0, 1.0), 1.0);
+    fragColor = vec4({{#if OUTPUT_IN_RANGE}}iqc_output(col{{#if VIGNETTE}}, fragCoord / iResolution.xy{{/if}}){{#else}}clamp({{#if OUTPUT}}iqc_output(col{{#if VIGNETTE}}, fragCoord / iResolution.xy{{/if}}){{#else}}col{{/if}}, 0.0, 1.0){{/if}}, 1.0);
 {{/if}}
 }
 {{#if !SHADERTOY}}
