@@ -100,3 +100,40 @@ TEST_CASE("int(floor(x)) of a value that is already an integer is int(x)", "[gls
     CHECK_THAT(code, Catch::Contains("int(floor(x.z + 0.5))"));
     CHECK_THAT(code, Catch::Contains("int(floor(x.y))"));
 }
+
+TEST_CASE("a switch's default is the initial value only where it is safe to compute for every selector", "[glsl]") {
+    // A group's table read at id - 1 as the default of a switch on the id (cases 7 and 8: two instances of their
+    // own) would be read at 6 and 7, past the table's 6 entries, if it were computed first: it is guarded by the
+    // cases' complement. A default that reads a table at a constant index stays the initial value.
+    ir::Module m;
+    ir::Global g;
+    g.name = "t";
+    g.type = Type::array(Type::vector(2), 6);
+    g.value.assign(12, 0.5);
+    m.globals.push_back(g);
+    ir::Function f;
+    f.name = "pick";
+    f.glsl_name = "pick";
+    f.entry = true;
+    {
+        ir::Builder b(m, f);
+        ir::ValueId id = b.param("id", Type::integer());
+        ir::ValueId t = b.global(0);
+        ir::ValueId read = b.op(ir::Op::Index, {t, b.op(ir::Op::Sub, {id, b.integer(1)})});
+        ir::ValueId a = b.constant(Type::vector(2), {1, 2}), c = b.constant(Type::vector(2), {3, 4});
+        ir::ValueId guarded = b.switch_(id, read, {{7, 8, a}, {8, 9, c}});
+        ir::ValueId plain = b.switch_(id, b.op(ir::Op::Index, {t, b.integer(2)}), {{7, 8, a}, {8, 9, c}});
+        f.result = b.op(ir::Op::Add, {guarded, plain});
+    }
+    m.functions.push_back(std::move(f));
+    SourceManager sm;
+    Diagnostics diags(sm);
+    Namer names;
+    Emitter em(m, names, diags);
+    const std::string code = em.function(0);
+    INFO(code);
+    CHECK_FALSE(diags.has_errors());
+    CHECK_THAT(code, Catch::Contains("if (!((id == 7) || (id == 8))) {"));
+    CHECK_THAT(code, !Catch::Contains("= t[id - 1];\n    if (id == 7)"));
+    CHECK_THAT(code, Catch::Contains("vec2 tmp_2 = t[2];"));
+}

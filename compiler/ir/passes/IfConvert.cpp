@@ -63,7 +63,7 @@ int convert_cheap_choices(const Module& m, Function& f) {
     for (size_t i = 0; i < f.body.size(); ++i) {
         const Instr& in = f.body[i];
         if ((in.op != Op::If && in.op != Op::Switch) || !s.live(ValueId(i)) || !selectable(in.type) || !only_arguments[i]) continue;
-        if (in.op == Op::Switch && switch_cases(in) == 0) continue;
+        if (in.op == Op::Switch && (switch_cases(in) == 0 || switch_cases(in) + 1 > kMaxArms)) continue;
         int total = 0;
         bool cheap = true;
         for (size_t k = 1; k < in.args.size() && cheap; ++k) {

@@ -7,8 +7,8 @@
 // selector, becomes a Select (a chain of them for a Switch: case k's test `id == lo` or `lo <= id && id < hi`,
 // the default last): the classic if-conversion of compilers for predicated and SIMD machines (Allen, Kennedy,
 // Porterfield & Warren, "Conversion of control dependence to data dependence", POPL 1983). Cheap: at most
-// kMaxArmCost instructions per arm and kMaxTotalCost over all arms, reads of values and components free, and
-// some arithmetic in at least one arm (a branch that only reads values every driver flattens itself, and
+// kMaxArms arms, kMaxArmCost instructions per arm and kMaxTotalCost over all arms, reads of values and
+// components free, and some arithmetic in at least one arm (a branch that only reads values every driver flattens itself, and
 // `if (l == 0) position = light_1_position;` reads better than nested selects). Safe: no call (its cost is not
 // known here), recurrence, array index that is not a constant (out of range in another case), or integer
 // division by anything but a non-zero constant; a NaN or ∞ an untaken arm computes is discarded by the select.
@@ -28,6 +28,8 @@ namespace iqc::ir {
 
 inline constexpr int kMaxArmCost = 16;    // instructions in one arm
 inline constexpr int kMaxTotalCost = 48;  // instructions over all arms of one choice
+inline constexpr int kMaxArms = 8;        // arms of one choice (cases and the default): 40 instances' points
+                                          // of one add each were a 39-deep select, all 40 computed per tap
 
 // Returns the number of If and Switch instructions converted.
 int convert_cheap_choices(Module& m);

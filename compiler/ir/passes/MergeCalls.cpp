@@ -7,6 +7,28 @@
 
 namespace iqc::ir {
 
+namespace {
+
+// Whether value v of `old` can be computed whatever the selector: no array read at an index that is not a
+// constant (a group's table read at id - k is out of range for another case's id), no integer division by a
+// variable, no call (whose body may read so) in its expression, up to `depth` operands deep (deeper: not known).
+bool speculation_safe(const std::vector<Instr>& old, ValueId v, int depth = 12) {
+    const Instr& in = old[v];
+    switch (in.op) {
+        case Op::Param: case Op::Const: case Op::Global: case Op::Input: return true;
+        case Op::Index: if (old[in.args[1]].op != Op::Const) return false; break;
+        case Op::IntDiv: case Op::IntMod: if (old[in.args[1]].op != Op::Const) return false; break;
+        case Op::Call: case Op::Loop: case Op::Member: case Op::If: case Op::Switch: return false;
+        default: break;
+    }
+    if (depth == 0) return false;
+    for (ValueId a : in.args)
+        if (!speculation_safe(old, a, depth - 1)) return false;
+    return true;
+}
+
+}  // namespace
+
 int merge_switch_calls(Module& m) {
     int merged = 0;
     for (Function& f : m.functions) {
@@ -55,13 +77,31 @@ int merge_switch_calls(Module& m) {
                             continue;
                         }
                         std::vector<std::tuple<long long, long long, ValueId>> arg_cases;
-                        // The first case's argument is the default (outside these cases the value is not used),
-                        // so the cases that pass it need no case of their own.
+                        // One case's argument is the default (outside these cases the value is not used), so the
+                        // cases that pass it need no case of their own: the first case's, or, where computing it
+                        // for another id could read a table out of its range (a group's `k_d[id - 1]` where the
+                        // merged call runs for every id: the backend computes a switch's default first), the first
+                        // argument that is safe; where none is, zero, and every case has its own.
+                        ValueId fallback = first.args[a];
+                        bool found = speculation_safe(old, fallback);
+                        for (size_t j = 0; j < cases.size() && !found; ++j) {
+                            fallback = old[in.args[size_t(cases[j]) + 2]].args[a];
+                            found = speculation_safe(old, fallback);
+                        }
+                        const Type& at = old[first.args[a]].type;
+                        ValueId dflt;
+                        if (found) {
+                            dflt = map[fallback];
+                        } else if (!at.is_array() && at.kind != Type::Tuple) {
+                            dflt = b.constant(at, std::vector<double>(size_t(std::max(1, at.components())), 0.0));
+                        } else {
+                            dflt = map[first.args[a]];
+                        }
                         for (int k : cases)
-                            if (map[old[in.args[size_t(k) + 2]].args[a]] != map[first.args[a]])
+                            if (map[old[in.args[size_t(k) + 2]].args[a]] != dflt)
                                 arg_cases.push_back({(long long)in.data[size_t(2 * k)], (long long)in.data[size_t(2 * k + 1)],
                                                      map[old[in.args[size_t(k) + 2]].args[a]]});
-                        args.push_back(b.switch_(map[in.args[0]], map[first.args[a]], std::move(arg_cases)));
+                        args.push_back(b.switch_(map[in.args[0]], dflt, std::move(arg_cases)));
                     }
                     ValueId call = b.call(callee, std::move(args));
                     f.body[call].name = first.name;
