@@ -12,6 +12,21 @@
 using namespace iqc;
 using namespace iqc::glsl;
 
+namespace {
+
+// The GLSL of module m's first function (no diagnostics expected).
+std::string emit_first_function(const ir::Module& m) {
+    SourceManager sm;
+    Diagnostics diags(sm);
+    Namer names;
+    Emitter em(m, names, diags);
+    std::string code = em.function(0);
+    CHECK_FALSE(diags.has_errors());
+    return code;
+}
+
+}  // namespace
+
 TEST_CASE("math names become readable GLSL identifiers", "[glsl]") {
     CHECK(identifier("N̂") == "N_hat");
     CHECK(identifier("α") == "alpha");
@@ -88,13 +103,8 @@ TEST_CASE("int(floor(x)) of a value that is already an integer is int(x)", "[gls
         f.result = b.op(ir::Op::Add, {b.op(ir::Op::Add, {a, c}), b.op(ir::Op::Add, {s, e})});
     }
     m.functions.push_back(std::move(f));
-    SourceManager sm;
-    Diagnostics diags(sm);
-    Namer names;
-    Emitter em(m, names, diags);
-    const std::string code = em.function(0);
+    const std::string code = emit_first_function(m);
     INFO(code);
-    CHECK_FALSE(diags.has_errors());
     CHECK_THAT(code, Catch::Contains("int(clamp(ceil(x), vec3(0.0), vec3(9.0, 9.0, 0.0)).x)"));
     CHECK_THAT(code, Catch::Contains("int(floor(clamp(floor(x), vec3(0.0), vec3(9.5, 9.0, 0.0)).y))"));
     CHECK_THAT(code, Catch::Contains("int(floor(x.z + 0.5))"));
@@ -126,13 +136,8 @@ TEST_CASE("a switch's default is the initial value only where it is safe to comp
         f.result = b.op(ir::Op::Add, {guarded, plain});
     }
     m.functions.push_back(std::move(f));
-    SourceManager sm;
-    Diagnostics diags(sm);
-    Namer names;
-    Emitter em(m, names, diags);
-    const std::string code = em.function(0);
+    const std::string code = emit_first_function(m);
     INFO(code);
-    CHECK_FALSE(diags.has_errors());
     CHECK_THAT(code, Catch::Contains("if (!((id == 7) || (id == 8))) {"));
     CHECK_THAT(code, !Catch::Contains("= t[id - 1];\n    if (id == 7)"));
     CHECK_THAT(code, Catch::Contains("vec2 tmp_2 = t[2];"));
