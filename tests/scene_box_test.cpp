@@ -435,6 +435,37 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
     near(b->second[1], 0.2 + m_uniform);  // an open box: the cone at max_dist
 }
 
+TEST_CASE("a shear inside a shape bounds the axes it mixes: one mixed form paired with an axis read as it is",
+          "[scene][box]") {
+    // D = box((p_1 + 0.3·p_2, p_2, p_3), 0.3): u = p_1 + 0.3·p_2 and w = p_2 are the map [[1, 0.3], [0, 1]]; the
+    // box of (u, w) is ±(0.3 + m) each, so p_1 = u - 0.3·w lies within ±1.3(0.3 + m). Paired with p_1 (which only
+    // u reads), p_2 would stay unknown where the box reads it: x was open (a trial's shear, stop 39's F7). The
+    // same shear as a constant matrix (`[1 0.5 0; 0 1 0; 0 0 1] p`): x within ±1.5(0.3 + m).
+    auto shear = [](const std::string& q) {
+        return "[modules]\nsheared = \"\"\"\nshape\n# lipschitz: 1.4\nD = ‖max(|q| - b, 0)‖ + min(max(|q_1| - b_1, |q_2| - b_2, "
+               "|q_3| - b_3), 0)\nq = " + q + "\nb = (0.3, 0.3, 0.3)\nwhere\np ∈ ℝ³\n\"\"\"\n[camera]\nposition = [0, 1, -4]\n"
+               "target = [0, 0.8, 0]\n[[shapes]]\ntype = \"sheared\"\n";
+    };
+    for (auto [q, k] : {std::pair<std::string, double>{"(p_1 + 0.3p_2, p_2, p_3)", 1.3}, {"[1 0.5 0; 0 1 0; 0 0 1] p", 1.5}}) {
+        INFO(q);
+        Compiled c = compile_path(write_temp("box_shear_const.iq", shear(q)));
+        INFO(c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        auto b = box_of(c.result.code);
+        REQUIRE(b);
+        // Closed on every side, around the sheared box (the level m is under 0.02 here), and no pixel changes.
+        for (int a = 0; a < 3; ++a) {
+            CHECK(b->first[a] > -1e29);
+            CHECK(b->second[a] < 1e29);
+        }
+        CHECK(b->second[0] >= k * 0.3);
+        CHECK(b->second[0] <= k * 0.3 + 0.05);
+        CHECK(b->second[1] >= 0.3);
+        CHECK(b->second[1] <= 0.35);
+        CHECK(differ_without_box(c.result, 96, 54) == 0);
+    }
+}
+
 TEST_CASE("a ray that enters the box only beyond the far plane takes no step", "[scene][box][render]") {
     // A ground y ≤ 0 seen level from y = 1 with max_dist 30: the rows just below the horizon meet the box
     // (y ≤ 0.16) beyond t = 30 (they were marched to the far plane, up to 30 steps each); the picture is the

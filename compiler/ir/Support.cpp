@@ -28,7 +28,8 @@ struct Box {
 // invariant: the rotated pair (u, w) has the norm of (p_a, p_b) (cos² + sin² = 1, whatever the angle depends
 // on). support_box therefore also analyses the shape with u and w as the free coordinates of the box (p_a and
 // p_b unbounded wherever else they appear): the box it finds for (u, w) bounds ‖(p_a, p_b)‖ = ‖(u, w)‖. A
-// constant invertible 2×2 map of the pair works the same way, through its inverse.
+// constant invertible 2×2 map of the pair works the same way, through its inverse, as does a shear: one mixed
+// form paired with an axis the shape reads as it is (u = p_1 + 0.3·p_2, w = p_2).
 
 // A coefficient of a linear form: a constant, or ±cos θ / ±sin θ of one value θ.
 struct Coefficient {
@@ -172,23 +173,29 @@ std::optional<PlanePair> plane_pair(const LinearForm& fu, const LinearForm& fw) 
     return p;
 }
 
-// The rotated pairs of the query's components in g (at most one per plane: the first found).
+// The rotated pairs of the query's components in g (at most one per plane: the first found). A plane with no
+// pair of two mixed forms may pair one mixed form with one of its axes read as it is: a shear such as
+// (p_1 + 0.3·p_2, p_2, p_3), whose u = p_1 + 0.3·p_2 and w = p_2 are the map [[1, 0.3], [0, 1]].
 std::vector<PlanePair> plane_pairs(const Function& g, int query) {
     struct Candidate {
         ValueId v;
         int comp;
         LinearForm f;
     };
-    std::vector<Candidate> c;
+    std::vector<Candidate> c, single;  // forms of two axes; an axis times a constant
+    auto keep = [&](ValueId v, int comp, LinearForm f) {
+        if (f.size() == 2) c.push_back({v, comp, std::move(f)});
+        else if (f.size() == 1 && f.begin()->second.kind == Coefficient::Constant) single.push_back({v, comp, std::move(f)});
+    };
     for (size_t i = 0; i < g.body.size(); ++i) {
         const Instr& in = g.body[i];
-        if (in.type.is_scalar() && (in.op == Op::Add || in.op == Op::Sub)) {
+        if (in.type.is_scalar() && (in.op == Op::Add || in.op == Op::Sub || query_axis(g, query, ValueId(i)) >= 0)) {
             LinearForm f;
-            if (linear_form(g, query, ValueId(i), -1, 1, f) && f.size() == 2) c.push_back({ValueId(i), -1, std::move(f)});
+            if (linear_form(g, query, ValueId(i), -1, 1, f)) keep(ValueId(i), -1, std::move(f));
         } else if (in.op == Op::Mul && in.type.is_vector() && in.type.rows <= 4) {
             for (int k = 0; k < in.type.rows; ++k) {
                 LinearForm f;
-                if (linear_form(g, query, ValueId(i), k, 1, f) && f.size() == 2) c.push_back({ValueId(i), k, std::move(f)});
+                if (linear_form(g, query, ValueId(i), k, 1, f)) keep(ValueId(i), k, std::move(f));
             }
         }
     }
@@ -200,6 +207,38 @@ std::vector<PlanePair> plane_pairs(const Function& g, int query) {
             if (!p || plane_done[size_t(3 - p->a - p->b)]) continue;
             p->u = c[i].v, p->u_comp = c[i].comp, p->w = c[j].v, p->w_comp = c[j].comp;
             plane_done[size_t(3 - p->a - p->b)] = true;
+            out.push_back(*p);
+        }
+    // The axis to pair with u is one the shape reads outside u (the shear's p_2, not its p_1, which only u
+    // reads: paired with p_1, p_2 would stay unknown wherever else the shape reads it).
+    std::vector<int> users(g.body.size(), 0);
+    for (const Instr& in : g.body)
+        for (ValueId a : in.args) users[a]++;
+    auto inside = [&](ValueId root, ValueId v) {  // whether v is an operand of root's expression (16 deep)
+        std::vector<std::pair<ValueId, int>> todo = {{root, 0}};
+        int uses = 0;
+        while (!todo.empty()) {
+            auto [x, d] = todo.back();
+            todo.pop_back();
+            if (d > 16) continue;
+            for (ValueId a : g.body[x].args) {
+                if (a == v) ++uses;
+                else todo.push_back({a, d + 1});
+            }
+        }
+        return uses;
+    };
+    for (const Candidate& u : c)
+        for (const Candidate& w : single) {
+            int a = u.f.begin()->first, b = u.f.rbegin()->first, axis = w.f.begin()->first;
+            if ((axis != a && axis != b) || plane_done[size_t(3 - a - b)]) continue;
+            if (w.comp < 0 && users[w.v] <= inside(u.v, w.v)) continue;
+            LinearForm fw = w.f;
+            fw[axis == a ? b : a] = {Coefficient::Constant, 0, 0};
+            auto p = plane_pair(u.f, fw);
+            if (!p) continue;
+            p->u = u.v, p->u_comp = u.comp, p->w = w.v, p->w_comp = w.comp;
+            plane_done[size_t(3 - a - b)] = true;
             out.push_back(*p);
         }
     return out;
