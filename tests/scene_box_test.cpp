@@ -435,7 +435,7 @@ TEST_CASE("rotations inside a shape: a twist, a bend, a turn by a slider or a co
     near(b->second[1], 0.2 + m_uniform);  // an open box: the cone at max_dist
 }
 
-TEST_CASE("a shear inside a shape bounds the axes it mixes: one mixed form paired with an axis read as it is",
+TEST_CASE("a shear or nested constant rotations inside a shape bound the axes they mix",
           "[scene][box]") {
     // D = box((p_1 + 0.3·p_2, p_2, p_3), 0.3): u = p_1 + 0.3·p_2 and w = p_2 are the map [[1, 0.3], [0, 1]]; the
     // box of (u, w) is ±(0.3 + m) each, so p_1 = u - 0.3·w lies within ±1.3(0.3 + m). Paired with p_1 (which only
@@ -464,6 +464,24 @@ TEST_CASE("a shear inside a shape bounds the axes it mixes: one mixed form paire
         CHECK(b->second[1] <= 0.35);
         CHECK(differ_without_box(c.result, 96, 54) == 0);
     }
+    // Nested rotations by constant angles, `rotate_y(rotate_y(p, 0.5), 0.3)`: the outer rotation's forms are
+    // constant maps of p too (the inner one's scaled), and the outer pair is analysed (the inner pair's box,
+    // rotated by intervals, left x open): the 1.2 x 0.2 rectangle turned by 0.8 rad reaches 0.6·cos 0.8 +
+    // 0.1·sin 0.8 = 0.49 in x and 0.6·sin 0.8 + 0.1·cos 0.8 = 0.50 in z.
+    std::string nested = "[modules]\nturned = \"\"\"\nshape\n`rotate_y` from domain\n"
+                         "D = ‖max(|q| - b, 0)‖ + min(max(|q_1| - b_1, |q_2| - b_2, |q_3| - b_3), 0)\n"
+                         "q = `rotate_y`(`rotate_y`(p, 0.5), 0.3)\nb = (0.6, 0.1, 0.1)\nwhere\np ∈ ℝ³\n\"\"\"\n"
+                         "[camera]\nposition = [0, 1, -4]\ntarget = [0, 0, 0]\n[[shapes]]\ntype = \"turned\"\n";
+    Compiled c = compile_path(write_temp("box_nested_rotation.iq", nested));
+    INFO(c.diagnostics);
+    REQUIRE(c.result.exit_code == 0);
+    auto b = box_of(c.result.code);
+    REQUIRE(b);
+    CHECK(b->second[0] >= 0.6 * std::cos(0.8) + 0.1 * std::sin(0.8));
+    CHECK(b->second[0] <= 0.56);
+    CHECK(b->second[2] >= 0.6 * std::sin(0.8) + 0.1 * std::cos(0.8));
+    CHECK(b->second[2] <= 0.56);
+    CHECK(differ_without_box(c.result, 96, 54) == 0);
 }
 
 TEST_CASE("a ray that enters the box only beyond the far plane takes no step", "[scene][box][render]") {

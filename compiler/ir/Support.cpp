@@ -100,6 +100,19 @@ bool linear_form(const Function& g, int query, ValueId v, int comp, double sign,
                         int a = query_axis(g, query, in.args[size_t(1 - k)]);
                         if (a >= 0) return add_term(f, a, *c);
                     }
+                // A constant times a linear form of constant coefficients (a rotation by a constant angle of
+                // a point already rotated by one): the form scaled. Not of cos θ and sin θ: their scaled
+                // values would pass for a rotation's.
+                for (int k : {0, 1}) {
+                    const Instr& c = g.body[in.args[size_t(k)]];
+                    if (c.op != Op::Const || c.data.size() != 1) continue;
+                    LinearForm sub;
+                    if (!linear_form(g, query, in.args[size_t(1 - k)], -1, 1, sub, depth + 1)) return false;
+                    for (const auto& [axis, t] : sub)
+                        if (t.kind != Coefficient::Constant || !add_term(f, axis, {Coefficient::Constant, sign * c.data[0] * t.value, 0}))
+                            return false;
+                    return true;
+                }
                 return false;
             }
             case Op::Extract: {
@@ -201,13 +214,56 @@ std::vector<PlanePair> plane_pairs(const Function& g, int query) {
     }
     std::vector<PlanePair> out;
     std::array<bool, 3> plane_done{};  // by the axis left out
+    // The shape's reads of the query's axes a and b outside the expressions of u and w: those stay unknown in
+    // the pair's analysis. Of a plane's pairs, the one with the fewest is taken: the first of those, or a later
+    // one computed from its values (of nested rotations by constant angles, the outer one, whose box needs no
+    // rotation of the inner one's box by intervals).
+    auto trees = [&](ValueId u, ValueId w) {  // the instructions u and w are computed from
+        std::vector<char> in_pair(g.body.size(), 0);
+        std::vector<ValueId> todo = {u, w};
+        while (!todo.empty()) {
+            ValueId x = todo.back();
+            todo.pop_back();
+            if (in_pair[x]) continue;
+            in_pair[x] = 1;
+            for (ValueId y : g.body[x].args) todo.push_back(y);
+        }
+        return in_pair;
+    };
+    auto outside_reads = [&](ValueId u, ValueId w, int a, int b) {
+        std::vector<char> in_pair = trees(u, w);
+        int reads = 0;
+        for (size_t i = 0; i < g.body.size(); ++i) {
+            if (in_pair[i]) continue;
+            for (ValueId y : g.body[i].args) {
+                int axis = query_axis(g, query, y);
+                const Instr& yi = g.body[y];
+                bool whole = yi.op == Op::Param && yi.aux == query && g.body[i].op != Op::Extract;
+                reads += whole || axis == a || axis == b;
+            }
+        }
+        return reads;
+    };
+    std::array<std::optional<PlanePair>, 3> best;
+    std::array<int, 3> best_reads{};
     for (size_t i = 0; i < c.size(); ++i)
         for (size_t j = i + 1; j < c.size(); ++j) {
             auto p = plane_pair(c[i].f, c[j].f);
-            if (!p || plane_done[size_t(3 - p->a - p->b)]) continue;
+            if (!p) continue;
+            size_t plane = size_t(3 - p->a - p->b);
             p->u = c[i].v, p->u_comp = c[i].comp, p->w = c[j].v, p->w_comp = c[j].comp;
-            plane_done[size_t(3 - p->a - p->b)] = true;
-            out.push_back(*p);
+            int reads = outside_reads(p->u, p->w, p->a, p->b);
+            bool better = !best[plane] || reads < best_reads[plane];
+            if (!better && reads == best_reads[plane]) {  // a pair computed from the best one's values
+                std::vector<char> t = trees(p->u, p->w);
+                better = t[best[plane]->u] && t[best[plane]->w];
+            }
+            if (better) best[plane] = p, best_reads[plane] = reads;
+        }
+    for (size_t plane = 0; plane < 3; ++plane)
+        if (best[plane]) {
+            out.push_back(*best[plane]);
+            plane_done[plane] = true;
         }
     // The axis to pair with u is one the shape reads outside u (the shear's p_2, not its p_1, which only u
     // reads: paired with p_1, p_2 would stay unknown wherever else the shape reads it).
