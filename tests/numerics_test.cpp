@@ -661,7 +661,7 @@ TEST_CASE("smooth minima written in the module are bounded as blends of their di
     // distances alone is outlined as a function of them (polynomial: 528.6, no useful bound, and exponential 3,
     // before).
     // (Only where the bound without refinements exceeds 2: within 2 and every sample within 1 it is not refined.)
-    for (const std::string& d : {"mix(`d1`, `d0`, h) - k h(1 - h)", "-log(exp(-`d0`/k) + exp(-`d1`/k))k"}) {
+    for (const char* d : {"mix(`d1`, `d0`, h) - k h(1 - h)", "-log(exp(-`d0`/k) + exp(-`d1`/k))k"}) {
         std::string text = replaced(scene("m(a, b, k) = a", 2), "D = m(`d0`, `d1`, k)", "k = 0.15\nh = " + h + "\nD = " + d);
         text = replaced(replaced(text, "(b - a)", "(`d1` - `d0`)"), "m(a, b, k) = a where a ∈ ℝ, b ∈ ℝ, k ∈ ℝ\n", "");
         Compiled r = compile_text("smin_inline.iq", text);

@@ -241,8 +241,7 @@ struct FunctionEmitter {
     bool safe_to_compute_first(ValueId v, int depth = 16) const {
         if (!var[v].empty()) return true;
         const Instr& in = f.body[v];
-        if ((in.op == Op::Index || in.op == Op::IntDiv || in.op == Op::IntMod) && f.body[in.args[1]].op != Op::Const) return false;
-        if (in.op == Op::Call || depth == 0) return false;
+        if (!ir::speculatable(f.body, in) || depth == 0) return false;
         for (ValueId a : in.args)
             if (!safe_to_compute_first(a, depth - 1)) return false;
         return true;

@@ -218,6 +218,23 @@ inline constexpr const char* kInstanceDistance = "iqc_instance_distance";  // (i
 // The element-count of a Switch's cases and the range of case k: [lo, hi).
 inline int switch_cases(const Instr& in) { return int(in.data.size() / 2); }
 
+// Whether instruction `in` of a function whose instructions are `body` may be computed for values its lazy
+// choice did not choose (speculatively): no array read at an index that is not a constant (a group's table at
+// id - 1, out of range for another instance's id), no integer division by anything but a non-zero constant, no
+// call or recurrence (whose bodies may do either). Used by if-conversion (ir/passes/IfConvert.h), merged calls'
+// switched arguments (ir/passes/MergeCalls.h) and the GLSL backend's switch defaults.
+inline bool speculatable(const std::vector<Instr>& body, const Instr& in) {
+    switch (in.op) {
+        case Op::Call: case Op::Loop: case Op::Member: return false;
+        case Op::Index: return body[in.args[1]].op == Op::Const;
+        case Op::IntDiv: case Op::IntMod: {
+            const Instr& d = body[in.args[1]];
+            return d.op == Op::Const && !d.data.empty() && d.data[0] != 0;
+        }
+        default: return true;
+    }
+}
+
 // Stable text form, e.g. `%3 = ℝ Sub %1, %2  ; D`.
 std::string print(const Function& f, const Module* m = nullptr);
 std::string print(const Module& m);

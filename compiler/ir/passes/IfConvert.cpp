@@ -15,16 +15,11 @@ constexpr int kUnsafe = 1 << 20;
 // What computing `in` speculatively costs: 0 for values that are free to read, kUnsafe for what must not run
 // on another case's values (or whose cost is unknown here).
 int instr_cost(const Function& f, const Instr& in) {
+    if (!speculatable(f.body, in)) return kUnsafe;
     switch (in.op) {
         // Reading and moving components: no arithmetic (a driver flattens a branch of only these itself).
         case Op::Param: case Op::Const: case Op::Global: case Op::Input: case Op::Copy:
         case Op::Construct: case Op::Extract: case Op::Row: case Op::Column: case Op::Element: return 0;
-        case Op::Call: case Op::Loop: case Op::Member: return kUnsafe;
-        case Op::Index: return f.body[in.args[1]].op == Op::Const ? 1 : kUnsafe;
-        case Op::IntDiv: case Op::IntMod: {
-            const Instr& d = f.body[in.args[1]];
-            return d.op == Op::Const && !d.data.empty() && d.data[0] != 0 ? 1 : kUnsafe;
-        }
         default: return 1;
     }
 }
@@ -56,7 +51,7 @@ int convert_cheap_choices(const Module& m, Function& f) {
         for (ValueId a : f.body[i].args)
             if (f.body[i].op != Op::Call) only_arguments[a] = 0;
     }
-    for (ValueId r : {f.result}) only_arguments[r] = 0;
+    only_arguments[f.result] = 0;
     for (const auto& [name, o] : f.outputs) only_arguments[o] = 0;
     std::vector<char> convert(f.body.size(), 0);
     int converted = 0;

@@ -14,14 +14,8 @@ namespace {
 // variable, no call (whose body may read so) in its expression, up to `depth` operands deep (deeper: not known).
 bool speculation_safe(const std::vector<Instr>& old, ValueId v, int depth = 12) {
     const Instr& in = old[v];
-    switch (in.op) {
-        case Op::Param: case Op::Const: case Op::Global: case Op::Input: return true;
-        case Op::Index: if (old[in.args[1]].op != Op::Const) return false; break;
-        case Op::IntDiv: case Op::IntMod: if (old[in.args[1]].op != Op::Const) return false; break;
-        case Op::Call: case Op::Loop: case Op::Member: case Op::If: case Op::Switch: return false;
-        default: break;
-    }
-    if (depth == 0) return false;
+    if (in.op == Op::Param || in.op == Op::Const || in.op == Op::Global || in.op == Op::Input) return true;
+    if (!speculatable(old, in) || in.op == Op::If || in.op == Op::Switch || depth == 0) return false;
     for (ValueId a : in.args)
         if (!speculation_safe(old, a, depth - 1)) return false;
     return true;
