@@ -245,12 +245,14 @@ std::vector<PlanePair> plane_pairs(const Function& g, int query) {
         return reads;
     };
     std::array<std::optional<PlanePair>, 3> best;
-    std::array<int, 3> best_reads{};
+    std::array<int, 3> best_reads{}, weighed{};  // per plane: the best pair's outside reads, pairs weighed
     for (size_t i = 0; i < c.size(); ++i)
         for (size_t j = i + 1; j < c.size(); ++j) {
             auto p = plane_pair(c[i].f, c[j].f);
             if (!p) continue;
             size_t plane = size_t(3 - p->a - p->b);
+            if (++weighed[plane] > 16) continue;  // each weighing walks the function: a shape of many copies'
+                                                  // rotations would weigh their pairs pairwise
             p->u = c[i].v, p->u_comp = c[i].comp, p->w = c[j].v, p->w_comp = c[j].comp;
             int reads = outside_reads(p->u, p->w, p->a, p->b);
             bool better = !best[plane] || reads < best_reads[plane];
@@ -270,18 +272,12 @@ std::vector<PlanePair> plane_pairs(const Function& g, int query) {
     std::vector<int> users(g.body.size(), 0);
     for (const Instr& in : g.body)
         for (ValueId a : in.args) users[a]++;
-    auto inside = [&](ValueId root, ValueId v) {  // whether v is an operand of root's expression (16 deep)
-        std::vector<std::pair<ValueId, int>> todo = {{root, 0}};
+    auto inside = [&](ValueId root, ValueId v) {  // v's uses by the instructions root is computed from
+        std::vector<char> tree = trees(root, root);
         int uses = 0;
-        while (!todo.empty()) {
-            auto [x, d] = todo.back();
-            todo.pop_back();
-            if (d > 16) continue;
-            for (ValueId a : g.body[x].args) {
-                if (a == v) ++uses;
-                else todo.push_back({a, d + 1});
-            }
-        }
+        for (size_t x = 0; x < g.body.size(); ++x)
+            if (tree[x])
+                for (ValueId a : g.body[x].args) uses += a == v;
         return uses;
     };
     for (const Candidate& u : c)
