@@ -235,18 +235,6 @@ struct FunctionEmitter {
                (in.op == Op::Const && (in.type.is_scalar() || in.type.kind == Type::Bool));
     }
 
-    // Whether the expression of v (up to the values that already have a variable) may be computed for a
-    // selector none of a switch's cases is for: no array read at an index that is not a constant (a group's
-    // `t[id - 1]`, out of range for another instance's id), no integer division by a variable, no call.
-    bool safe_to_compute_first(ValueId v, int depth = 16) const {
-        if (!var[v].empty()) return true;
-        const Instr& in = f.body[v];
-        if (!ir::speculatable(f.body, in) || depth == 0) return false;
-        for (ValueId a : in.args)
-            if (!safe_to_compute_first(a, depth - 1)) return false;
-        return true;
-    }
-
     // A value used more than once gets a variable when recomputing it would cost real work (a call, a
     // square root, ...) or repeat long text; cheap ones such as `P_L - p` stay inline for readability
     // (the driver's own CSE removes the repeat).
@@ -672,7 +660,9 @@ struct FunctionEmitter {
         };
         int cases = ir::switch_cases(in);
         std::string fallback = region(sched.arms[v][1], inner, in.args[1]);
-        if (fallback.empty() && safe_to_compute_first(in.args[1])) {  // nothing to compute first: the default is the initial value
+        // Nothing to compute first, and the default safe to compute for any selector: it is the initial value.
+        auto computed = [&](ValueId x) { return !var[x].empty(); };
+        if (fallback.empty() && ir::speculatable_expression(f.body, in.args[1], computed)) {
             out += fmt::format("{}{} {} = {};{}\n", indent, tn, vn, arg(in, 1, false), comment);
         } else {
             std::vector<std::string> any;

@@ -235,6 +235,22 @@ inline bool speculatable(const std::vector<Instr>& body, const Instr& in) {
     }
 }
 
+// Whether value v of `body` and its operands, transitively (to `depth` operands; deeper: not known), are all
+// speculatable, a lazy choice inside counting as not; a value `computed(v)` says already has a value (a GLSL
+// variable) counts as safe without its operands. A merged call's switched-argument default (MergeCalls) and the
+// GLSL backend's switch defaults, which run before the cases are told apart.
+template <class Computed>
+bool speculatable_expression(const std::vector<Instr>& body, ValueId v, Computed computed, int depth = 16) {
+    if (computed(v)) return true;
+    const Instr& in = body[v];
+    if (!speculatable(body, in) || in.op == Op::If || in.op == Op::Switch) return false;
+    if (in.args.empty()) return true;
+    if (depth == 0) return false;
+    for (ValueId a : in.args)
+        if (!speculatable_expression(body, a, computed, depth - 1)) return false;
+    return true;
+}
+
 // Stable text form, e.g. `%3 = ℝ Sub %1, %2  ; D`.
 std::string print(const Function& f, const Module* m = nullptr);
 std::string print(const Module& m);

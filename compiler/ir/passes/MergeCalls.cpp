@@ -7,22 +7,6 @@
 
 namespace iqc::ir {
 
-namespace {
-
-// Whether value v of `old` can be computed whatever the selector: no array read at an index that is not a
-// constant (a group's table read at id - k is out of range for another case's id), no integer division by a
-// variable, no call (whose body may read so) in its expression, up to `depth` operands deep (deeper: not known).
-bool speculation_safe(const std::vector<Instr>& old, ValueId v, int depth = 12) {
-    const Instr& in = old[v];
-    if (in.op == Op::Param || in.op == Op::Const || in.op == Op::Global || in.op == Op::Input) return true;
-    if (!speculatable(old, in) || in.op == Op::If || in.op == Op::Switch || depth == 0) return false;
-    for (ValueId a : in.args)
-        if (!speculation_safe(old, a, depth - 1)) return false;
-    return true;
-}
-
-}  // namespace
-
 int merge_switch_calls(Module& m) {
     int merged = 0;
     for (Function& f : m.functions) {
@@ -77,10 +61,10 @@ int merge_switch_calls(Module& m) {
                         // merged call runs for every id: the backend computes a switch's default first), the first
                         // argument that is safe; where none is, zero, and every case has its own.
                         ValueId fallback = first.args[a];
-                        bool found = speculation_safe(old, fallback);
+                        bool found = speculatable_expression(old, fallback, [](ValueId) { return false; });
                         for (size_t j = 0; j < cases.size() && !found; ++j) {
                             fallback = old[in.args[size_t(cases[j]) + 2]].args[a];
-                            found = speculation_safe(old, fallback);
+                            found = speculatable_expression(old, fallback, [](ValueId) { return false; });
                         }
                         const Type& at = old[first.args[a]].type;
                         ValueId dflt;
