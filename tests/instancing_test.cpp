@@ -4,6 +4,7 @@
 // targets (Shadertoy constants; webgl2 uniform blocks or the data texture).
 #include <catch2/catch.hpp>
 
+#include <map>
 #include <set>
 
 #include <cmath>
@@ -232,6 +233,62 @@ TEST_CASE("Shadertoy --meta names each member's element of a group's constant ta
     for (const auto& p : meta["parameters"])  // s37's element holds its colour
         if (p["name"] == "k_d" && p["instance"] == "s37") CHECK(p["default"][0] == Approx(0.37));
     CHECK_THAT(c.result.code, Catch::Contains("const vec3 " + table + "[100]"));
+}
+
+TEST_CASE("a hierarchy's members take its leaf order: no table of that order, each instance's data in its own element",
+          "[instancing][bvh]") {
+    // 100 spheres scattered (no lattice), each with `bound` and its own colour: a bounding-volume hierarchy. The
+    // members are numbered in its leaf order, so a leaf's members are a run of the per-member tables (a table of
+    // the leaf order cost llvmpipe's compile a third of 1,000 rings' code tables, and a dependent lookup per
+    // member). Each instance's parameters must still be its own: --meta names each element's instance.
+    std::string scene = "[[lights]]\nposition = [-5, 8, -6]\n";
+    uint32_t h = 777;
+    auto rnd = [&] {
+        h = h * 1664525u + 1013904223u;
+        return double(h >> 8) / double(1u << 24);
+    };
+    std::map<std::string, double> red;
+    for (int i = 0; i < 100; ++i) {
+        double x = 12 * rnd() - 6, y = 2 * rnd(), z = 12 * rnd() - 6, r = 0.01 * ((i * 37) % 100);
+        red[fmt::format("s{}", i)] = r;
+        scene += fmt::format("[[shapes]]\nname = \"s{}\"\ntype = \"sphere\"\nmaterial = \"lambert\"\nbound = 1.1\n"
+                             "transform = \"T(({:.3f}, {:.3f}, {:.3f}))\"\nmaterial_params = {{ k_d = [{:.2f}, 0.5, 0.5] }}\n",
+                             i, x, y, z, r);
+    }
+    const auto path = write_temp("scattered_100.iq", scene);
+    for (Target t : {Target::Shadertoy, Target::WebGL2}) {
+        CompileOptions o;
+        o.target = t;
+        Compiled c = compile_path(path, o);
+        INFO(target_name(t) << "\n" << c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        CHECK_THAT(c.result.code, Catch::Contains("100 instances, a bounding-box hierarchy of"));
+        CHECK_THAT(c.result.code, !Catch::Contains("tree_members"));
+        auto meta = nlohmann::json::parse(c.result.meta);
+        int seen = 0;
+        for (const auto& p : meta["parameters"])
+            if (p["name"] == "k_d" && red.count(p["instance"].get<std::string>())) {
+                INFO(p.dump());
+                CHECK(p["default"][0].get<double>() == Approx(red[p["instance"].get<std::string>()]));
+                ++seen;
+            }
+        CHECK(seen == 100);
+        if (t == Target::Shadertoy) {
+            // The table's element k holds the colour of the instance --meta names for element k.
+            for (const auto& p : meta["parameters"])
+                if (p["name"] == "k_d" && p["instance"] == "s37") {
+                    std::string at = p["constant"];
+                    const size_t open = at.find('['), close = at.find(']');
+                    REQUIRE(close != std::string::npos);
+                    const int k = std::stoi(at.substr(open + 1, close - open - 1));
+                    const size_t table = c.result.code.find("const vec3 " + at.substr(0, open) + "[100] = vec3[100](");
+                    REQUIRE(table != std::string::npos);
+                    size_t e = c.result.code.find("vec3(", c.result.code.find('(', table) + 1);
+                    for (int j = 0; j < k; ++j) e = c.result.code.find("vec3(", e + 1);
+                    CHECK(std::stod(c.result.code.substr(e + 5)) == Approx(red["s37"]));
+                }
+        }
+    }
 }
 
 TEST_CASE("100 and 1000 rings draw the reference's instances at the reference's depths on both targets", "[instancing][render]") {
