@@ -111,6 +111,54 @@ TEST_CASE("int(floor(x)) of a value that is already an integer is int(x)", "[gls
     CHECK_THAT(code, Catch::Contains("int(floor(x.y))"));
 }
 
+TEST_CASE("an integer division by a constant is a multiplication and a shift where the dividend's range is known", "[glsl]") {
+    // Builder::div_by_constant / mod_by_constant for k in [0, n): exact at every k (the double evaluator, which
+    // computes IntDiv as floor), with no 32-bit overflow ((n - 1)·M < 2^31); a power of two is a shift or a mask
+    // in GLSL (IntDiv/IntMod take operands >= 0), other divisors keep `/` and `%` where no multiplier fits.
+    struct Case { long long d, n; bool multiplied; };
+    // (7 over [0, 10^6) and 1000 over [0, 3·10^6): no multiplier that is exact there fits in 32 bits.)
+    for (Case c : {Case{3, 9, true}, Case{7, 100, true}, Case{10, 100, true}, Case{10, 1000, true}, Case{13, 4096, true},
+                   Case{100, 10000, true}, Case{7, 1000000, false}, Case{1000, 3000000, false}, Case{8, 50, false}, Case{1, 20, false},
+                   Case{9, 5, false}}) {
+        INFO(c.d << ", " << c.n);
+        ir::Module m;
+        ir::Function f;
+        f.name = "divide";
+        f.glsl_name = "divide";
+        f.entry = true;
+        {
+            ir::Builder b(m, f);
+            ir::ValueId k = b.param("k", Type::integer());
+            f.result = b.construct(Type::vector(2), {b.op(ir::Op::Add, {b.scalar(0), b.div_by_constant(k, c.d, c.n)}),
+                                                    b.op(ir::Op::Add, {b.scalar(0), b.mod_by_constant(k, c.d, c.n)})});
+        }
+        for (const ir::Instr& in : f.body)  // the multiplier: no overflow in 32-bit ints over [0, n)
+            if (in.op == ir::Op::Mul && in.type.kind == Type::Integer && f.body[in.args[1]].op == ir::Op::Const &&
+                f.body[in.args[0]].op == ir::Op::Param)
+                CHECK((c.n - 1) * (long long)f.body[in.args[1]].data[0] < (1LL << 31));
+        m.functions.push_back(f);
+        const long long step = std::max(1LL, c.n / 20000);
+        for (long long k = 0; k < c.n; k += (k < 5000 || k > c.n - 5000) ? 1 : step) {
+            ir::Value r = ir::evaluate(m, 0, {ir::Value{Type::integer(), {double(k)}}});
+            if (r.v[0] != double(k / c.d) || r.v[1] != double(k % c.d)) {
+                FAIL_CHECK(k << ": " << r.v[0] << ", " << r.v[1]);
+                break;
+            }
+        }
+        const std::string code = emit_first_function(m);
+        INFO(code);
+        if (c.d == 8) {
+            CHECK_THAT(code, Catch::Contains("k >> 3"));
+            CHECK_THAT(code, Catch::Contains("k & 7"));
+        } else if (c.multiplied) {
+            CHECK_THAT(code, Catch::Contains(">>"));
+            CHECK_THAT(code, !Catch::Contains(" / ") && !Catch::Contains(" % "));
+        } else if (c.d > 1) {
+            CHECK_THAT(code, Catch::Contains("k / " + std::to_string(c.d)));
+        }
+    }
+}
+
 TEST_CASE("a switch's default is the initial value only where it is safe to compute for every selector", "[glsl]") {
     // A group's table read at id - 1 as the default of a switch on the id (cases 7 and 8: two instances of their
     // own) would be read at 6 and 7, past the table's 6 entries, if it were computed first: it is guarded by the

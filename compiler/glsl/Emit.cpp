@@ -267,6 +267,16 @@ struct FunctionEmitter {
     }
 
     // Operand k of `in` as its consumer reads it: `paren` puts a compound expression in parentheses.
+    // s where v is the integer constant 2^s (s in [0, 30]), else -1.
+    int power_of_two(ValueId v) const {
+        const Instr& in = f.body[v];
+        if (in.op != Op::Const || in.type.kind != Type::Integer || in.data.size() != 1) return -1;
+        const double x = in.data[0];
+        for (int s = 0; s <= 30; ++s)
+            if (x == double(1LL << s)) return s;
+        return -1;
+    }
+
     std::string arg(const Instr& in, size_t k, bool paren) {
         ValueId v = in.args[k];
         const Type& t = f.body[v].type;
@@ -471,8 +481,14 @@ struct FunctionEmitter {
             case Op::Copy: return plain(0);
             case Op::Add: return a(0) + " + " + a(1);
             case Op::Sub: return a(0) + " - " + a(1);
-            case Op::IntDiv: return a(0) + " / " + a(1);
-            case Op::IntMod: return a(0) + " % " + a(1);
+            // IntDiv/IntMod take operands >= 0: by a power of two, a shift and a mask (the same value; no
+            // rounding toward zero to correct for, which a signed `/` by a constant costs).
+            case Op::IntDiv:
+                if (int s = power_of_two(in.args[1]); s >= 0) return s == 0 ? plain(0) : a(0) + " >> " + std::to_string(s);
+                return a(0) + " / " + a(1);
+            case Op::IntMod:
+                if (int s = power_of_two(in.args[1]); s >= 0) return s == 0 ? "0" : a(0) + " & " + std::to_string((1LL << s) - 1);
+                return a(0) + " % " + a(1);
             case Op::FloorInt: return integral(in.args[0]) ? "int(" + plain(0) + ")" : "int(floor(" + plain(0) + "))";
             case Op::Mul: {
                 const Type& lt = f.body[in.args[0]].type;

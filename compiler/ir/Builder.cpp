@@ -108,4 +108,39 @@ ValueId Builder::named(ValueId v, const std::string& name, const std::string& so
     return v;
 }
 
+namespace {
+
+// The multiplier and shift of div_by_constant, or {0, 0} where there are none.
+std::pair<long long, int> division_magic(long long d, long long n) {
+    for (int s = 0; s <= 30; ++s) {
+        const long long two_s = 1LL << s;
+        if (two_s < d) continue;
+        const long long M = (two_s + d - 1) / d, e = M * d - two_s;
+        if ((n - 1) * e < two_s && (n - 1) * M < (1LL << 31)) return {M, s};
+    }
+    return {0, 0};
+}
+
+}  // namespace
+
+ValueId Builder::div_by_constant(ValueId k, long long d, long long n) {
+    if (d == 1) return k;
+    if ((d & (d - 1)) == 0 || n <= d) {
+        // A power of two is a shift already; below d the quotient is 0 (kept as the division: k may be a
+        // value the caller did not bound, such as a stand-in lane's index).
+        return op(Op::IntDiv, {k, integer(d)});
+    }
+    auto [M, s] = division_magic(d, n);
+    if (M == 0) return op(Op::IntDiv, {k, integer(d)});
+    return op(Op::IntDiv, {op(Op::Mul, {k, integer(M)}), integer(1LL << s)});
+}
+
+ValueId Builder::mod_by_constant(ValueId k, long long d, long long n) {
+    if (d == 1) return integer(0);
+    if ((d & (d - 1)) == 0 || n <= d) return op(Op::IntMod, {k, integer(d)});
+    auto [M, s] = division_magic(d, n);
+    if (M == 0) return op(Op::IntMod, {k, integer(d)});
+    return op(Op::Sub, {k, op(Op::Mul, {op(Op::IntDiv, {op(Op::Mul, {k, integer(M)}), integer(1LL << s)}), integer(d)})});
+}
+
 }  // namespace iqc::ir

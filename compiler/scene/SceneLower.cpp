@@ -1586,11 +1586,13 @@ private:
             if (r != 0 || back != m) return ValueId(-1);
         }
         std::vector<ValueId> c(3, ValueId(-1));
+        // r ∈ [0, members - base): k is a member's index (the callers' ids are in range).
         ValueId r = b.op(Op::Sub, {k, b.integer(L.base)});
+        long long n = (long long)it.members.size() - L.base;
         for (size_t i = 0; i < axes.size(); ++i) {
-            ValueId s = b.integer(L.stride[axes[i]]);
-            c[axes[i]] = i + 1 < axes.size() || L.stride[axes[i]] != 1 ? b.op(Op::IntDiv, {r, s}) : r;
-            if (i + 1 < axes.size()) r = b.op(Op::IntMod, {r, s});
+            const long long s = L.stride[axes[i]];
+            c[axes[i]] = b.div_by_constant(r, s, n);
+            if (i + 1 < axes.size()) r = b.mod_by_constant(r, s, n), n = std::min(n, s);
         }
         for (auto& x : c)
             if (x == ValueId(-1)) x = b.scalar(0);

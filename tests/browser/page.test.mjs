@@ -135,8 +135,9 @@ function ringsScene(n) {
   while (side * side * 10 < n) side++;
   for (let i = 0; i < n; i++) {
     const x = (i % side) - side / 2 + 0.1 * Math.sin(i), z = Math.floor(i / side) % side - side / 2, y = Math.floor(i / (side * side)) * 0.5 - 0.7;
-    // tilted about two axes: a whole matrix per ring (a tilt about x alone is two scalar tables, too little for the texture)
-    s += `[[shapes]]\ntype = "ring"\nmaterial = "lambert"\ntransform = "T((${x.toFixed(4)}, ${y}, ${z}))⋅\`R_y\`(0.3)⋅\`R_x\`(${(0.4 * (i % 7)).toFixed(2)})"\n`;
+    // tilted about two axes: a whole matrix per ring (a tilt about x alone is two scalar tables, too little for the
+    // texture), each by its own angle (tilts that repeat keep one period of their table)
+    s += `[[shapes]]\ntype = "ring"\nmaterial = "lambert"\ntransform = "T((${x.toFixed(4)}, ${y}, ${z}))⋅\`R_y\`(0.3)⋅\`R_x\`(${(0.4 * (i % 7) + 0.1 * Math.sin(2.3 * i)).toFixed(3)})"\n`;
   }
   return s;
 }

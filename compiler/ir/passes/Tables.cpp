@@ -4,6 +4,8 @@
 #include <map>
 #include <optional>
 
+#include <fmt/format.h>
+
 #include "ir/Builder.h"
 
 namespace iqc::ir {
@@ -76,6 +78,91 @@ std::optional<std::vector<Lattice>> fit_table(const Global& g) {
     return out;
 }
 
+// The smallest period P ≤ n / 2 of a table's entries (entry k equals entry k mod P exactly, every component), or
+// 0: from the prefix function of the entries' sequence (Knuth, Morris & Pratt 1977), whose last border b gives
+// the smallest period n - b.
+long long period(const Global& g) {
+    const long long n = g.type.count;
+    const size_t per = size_t(std::max(1, g.type.element().components()));
+    if (n < 4 || g.value.size() != size_t(n) * per) return 0;
+    auto same = [&](long long i, long long j) {
+        for (size_t c = 0; c < per; ++c)
+            if (g.value[size_t(i) * per + c] != g.value[size_t(j) * per + c]) return false;
+        return true;
+    };
+    std::vector<long long> border(size_t(n), 0);
+    for (long long i = 1; i < n; ++i) {
+        long long b = border[size_t(i - 1)];
+        while (b > 0 && !same(i, b)) b = border[size_t(b - 1)];
+        if (same(i, b)) ++b;
+        border[size_t(i)] = b;
+    }
+    const long long P = n - border[size_t(n - 1)];
+    return 2 * P <= n ? P : 0;
+}
+
+// Whether every use of global g's value is a read of one element (Index): then the table may change shape.
+bool only_indexed(const Module& m, int g) {
+    for (const Function& f : m.functions)
+        for (const Instr& in : f.body)
+            for (size_t a = 0; a < in.args.size(); ++a) {
+                const Instr& arg = f.body[in.args[a]];
+                if (arg.op == Op::Global && arg.aux == g && !(in.op == Op::Index && a == 0)) return false;
+            }
+    return true;
+}
+
+int compress_periodic(Module& m, const std::map<int, std::optional<std::vector<Lattice>>>& fits) {
+    // Periodic tables (entries that repeat every P members, as tilts cycling through 7 angles do) keep one period,
+    // read at k mod P: llvmpipe's compile grows with the square of a code table's elements (100 tilted tori, a
+    // vec2[100] -> vec2[7]: 486.9 -> 471 M instructions of compile and an 8×8 draw), and the modulo, by
+    // multiplication (Builder::mod_by_constant), costs less than the larger table's reads (frame -4%).
+    std::map<int, long long> periods;
+    for (size_t g = 0; g < m.globals.size(); ++g) {
+        const Global& gl = m.globals[g];
+        if (auto it = fits.find(int(g)); it != fits.end() && it->second) continue;  // arithmetic already
+        if (gl.kind != Global::Kind::Constant || !gl.type.is_array() || gl.type.elem == Type::Integer) continue;
+        if (long long P = period(gl); P > 0 && only_indexed(m, int(g))) periods[int(g)] = P;
+    }
+    if (periods.empty()) return 0;
+    int replaced = 0;
+    {
+        for (auto& f : m.functions) {
+            bool any = false;
+            for (const Instr& in : f.body) any |= in.op == Op::Index && f.body[in.args[0]].op == Op::Global && periods.count(f.body[in.args[0]].aux);
+            if (!any) continue;
+            Function out = f;
+            out.body.clear();
+            Builder b(m, out);
+            std::vector<ValueId> map(f.body.size());
+            for (size_t i = 0; i < f.body.size(); ++i) {
+                Instr in = f.body[i];
+                for (ValueId& a : in.args) a = map[a];
+                if (in.op == Op::Index && out.body[in.args[0]].op == Op::Global && periods.count(out.body[in.args[0]].aux)) {
+                    const int g = out.body[in.args[0]].aux;
+                    in.args[1] = b.mod_by_constant(in.args[1], periods[g], m.globals[size_t(g)].type.count);
+                    ++replaced;
+                }
+                map[i] = out.add(std::move(in));
+            }
+            out.result = map[f.result];
+            for (auto& [name, v] : out.outputs) v = map[v];
+            f = std::move(out);
+        }
+        for (auto& f : m.functions)  // the globals' reads say their new length
+            for (Instr& in : f.body)
+                if (in.op == Op::Global && periods.count(in.aux)) in.type.count = int(periods[in.aux]);
+        for (auto& [g, P] : periods) {
+            Global& gl = m.globals[size_t(g)];
+            const long long n = gl.type.count;
+            gl.value.resize(size_t(P) * gl.value.size() / size_t(n));
+            gl.type.count = int(P);
+            gl.comment += fmt::format("{}one period of {} entries: member k's at k mod {}", gl.comment.empty() ? "" : " — ", n, P);
+        }
+    }
+    return replaced;
+}
+
 }  // namespace
 
 int compress_tables(Module& m) {
@@ -99,6 +186,7 @@ int compress_tables(Module& m) {
             for (ValueId& a : in.args) a = map[a];
             if (in.op == Op::Index && out.body[in.args[0]].op == Op::Global && fits[out.body[in.args[0]].aux]) {
                 const auto& lat = *fits[out.body[in.args[0]].aux];
+                const long long n = m.globals[size_t(out.body[in.args[0]].aux)].type.count;  // k ∈ [0, n): a read in range
                 ValueId k = in.args[1];
                 std::vector<ValueId> comps;
                 for (const Lattice& l : lat) {
@@ -106,8 +194,8 @@ int compress_tables(Module& m) {
                     bool have = l.base != 0;
                     if (have) v = b.scalar(l.base);
                     for (const Term& t : l.terms) {
-                        ValueId q = t.d == 1 ? k : b.op(Op::IntDiv, {k, b.integer(t.d)});
-                        if (t.m) q = b.op(Op::IntMod, {q, b.integer(t.m)});
+                        ValueId q = b.div_by_constant(k, t.d, n);
+                        if (t.m) q = b.mod_by_constant(q, t.m, (n - 1) / t.d + 1);
                         double a = have ? std::fabs(t.a) : t.a;  // after the first term, a - |a|q for a < 0
                         ValueId term = a == 1 ? q : b.op(Op::Mul, {b.scalar(a), q});
                         v = !have ? term : b.op(t.a < 0 ? Op::Sub : Op::Add, {v, term});
@@ -127,7 +215,7 @@ int compress_tables(Module& m) {
         for (auto& [name, v] : out.outputs) v = map[v];
         f = std::move(out);
     }
-    return replaced;
+    return replaced + compress_periodic(m, fits);
 }
 
 }  // namespace iqc::ir
