@@ -575,8 +575,8 @@ private:
         return counted ? b.construct(Type::vector(2), {d, count}) : d;
     }
 
-    // The group's bounding-volume hierarchy from its members' `bound` spheres in world space. Without a lattice (which
-    // finds a member from its cell, in the members' order) the members take the hierarchy's leaf order: their ids and
+    // The group's bounding-volume hierarchy from its members' `bound` spheres in world space. On Shadertoy, without a
+    // lattice (which finds a member from its cell, in the members' order), the members take the hierarchy's leaf order: their ids and
     // per-member tables follow it (the ids are the renderer's; per-member parameters keep their instances' names),
     // so a leaf's members are a run of the tables, read without a table of the leaf order between. That table was
     // a third of the code tables of 1,000 tilted rings, and llvmpipe's compile grows with the square of the code
@@ -588,7 +588,12 @@ private:
         for (size_t mi : g.members) spheres.push_back(world_sphere(plan(mi).inv_linear, plan(mi).inv_offset, bound_of(mi)));
         g.tree = build_bounds_tree(spheres, kTreeBranching);
         g.exact = plan(g.members[0]).shape->exactness == "exact";
-        if (!g.lattice.found()) {
+        // Only where the tables are constants in the code (Shadertoy): on targets with sliders the html page keeps
+        // slider values by block member or texture offset across `iqc serve`'s reloads, and an edit that moves one
+        // instance would renumber others (a new user's trial: 42 of 906 saved values on other instances); there
+        // the tables are uniform blocks or the texture, whose size costs no compile, and --meta lists the
+        // instances in the scene's order.
+        if (o_.params_constant && !g.lattice.found()) {
             std::vector<size_t> leaf_order;
             for (int k : g.tree.order) leaf_order.push_back(g.members[size_t(k)]);
             g.members = std::move(leaf_order);
