@@ -210,12 +210,26 @@ float iqc_cone(float t) {
 // stalled at a silhouette), else nothing. A ray that passed near a surface and went on is not a hit: it
 // would draw that surface in front of what the ray was reaching (a torus 3–6 units in front of the floor it
 // grazed past). Nor is a sample without an instance (id -1: a bounding-volume node standing in for its
-// members, or nothing at all).
-float iqc_at_step_cap(float best, float best_t, int best_id, float last, float last_t, int last_id, bool closing, out int id) {
-    if (last < iqc_cone(last_t) && (closing || last < 10.0 * iqc_eps(last_t)) && last_id >= 0) { id = last_id; return last_t; }
-    if (best < 10.0 && best_id >= 0 && last_t - best_t <= max(10.0 * iqc_eps(best_t), iqc_cone(best_t))) { id = best_id; return best_t; }
-    id = -1;
-    return -1.0;
+// members, or nothing at all). Ids as the scene returns them (floats); -1 and -1.0 where nothing.
+// Choices, not returns, and one conversion of the id, by the march's caller: llvmpipe compiled the early returns of
+// this function and of the march after its loop as control flow around the whole march (bench/compile_count.sh,
+// 100 instances: 462.9 -> 442.7 M instructions with the march's own early return at the box, stop 42).
+float iqc_at_step_cap(float best, float best_t, float best_id, float last, float last_t, float last_id, bool closing, out float id) {
+    bool at_last = last < iqc_cone(last_t) && (closing || last < 10.0 * iqc_eps(last_t)) && last_id >= 0.0;
+    bool at_best = best < 10.0 && best_id >= 0.0 && last_t - best_t <= max(10.0 * iqc_eps(best_t), iqc_cone(best_t));
+    id = at_last ? last_id : (at_best ? best_id : -1.0);
+    return at_last ? last_t : (at_best ? best_t : -1.0);
+}
+
+// The march's result from its last sample (a hit where within the tolerance), whether the ray left the box or
+// passed the far plane (`beyond`: background), and else the step cap's choice; id: the instance, -1 for none.
+float iqc_march_end(float last, float last_t, float last_id, bool beyond, float best, float best_t, float best_id, bool closing,
+                    out int id) {
+    float cap_id;
+    float cap_t = iqc_at_step_cap(best, best_t, best_id, last, last_t, last_id, closing, cap_id);
+    bool hit = last < iqc_eps(last_t);
+    id = int(hit ? last_id : (beyond ? -1.0 : cap_id));
+    return hit ? last_t : (beyond ? -1.0 : cap_t);
 }
 
 float iqc_nearness(vec2 h) {
@@ -290,8 +304,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     id = -1;
     steps = 0;
 {{#if SCENE_BOX}}
+    // A ray that misses the box (t_far -1) takes no step: the loop's test t <= t_far fails at once (no early
+    // exit here: see iqc_at_step_cap).
     float t_far = iqc_far(ro, rd, t);  // t: where the ray enters the box
-    if (t_far < 0.0) return -1.0;
 {{/if}}
 {{#if MARCH_SEGMENT}}
     // The candidate segment's length: the whole ray at first, and never 0 (a ray that starts at its far end,
@@ -378,9 +393,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{#if INSIDE_START}}
     iqc_side = s;
 {{/if}}
-    if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
-    if (t > {{T_FAR}}) return -1.0;
-    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
+    return iqc_march_end(last, last_t, last_id, t > {{T_FAR}}, {{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, best_id, last <= prev, id);
 }
 {{/if}}
 {{#if MARCH_RELAXED}}
@@ -441,9 +454,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{#if INSIDE_START}}
     iqc_side = s;
 {{/if}}
-    if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
-    if (t > {{T_FAR}}) return -1.0;
-    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
+    return iqc_march_end(last, last_t, last_id, t > {{T_FAR}}, {{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, best_id, last <= prev, id);
 }
 {{/if}}
 {{#if MARCH_AUTO}}
@@ -543,9 +554,7 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 {{#if INSIDE_START}}
     iqc_side = s;
 {{/if}}
-    if (last < iqc_eps(last_t)) { id = int(last_id); return last_t; }
-    if (t > {{T_FAR}}) return -1.0;
-    return iqc_at_step_cap({{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, int(best_id), last, last_t, int(last_id), last <= prev, id);
+    return iqc_march_end(last, last_t, last_id, t > {{T_FAR}}, {{#if EPS_CONSTANT}}best / IQC_HIT{{#else}}best{{/if}}, best_t, best_id, last <= prev, id);
 }
 {{/if}}
 {{#if MARCH_ORACLE}}

@@ -46,7 +46,6 @@ MARCH = '''float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     id = -1;
     steps = 0;
     float t_far = FAR;
-    if (t_far < 0.0) return -1.0;
     for (int i = 0; i < IQC_MAX_STEPS && t <= t_far; i++) {
         EVAL
         steps++;
@@ -58,16 +57,15 @@ MARCH = '''float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
         if (last < best) { best = last; best_t = t; }
         t += D;
     }
-    if (last < iqc_eps(last_t)) { id = int(HITID); return last_t; }
-    if (t > t_far) return -1.0;
-    return iqc_at_step_cap(best / IQC_HIT, best_t, int(iqc_scene(ro + best_t * rd).y), last, last_t,
-                           int(iqc_scene(ro + last_t * rd).y), last <= prev, id);
+    float last_id = last < iqc_eps(last_t) ? HITID : iqc_scene(ro + last_t * rd).y;
+    return iqc_march_end(last, last_t, last_id, t > t_far, best / IQC_HIT, best_t, iqc_scene(ro + best_t * rd).y,
+                         last <= prev, id);
 }
 '''
 
 
 def march(s, distance_only):
-    if 'iqc_at_step_cap(best / IQC_HIT' not in s or 'if (i == 0 && h.x < 0.0)' in s or 'iqc_segment' in s:
+    if 'best / IQC_HIT, best_t, best_id, last <= prev, id);' not in s or 'if (i == 0 && h.x < 0.0)' in s or 'iqc_segment' in s:
         return None  # a relative tolerance, an inside-start test or segment tracing: not handled
     far = 'iqc_far(ro, rd, t)' if 'float iqc_far(' in s else 'IQC_MAX_DIST'
     m = MARCH.replace('FAR', far)
