@@ -112,70 +112,14 @@ bool only_indexed(const Module& m, int g) {
     return true;
 }
 
-int compress_periodic(Module& m, const std::map<int, std::optional<std::vector<Lattice>>>& fits) {
-    // Periodic tables (entries that repeat every P members, as tilts cycling through 7 angles do) keep one period,
-    // read at k mod P: llvmpipe's compile grows with the square of a code table's elements (100 tilted tori, a
-    // vec2[100] -> vec2[7]: 486.9 -> 471 M instructions of compile and an 8×8 draw), and the modulo, by
-    // multiplication (Builder::mod_by_constant), costs less than the larger table's reads (frame -4%).
-    std::map<int, long long> periods;
-    for (size_t g = 0; g < m.globals.size(); ++g) {
-        const Global& gl = m.globals[g];
-        if (auto it = fits.find(int(g)); it != fits.end() && it->second) continue;  // arithmetic already
-        if (gl.kind != Global::Kind::Constant || !gl.type.is_array() || gl.type.elem == Type::Integer) continue;
-        if (long long P = period(gl); P > 0 && only_indexed(m, int(g))) periods[int(g)] = P;
-    }
-    if (periods.empty()) return 0;
-    int replaced = 0;
-    {
-        for (auto& f : m.functions) {
-            bool any = false;
-            for (const Instr& in : f.body) any |= in.op == Op::Index && f.body[in.args[0]].op == Op::Global && periods.count(f.body[in.args[0]].aux);
-            if (!any) continue;
-            Function out = f;
-            out.body.clear();
-            Builder b(m, out);
-            std::vector<ValueId> map(f.body.size());
-            for (size_t i = 0; i < f.body.size(); ++i) {
-                Instr in = f.body[i];
-                for (ValueId& a : in.args) a = map[a];
-                if (in.op == Op::Index && out.body[in.args[0]].op == Op::Global && periods.count(out.body[in.args[0]].aux)) {
-                    const int g = out.body[in.args[0]].aux;
-                    in.args[1] = b.mod_by_constant(in.args[1], periods[g], m.globals[size_t(g)].type.count);
-                    ++replaced;
-                }
-                map[i] = out.add(std::move(in));
-            }
-            out.result = map[f.result];
-            for (auto& [name, v] : out.outputs) v = map[v];
-            f = std::move(out);
-        }
-        for (auto& f : m.functions)  // the globals' reads say their new length
-            for (Instr& in : f.body)
-                if (in.op == Op::Global && periods.count(in.aux)) in.type.count = int(periods[in.aux]);
-        for (auto& [g, P] : periods) {
-            Global& gl = m.globals[size_t(g)];
-            const long long n = gl.type.count;
-            gl.value.resize(size_t(P) * gl.value.size() / size_t(n));
-            gl.type.count = int(P);
-            gl.comment += fmt::format("{}one period of {} entries: member k's at k mod {}", gl.comment.empty() ? "" : " — ", n, P);
-        }
-    }
-    return replaced;
-}
-
-}  // namespace
-
-int compress_tables(Module& m) {
-    std::map<int, std::optional<std::vector<Lattice>>> fits;
+// Rebuilds every function that reads (Index) a global for which `picks(g)` holds: each such read becomes
+// `rewrite(b, in)`'s value (in: the read, its operands already in the new function). Returns the reads rewritten.
+template <class Picks, class Rewrite>
+int rewrite_reads(Module& m, Picks picks, Rewrite rewrite) {
     int replaced = 0;
     for (auto& f : m.functions) {
         bool any = false;
-        for (const Instr& in : f.body)
-            if (in.op == Op::Index && f.body[in.args[0]].op == Op::Global) {
-                int g = f.body[in.args[0]].aux;
-                if (!fits.count(g)) fits[g] = fit_table(m.globals[size_t(g)]);
-                any |= fits[g].has_value();
-            }
+        for (const Instr& in : f.body) any |= in.op == Op::Index && f.body[in.args[0]].op == Op::Global && picks(f.body[in.args[0]].aux);
         if (!any) continue;
         Function out = f;
         out.body.clear();
@@ -184,28 +128,8 @@ int compress_tables(Module& m) {
         for (size_t i = 0; i < f.body.size(); ++i) {
             Instr in = f.body[i];
             for (ValueId& a : in.args) a = map[a];
-            if (in.op == Op::Index && out.body[in.args[0]].op == Op::Global && fits[out.body[in.args[0]].aux]) {
-                const auto& lat = *fits[out.body[in.args[0]].aux];
-                const long long n = m.globals[size_t(out.body[in.args[0]].aux)].type.count;  // k ∈ [0, n): a read in range
-                ValueId k = in.args[1];
-                std::vector<ValueId> comps;
-                for (const Lattice& l : lat) {
-                    ValueId v = 0;
-                    bool have = l.base != 0;
-                    if (have) v = b.scalar(l.base);
-                    for (const Term& t : l.terms) {
-                        ValueId q = b.div_by_constant(k, t.d, n);
-                        if (t.m) q = b.mod_by_constant(q, t.m, (n - 1) / t.d + 1);
-                        double a = have ? std::fabs(t.a) : t.a;  // after the first term, a - |a|q for a < 0
-                        ValueId term = a == 1 ? q : b.op(Op::Mul, {b.scalar(a), q});
-                        v = !have ? term : b.op(t.a < 0 ? Op::Sub : Op::Add, {v, term});
-                        have = true;
-                    }
-                    if (!have) v = b.scalar(0);
-                    if (b.type(v).kind == Type::Integer) v = b.op(Op::Add, {b.scalar(0), v});  // a real component
-                    comps.push_back(v);
-                }
-                map[i] = comps.size() == 1 ? comps[0] : b.construct(in.type, comps);
+            if (in.op == Op::Index && out.body[in.args[0]].op == Op::Global && picks(out.body[in.args[0]].aux)) {
+                map[i] = rewrite(b, std::move(in));
                 ++replaced;
                 continue;
             }
@@ -215,6 +139,72 @@ int compress_tables(Module& m) {
         for (auto& [name, v] : out.outputs) v = map[v];
         f = std::move(out);
     }
+    return replaced;
+}
+
+int compress_periodic(Module& m, const std::map<int, std::optional<std::vector<Lattice>>>& fits) {
+    // Periodic tables (entries that repeat every P members, as tilts cycling through 7 angles do) keep one period,
+    // read at k mod P: llvmpipe's compile grows with the square of a code table's elements (100 tilted tori, a
+    // vec2[100] -> vec2[7]: 486.9 -> 462.9 M instructions of compile and an 8×8 draw), and the modulo, by
+    // multiplication (Builder::mod_by_constant), costs no more than the larger table's reads (frame 1.00×).
+    std::map<int, long long> periods;
+    for (size_t g = 0; g < m.globals.size(); ++g) {
+        const Global& gl = m.globals[g];
+        if (auto it = fits.find(int(g)); it != fits.end() && it->second) continue;  // arithmetic already
+        if (gl.kind != Global::Kind::Constant || !gl.type.is_array() || gl.type.elem == Type::Integer) continue;
+        if (long long P = period(gl); P > 0 && only_indexed(m, int(g))) periods[int(g)] = P;
+    }
+    if (periods.empty()) return 0;
+    const int replaced = rewrite_reads(m, [&](int g) { return periods.count(g) > 0; }, [&](Builder& b, Instr in) {
+        const int g = b.function().body[in.args[0]].aux;
+        in.args[1] = b.mod_by_constant(in.args[1], periods[g], m.globals[size_t(g)].type.count);
+        return b.function().add(std::move(in));
+    });
+    for (auto& f : m.functions)  // the globals' reads say their new length
+        for (Instr& in : f.body)
+            if (in.op == Op::Global && periods.count(in.aux)) in.type.count = int(periods[in.aux]);
+    for (auto& [g, P] : periods) {
+        Global& gl = m.globals[size_t(g)];
+        const long long n = gl.type.count;
+        gl.value.resize(size_t(P) * gl.value.size() / size_t(n));
+        gl.type.count = int(P);
+        gl.comment += fmt::format("{}one period of {} entries: member k's at k mod {}", gl.comment.empty() ? "" : " — ", n, P);
+    }
+    return replaced;
+}
+
+}  // namespace
+
+int compress_tables(Module& m) {
+    std::map<int, std::optional<std::vector<Lattice>>> fits;
+    for (const auto& f : m.functions)
+        for (const Instr& in : f.body)
+            if (in.op == Op::Index && f.body[in.args[0]].op == Op::Global && !fits.count(f.body[in.args[0]].aux))
+                fits[f.body[in.args[0]].aux] = fit_table(m.globals[size_t(f.body[in.args[0]].aux)]);
+    const int replaced = rewrite_reads(m, [&](int g) { return fits.count(g) && fits[g].has_value(); }, [&](Builder& b, Instr in) {
+        const int g = b.function().body[in.args[0]].aux;
+        const auto& lat = *fits[g];
+        const long long n = m.globals[size_t(g)].type.count;  // k ∈ [0, n): a read in range
+        ValueId k = in.args[1];
+        std::vector<ValueId> comps;
+        for (const Lattice& l : lat) {
+            ValueId v = 0;
+            bool have = l.base != 0;
+            if (have) v = b.scalar(l.base);
+            for (const Term& t : l.terms) {
+                ValueId q = b.div_by_constant(k, t.d, n);
+                if (t.m) q = b.mod_by_constant(q, t.m, (n - 1) / t.d + 1);
+                double a = have ? std::fabs(t.a) : t.a;  // after the first term, a - |a|q for a < 0
+                ValueId term = a == 1 ? q : b.op(Op::Mul, {b.scalar(a), q});
+                v = !have ? term : b.op(t.a < 0 ? Op::Sub : Op::Add, {v, term});
+                have = true;
+            }
+            if (!have) v = b.scalar(0);
+            if (b.type(v).kind == Type::Integer) v = b.op(Op::Add, {b.scalar(0), v});  // a real component
+            comps.push_back(v);
+        }
+        return comps.size() == 1 ? comps[0] : b.construct(in.type, comps);
+    });
     return replaced + compress_periodic(m, fits);
 }
 
