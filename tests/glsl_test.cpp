@@ -14,6 +14,15 @@ using namespace iqc::glsl;
 
 namespace {
 
+// An entry function named `name` (its GLSL name too), for a test to build with ir::Builder.
+ir::Function entry_function(const char* name) {
+    ir::Function f;
+    f.name = name;
+    f.glsl_name = name;
+    f.entry = true;
+    return f;
+}
+
 // The GLSL of module m's first function (no diagnostics expected).
 std::string emit_first_function(const ir::Module& m) {
     SourceManager sm;
@@ -84,10 +93,7 @@ TEST_CASE("glslang validation accepts good shaders and rejects bad ones", "[glsl
 TEST_CASE("int(floor(x)) of a value that is already an integer is int(x)", "[glsl]") {
     // A lattice's cell range is clamp(ceil(...), 0, n - 1): the floor of it was code for the driver to compile.
     ir::Module m;
-    ir::Function f;
-    f.name = "cells";
-    f.glsl_name = "cells";
-    f.entry = true;
+    ir::Function f = entry_function("cells");
     {
         ir::Builder b(m, f);
         ir::ValueId x = b.param("x", Type::vector(3));
@@ -122,10 +128,7 @@ TEST_CASE("an integer division by a constant is a multiplication and a shift whe
                    Case{9, 5, false}}) {
         INFO(c.d << ", " << c.n);
         ir::Module m;
-        ir::Function f;
-        f.name = "divide";
-        f.glsl_name = "divide";
-        f.entry = true;
+        ir::Function f = entry_function("divide");
         {
             ir::Builder b(m, f);
             ir::ValueId k = b.param("k", Type::integer());
@@ -169,10 +172,7 @@ TEST_CASE("a switch's default is the initial value only where it is safe to comp
     g.type = Type::array(Type::vector(2), 6);
     g.value.assign(12, 0.5);
     m.globals.push_back(g);
-    ir::Function f;
-    f.name = "pick";
-    f.glsl_name = "pick";
-    f.entry = true;
+    ir::Function f = entry_function("pick");
     {
         ir::Builder b(m, f);
         ir::ValueId id = b.param("id", Type::integer());

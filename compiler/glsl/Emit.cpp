@@ -266,7 +266,6 @@ struct FunctionEmitter {
         }
     }
 
-    // Operand k of `in` as its consumer reads it: `paren` puts a compound expression in parentheses.
     // s where v is the integer constant 2^s (s in [0, 30]), else -1.
     int power_of_two(ValueId v) const {
         const Instr& in = f.body[v];
@@ -277,6 +276,7 @@ struct FunctionEmitter {
         return -1;
     }
 
+    // Operand k of `in` as its consumer reads it: `paren` puts a compound expression in parentheses.
     std::string arg(const Instr& in, size_t k, bool paren) {
         ValueId v = in.args[k];
         const Type& t = f.body[v].type;
