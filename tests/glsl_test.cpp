@@ -23,16 +23,18 @@ ir::Function entry_function(const char* name) {
     return f;
 }
 
-// The GLSL of module m's first function (no diagnostics expected).
-std::string emit_first_function(const ir::Module& m) {
+// The GLSL of module m's function `index` (no diagnostics expected).
+std::string emit_function(const ir::Module& m, int index) {
     SourceManager sm;
     Diagnostics diags(sm);
     Namer names;
     Emitter em(m, names, diags);
-    std::string code = em.function(0);
+    std::string code = em.function(index);
     CHECK_FALSE(diags.has_errors());
     return code;
 }
+
+std::string emit_first_function(const ir::Module& m) { return emit_function(m, 0); }
 
 }  // namespace
 
@@ -189,4 +191,34 @@ TEST_CASE("a switch's default is the initial value only where it is safe to comp
     CHECK_THAT(code, Catch::Contains("if (!((id == 7) || (id == 8))) {"));
     CHECK_THAT(code, !Catch::Contains("= t[id - 1];\n    if (id == 7)"));
     CHECK_THAT(code, Catch::Contains("vec2 tmp_2 = t[2];"));
+}
+
+TEST_CASE("a select's operands that are calls are computed in statements before the select", "[glsl]") {
+    // GLSL's ?: computes only the chosen operand: `id == 0 ? ball(p) : ball(2p)` is a branch around each inlined
+    // body in the driver, where the IR's Select computes both (IfConvert's dispatch of instances' distances). A
+    // call elsewhere stays inline.
+    ir::Module m;
+    ir::Function ball;
+    ball.name = ball.glsl_name = "ball";
+    {
+        ir::Builder b(m, ball);
+        ir::ValueId p = b.param("p", Type::vector(3));
+        ball.result = b.op(ir::Op::Sub, {b.builtin("length", {p}), b.scalar(1)});
+    }
+    m.functions.push_back(std::move(ball));
+    ir::Function f = entry_function("pick");
+    {
+        ir::Builder b(m, f);
+        ir::ValueId p = b.param("p", Type::vector(3));
+        ir::ValueId id = b.param("id", Type::integer());
+        // The far operand: a call scaled (the scale of an instance's distance).
+        ir::ValueId near = b.call(0, {p}), far = b.op(ir::Op::Mul, {b.call(0, {b.op(ir::Op::Mul, {b.scalar(2), p})}), b.scalar(0.5)});
+        ir::ValueId chosen = b.op(ir::Op::Select, {b.compare(ir::CompareKind::Eq, id, b.integer(0)), near, far});
+        f.result = b.op(ir::Op::Add, {chosen, b.call(0, {b.op(ir::Op::Neg, {p})})});
+    }
+    m.functions.push_back(std::move(f));
+    const std::string code = emit_function(m, 1);
+    INFO(code);
+    CHECK_THAT(code, Catch::Contains("    float tmp = ball(p);\n    float tmp_2 = ball(2.0 * p) * 0.5;\n"));
+    CHECK_THAT(code, Catch::Contains("((id == 0) ? tmp : tmp_2) + ball(-p)"));
 }

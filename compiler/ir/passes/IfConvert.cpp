@@ -26,6 +26,21 @@ int instr_cost(const Function& f, const Instr& in) {
 
 bool selectable(const Type& t) { return t.is_scalar() || t.is_vector() || t.kind == Type::Bool; }
 
+// What computing a call of function `fi` speculatively costs: its instructions' costs, calls in it costed the
+// same way (to `depth` levels; deeper: kUnsafe), kUnsafe where any of them is not safe to compute on another
+// case's values. Every instruction of the body counts, live or not (dead code elimination runs later).
+int callee_cost(const Module& m, int fi, int depth = 4) {
+    if (fi < 0 || size_t(fi) >= m.functions.size() || depth == 0) return kUnsafe;
+    const Function& g = m.functions[size_t(fi)];
+    long long c = 0;
+    for (const Instr& in : g.body) {
+        if (in.op == Op::If || in.op == Op::Switch) return kUnsafe;  // lazy inside: not costed here
+        c += in.op == Op::Call ? callee_cost(m, in.aux, depth - 1) : instr_cost(g, in);
+        if (c >= kUnsafe) return kUnsafe;
+    }
+    return int(c);
+}
+
 }  // namespace
 
 int convert_cheap_choices(const Module& m, Function& f) {
@@ -36,13 +51,18 @@ int convert_cheap_choices(const Module& m, Function& f) {
     std::vector<std::vector<int>> children(s.regions.size());
     for (size_t r = 1; r < s.regions.size(); ++r) children[size_t(s.regions[r].parent)].push_back(int(r));
     // The cost of region r with the regions nested in it (memoised: every region has one parent).
-    std::vector<int> memo(s.regions.size(), -1);
-    auto cost = [&](auto& self, int r) -> int {
-        if (memo[size_t(r)] >= 0) return memo[size_t(r)];
+    // With `calls`, a call costs its callee's instructions (callee_cost); else it is not safe.
+    std::vector<int> memo(s.regions.size(), -1), memo_calls(s.regions.size(), -1);
+    auto cost = [&](auto& self, int r, bool calls = false) -> int {
+        std::vector<int>& mm = calls ? memo_calls : memo;
+        if (mm[size_t(r)] >= 0) return mm[size_t(r)];
         long long c = 0;
-        for (ValueId i : s.regions[size_t(r)].instrs) c += instr_cost(f, f.body[i]);
-        for (int k : children[size_t(r)]) c += self(self, k);
-        return memo[size_t(r)] = int(std::min<long long>(c, kUnsafe));
+        for (ValueId i : s.regions[size_t(r)].instrs) {
+            const Instr& in = f.body[i];
+            c += calls && in.op == Op::Call ? callee_cost(m, in.aux) : instr_cost(f, in);
+        }
+        for (int k : children[size_t(r)]) c += self(self, k, calls);
+        return mm[size_t(r)] = int(std::min<long long>(c, kUnsafe));
     };
     // Which choices only feed calls' arguments.
     std::vector<char> only_arguments(f.body.size(), 1);
@@ -55,9 +75,25 @@ int convert_cheap_choices(const Module& m, Function& f) {
     for (const auto& [name, o] : f.outputs) only_arguments[o] = 0;
     std::vector<char> convert(f.body.size(), 0);
     int converted = 0;
+    // The finite-difference normal's dispatch (iqc_distance_of's result: each instance's distance, the runtime
+    // passing only instances' ids): with few instances whose distances are cheap, every instance's distance and
+    // a chain of selects, the last case innermost (no default: no other id comes).
+    ValueId dispatch = ValueId(-1);
+    if (f.name == names::kDistanceOf && f.body[f.result].op == Op::Switch) {
+        const Instr& in = f.body[f.result];
+        int total = 0;
+        for (size_t k = 2; k < in.args.size() && total <= kMaxDispatchCost; ++k) {
+            int r = s.arms[f.result][k];
+            total += r < 0 ? 0 : cost(cost, r, true);
+        }
+        if (switch_cases(in) >= 2 && switch_cases(in) <= kMaxArms && selectable(in.type) && total <= kMaxDispatchCost)
+            dispatch = f.result, convert[f.result] = 1, ++converted;
+    }
     for (size_t i = 0; i < f.body.size(); ++i) {
         const Instr& in = f.body[i];
-        if ((in.op != Op::If && in.op != Op::Switch) || !s.live(ValueId(i)) || !selectable(in.type) || !only_arguments[i]) continue;
+        if ((in.op != Op::If && in.op != Op::Switch) || !s.live(ValueId(i)) || !selectable(in.type) || !only_arguments[i] ||
+            ValueId(i) == dispatch)
+            continue;
         if (in.op == Op::Switch && (switch_cases(in) == 0 || switch_cases(in) + 1 > kMaxArms)) continue;
         int total = 0;
         bool cheap = true;
@@ -90,8 +126,19 @@ int convert_cheap_choices(const Module& m, Function& f) {
         } else {
             // The cases are disjoint: their order in the chain does not matter; the default is the innermost.
             ValueId sel = map[in.args[0]];
-            v = map[in.args[1]];
-            for (int k = switch_cases(in); k-- > 0;) {
+            int cases = switch_cases(in);
+            auto width = [&](int k) { return in.data[size_t(2 * k + 1)] - in.data[size_t(2 * k)]; };
+            // The dispatch's widest case (a group's range of ids, whose test takes two comparisons) stands
+            // innermost, where the default was, untested.
+            int untested = -1;
+            if (ValueId(i) == dispatch) {
+                untested = cases - 1;
+                for (int k = 0; k < cases; ++k)
+                    if (width(k) > width(untested)) untested = k;
+            }
+            v = map[in.args[untested >= 0 ? size_t(untested) + 2 : 1]];
+            for (int k = cases; k-- > 0;) {
+                if (k == untested) continue;
                 long long lo = std::llround(in.data[size_t(2 * k)]), hi = std::llround(in.data[size_t(2 * k + 1)]);
                 ValueId cond = hi == lo + 1 ? b.compare(CompareKind::Eq, sel, b.integer(lo))
                                             : b.op(Op::And, {b.compare(CompareKind::Ge, sel, b.integer(lo)),
