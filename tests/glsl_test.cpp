@@ -222,3 +222,23 @@ TEST_CASE("a select's operands that are calls are computed in statements before 
     CHECK_THAT(code, Catch::Contains("    float tmp = ball(p);\n    float tmp_2 = ball(2.0 * p) * 0.5;\n"));
     CHECK_THAT(code, Catch::Contains("((id == 0) ? tmp : tmp_2) + ball(-p)"));
 }
+
+TEST_CASE("an integer constant read as a float is a float literal", "[glsl]") {
+    // A lattice one cell deep in z: the cell (i, j, 0) was vec3(float(i), float(j), float(0)).
+    ir::Module m;
+    ir::Function f = entry_function("cell");
+    {
+        ir::Builder b(m, f);
+        ir::ValueId i = b.param("i", Type::integer());
+        ir::ValueId x = b.param("x", Type::scalar());
+        ir::ValueId c = b.construct(Type::vector(3), {i, b.integer(3), b.integer(0)});
+        ir::ValueId d = b.op(ir::Op::Sub, {x, b.integer(-2)});
+        f.result = b.op(ir::Op::Add, {b.op(ir::Op::Extract, {c}, 2), d});
+    }
+    m.functions.push_back(std::move(f));
+    const std::string code = emit_first_function(m);
+    INFO(code);
+    CHECK_THAT(code, Catch::Contains("vec3(float(i), 3.0, 0.0)"));
+    CHECK_THAT(code, Catch::Contains("x - (-2.0)"));
+    CHECK_THAT(code, !Catch::Contains("float(0)"));
+}

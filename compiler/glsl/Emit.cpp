@@ -282,7 +282,15 @@ struct FunctionEmitter {
         ValueId v = in.args[k];
         const Type& t = f.body[v].type;
         bool want = wants_int(in, k);
-        if (t.kind == Type::Integer && !want) return "float(" + expr(v) + ")";
+        if (t.kind == Type::Integer && !want) {
+            const Instr& c = f.body[v];
+            // An integer constant read as a float is a float literal (`0.0`, not `float(0)`).
+            if (c.op == Op::Const && c.data.size() == 1 && var[v].empty()) {
+                std::string lit = float_literal(c.data[0]);
+                return paren && c.data[0] < 0 ? "(" + lit + ")" : lit;
+            }
+            return "float(" + expr(v) + ")";
+        }
         if (want && t.kind == Type::Scalar) return "int(" + expr(v) + ")";
         std::string s = expr(v);
         return paren && compound(v) ? "(" + s + ")" : s;

@@ -122,6 +122,11 @@ int fold_constants(const Module& m, Function& f) {
                 else if (all_equal(f, in.args[1], 1.0) && f.body[in.args[1]].type.is_scalar() && f.body[in.args[0]].type == in.type)
                     redirect(in.args[0]);
                 break;
+            case Op::Hadamard:
+                // x ⊙ (1, 1, 1) = x (a lattice's spacing of 1 scaling its cell)
+                if (all_equal(f, in.args[0], 1.0) && f.body[in.args[1]].type == in.type) redirect(in.args[1]);
+                else if (all_equal(f, in.args[1], 1.0) && f.body[in.args[0]].type == in.type) redirect(in.args[0]);
+                break;
             case Op::Add:
                 if (all_equal(f, in.args[0], 0.0) && f.body[in.args[1]].type == in.type) redirect(in.args[1]);
                 else if (all_equal(f, in.args[1], 0.0) && f.body[in.args[0]].type == in.type) redirect(in.args[0]);
