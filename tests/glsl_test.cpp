@@ -193,10 +193,11 @@ TEST_CASE("a switch's default is the initial value only where it is safe to comp
     CHECK_THAT(code, Catch::Contains("vec2 tmp_2 = t[2];"));
 }
 
-TEST_CASE("a select's operands that are calls are computed in statements before the select", "[glsl]") {
+TEST_CASE("the instances' distances a dispatch selects are computed in statements before the select", "[glsl]") {
     // GLSL's ?: computes only the chosen operand: `id == 0 ? ball(p) : ball(2p)` is a branch around each inlined
-    // body in the driver, where the IR's Select computes both (IfConvert's dispatch of instances' distances). A
-    // call elsewhere stays inline.
+    // body in the driver, where the IR's Select computes both (IfConvert's dispatch of instances' distances, in
+    // iqc_distance_of). A call elsewhere in that function stays inline, and so does a select's call in another
+    // function (a piecewise bound its author wrote: `{ f(p) if ‖p‖ < 2; ... }`).
     ir::Module m;
     ir::Function ball;
     ball.name = ball.glsl_name = "ball";
@@ -206,7 +207,7 @@ TEST_CASE("a select's operands that are calls are computed in statements before 
         ball.result = b.op(ir::Op::Sub, {b.builtin("length", {p}), b.scalar(1)});
     }
     m.functions.push_back(std::move(ball));
-    ir::Function f = entry_function("pick");
+    ir::Function f = entry_function(ir::names::kDistanceOf);
     {
         ir::Builder b(m, f);
         ir::ValueId p = b.param("p", Type::vector(3));
@@ -221,6 +222,18 @@ TEST_CASE("a select's operands that are calls are computed in statements before 
     INFO(code);
     CHECK_THAT(code, Catch::Contains("    float tmp = ball(p);\n    float tmp_2 = ball(2.0 * p) * 0.5;\n"));
     CHECK_THAT(code, Catch::Contains("((id == 0) ? tmp : tmp_2) + ball(-p)"));
+    // The same select in another function: the calls inline in ?:.
+    ir::Function g = entry_function("pick");
+    {
+        ir::Builder b(m, g);
+        ir::ValueId p = b.param("p", Type::vector(3));
+        ir::ValueId c = b.compare(ir::CompareKind::Lt, b.builtin("length", {p}), b.scalar(2));
+        g.result = b.op(ir::Op::Select, {c, b.call(0, {p}), b.op(ir::Op::Sub, {b.builtin("length", {p}), b.scalar(1)})});
+    }
+    m.functions.push_back(std::move(g));
+    const std::string other = emit_function(m, 2);
+    INFO(other);
+    CHECK_THAT(other, Catch::Contains("? ball(p) :"));
 }
 
 TEST_CASE("an integer constant read as a float is a float literal", "[glsl]") {

@@ -606,16 +606,19 @@ struct FunctionEmitter {
             if (sched.live(ValueId(i)))
                 for (ValueId a : f.body[i].args) uses[a]++;
         // GLSL's ?: computes only the chosen operand: a call inline there becomes a branch around the inlined
-        // body in the driver (Mesa keeps it one, where a select of two values is flattened), which an IR Select,
-        // computing both, is not. An instance's distances chosen by its id (IfConvert's dispatch) cost llvmpipe's
-        // compile more inline in the ?: chain than the if-chain they replaced (grazing plane 341.4 -> 344.9 M
-        // instructions; in statements 334.2 M).
+        // body in the driver (Mesa keeps it one, where a select of two values is flattened). The instances'
+        // distances IfConvert's dispatch selects by id (iqc_distance_of, each cheap) cost llvmpipe's compile more
+        // inline in the ?: chain than the if-chain they replaced (grazing plane 341.4 -> 344.9 M instructions; in
+        // statements 334.2 M). Elsewhere a call in a select stays inline: a piecewise `{ f(p) if ‖p‖ < 2; ... }`
+        // over a costly f is a bound its author wrote, and the GPU skips f where no pixel of a group takes it.
         eager.assign(n, 0);
-        // Whether v's expression, where emitted inline (a value read once), calls a function.
+        if (f.name != ir::names::kDistanceOf) return;
+        // Whether v's expression, where emitted inline (a value read once), calls a function (a select inside
+        // it has its own call operands computed first).
         auto calls = [&](auto& self, ValueId v, int depth) -> bool {
             const Instr& in = f.body[v];
             if (in.op == Op::Call) return true;
-            if (depth == 0 || in.op == Op::If || in.op == Op::Switch || in.op == Op::Loop) return false;
+            if (depth == 0 || in.op == Op::If || in.op == Op::Switch || in.op == Op::Loop || in.op == Op::Select) return false;
             for (ValueId a : in.args)
                 if (uses[a] == 1 && self(self, a, depth - 1)) return true;
             return false;
