@@ -169,7 +169,7 @@ struct FunctionEmitter {
     Namer locals;
     ir::Schedule sched;
     std::vector<int> uses;
-    std::vector<char> eager;       // a call that a select's value operand reads: computed in a statement first
+    std::vector<char> eager;       // a select's value operand that calls a function (iqc_distance_of): a statement first
     std::vector<int> depth;        // nesting of the value's expression as emitted (0: in a variable)
     std::vector<std::string> var;  // GLSL variable holding the value, if materialised
     std::map<ValueId, std::vector<std::string>> loop_states;  // a Loop's state variables

@@ -77,7 +77,7 @@ int convert_cheap_choices(const Module& m, Function& f) {
     int converted = 0;
     // The finite-difference normal's dispatch (iqc_distance_of's result: each instance's distance, the runtime
     // passing only instances' ids): with few instances whose distances are cheap, every instance's distance and
-    // a chain of selects, the last case innermost (no default: no other id comes).
+    // a chain of selects, the widest case innermost untested (no default: no other id comes).
     ValueId dispatch = ValueId(-1);
     if (f.name == names::kDistanceOf && f.body[f.result].op == Op::Switch) {
         const Instr& in = f.body[f.result];
