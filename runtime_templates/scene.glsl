@@ -682,8 +682,9 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
 
 {{#if NORMALS_FINITE}}
 // A tap of a finite-difference normal: the hit instance's own distance (iqc_distance_of), not the whole
-// scene's — one instance's code instead of every instance's, and the normal of the surface the ray hit where
-// another instance lies within the tap's reach (as the analytic normal is).
+// scene's minimum — the normal of the surface the ray hit where another instance lies within the tap's reach
+// (as the analytic normal is), and one instance's code, or with 2-8 cheap instances each one's distance and a
+// select of the hit one's (the IR pass `select`: llvmpipe compiled the chain of ifs at more cost).
 float iqc_normal_tap(vec3 p, int id) {
 {{#if INSTANCE_TAPS}}
 {{#if INSTRUMENT}}
