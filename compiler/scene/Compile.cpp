@@ -414,23 +414,22 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         std::string axes;
         for (int a = 0; a < 3; ++a)
             if (std::isfinite(box->first[size_t(a)]) || std::isfinite(box->second[size_t(a)])) axes += "xyz"[a];
+        // One slab per bounded axis: float, vec2 or vec3 arithmetic on those components (all of rd where all three).
         std::string& slabs = V["BOX_SLABS"];
-        if (axes.empty())
+        const size_t n = axes.size();
+        if (n == 0) {
             slabs = "    float t_in = 0.0, t_out = IQC_MAX_DIST;";
-        else if (axes.size() == 1)
-            slabs = "    float m = 1.0 / rd." + axes + ";\n"
-                    "    float a = (IQC_BOX_LO." + axes + " - ro." + axes + ") * m, b = (IQC_BOX_HI." + axes + " - ro." + axes + ") * m;\n"
-                    "    float t_in = min(a, b), t_out = min(max(a, b), IQC_MAX_DIST);";
-        else if (axes.size() == 2)
-            slabs = "    vec2 m = 1.0 / rd." + axes + ";\n"
-                    "    vec2 a = (IQC_BOX_LO." + axes + " - ro." + axes + ") * m, b = (IQC_BOX_HI." + axes + " - ro." + axes + ") * m;\n"
-                    "    vec2 n = min(a, b), f = max(a, b);\n"
-                    "    float t_in = max(n.x, n.y), t_out = min(min(f.x, f.y), IQC_MAX_DIST);";
-        else
-            slabs = "    vec3 m = 1.0 / rd;\n"
-                    "    vec3 a = (IQC_BOX_LO - ro) * m, b = (IQC_BOX_HI - ro) * m;\n"
-                    "    vec3 n = min(a, b), f = max(a, b);\n"
-                    "    float t_in = max(max(n.x, n.y), n.z), t_out = min(min(min(f.x, f.y), f.z), IQC_MAX_DIST);";
+        } else {
+            const std::string type = n == 1 ? "float" : "vec" + std::to_string(n), sw = n == 3 ? "" : "." + axes;
+            slabs = "    " + type + " m = 1.0 / rd" + sw + ";\n    " + type + " a = (IQC_BOX_LO" + sw + " - ro" + sw +
+                    ") * m, b = (IQC_BOX_HI" + sw + " - ro" + sw + ") * m;\n";
+            if (n == 1)
+                slabs += "    float t_in = min(a, b), t_out = min(max(a, b), IQC_MAX_DIST);";
+            else
+                slabs += "    " + type + " n = min(a, b), f = max(a, b);\n" +
+                         (n == 2 ? "    float t_in = max(n.x, n.y), t_out = min(min(f.x, f.y), IQC_MAX_DIST);"
+                                 : "    float t_in = max(max(n.x, n.y), n.z), t_out = min(min(min(f.x, f.y), f.z), IQC_MAX_DIST);");
+        }
         F.insert("SCENE_BOX");
         V["T_FAR"] = "t_far";
     }
