@@ -29,14 +29,26 @@ struct ShapeSource {
     bool exact = false;
 };
 
+// D at a point: one Evaluator for every call (its schedule is planned once; ir::evaluate per point planned
+// it again each time: most of this test's time, 560 s under the sanitizers in CI).
 struct Evaluable {
     ir::Module irm;
     int fn = -1;
     std::vector<ir::Value> args;
     int query = 0;
+    std::unique_ptr<ir::Evaluator> ev;
+    std::vector<const double*> arg_ptrs;
     double operator()(double x, double y, double z) {
-        args[size_t(query)] = {Type::vector(3), {x, y, z}};
-        return ir::evaluate(irm, fn, args).v[0];
+        if (!ev) {
+            ev = std::make_unique<ir::Evaluator>(irm);
+            args[size_t(query)] = {Type::vector(3), {0, 0, 0}};
+            for (auto& a : args) arg_ptrs.push_back(a.v.data());
+        }
+        std::vector<double>& q = args[size_t(query)].v;
+        q[0] = x, q[1] = y, q[2] = z;
+        double out = 0;
+        ev->call(fn, arg_ptrs.data(), &out);
+        return out;
     }
 };
 
