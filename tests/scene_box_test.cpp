@@ -626,3 +626,55 @@ TEST_CASE("the box's slab test takes only the axes where the box is bounded", "[
         CHECK(other > 0);  // the picture is not one colour: the shape is in it
     }
 }
+
+TEST_CASE("a turn by a multiple of π/2 keeps the axes it bounds: rounding's coefficients do not open the box", "[scene][box][render]") {
+    // cos(π/2) is 6·10⁻¹⁷ in double: R_y(π/2) mixes a wall's unbounded object z into world x by that much. Over the
+    // world float32 tells apart it moves the wall by less than 10⁻⁸, which the box takes as a margin; before, the
+    // wall's world box was open on every axis and the scene had no box (stop 43's trial: R_z(π) on a column).
+    struct Case {
+        const char* what;
+        const char* distance;
+        const char* transform;
+        std::array<bool, 3> bounded;  // the world axes the box bounds
+        int axis;                     // one of them, with its half-width `half` around 0
+        double half;
+    };
+    const Case cases[] = {
+        {"a wall across x turned by R_y(π/2): across z", "|p_1| - 0.2", "`R_y`(π/2)", {false, false, true}, 2, 0.2},
+        {"a wall across x turned by R_z(π): across x", "|p_1| - 0.2", "`R_z`(π)", {true, false, false}, 0, 0.2},
+        {"a column along y turned by R_z(π): x and z", "‖(p_1, p_3)‖ - 0.5", "`R_z`(π)", {true, false, true}, 0, 0.5},
+        {"a column along y turned by R_x(π/2): along z, x and y bounded", "‖(p_1, p_3)‖ - 0.5", "`R_x`(π/2)", {true, true, false}, 1, 0.5},
+        {"a rod along x turned by R_y(-π/2)⋅R_z(π): along z", "‖(p_2, p_3)‖ - 0.3", "`R_y`(-π/2)⋅`R_z`(π)", {true, true, false}, 0, 0.3},
+    };
+    for (const Case& c : cases) {
+        INFO(c.what);
+        const std::string scene = std::string("[modules]\nthing = \"\"\"\nshape\nD = ") + c.distance +
+                                  "\nwhere\np ∈ ℝ³\n\"\"\"\n[camera]\nposition = [1.5, 2, -4]\ntarget = [0, 0, 0]\n"
+                                  "[[shapes]]\ntype = \"thing\"\ntransform = \"" + c.transform + "\"\n";
+        Compiled compiled = compile_text("box_turned.iq", scene);
+        INFO(compiled.diagnostics);
+        REQUIRE(compiled.result.exit_code == 0);
+        auto b = box_of(compiled.result.code);
+        REQUIRE(b);
+        for (int a = 0; a < 3; ++a) {
+            INFO("axis " << a);
+            CHECK((b->first[a] > -1e29) == c.bounded[a]);
+            CHECK((b->second[a] < 1e29) == c.bounded[a]);
+        }
+        // Around the shape by the level, not more: the box is open on a side, so the step cap's pixel cone at
+        // max_dist (100 / (360 · focal), focal 1/tan(30°): 0.16).
+        const double m = 100 / (360 / std::tan(M_PI / 6));
+        CHECK(b->first[c.axis] <= -c.half - m);
+        CHECK(b->first[c.axis] >= -c.half - m - 0.01);
+        CHECK(b->second[c.axis] >= c.half + m);
+        CHECK(b->second[c.axis] <= c.half + m + 0.01);
+        // At 360 rows, the step cap's pixel cone the level is taken at (at 90 rows, four times wider, the cone
+        // at the wall's far end reaches past the box with or without the turn).
+        CHECK(differ_without_box(compiled.result, 160, 360) == 0);
+    }
+    // A real tilt stays open: R_y(10⁻⁶) moves the wall 0.1 at z = 10⁵, inside max_dist's reach.
+    Compiled tilted = compile_text("box_tilted.iq", "[modules]\nthing = \"\"\"\nshape\nD = |p_1| - 0.2\nwhere\np ∈ ℝ³\n\"\"\"\n"
+                                                    "[[shapes]]\ntype = \"thing\"\ntransform = \"`R_y`(0.000001)\"\n");
+    REQUIRE(tilted.result.exit_code == 0);
+    CHECK_FALSE(box_of(tilted.result.code));
+}

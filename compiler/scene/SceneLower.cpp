@@ -415,15 +415,32 @@ private:
                     every &= place(mi, std::nullopt);
                     continue;
                 }
+                // An unbounded object axis mixed into a world axis by a coefficient that is rounding (cos(π/2) =
+                // 6·10⁻¹⁷: a wall turned by R_y(π/2) lost its bounded axis, and the scene its box): over the world
+                // points float32 tells apart (|w| ≤ kFloatWorld, or 1000 max_dists) the object coordinate
+                // x = L·w + o moves the world one by at most |Li|·‖L's row‖·|w|; where that is below a thousandth
+                // of the level, the interval grows by it instead of opening.
+                constexpr double kFloatWorld = 1e8;  // float32's spacing there is 8
+                const double world = std::max(kFloatWorld, 1e3 * o_.max_dist);
                 std::array<ir::Interval, 3> w;
                 for (size_t r = 0; r < 3; ++r) {
                     ir::Interval sum{0, 0};
+                    double drift = 0;
                     for (size_t c = 0; c < 3; ++c) {
-                        if (Li[r * 3 + c] == 0) continue;  // an unbounded object axis the map leaves out
+                        const double l = Li[r * 3 + c];
+                        if (l == 0) continue;  // an unbounded object axis the map leaves out
+                        if (!std::isfinite(box->lo[c]) || !std::isfinite(box->hi[c])) {
+                            const double row = std::hypot(p.inv_linear[c * 3], p.inv_linear[c * 3 + 1], p.inv_linear[c * 3 + 2]);
+                            const double moved = std::fabs(l) * row * world;
+                            if (moved <= 1e-3 * tau) {
+                                drift += moved;
+                                continue;
+                            }
+                        }
                         ir::Interval x{box->lo[c] - p.inv_offset[c], box->hi[c] - p.inv_offset[c]};
-                        sum = ir::iv::add(sum, ir::iv::mul({Li[r * 3 + c], Li[r * 3 + c]}, x));
+                        sum = ir::iv::add(sum, ir::iv::mul({l, l}, x));
                     }
-                    w[r] = sum;
+                    w[r] = {sum.lo - drift, sum.hi + drift};
                 }
                 place(mi, w);
             }
