@@ -285,6 +285,17 @@ struct Planner {
         // What the shader computes with — the inverse, its offset and the scale — must be float32 numbers: past
         // 3.4·10³⁸ they were clamped, below 1.2·10⁻³⁸ flushed to 0 or denormal (S((10⁶⁰, …)) drew everything
         // inside the shape; T((3e38, …))⋅T((3e38, …)) moved it silently).
+        // Products of rounding's coefficients (cos(π/2) = 6·10⁻¹⁷ in R_y(π)⋅R_x(π/2)⋅R_z(π) with a scale) fall below
+        // float32's range beside entries near 1: they are 0 (10²⁰ times smaller than the map's largest entry, they
+        // move nothing a float can tell), not an error. A map whose entries are all that small still is one.
+        double largest = 0;
+        for (double x : plan.inv_linear) largest = std::max(largest, std::fabs(x));
+        for (double o : plan.inv_offset) largest = std::max(largest, std::fabs(o));
+        auto flush = [&](double& x) {
+            if (x != 0 && std::fabs(x) < 1.2e-38 && std::fabs(x) <= 1e-20 * largest) x = 0;
+        };
+        for (double& x : plan.inv_linear) flush(x);
+        for (double& x : plan.inv_offset) flush(x);
         std::vector<double> used = plan.inv_linear;
         used.insert(used.end(), plan.inv_offset.begin(), plan.inv_offset.end());
         used.push_back(plan.scale);
