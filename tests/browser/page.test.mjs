@@ -20,6 +20,8 @@ const parts = new Set(partArgs.length ? partArgs : ["examples", "instances", "th
 for (const p of parts)
   if (!["examples", "instances", "threejs", "pages"].includes(p)) { console.error(`unknown part '${p}'`); process.exit(2); }
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), "iqc-browser-"));
+// Removed at exit (IQC_KEEP_TEST_FILES=1 keeps it, to look at): every run left one behind.
+process.on("exit", () => { if (!process.env.IQC_KEEP_TEST_FILES) fs.rmSync(tmp, { recursive: true, force: true }); });
 let failures = 0, checks = 0;
 const check = (ok, what) => { console.log((ok ? "ok   " : "FAIL ") + what); checks++; if (!ok) failures++; };
 

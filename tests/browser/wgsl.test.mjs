@@ -16,6 +16,8 @@ import path from "node:path";
 
 const [iqc, src, ...only] = process.argv.slice(2);
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), "iqc-wgsl-"));
+// Removed at exit (IQC_KEEP_TEST_FILES=1 keeps it, to look at): every run left one behind.
+process.on("exit", () => { if (!process.env.IQC_KEEP_TEST_FILES) fs.rmSync(tmp, { recursive: true, force: true }); });
 let failures = 0;
 const check = (ok, what) => { console.log((ok ? "ok   " : "FAIL ") + what); if (!ok) failures++; };
 
