@@ -76,10 +76,7 @@ const vec3 IQC_BOX_LO = {{BOX_LO}};  // the scene's box (±1e30: unbounded on th
 const vec3 IQC_BOX_HI = {{BOX_HI}};
 {{/if}}
 {{#if MARCH_FIXED}}
-{{#if FIXED_STEP_PER_RAY}}
-{{#else}}
 const float IQC_FIXED_STEP = {{FIXED_STEP}};
-{{/if}}
 {{/if}}
 {{#if MARCH_RELAXED}}
 const float IQC_RELAXATION = {{RELAXATION}};  // over-relaxation factor ω
@@ -651,14 +648,6 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     float t_far = iqc_far(ro, rd, t);  // t: where the ray enters the box
     if (t_far < 0.0) return -1.0;
 {{/if}}
-{{#if FIXED_STEP_PER_RAY}}
-    // The step (no `step` set, a box open on a side): this ray's way through the scene's box over the step cap,
-    // the finest that reaches the box's far side. max_dist over the cap for every ray sampled a thin wall's box
-    // only where a ray entered and left it, both outside the wall, and drew no wall.
-    float step = (t_far - t) / float(max(IQC_MAX_STEPS - 1, 1));
-{{#else}}
-    float step = IQC_FIXED_STEP;
-{{/if}}
     vec2 h = iqc_scene(ro + t * rd);
     steps++;
     if (h.x < 0.0) s = -1.0;
@@ -666,9 +655,12 @@ float iqc_march(vec3 ro, vec3 rd, out int id, out int steps) {
     iqc_side = s;
 {{/if}}
     for (int i = 1; i < IQC_MAX_STEPS; i++) {
-        // The last step ends at the end, not past it (a surface in that part would be skipped).
-        if (t >= {{T_FAR}}) return -1.0;
-        float t_next = min(t + step, {{T_FAR}});
+        float t_next = t + IQC_FIXED_STEP;
+        if (t_next > {{T_FAR}}) {
+            // The last step ends at the end, not past it (a surface in that part would be skipped).
+            if (t >= {{T_FAR}}) return -1.0;
+            t_next = {{T_FAR}};
+        }
         vec2 h_next = iqc_scene(ro + t_next * rd);
         steps++;
         if (s * {{#if HIT_SCALE}}iqc_value(h_next){{#else}}h_next.x{{/if}} < iqc_eps(t_next)) {

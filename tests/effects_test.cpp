@@ -24,7 +24,7 @@ const std::vector<std::pair<std::string, std::vector<std::string>>> kEffects = {
     {"debug_steps", {"float(steps) / float(IQC_MAX_STEPS)"}},
     {"debug_depth", {"1.0 - t / IQC_MAX_DIST"}},
     {"orbit_camera", {"iMouse.x > 0.0", "yaw"}},
-    {"march_fixed", {"float step = (t_far - t)", "bisection"}},
+    {"march_fixed", {"IQC_FIXED_STEP", "bisection"}},
     {"march_relaxed", {"IQC_RELAXATION", "Keinert"}},
     {"march_auto", {"Bán & Valasek", "step_len = d * (1.0 + g * (1.0 + m) / (1.0 - m))"}},
     {"normals_central", {"Normal by central differences"}},

@@ -177,6 +177,7 @@ SceneIR SceneCompiler::lower(const std::vector<InstancePlan>& plans) {
     // darken (the penumbra estimate); they get the scene without them.
     lo.unbounded_scene = (s_.effects.shadows == Shadows::Soft || s_.effects.ao) && !opts_.per_instance;
     lo.max_dist = s_.render.max_dist;
+    if (march() == March::Fixed && !(s_.render.step > 0) && !opts_.per_instance && !opts_.oracle) lo.thickness_level = hit();
     lo.bound_margin = bound_margin();
     lo.box_level = box_level();
     {
@@ -349,25 +350,44 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     V["CAMERA_POSITION"] = vec3_literal(s_.camera.position);
     V["CAMERA_TARGET"] = vec3_literal(s_.camera.target);
     V["CAMERA_FOCAL"] = glsl::float_literal(focal);
-    // `fixed`'s step where `step` is not set: the longest way a march can go, over the step cap. Marches start
-    // where the ray enters the scene's box and end where it leaves, so where the box is closed on every side that
-    // way is at most its diagonal (a camera 12,000 units from a torus took steps of 156, max_dist / max_steps,
-    // through a box 2.8 wide and drew nothing). Where it is open on a side (a ground, a wall), each ray's own way
-    // through it over the cap (FIXED_STEP_PER_RAY, below): max_dist / max_steps, 0.47 at max_dist 60, stepped
-    // over a wall 0.2 thick, sampling its box only where rays entered and left it. (Per ray in a closed box too,
-    // every ray that misses would take all the steps: the displaced torus's evaluations 9 → 76 per pixel.)
+    // `fixed`'s step by default: the longest way a march can go over the step cap. Marches start where the ray
+    // enters the scene's box and end where it leaves, so where the box is closed on every side that way is at
+    // most its diagonal: a camera 12,000 units from a torus took steps of 156 (max_dist / max_steps) through a
+    // box 2.8 wide and drew nothing.
     double fixed_reach = render.max_dist;
-    bool box_closed = false;
     if (const auto& box = scene.box; box && !opts_.per_instance) {
         double d2 = 0;
-        box_closed = true;
+        bool closed = true;
         for (size_t k = 0; k < 3; ++k) {
-            box_closed &= std::isfinite(box->first[k]) && std::isfinite(box->second[k]);
+            closed &= std::isfinite(box->first[k]) && std::isfinite(box->second[k]);
             d2 += (box->second[k] - box->first[k]) * (box->second[k] - box->first[k]);
         }
-        if (box_closed) fixed_reach = std::min(fixed_reach, std::sqrt(d2));
+        if (closed) fixed_reach = std::min(fixed_reach, std::sqrt(d2));
     }
     V["FIXED_STEP"] = glsl::float_literal(render.step > 0 ? render.step : fixed_reach / max_steps);
+    // A default step longer than half the thinnest instance can take a ray over it: a wall 0.2 thick drew nothing
+    // with steps of 0.47 (max_dist 60 over 128 steps; a trial's finding, stop 44). Steps from each ray's own way
+    // through the box were tried (stop 45): thin walls in open boxes were drawn, but every ray that missed took
+    // all max_steps samples (a trial: 15x a pipe scene's evaluations for the same picture), a ground made every
+    // downward ray's way max_dist again, and a finite panel's closed box kept its diagonal's step. A fixed step
+    // is the scene's choice of cost against what it can miss: it is said, with the step that would see the part.
+    if (scene.thinnest && !(render.step > 0) && fixed_reach / max_steps > scene.thinnest->thickness / 2) {
+        // Half the thickness, rounded down to two significant digits (a step to write in the scene).
+        const double half = scene.thinnest->thickness / 2, unit = std::pow(10.0, std::floor(std::log10(half)) - 1);
+        const double fine = std::floor(half / unit) * unit;
+        const long steps = long(std::ceil(fixed_reach / fine));
+        d_.warning(scene.thinnest->span,
+                   fmt::format("`march = \"fixed\"` steps {} by default ({} {:g} / max_steps {}), over half the thickness of '{}' "
+                               "({:.4g}, by interval arithmetic on its distance): a ray can step over it without a sample inside. "
+                               "Set `step` under [render] to at most {}{}",
+                               glsl::float_literal(fixed_reach / max_steps),
+                               fixed_reach < render.max_dist ? "the scene box's diagonal" : "max_dist", fixed_reach, max_steps,
+                               scene.thinnest->name, scene.thinnest->thickness, glsl::float_literal(fine),
+                               steps <= kMaxStepsSetting
+                                   ? fmt::format(" (and max_steps to {} to reach as far)", steps)
+                                   : fmt::format(" (to reach as far it would take {} steps, over max_steps' limit of {}: a "
+                                                 "smaller max_dist, or `march = \"sphere\"`)", steps, kMaxStepsSetting)));
+    }
     V["RELAXATION"] = glsl::float_literal(render.relaxation);
     V["SHADOW_K"] = glsl::float_literal(fx.shadow_softness);
     V["FOG"] = glsl::float_literal(fx.fog);
@@ -436,7 +456,6 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         }
         F.insert("SCENE_BOX");
         V["T_FAR"] = "t_far";
-        if (render.step <= 0 && !box_closed) F.insert("FIXED_STEP_PER_RAY");
     }
     static const char* marches[] = {"MARCH_FIXED", "MARCH_SPHERE", "MARCH_RELAXED", "MARCH_AUTO", "MARCH_SEGMENT"};
     // Segment tracing is sphere tracing with another step: one march function with both flags (sphere tracing

@@ -504,7 +504,7 @@ void SceneReader::read_render(const toml::table& root) {
             auto& t = *n->as_table();
             check_keys(t, kRenderKeys, " in [render]");
             if (auto* x = t.get("max_steps"))
-                if (auto v = get_int(*x, "max_steps", 1, 100000)) s_.render.max_steps = *v;
+                if (auto v = get_int(*x, "max_steps", 1, kMaxStepsSetting)) s_.render.max_steps = *v;
             if (auto* x = t.get("max_dist"))
                 if (auto v = get_number(*x, "max_dist")) {
                     if (*v <= 0) d_.error(span_of(*x), "'max_dist' must be positive");

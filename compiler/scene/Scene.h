@@ -65,6 +65,9 @@ enum class Normals { Central, Forward, Tetrahedron, Analytic };
 enum class DebugView { None, Normals, Steps, Depth };
 enum class Shadows { None, Hard, Soft };
 
+// The largest `max_steps` a scene may set (scene.md: llvmpipe ends a pixel's shader after 65,535 loop iterations).
+inline constexpr int kMaxStepsSetting = 100000;
+
 struct RenderDesc {
     March march = March::Sphere;
     Span march_span;  // where `march` is written (empty: the default)
@@ -91,7 +94,7 @@ struct RenderDesc {
     double vignette = 0;
     double contrast = 0;
     double relaxation = 1.6;    // ω of the relaxed method
-    double step = 0;            // the fixed method's step (0: max_dist / max_steps)
+    double step = 0;            // the fixed method's step (0: max_dist, or the scene box's diagonal where shorter, / max_steps)
     DebugView debug = DebugView::None;
 };
 

@@ -130,6 +130,7 @@ public:
         m_.constant_parameters = o_.params_constant;
         make_items();
         if (!o_.per_instance) scene_box();
+        if (o_.thickness_level > 0) thinnest();
         declare_lights();
         for (Item& it : items_) declare_item(it);
         for (Item& it : items_) {
@@ -450,6 +451,38 @@ private:
         for (size_t a = 0; a < 3; ++a) bounded |= std::isfinite(lo[a]) || std::isfinite(hi[a]);
         if (!bounded) return;
         out_.box = {lo, hi};
+    }
+    // SceneIR::thinnest: per shape, one box per distinct parameter values (at most 8 sets a shape, the rest
+    // skipped: a warning needs one thin part, not all), at the thickness level over the members' smallest scale.
+    // Instances whose transform moves at run time are left out (their scale is not known here).
+    void thinnest() {
+        std::vector<std::pair<const CheckedModule*, std::map<std::vector<std::vector<double>>, std::vector<size_t>>>> kinds;
+        for (size_t i = 0; i < plans_.size(); ++i) {
+            const InstancePlan& p = plan(i);
+            if (runtime_transform(p)) continue;
+            auto kind = std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == p.shape; });
+            if (kind == kinds.end()) kind = kinds.insert(kinds.end(), {p.shape, {}});
+            if (kind->second.size() < 8 || kind->second.count(p.shape_values)) kind->second[p.shape_values].push_back(i);
+        }
+        for (const auto& [shape, sets] : kinds)
+            for (const auto& [values, members] : sets) {
+                const InstancePlan& first = plan(members[0]);
+                std::vector<std::vector<ir::Interval>> params(first.shape->params.size());
+                for (size_t k = 0; k < params.size(); ++k)
+                    for (double v : values[k]) params[k].push_back({v, v});
+                params[size_t(first.query)].assign(3, {});
+                size_t smallest = members[0];
+                for (size_t mi : members)
+                    if (plan(mi).scale < plan(smallest).scale) smallest = mi;
+                const double scale = std::max(plan(smallest).scale, 1e-9), level = o_.thickness_level / scale;
+                auto box = ir::support_box(m_, lower_module_cached(*first.shape, ctx_), first.query, std::move(params), level);
+                if (!box) continue;
+                for (size_t a = 0; a < 3; ++a) {
+                    const double t = (box->hi[a] - box->lo[a] - 2 * level) * scale;
+                    if (std::isfinite(t) && t > 0 && (!out_.thinnest || t < out_.thinnest->thickness))
+                        out_.thinnest = ThinPart{t, plan(smallest).name, plan(smallest).desc->type_span};
+                }
+            }
     }
     bool runtime_transform(const InstancePlan& p) const {
         return p.has_transform && (p.transform_uses_inputs || (!o_.params_constant && !p.transform->params.empty()));

@@ -48,6 +48,18 @@ struct SceneLowerOptions {
     std::optional<std::array<double, 3>> box_eye;  // the camera, or an orbit's target
     double box_eye_radius = 0;       // an orbit's radius: the camera anywhere on that sphere around box_eye
     int min_group = 4;               // instances of one kind that become a loop
+    // > 0: find the thinnest instance (SceneIR::thinnest), its boxes taken at this level (the hit tolerance): for
+    // `fixed` steps' default, which can step over a part thinner than a step (Compile.cpp warns).
+    double thickness_level = 0;
+};
+
+// An instance's thickness: the narrowest side of its shape's box (ir::support_box in object space, at the
+// instances' own parameter values, less the level on both sides) times its transform's smallest scale; a lower
+// bound of how far a straight line through it can run inside the box (for a slab, its thickness).
+struct ThinPart {
+    double thickness = 0;  // world units
+    std::string name;      // the instance, as the user sees it
+    Span span;             // its `type`
 };
 
 struct SceneIR {
@@ -68,6 +80,7 @@ struct SceneIR {
     // Absent where no side is bounded or the compiler cannot tell (a transform that moves at run time, a blend).
     std::optional<std::pair<std::array<double, 3>, std::array<double, 3>>> box;
     int box_analyses = 0;  // the shapes' boxes analysed for it (ir::support_box calls: a measure of the work)
+    std::optional<ThinPart> thinnest;      // where SceneLowerOptions::thickness_level asks for it (and one is bounded)
     std::vector<std::string> group_notes;  // "torus with lambert: 1000 instances in one loop"
     std::vector<int> instance_ids;         // per plan: the id iqc_scene returns for it (and iqc_distance_of takes)
     std::vector<std::pair<Span, std::string>> warnings;  // what the lowering chose against the scene's wish, located
