@@ -230,6 +230,68 @@ function ball_and_far_plane(p: ℝ³, c: ℝ) -> ℝ {
     CHECK(ir::support_radius(m, 1, 0, V{{}, {{0.3, 0.3}, {0.08, 0.08}}}) == torus);
 }
 
+TEST_CASE("a shape's depth by interval branch and bound: a bound of the largest ball inside, within 10%", "[bvh]") {
+    // A ball (depth its radius), a shell 0.04 thick (depth 0.02: its box is 2 across), a torus tube (0.1), and a
+    // function positive everywhere (no depth).
+    const char* text = R"(function ball(p: ℝ³, r: ℝ) -> ℝ {
+  %0 = ℝ³ Param #0 p  ; p
+  %1 = ℝ Param #1 r  ; r
+  %2 = ℝ Builtin length %0
+  %3 = ℝ Sub %2, %1
+  return %3
+}
+function shell(p: ℝ³) -> ℝ {
+  %0 = ℝ³ Param #0 p  ; p
+  %1 = ℝ Builtin length %0
+  %2 = ℝ Const 1
+  %3 = ℝ Sub %1, %2
+  %4 = ℝ Builtin abs %3
+  %5 = ℝ Const 0.02
+  %6 = ℝ Sub %4, %5
+  return %6
+}
+function torus(p: ℝ³) -> ℝ {
+  %0 = ℝ³ Param #0 p  ; p
+  %1 = ℝ Extract [0] %0
+  %2 = ℝ Extract [2] %0
+  %3 = ℝ² Construct %1, %2
+  %4 = ℝ Builtin length %3
+  %5 = ℝ Const 0.5
+  %6 = ℝ Sub %4, %5
+  %7 = ℝ Extract [1] %0
+  %8 = ℝ² Construct %6, %7
+  %9 = ℝ Builtin length %8
+  %10 = ℝ Const 0.1
+  %11 = ℝ Sub %9, %10
+  return %11
+}
+)";
+    ir::Module m;
+    std::string error;
+    INFO(error);
+    REQUIRE(ir::parse_module(text, m, error));
+    using V = std::vector<std::vector<ir::Interval>>;
+    const std::array<double, 3> lo{-1.1, -1.1, -1.1}, hi{1.1, 1.1, 1.1};
+    auto ball = ir::deepest_bound(m, 0, 0, V{{}, {{0.7, 0.7}}}, lo, hi);
+    REQUIRE(ball);
+    CHECK(*ball >= 0.7);
+    CHECK(*ball <= 0.7 * 1.1);
+    auto shell = ir::deepest_bound(m, 1, 0, V{{}}, lo, hi);
+    REQUIRE(shell);
+    CHECK(*shell >= 0.02);
+    CHECK(*shell <= 0.022);
+    auto tube = ir::deepest_bound(m, 2, 0, V{{}}, lo, hi);
+    REQUIRE(tube);
+    CHECK(*tube >= 0.1);
+    CHECK(*tube <= 0.11);
+    auto none = ir::deepest_bound(m, 0, 0, V{{}, {{-1, -1}}}, lo, hi);  // ‖p‖ + 1: never inside
+    REQUIRE(none);
+    CHECK(*none == 0);
+    // An unbounded box, or one the distance cannot bound: nothing.
+    CHECK_FALSE(ir::deepest_bound(m, 0, 0, V{{}, {{0.7, 0.7}}}, {-INFINITY, -1, -1}, hi));
+    CHECK_FALSE(ir::deepest_bound(m, 0, 0, V{{}, {{-INFINITY, INFINITY}}}, lo, hi));
+}
+
 TEST_CASE("find_instance_lattice: full and partly filled lattices in any member order, none for other layouts", "[bvh][lattice]") {
     // Members listed x fastest, then z, then y (bench/rings.sh's order), spacing (1, 0.5, 1), radius 0.4.
     auto rings = [](int n, int side) {

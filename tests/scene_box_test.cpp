@@ -604,6 +604,30 @@ TEST_CASE("fixed steps longer than half the thinnest instance are a located warn
         REQUIRE(quiet.result.exit_code == 0);
         CHECK(quiet.diagnostics.find("warning") == std::string::npos);
     }
+    // Thin parts whose box is not thin (stop 45's trial): a shell 0.04 thick has a box 2 across; its depth (the
+    // distance's lowest value inside it, by interval branch and bound) gives its thickness. On a ground (an open
+    // box: steps of 60 / 128).
+    const std::string ground = "[[shapes]]\ntype = \"floor\"\n";
+    const std::string more = "floor = \"\"\"\nshape\nD = p_2 + 2\nwhere\np ∈ ℝ³\n\"\"\"\n"
+                             "shell = \"\"\"\nshape\nD = |‖p‖ - 1| - 0.02\nwhere\np ∈ ℝ³\n\"\"\"\n"
+                             "plate = \"\"\"\nshape\nD = max(|p_1| - 0.01, |p_2| - 0.5, |p_3| - 0.5)\nwhere\np ∈ ℝ³\n\"\"\"\n";
+    auto with_ground = [&](const std::string& type, const std::string& transform) {
+        std::string text = scene("march = \"fixed\"", type, transform) + ground;
+        text.insert(text.find("[camera]"), more);
+        return text;
+    };
+    Compiled shell = compile_text("fixed_shell.iq", with_ground("shell", "T((3, 0.3, 0.5))"));
+    REQUIRE(shell.result.exit_code == 0);
+    CHECK_THAT(shell.diagnostics, Catch::Contains("over half the thickness of 'shell_1' (0.04"));
+    // A plate 0.02 thick stretched 80 times across its thin side is a block 1.6 thick: no warning; unstretched,
+    // and turned by time (taken at time 0), it is warned.
+    Compiled stretched = compile_text("fixed_stretched.iq", with_ground("plate", "S((80, 1, 1))"));
+    REQUIRE(stretched.result.exit_code == 0);
+    CHECK(stretched.diagnostics.find("thickness") == std::string::npos);
+    Compiled plate = compile_text("fixed_plate.iq", with_ground("plate", "`R_y`(time)"));
+    INFO(plate.diagnostics);
+    REQUIRE(plate.result.exit_code == 0);
+    CHECK_THAT(plate.diagnostics, Catch::Contains("over half the thickness of 'plate_1' (0.02"));
     // A step that would need more than max_steps' limit to reach max_dist says so.
     std::string far_text = scene("march = \"fixed\"", "wall", "T((3, 0.3, 0.5))");
     far_text.replace(far_text.find("max_dist = 60"), 13, "max_dist = 20000");

@@ -656,4 +656,48 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
     return out;
 }
 
+std::optional<double> deepest_bound(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
+                                    const std::array<double, 3>& lo, const std::array<double, 3>& hi, int loop_trips, long work) {
+    if (!boxable(m, fn, query, params.size())) return std::nullopt;
+    for (size_t a = 0; a < 3; ++a)
+        if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || lo[a] > hi[a]) return std::nullopt;
+    DistanceRange distance{m, m.functions[size_t(fn)], query, params, loop_trips, work};
+    // Boxes by the depth their interval allows (−lo of d), deepest first.
+    using Entry = std::pair<double, Box>;
+    auto shallower = [](const Entry& x, const Entry& y) { return x.first < y.first; };
+    std::priority_queue<Entry, std::vector<Entry>, decltype(shallower)> queue(shallower);
+    auto push = [&](const Box& b) {
+        Interval d = distance(b);
+        if (d.lo < 0) queue.push({-d.lo, b});  // boxes where d stays ≥ 0 hold no depth
+    };
+    double found = 0;  // a depth some point has (d at a box's centre)
+    push(Box{lo, hi});
+    while (!queue.empty() && work > 0) {
+        auto [bound, b] = queue.top();
+        if (!std::isfinite(bound)) {
+            if (b.hi[0] - b.lo[0] + b.hi[1] - b.lo[1] + b.hi[2] - b.lo[2] <= 0) return std::nullopt;
+        } else if (bound <= 1.1 * found) {
+            return bound;
+        }
+        queue.pop();
+        Box centre;
+        for (size_t a = 0; a < 3; ++a) centre.lo[a] = centre.hi[a] = 0.5 * (b.lo[a] + b.hi[a]);
+        Interval at = distance(centre);
+        if (std::isfinite(at.hi)) found = std::max(found, -at.hi);
+        size_t wide = 0;
+        for (size_t a = 1; a < 3; ++a)
+            if (b.hi[a] - b.lo[a] > b.hi[wide] - b.lo[wide]) wide = a;
+        const double mid = 0.5 * (b.lo[wide] + b.hi[wide]);
+        if (!(mid > b.lo[wide] && mid < b.hi[wide])) return std::isfinite(bound) ? std::optional<double>(bound) : std::nullopt;
+        Box left = b, right = b;
+        left.hi[wide] = mid;
+        right.lo[wide] = mid;
+        push(left);
+        push(right);
+    }
+    if (queue.empty()) return 0.0;  // no point of the box is inside the solid
+    double bound = queue.top().first;
+    return std::isfinite(bound) ? std::optional<double>(bound) : std::nullopt;
+}
+
 }  // namespace iqc::ir

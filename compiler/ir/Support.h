@@ -50,4 +50,14 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
 bool support_box_open(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params, double level,
                       int per_proof = 48, int loop_trips = 16, long work = 300000);
 
+// An upper bound of the distance's depth inside the solid, max(−d) over the box [lo, hi] (finite on every side;
+// for an exact signed distance the radius of the largest ball inside the solid: a shell's or a tube's half
+// thickness). Best-first branch and bound (Moore 1966): the box whose interval of d reaches lowest is split in
+// two at its widest side until that bound is within 10% of a depth found at a box's centre, or `work`
+// instructions are spent; nothing where the function cannot be boxed or no bound under +∞ is found. A distance
+// that underestimates (a Lipschitz bound, not exact) gives a smaller depth than the solid's.
+std::optional<double> deepest_bound(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
+                                    const std::array<double, 3>& lo, const std::array<double, 3>& hi, int loop_trips = 16,
+                                    long work = 1500000);
+
 }  // namespace iqc::ir

@@ -378,7 +378,8 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         const long steps = long(std::ceil(fixed_reach / fine));
         d_.warning(scene.thinnest->span,
                    fmt::format("`march = \"fixed\"` steps {} by default ({} {:g} / max_steps {}), over half the thickness of '{}' "
-                               "({:.4g}, by interval arithmetic on its distance): a ray can step over it without a sample inside. "
+                               "({:.4g} with the hit test's band, by interval arithmetic on its distance): a ray can step over it without a "
+                               "sample inside. "
                                "Set `step` under [render] to at most {}{}",
                                glsl::float_literal(fixed_reach / max_steps),
                                fixed_reach < render.max_dist ? "the scene box's diagonal" : "max_dist", fixed_reach, max_steps,

@@ -452,36 +452,66 @@ private:
         if (!bounded) return;
         out_.box = {lo, hi};
     }
-    // SceneIR::thinnest: per shape, one box per distinct parameter values (at most 8 sets a shape, the rest
-    // skipped: a warning needs one thin part, not all), at the thickness level over the members' smallest scale.
-    // Instances whose transform moves at run time are left out (their scale is not known here).
+    // SceneIR::thinnest: per shape, one analysis per distinct parameter values (at most 8 sets a shape and 32 in
+    // all, each with a small budget: a warning needs one thin part, and 200 shapes of a kind each cost 5x the
+    // compile in a trial). Each set's box at the hit level in object space (support_box: the hit test's band
+    // included, as a fixed march sees it), its sides' world widths through the members' transforms (a slab
+    // |x_a| ≤ w/2 maps to one w / ‖row a of the world → object map‖ thick: a scale that stretches it counts),
+    // and, where the map keeps shapes (a rotation and a uniform scale) and the box is closed, twice the depth
+    // of the solid (deepest_bound: a shell's, a tube's, a frame's thickness, which the box does not show).
+    // Transforms that move at run time are taken at their values at time 0 and the sliders' defaults.
     void thinnest() {
         std::vector<std::pair<const CheckedModule*, std::map<std::vector<std::vector<double>>, std::vector<size_t>>>> kinds;
         for (size_t i = 0; i < plans_.size(); ++i) {
             const InstancePlan& p = plan(i);
-            if (runtime_transform(p)) continue;
             auto kind = std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == p.shape; });
             if (kind == kinds.end()) kind = kinds.insert(kinds.end(), {p.shape, {}});
             if (kind->second.size() < 8 || kind->second.count(p.shape_values)) kind->second[p.shape_values].push_back(i);
         }
+        constexpr long kWork = 300000;  // about 3 ms an analysis
+        int analyses = 0;
         for (const auto& [shape, sets] : kinds)
             for (const auto& [values, members] : sets) {
+                if (++analyses > 32) return;
                 const InstancePlan& first = plan(members[0]);
                 std::vector<std::vector<ir::Interval>> params(first.shape->params.size());
                 for (size_t k = 0; k < params.size(); ++k)
                     for (double v : values[k]) params[k].push_back({v, v});
                 params[size_t(first.query)].assign(3, {});
-                size_t smallest = members[0];
-                for (size_t mi : members)
-                    if (plan(mi).scale < plan(smallest).scale) smallest = mi;
-                const double scale = std::max(plan(smallest).scale, 1e-9), level = o_.thickness_level / scale;
-                auto box = ir::support_box(m_, lower_module_cached(*first.shape, ctx_), first.query, std::move(params), level);
-                if (!box) continue;
-                for (size_t a = 0; a < 3; ++a) {
-                    const double t = (box->hi[a] - box->lo[a] - 2 * level) * scale;
-                    if (std::isfinite(t) && t > 0 && (!out_.thinnest || t < out_.thinnest->thickness))
-                        out_.thinnest = ThinPart{t, plan(smallest).name, plan(smallest).desc->type_span};
+                // The members' widest object rows per axis, smallest scale, and whether every map keeps shapes.
+                std::array<double, 3> row{0, 0, 0};
+                double scale = INFINITY;
+                bool conformal = true;
+                for (size_t mi : members) {
+                    const InstancePlan& p = plan(mi);
+                    std::array<double, 3> r;
+                    for (size_t a = 0; a < 3; ++a) {
+                        r[a] = std::hypot(p.inv_linear[a * 3], p.inv_linear[a * 3 + 1], p.inv_linear[a * 3 + 2]);
+                        row[a] = std::max(row[a], r[a]);
+                    }
+                    const double lo = std::min({r[0], r[1], r[2]}), hi = std::max({r[0], r[1], r[2]});
+                    double cross = 0;  // rows of a rotation times a scale are orthogonal
+                    for (size_t a = 0; a < 3; ++a)
+                        for (size_t b = a + 1; b < 3; ++b)
+                            cross = std::max(cross, std::fabs(p.inv_linear[a * 3] * p.inv_linear[b * 3] + p.inv_linear[a * 3 + 1] * p.inv_linear[b * 3 + 1] +
+                                                              p.inv_linear[a * 3 + 2] * p.inv_linear[b * 3 + 2]));
+                    conformal &= hi <= 1.01 * lo && cross <= 0.01 * hi * hi;
+                    scale = std::min(scale, p.scale);
                 }
+                if (!(scale > 0) || !std::isfinite(scale)) continue;
+                const int fn = lower_module_cached(*first.shape, ctx_);
+                const double level = o_.thickness_level / scale;
+                auto box = ir::support_box(m_, fn, first.query, params, level, 48, 16, kWork);
+                if (!box) continue;
+                double thickness = INFINITY;
+                for (size_t a = 0; a < 3; ++a)
+                    if (row[a] > 0) thickness = std::min(thickness, (box->hi[a] - box->lo[a]) / row[a]);
+                if (conformal)
+                    if (auto depth = ir::deepest_bound(m_, fn, first.query, params, box->lo, box->hi, 16, kWork))
+                        thickness = std::min(thickness, 2 * (*depth * scale + o_.thickness_level));
+                const InstancePlan& named = plan(members[0]);
+                if (std::isfinite(thickness) && thickness > 0 && (!out_.thinnest || thickness < out_.thinnest->thickness))
+                    out_.thinnest = ThinPart{thickness, named.name, named.desc->type_span};
             }
     }
     bool runtime_transform(const InstancePlan& p) const {
