@@ -672,7 +672,8 @@ std::optional<double> deepest_bound(const Module& m, int fn, int query, std::vec
     };
     double found = 0;  // a depth some point has (d at a box's centre)
     push(Box{lo, hi});
-    while (!queue.empty() && work > 0) {
+    // (work is spent by the analysis of each box; a cap on the splits too, for a function of almost no code)
+    for (int splits = 0; !queue.empty() && work > 0 && splits < 20000; ++splits) {
         auto [bound, b] = queue.top();
         if (!std::isfinite(bound)) {
             if (b.hi[0] - b.lo[0] + b.hi[1] - b.lo[1] + b.hi[2] - b.lo[2] <= 0) return std::nullopt;

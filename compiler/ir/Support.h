@@ -54,7 +54,7 @@ bool support_box_open(const Module& m, int fn, int query, std::vector<std::vecto
 // for an exact signed distance the radius of the largest ball inside the solid: a shell's or a tube's half
 // thickness). Best-first branch and bound (Moore 1966): the box whose interval of d reaches lowest is split in
 // two at its widest side until that bound is within 10% of a depth found at a box's centre, or `work`
-// instructions are spent; nothing where the function cannot be boxed or no bound under +∞ is found. A distance
+// instructions (or 20,000 splits) are spent; nothing where the function cannot be boxed or no bound under +∞ is found. A distance
 // that underestimates (a Lipschitz bound, not exact) gives a smaller depth than the solid's.
 std::optional<double> deepest_bound(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
                                     const std::array<double, 3>& lo, const std::array<double, 3>& hi, int loop_trips = 16,
