@@ -554,7 +554,7 @@ TEST_CASE("fixed steps by default cover the scene's box, not max_dist, over the 
 // each ray's own way through the box drew them but made every missing ray take all max_steps samples (15x a pipe
 // scene's evaluations for the same picture): the compiler finds the thinnest instance (its shape's box by
 // interval arithmetic, its transform's scale) and says which step would see it.
-TEST_CASE("fixed steps longer than half the thinnest instance are a located warning with the step that sees it", "[scene][box][render]") {
+TEST_CASE("fixed steps longer than the thinnest instance are a located warning with the step that sees it", "[scene][box][render]") {
     const std::string modules = "[modules]\nwall = \"\"\"\nshape\nD = |p_1| - 0.1\nwhere\np ∈ ℝ³\n\"\"\"\n"
                                 "ball = \"\"\"\nshape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n\"\"\"\n";
     auto scene = [&](const std::string& render, const std::string& type, const std::string& transform) {
@@ -565,7 +565,7 @@ TEST_CASE("fixed steps longer than half the thinnest instance are a located warn
     Compiled thin = compile_text("fixed_thin.iq", scene("march = \"fixed\"", "wall", "T((3, 0.3, 0.5))"));
     REQUIRE(thin.result.exit_code == 0);
     CHECK_THAT(thin.diagnostics, Catch::Contains("fixed_thin.iq:21:8: warning: `march = \"fixed\"` steps 0.46875 by default "
-                                                 "(max_dist 60 / max_steps 128), over half the thickness of 'wall_1' (0.20"));
+                                                 "(max_dist 60 / max_steps 128), longer than the thickness of 'wall_1' (0.20"));
     CHECK_THAT(thin.diagnostics, Catch::Contains("Set `step` under [render] to at most 0.1 (and max_steps to 600 to reach as far)"));
     CHECK_THAT(thin.diagnostics, Catch::Contains("  type = \"wall\"\n         ^~~~~~"));
     // What it says holds: with the step it gives the wall is drawn as sphere tracing draws it; without, it is not.
@@ -589,13 +589,14 @@ TEST_CASE("fixed steps longer than half the thinnest instance are a located warn
     CHECK(differ_coarse > 96 * 54 / 2);
     CHECK(differ_fine <= 96 * 54 / 100);
     // Thickness in the shape's own space times the transform's scale: the wall turned by π/6 and scaled by 3 is
-    // 0.6 thick (its world box is not thin on any axis); a step of 0.3 or less is not warned.
-    Compiled turned = compile_text("fixed_turned.iq", scene("march = \"fixed\"", "wall", "`R_y`(π/6)⋅S((3, 3, 3))"));
+    // 0.6 thick (its world box is not thin on any axis): warned at steps of 60 / 64, not at 60 / 128 (a step
+    // shorter than a slab's thickness samples it on every ray).
+    Compiled turned = compile_text("fixed_turned.iq", scene("march = \"fixed\"\nmax_steps = 64", "wall", "`R_y`(π/6)⋅S((3, 3, 3))"));
     REQUIRE(turned.result.exit_code == 0);
-    CHECK_THAT(turned.diagnostics, Catch::Contains("over half the thickness of 'wall_1' (0.60"));
+    CHECK_THAT(turned.diagnostics, Catch::Contains("longer than the thickness of 'wall_1' (0.60"));
     CHECK_THAT(turned.diagnostics, Catch::Contains("to at most 0.3 (and max_steps to 200 to reach as far)"));
-    Compiled fits = compile_text("fixed_fits.iq", scene("march = \"fixed\"\nmax_steps = 256", "wall", "`R_y`(π/6)⋅S((3, 3, 3))"));
-    CHECK(fits.diagnostics.find("thickness") == std::string::npos);  // 60 / 256 = 0.23
+    Compiled fits = compile_text("fixed_fits.iq", scene("march = \"fixed\"", "wall", "`R_y`(π/6)⋅S((3, 3, 3))"));
+    CHECK(fits.diagnostics.find("thickness") == std::string::npos);  // 60 / 128 = 0.47
     // No warning: a step the scene sets, another march, a shape thicker than two steps (a ball 2 across).
     for (const auto& [render, type] : std::vector<std::pair<std::string, std::string>>{
              {"march = \"fixed\"\nstep = 0.3", "wall"}, {"march = \"sphere\"", "wall"}, {"march = \"fixed\"", "ball"}}) {
@@ -618,7 +619,7 @@ TEST_CASE("fixed steps longer than half the thinnest instance are a located warn
     };
     Compiled shell = compile_text("fixed_shell.iq", with_ground("shell", "T((3, 0.3, 0.5))"));
     REQUIRE(shell.result.exit_code == 0);
-    CHECK_THAT(shell.diagnostics, Catch::Contains("over half the thickness of 'shell_1' (0.04"));
+    CHECK_THAT(shell.diagnostics, Catch::Contains("longer than the thickness of 'shell_1' (0.04"));
     // A plate 0.02 thick stretched 80 times across its thin side is a block 1.6 thick: no warning; unstretched,
     // and turned by time (taken at time 0), it is warned.
     Compiled stretched = compile_text("fixed_stretched.iq", with_ground("plate", "S((80, 1, 1))"));
@@ -627,7 +628,18 @@ TEST_CASE("fixed steps longer than half the thinnest instance are a located warn
     Compiled plate = compile_text("fixed_plate.iq", with_ground("plate", "`R_y`(time)"));
     INFO(plate.diagnostics);
     REQUIRE(plate.result.exit_code == 0);
-    CHECK_THAT(plate.diagnostics, Catch::Contains("over half the thickness of 'plate_1' (0.02"));
+    CHECK_THAT(plate.diagnostics, Catch::Contains("longer than the thickness of 'plate_1' (0.02"));
+    // A relative hit tolerance (0.01 per unit of distance): the hit test sees the plate 20 units away 0.02 + 2·0.2
+    // thick, and steps of 60 / 256 sample it on every ray (a trial's false alarm); with 0.01 absolute, warned.
+    for (const char* mode : {"relative", "absolute"}) {
+        std::string text = with_ground("plate", "T((0, 0, 20))⋅`R_y`(0.3)");
+        text.insert(text.find("max_dist = 60"), std::string("hit_mode = \"") + mode + "\"\nhit = 0.01\nmax_steps = 256\n");
+        text.replace(text.find("position = [-6, 1.2, 1]"), 23, "position = [0, 1, -1]");
+        Compiled c = compile_text("fixed_relative.iq", text);
+        INFO(mode << "\n" << c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        CHECK((c.diagnostics.find("longer than the thickness of 'plate_1'") != std::string::npos) == (std::string(mode) == "absolute"));
+    }
     // A step that would need more than max_steps' limit to reach max_dist says so.
     std::string far_text = scene("march = \"fixed\"", "wall", "T((3, 0.3, 0.5))");
     far_text.replace(far_text.find("max_dist = 60"), 13, "max_dist = 20000");

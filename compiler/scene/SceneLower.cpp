@@ -509,6 +509,36 @@ private:
                 if (conformal)
                     if (auto depth = ir::deepest_bound(m_, fn, first.query, params, box->lo, box->hi, 16, kWork))
                         thickness = std::min(thickness, 2 * (*depth * scale + o_.thickness_level));
+                // A relative tolerance: the band is the tolerance times the distance from the camera to the nearest
+                // member's box (its world centre, less its half-diagonal through the object → world map), not 1.
+                if (o_.thickness_eye && std::isfinite(thickness)) {
+                    double nearest = INFINITY, half = 0;
+                    std::array<double, 3> centre;
+                    for (size_t a = 0; a < 3; ++a) {
+                        centre[a] = 0.5 * (box->lo[a] + box->hi[a]);
+                        half += std::pow(0.5 * (box->hi[a] - box->lo[a]), 2);
+                    }
+                    half = std::sqrt(half);
+                    for (size_t mi : members) {
+                        const InstancePlan& p = plan(mi);
+                        bool singular = false;
+                        std::vector<double> Li = ir::mat_inverse(p.inv_linear, 3, &singular);
+                        if (singular || !std::isfinite(half)) {
+                            nearest = 0;
+                            break;
+                        }
+                        double frobenius = 0, d2 = 0;
+                        for (double x : Li) frobenius += x * x;
+                        for (size_t r = 0; r < 3; ++r) {
+                            double w = 0;
+                            for (size_t c = 0; c < 3; ++c) w += Li[r * 3 + c] * (centre[c] - p.inv_offset[c]);
+                            d2 += std::pow(w - (*o_.thickness_eye)[r], 2);
+                        }
+                        nearest = std::min(nearest, std::max(std::sqrt(d2) - half * std::sqrt(frobenius), 0.0));
+                    }
+                    const double band = o_.thickness_level * std::max(nearest, 1e-3);
+                    if (band > o_.thickness_level) thickness += 2 * (band - o_.thickness_level);
+                }
                 const InstancePlan& named = plan(members[0]);
                 if (std::isfinite(thickness) && thickness > 0 && (!out_.thinnest || thickness < out_.thinnest->thickness))
                     out_.thinnest = ThinPart{thickness, named.name, named.desc->type_span};

@@ -51,6 +51,9 @@ struct SceneLowerOptions {
     // > 0: find the thinnest instance (SceneIR::thinnest), its boxes taken at this level (the hit tolerance): for
     // `fixed` steps' default, which can step over a part thinner than a step (Compile.cpp warns).
     double thickness_level = 0;
+    // A hit tolerance relative to the distance along the ray (thickness_level per unit): the camera, from which
+    // the band the hit test sees around an instance is the tolerance times its distance.
+    std::optional<std::array<double, 3>> thickness_eye;
 };
 
 // An instance's thickness: the narrowest side of its shape's box (ir::support_box in object space, at the
