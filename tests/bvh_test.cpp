@@ -141,9 +141,9 @@ TEST_CASE("the bounds tree is deterministic", "[bvh]") {
     for (size_t l = 0; l < a.levels.size(); ++l) CHECK(a.levels[l].first == b.levels[l].first);
 }
 
-TEST_CASE("a shape's extent by interval arithmetic: a ball that contains the solid, tight to a few percent", "[bvh]") {
-    // The IR of a sphere of radius r, a torus (R, r) and a box of half-sides b, and a plane (unbounded).
-    const char* text = R"(function ball(p: ℝ³, r: ℝ) -> ℝ {
+// The IR of a sphere of radius r, a torus (R, r) and a box of half-sides b, and a plane (unbounded), and more
+// (the extent and depth tests below).
+const char* const kShapesIr = R"(function ball(p: ℝ³, r: ℝ) -> ℝ {
   %0 = ℝ³ Param #0 p  ; p
   %1 = ℝ Param #1 r  ; r
   %2 = ℝ Builtin length %0
@@ -197,6 +197,9 @@ function ball_and_far_plane(p: ℝ³, c: ℝ) -> ℝ {
   return %7
 }
 )";
+
+TEST_CASE("a shape's extent by interval arithmetic: a ball that contains the solid, tight to a few percent", "[bvh]") {
+    const std::string text = kShapesIr;
     ir::Module m;
     std::string error;
     INFO(error);
@@ -231,16 +234,9 @@ function ball_and_far_plane(p: ℝ³, c: ℝ) -> ℝ {
 }
 
 TEST_CASE("a shape's depth by interval branch and bound: a bound of the largest ball inside, within 10%", "[bvh]") {
-    // A ball (depth its radius), a shell 0.04 thick (depth 0.02: its box is 2 across), a torus tube (0.1), and a
+    // A ball (depth its radius), a shell 0.04 thick (depth 0.02: its box is 2 across), a torus's tube (0.1), and a
     // function positive everywhere (no depth).
-    const char* text = R"(function ball(p: ℝ³, r: ℝ) -> ℝ {
-  %0 = ℝ³ Param #0 p  ; p
-  %1 = ℝ Param #1 r  ; r
-  %2 = ℝ Builtin length %0
-  %3 = ℝ Sub %2, %1
-  return %3
-}
-function shell(p: ℝ³) -> ℝ {
+    const std::string text = std::string(kShapesIr) + R"(function shell(p: ℝ³) -> ℝ {
   %0 = ℝ³ Param #0 p  ; p
   %1 = ℝ Builtin length %0
   %2 = ℝ Const 1
@@ -249,21 +245,6 @@ function shell(p: ℝ³) -> ℝ {
   %5 = ℝ Const 0.02
   %6 = ℝ Sub %4, %5
   return %6
-}
-function torus(p: ℝ³) -> ℝ {
-  %0 = ℝ³ Param #0 p  ; p
-  %1 = ℝ Extract [0] %0
-  %2 = ℝ Extract [2] %0
-  %3 = ℝ² Construct %1, %2
-  %4 = ℝ Builtin length %3
-  %5 = ℝ Const 0.5
-  %6 = ℝ Sub %4, %5
-  %7 = ℝ Extract [1] %0
-  %8 = ℝ² Construct %6, %7
-  %9 = ℝ Builtin length %8
-  %10 = ℝ Const 0.1
-  %11 = ℝ Sub %9, %10
-  return %11
 }
 )";
     ir::Module m;
@@ -276,11 +257,11 @@ function torus(p: ℝ³) -> ℝ {
     REQUIRE(ball);
     CHECK(*ball >= 0.7);
     CHECK(*ball <= 0.7 * 1.1);
-    auto shell = ir::deepest_bound(m, 1, 0, V{{}}, lo, hi);
+    auto shell = ir::deepest_bound(m, m.find("shell"), 0, V{{}}, lo, hi);
     REQUIRE(shell);
     CHECK(*shell >= 0.02);
     CHECK(*shell <= 0.022);
-    auto tube = ir::deepest_bound(m, 2, 0, V{{}}, lo, hi);
+    auto tube = ir::deepest_bound(m, m.find("torus"), 0, V{{}, {{0.5, 0.5}, {0.1, 0.1}}}, lo, hi);
     REQUIRE(tube);
     CHECK(*tube >= 0.1);
     CHECK(*tube <= 0.11);
