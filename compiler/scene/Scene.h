@@ -65,7 +65,8 @@ enum class Normals { Central, Forward, Tetrahedron, Analytic };
 enum class DebugView { None, Normals, Steps, Depth };
 enum class Shadows { None, Hard, Soft };
 
-// The largest `max_steps` a scene may set (scene.md: llvmpipe ends a pixel's shader after 65,535 loop iterations).
+// The largest `max_steps` a scene may set (Scene.cpp refuses more; the fixed march's thickness warning says when
+// the step it advises would need more to reach as far).
 inline constexpr int kMaxStepsSetting = 100000;
 
 struct RenderDesc {

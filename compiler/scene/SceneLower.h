@@ -56,9 +56,10 @@ struct SceneLowerOptions {
     std::optional<std::array<double, 3>> thickness_eye;
 };
 
-// An instance's thickness: the narrowest side of its shape's box (ir::support_box in object space, at the
-// instances' own parameter values, less the level on both sides) times its transform's smallest scale; a lower
-// bound of how far a straight line through it can run inside the box (for a slab, its thickness).
+// An instance's thickness as a fixed march's hit test sees it (the hit tolerance's band included): the narrowest
+// world width of its shape's box (ir::support_box in object space, at the instances' own parameter values) through
+// its transform, or, where the transform keeps shapes and the box is closed, twice the solid's depth
+// (ir::deepest_bound: a shell's, a tube's thickness). For a slab, how short a ray's way through it can be.
 struct ThinPart {
     double thickness = 0;  // world units
     std::string name;      // the instance, as the user sees it
