@@ -13,10 +13,12 @@
 #include <string>
 #include <sys/wait.h>
 
+#include "ir/Builder.h"
 #include "ir/Eval.h"
 #include "ir/Lower.h"
 #include "render/Render.h"
 #include "scene/Compile.h"
+#include "scene/Modules.h"
 #include "sema/Builtins.h"
 #include "sema/Check.h"
 #include "syntax/Parser.h"
@@ -172,5 +174,37 @@ inline Evaluated eval_module(const std::string& source, const std::map<std::stri
 }
 
 inline double scalar_of(const Evaluated& e, const std::string& name) { return e.outputs.at(name).v.at(0); }
+
+// Shape module `text` (module `name`, file `path`) lowered into `m` with an object function q ∈ ℝ³ -> D(q),
+// every other parameter at its default, appended last: its index, or -1 for a module that is not a shape.
+// `seen`, when given, is called with the checked module (its pragmas: exactness, Lipschitz bound).
+inline int lower_shape_object(ir::Module& m, const std::string& text, const std::string& name, const std::string& path = "",
+                              const std::function<void(const CheckedModule&)>& seen = {}) {
+    SourceManager sm;
+    Diagnostics d(sm);
+    FileId f = sm.add(path.empty() ? name + ".iql" : path, text);
+    ModuleLibrary lib(sm, d, {});
+    ModuleSource source{name, f, {{0, uint32_t(text.size())}}, {f, 0, 1}, "file"};  // the library keeps a pointer
+    lib.add(source);
+    const CheckedModule* cm = lib.get(name, {});
+    if (!cm || cm->ast.kind != ast::ModuleKind::Shape) return -1;
+    INFO(name << "\n" << d.render());
+    REQUIRE(cm->ok);
+    if (seen) seen(*cm);
+    LowerContext ctx{m, {}, {}};
+    int fn = lower_module(*cm, name, name, ctx);
+    ir::Function w;
+    w.name = "object";
+    {
+        ir::Builder b(m, w);
+        ir::ValueId q = b.param("q", Type::vector(3));
+        std::vector<ir::ValueId> args;
+        for (const auto& p : cm->params) args.push_back(p.name == "p" ? q : b.constant(p.type, p.value));
+        w.result = b.call(fn, args);
+    }
+    w.entry = true;
+    m.functions.push_back(std::move(w));
+    return int(m.functions.size()) - 1;
+}
 
 }  // namespace iqc::test

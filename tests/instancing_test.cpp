@@ -91,6 +91,28 @@ int count(const std::string& s, const std::string& what) {
     return n;
 }
 
+// Scene evaluations and shape evaluations in all over a W×H picture of the scene at `path` compiled with
+// `o` and the instrumentation (the counts `iqc render --stats` prints).
+struct Evaluations {
+    double evals = 0, shapes = 0;
+};
+Evaluations count_evaluations(const std::filesystem::path& path, CompileOptions o, int W, int H) {
+    o.ids = false;
+    o.instrument = true;
+    Compiled ic = compile_path(path, o);
+    REQUIRE(ic.result.exit_code == 0);
+    render::RenderResult ir = render_compiled(ic.result, W, H);
+    INFO(ir.error);
+    REQUIRE(ir.ok);
+    Evaluations n;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            n.evals += ir.image.pixel(x, y)[1];
+            n.shapes += ir.image.pixel(x, y)[3];
+        }
+    return n;
+}
+
 }  // namespace
 
 TEST_CASE("1000 rings are one loop and one case of each dispatch on every target", "[instancing]") {
@@ -423,22 +445,10 @@ TEST_CASE("rings with bound: a lattice on a grid, a bounding-volume hierarchy ot
         CHECK(a.disagree <= a.samples / 50);
         CHECK(a.rings > a.samples / 8);
         // Instrumented: shapes evaluated per scene evaluation (the stats `iqc render --stats` prints).
-        CompileOptions io = o;
-        io.ids = false;
-        io.instrument = true;
-        Compiled ic = compile_path(path, io);
-        REQUIRE(ic.result.exit_code == 0);
-        render::RenderResult ir = render_compiled(ic.result, W, H);
-        REQUIRE(ir.ok);
-        double evals = 0, shapes = 0;
-        for (int y = 0; y < H; ++y)
-            for (int x = 0; x < W; ++x) {
-                evals += ir.image.pixel(x, y)[1];
-                shapes += ir.image.pixel(x, y)[3];
-            }
-        INFO(shapes / evals << " shapes per scene evaluation");
-        CHECK(evals > W * H);
-        CHECK(shapes / evals <= 16);
+        Evaluations counts = count_evaluations(path, o, W, H);
+        INFO(counts.shapes / counts.evals << " shapes per scene evaluation");
+        CHECK(counts.evals > W * H);
+        CHECK(counts.shapes / counts.evals <= 16);
     }
 }
 
@@ -471,24 +481,52 @@ TEST_CASE("rings without bound get one derived from the shape: a lattice, few sh
     Agreement a = against_reference(c.result, r, W, H, 3);
     CHECK(a.disagree <= a.samples / 50);
     CHECK(a.rings > a.samples / 8);
-    CompileOptions io;
-    io.instrument = true;
-    Compiled ic = compile_path(path, io);
-    REQUIRE(ic.result.exit_code == 0);
-    render::RenderResult ir = render_compiled(ic.result, W, H);
-    REQUIRE(ir.ok);
-    double evals = 0, shapes = 0;
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            evals += ir.image.pixel(x, y)[1];
-            shapes += ir.image.pixel(x, y)[3];
-        }
-    INFO(shapes / evals << " shapes per scene evaluation");
-    CHECK(shapes / evals <= 16);
+    Evaluations counts = count_evaluations(path, CompileOptions{}, W, H);
+    INFO(counts.shapes / counts.evals << " shapes per scene evaluation");
+    CHECK(counts.shapes / counts.evals <= 16);
     // A group below 48 members keeps its plain loop, and a plane has no extent to derive: no bound.
     Compiled small = compile_path(write_temp("rings_small.iq", rings_scene(40, false, 0)), CompileOptions{});
     REQUIRE(small.result.exit_code == 0);
     CHECK_THAT(small.result.code, !Catch::Contains("derived from the shape"));
+}
+
+TEST_CASE("a piecewise shape without bound gets one by case splitting: 100 octahedra, few shapes per evaluation",
+          "[instancing][render][bvh]") {
+    // The standard library's octahedron picks one of three permutations of |p| (a piecewise choice): one pass of
+    // intervals takes their hull and proves no box free, so it got no derived bound (and no scene box), and every
+    // step evaluated all 100 (98 shape evaluations per scene evaluation at 320×180). Case splitting
+    // (ir/CaseSplit.h) proves it within a little more than its size, 0.35.
+    const int W = 64, H = 36;
+    std::string s = "[camera]\nposition = [0, 0, -14]\ntarget = [0, 0, 0]\n";
+    for (int k = 0; k < 100; ++k)
+        s += fmt::format("[[shapes]]\ntype = \"octahedron\"\nshape_params = {{ s = 0.35 }}\ntransform = \"T(({}, {}, 0))⋅`R_x`({})\"\n",
+                         k % 10 - 4.5, k / 10 - 4.5, 0.4 * (k % 7));
+    auto path = write_temp("octahedra_derived.iq", s);
+    Compiled c = compile_path(path, CompileOptions{});
+    INFO(c.diagnostics);
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.result.code, Catch::Contains("derived from the shape"));
+    Evaluations counts = count_evaluations(path, CompileOptions{}, W, H);
+    INFO(counts.shapes / counts.evals << " shapes per scene evaluation");
+    CHECK(counts.evals > W * H);
+    CHECK(counts.shapes / counts.evals <= 4);
+    // The picture: the same as with a `bound` written (0.36, just over the octahedron's 0.35).
+    std::string b = s;
+    for (size_t at = 0; (at = b.find("shape_params", at)) != std::string::npos; at += 20) b.insert(at, "bound = 0.36\n");
+    Compiled bounded = compile_path(write_temp("octahedra_bounded.iq", b), CompileOptions{});
+    REQUIRE(bounded.result.exit_code == 0);
+    render::RenderResult x = render_compiled(c.result, W, H), y = render_compiled(bounded.result, W, H);
+    REQUIRE(x.ok);
+    REQUIRE(y.ok);
+    int differ = 0;
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i)
+            for (int k = 0; k < 3; ++k)
+                if (std::fabs(x.image.pixel(i, j)[k] - y.image.pixel(i, j)[k]) > 2.0 / 255) {
+                    ++differ;
+                    break;
+                }
+    CHECK(differ <= W * H / 100);
 }
 
 TEST_CASE("the hierarchy serves the unbounded scene only for exact shapes", "[instancing]") {

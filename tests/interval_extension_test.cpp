@@ -52,30 +52,8 @@ int extension_of(ir::Module& m, int fn, std::string* why, bool* jumps = nullptr)
 // Shape module `text` at its defaults as q -> D(q), its gradient, and both extensions.
 std::unique_ptr<Extended> extend_shape(const std::string& text, const std::string& name) {
     auto out = std::make_unique<Extended>();
-    SourceManager sm;
-    Diagnostics d(sm);
-    FileId f = sm.add(name + ".iql", text);
-    ModuleLibrary lib(sm, d, {});
-    ModuleSource source{name, f, {{0, uint32_t(text.size())}}, {f, 0, 1}, "file"};
-    lib.add(source);
-    const CheckedModule* cm = lib.get(name, {});
-    if (!cm || cm->ast.kind != ast::ModuleKind::Shape) return nullptr;
-    INFO(name << "\n" << d.render());
-    REQUIRE(cm->ok);
-    LowerContext ctx{out->m, {}, {}};
-    int fn = lower_module(*cm, name, name, ctx);
-    ir::Function w;
-    w.name = "object";
-    {
-        ir::Builder b(out->m, w);
-        ir::ValueId q = b.param("q", Type::vector(3));
-        std::vector<ir::ValueId> args;
-        for (const auto& p : cm->params) args.push_back(p.name == "p" ? q : b.constant(p.type, p.value));
-        w.result = b.call(fn, args);
-    }
-    w.entry = true;
-    out->m.functions.push_back(std::move(w));
-    out->value = int(out->m.functions.size()) - 1;
+    out->value = test::lower_shape_object(out->m, text, name);
+    if (out->value < 0) return nullptr;
     ir::rewrite_unstable_forms(out->m);
     out->gradient = ir::differentiate(out->m, out->value, 0, "object_gradient", &out->why);
     if (out->gradient < 0) return out;

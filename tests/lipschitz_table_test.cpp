@@ -32,37 +32,15 @@ struct Estimated {
 // the pass makes it (the stable rewrites first).
 Estimated estimate_shape(const std::string& text, const std::string& name, const std::string& path) {
     Estimated out;
-    SourceManager sm;
-    Diagnostics d(sm);
-    FileId f = sm.add(path, text);
-    ModuleLibrary lib(sm, d, {});
-    ModuleSource source{name, f, {{0, uint32_t(text.size())}}, {f, 0, 1}, "file"};  // the library keeps a pointer
-    lib.add(source);
-    const CheckedModule* m = lib.get(name, {});
-    if (!m || m->ast.kind != ast::ModuleKind::Shape) return out;
-    INFO(name << "\n" << d.render());
-    REQUIRE(m->ok);
     ir::Module irm;
-    LowerContext ctx{irm, {}, {}};
-    int fn = lower_module(*m, name, name, ctx);
-    // The object function: q ∈ ℝ³ -> D(q) with every other parameter at its default.
-    ir::Function w;
-    w.name = "object";
-    {
-        ir::Builder b(irm, w);
-        ir::ValueId q = b.param("q", Type::vector(3));
-        std::vector<ir::ValueId> args;
-        for (const auto& p : m->params) args.push_back(p.name == "p" ? q : b.constant(p.type, p.value));
-        w.result = b.call(fn, args);
-    }
-    w.entry = true;
-    irm.functions.push_back(std::move(w));
-    int object = int(irm.functions.size()) - 1;
+    int object = test::lower_shape_object(irm, text, name, path, [&](const CheckedModule& m) {
+        out.exactness = m.exactness;
+        out.lipschitz = m.lipschitz;
+    });
+    if (object < 0) return out;
     ir::rewrite_unstable_forms(irm);  // as the pipeline does before its lipschitz pass
     std::vector<ir::Interval> box(3, {-3, 3});
     out.shape = true;
-    out.exactness = m->exactness;
-    out.lipschitz = m->lipschitz;
     out.e = ir::estimate_lipschitz(irm, object, box, {});
     return out;
 }

@@ -778,3 +778,38 @@ TEST_CASE("a turn by a multiple of π/2 keeps the axes it bounds: rounding's coe
     REQUIRE(tilted.result.exit_code == 0);
     CHECK_FALSE(box_of(tilted.result.code));
 }
+
+TEST_CASE("piecewise shapes are boxed case by case: the octahedron's box is its vertices', the pyramid's is closed",
+          "[scene][box]") {
+    // The octahedron's distance picks one of three permutations of |p|; one pass of intervals takes their hull
+    // and proves no half-space free, so the box was open on every side (every ray marched from the camera).
+    // Case splitting (ir/CaseSplit.h) proves each side within the hit test's band of its vertex at distance s.
+    const std::string camera = "[camera]\nposition = [0, 1, -5]\ntarget = [0, 0, 0]\n";
+    Compiled oct = compile_path(write_temp("box_octahedron.iq", camera + "[[shapes]]\ntype = \"octahedron\"\n"));
+    REQUIRE(oct.result.exit_code == 0);
+    auto b = box_of(oct.result.code);
+    REQUIRE(b);
+    const double m = fixed_level({0, 1, -5}, {-1, -1, -1}, {1, 1, 1});
+    for (int a = 0; a < 3; ++a) {
+        INFO("axis " << a << ": [" << b->first[a] << ", " << b->second[a] << "], level " << m);
+        CHECK(b->second[a] >= 1 + m);
+        CHECK(b->second[a] <= 1 + m + 0.02);
+        CHECK(b->first[a] <= -1 - m);
+        CHECK(b->first[a] >= -1 - m - 0.02);
+    }
+    // The pyramid (by default a square base of side 1.4 at y = -0.6, its apex at y = 0.6): its cases close the
+    // sides along x and z, which were open.
+    Compiled pyr = compile_path(write_temp("box_pyramid.iq", camera + "[[shapes]]\ntype = \"pyramid\"\n"));
+    REQUIRE(pyr.result.exit_code == 0);
+    b = box_of(pyr.result.code);
+    REQUIRE(b);
+    const double extent[3] = {0.7, 0.6, 0.7};
+    const double mp = fixed_level({0, 1, -5}, {-0.7, -0.6, -0.7}, {0.7, 0.6, 0.7});
+    for (int a = 0; a < 3; ++a) {
+        INFO("axis " << a << ": [" << b->first[a] << ", " << b->second[a] << "], level " << mp);
+        CHECK(b->second[a] >= extent[a] + mp);
+        CHECK(b->second[a] <= extent[a] + mp + 0.03);
+        CHECK(b->first[a] <= -extent[a] - mp);
+        CHECK(b->first[a] >= -extent[a] - mp - 0.03);
+    }
+}

@@ -7,6 +7,7 @@
 #include <map>
 #include <queue>
 
+#include "ir/CaseSplit.h"
 #include "ir/passes/CSE.h"
 #include "ir/passes/Fold.h"
 #include "ir/passes/Inline.h"
@@ -298,6 +299,56 @@ std::vector<PlanePair> plane_pairs(const Function& g, int query) {
 
 }  // namespace
 
+namespace {
+
+// Case splitting (ir/CaseSplit.h) where the hull of a piecewise choice loses what each case knows: the
+// octahedron's q is one of three permutations of |p|, and each component's hull over them is every one of
+// |p|'s, so ‖(q₁, q₂ − s + k, q₃ − k)‖ may be 0 anywhere and no half-space beyond a plane is proven free,
+// though in each case one component is at least p₁. Without it the standard library's octahedron and
+// round_cone_ab had no box (rays not clipped; no derived `bound`: 100 octahedra evaluated all 100 at every
+// step), the pyramid's was open on two sides. Interval passes per box, tried only where one pass leaves the
+// box unproven (the octahedron's cases take up to ~15 passes, each up to 3 rounds of narrowing).
+constexpr int kSplitPasses = 32;
+
+// A copy of `f` for case splitting: calls inlined (only a function's own comparisons are split), constants
+// folded, common subexpressions merged; nothing where it has no comparison or sign to split, or is too large.
+std::optional<Function> splittable(const Module& m, const Function& f) {
+    std::optional<Function> g;
+    try {
+        g = inline_calls(m, f);
+    } catch (const SizeLimit&) {
+        return std::nullopt;
+    }
+    if (g->body.size() > 20000) return std::nullopt;
+    fold_constants(m, *g);
+    eliminate_common_subexpressions(*g);
+    for (const Instr& in : g->body)
+        if (in.op == Op::Compare || (in.op == Op::Builtin && builtins()[size_t(in.aux)].name == std::string_view("sign")))
+            return g;
+    return std::nullopt;
+}
+
+// The distance's lowest value over the cases of `g` (its first component's lower end), `params` as given,
+// where it is above `level`; −∞ where it is not, or unknown.
+double split_lowest(const Module& m, const Function& g, const std::vector<std::vector<Interval>>& params, double level,
+                    int loop_trips, long* work) {
+    CaseSplitOptions o;
+    o.query_point = false;  // sound at every point, x = 0 too (a sign's closed halves)
+    o.loop_trips = loop_trips;
+    o.work = work;
+    o.target = -level;  // a case at or below the level: the box is not proven free, whatever the others
+    double worst = case_split_bound(
+        m, g, params,
+        [](const Bounds& r) {
+            double lo = r.c.empty() ? -INFINITY : r.c[0].lo;
+            return std::isnan(lo) ? INFINITY : -lo;
+        },
+        kSplitPasses, o);
+    return std::isnan(worst) || worst >= o.target ? -INFINITY : -worst;
+}
+
+}  // namespace
+
 std::optional<double> support_radius(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
                                       double reach, int budget) {
     if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
@@ -311,6 +362,25 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
         double lo = r.c.empty() ? -INFINITY : r.c[0].lo;
         return std::isnan(lo) ? -INFINITY : lo;
     };
+    // The same, and where one pass leaves the box unproven, by case splitting on a flattened copy (its
+    // instructions count against the budget, a box's worth per function's length).
+    const std::optional<Function> g = splittable(m, f);
+    auto lowest_split = [&](const Box& b) {
+        double lo = lowest(b);
+        if (lo > 0 || !g) return lo;
+        // Not where the box's centre lies in the solid: no case can prove that box free.
+        if (std::isfinite(b.lo[0] + b.hi[0] + b.lo[1] + b.hi[1] + b.lo[2] + b.hi[2])) {
+            Box c;
+            for (size_t a = 0; a < 3; ++a) c.lo[a] = c.hi[a] = 0.5 * (b.lo[a] + b.hi[a]);
+            if (lowest(c) <= 0) return lo;
+        }
+        long work = long(std::max(0, budget)) * long(std::max<size_t>(1, g->body.size()));
+        const long given = work;
+        params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
+        lo = std::max(lo, split_lowest(m, *g, params, 0, 0, &work));
+        budget -= int((given - work) / long(std::max<size_t>(1, g->body.size())));
+        return lo;
+    };
     // One pass: the boxes of `domain`, split `depth` times where they may hold the solid; false when one
     // touching the domain's boundary does (when `open`), or the budget runs out.
     auto pass = [&](const Box& domain, int depth, bool open, std::vector<Box>& kept) {
@@ -320,11 +390,16 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
             auto [b, level] = stack.back();
             stack.pop_back();
             if (--budget < 0) return false;
-            if (lowest(b) > 0) continue;
+            if (lowest_split(b) > 0) continue;
             if (level == depth) {
+                bool edge = false;
                 if (open)
                     for (int c = 0; c < 3; ++c)
-                        if (b.lo[size_t(c)] <= domain.lo[size_t(c)] || b.hi[size_t(c)] >= domain.hi[size_t(c)]) return false;
+                        edge |= b.lo[size_t(c)] <= domain.lo[size_t(c)] || b.hi[size_t(c)] >= domain.hi[size_t(c)];
+                if (edge) {
+                    if (lowest_split(b) > 0) continue;  // free after all: not kept
+                    return false;
+                }
                 kept.push_back(b);
                 continue;
             }
@@ -353,7 +428,7 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
             Box slab{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
             if (side > 0) slab.lo[a] = reach;
             else slab.hi[a] = -reach;
-            if (--budget < 0 || !(lowest(slab) > 0)) return std::nullopt;
+            if (--budget < 0 || !(lowest_split(slab) > 0)) return std::nullopt;
         }
     // Fine: the hull of what is left, widened by half a cell, split again (four times: each cell is 1/8 of the
     // last hull, which shrinks to the solid's).
@@ -401,7 +476,7 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
                 c.hi[a] = upper ? b.hi[a] : mid;
             }
             --budget;
-            if (lowest(c) <= 0) queue.push(c);
+            if (lowest_split(c) <= 0) queue.push(c);
         }
     }
     return std::nextafter(r * (1 + 1e-9), INFINITY);
@@ -410,12 +485,16 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
 namespace {
 
 using BoxRange = std::function<Interval(const Box&)>;  // the distance's interval over a box
+// The distance's lowest value over a box by case splitting (splittable, split_lowest) where it is above the
+// level (else −∞), spending `allowance` (instructions) and the analysis's work.
+using BoxSplit = std::function<double(const Box&, double level, long& allowance)>;
+constexpr long kSplitPerProof = 16000;  // a proof's allowance for splits (a proof that holds spends ~1,500)
 constexpr double kUnboundedAt = 1048576.0;              // 2^20: beyond this, a side is unbounded
 
 // Whether no point of `start` has a distance ≤ level (false: not proven, or a point found that has): the boxes
 // where `range` may reach the level are split at their widest side (an unbounded one first) up to `per_proof`
 // times, spending `work`; a box's centre at or below the level ends the proof at once.
-bool free_of(const BoxRange& range, const Box& start, double level, int per_proof, long& work) {
+bool free_of(const BoxRange& range, const BoxSplit& split, const Box& start, double level, int per_proof, long& work) {
     // A point inside an interval, and its halves (an unbounded side grows geometrically).
     auto centre = [](double lo, double hi) {
         if (std::isinf(lo) && std::isinf(hi)) return 0.0;
@@ -423,8 +502,15 @@ bool free_of(const BoxRange& range, const Box& start, double level, int per_proo
         if (std::isinf(lo)) return hi - std::max(1.0, std::fabs(hi));
         return 0.5 * (lo + hi);
     };
+    // A point of the set ends the proof at once: the start's point nearest the origin first (a shape's own
+    // space has its solid around the origin: a plane through it is disproved by one sample, where case
+    // splitting would spend its allowance on boxes it cannot prove), then each box's centre.
+    Box near;
+    for (size_t a = 0; a < 3; ++a) near.lo[a] = near.hi[a] = std::clamp(0.0, start.lo[a], start.hi[a]);
+    if (range(near).hi <= level) return false;
     std::vector<Box> stack = {start};
     int left = per_proof;
+    long allowance = kSplitPerProof;
     while (!stack.empty()) {
         if (work <= 0) return false;
         Box b = stack.back();
@@ -434,6 +520,7 @@ bool free_of(const BoxRange& range, const Box& start, double level, int per_proo
         Box c;
         for (size_t a = 0; a < 3; ++a) c.lo[a] = c.hi[a] = centre(b.lo[a], b.hi[a]);
         if (range(c).hi <= level) return false;
+        if (split && allowance > 0 && split(b, level, allowance) > level) continue;  // proven case by case
         size_t w = 0;
         double widest = -1;
         for (size_t a = 0; a < 3; ++a) {
@@ -458,13 +545,13 @@ Box half_space(size_t a, bool upper, double c) {
 }
 
 // support_box's search, side by side, for a distance whose interval over a box `range` gives (spending `work`).
-SupportBox box_sides(const BoxRange& range, double level, int per_proof, long& work) {
+SupportBox box_sides(const BoxRange& range, const BoxSplit& split, double level, int per_proof, long& work) {
     constexpr double R = kUnboundedAt;
     SupportBox out;
     // One side's edge: the nearest plane c (along axis a, from below or above) beyond which nothing is ≤ level;
     // ±∞ where the half-space beyond R is not proven free.
     auto edge_of = [&](size_t a, bool upper) {
-        auto beyond = [&](double c) { return free_of(range, half_space(a, upper, c), level, per_proof, work); };
+        auto beyond = [&](double c) { return free_of(range, split, half_space(a, upper, c), level, per_proof, work); };
         const double sgn = upper ? 1 : -1;
         if (!beyond(sgn * R)) return sgn * INFINITY;
         // A plane that is not proven (in) and one that is (out): planes ±1, ±2, ±4, … from 0 outward (or
@@ -538,6 +625,25 @@ struct DistanceRange {
         interval_analysis(scratch, values, m, f, params, {}, loop_trips, &work);
         return first_component(values[f.result]);
     }
+    // Case splitting (a BoxSplit) on `flat`, f made splittable; nothing where it is not. Its instructions
+    // come from a pool of their own, as large as the analysis's `work` when it begins (so that what the
+    // intervals alone proved they still prove: a terrain's top at 32 was left open when splits, which its
+    // noise never decides, spent the side's share first).
+    std::optional<Function> flat{};
+    long split_work = 0;
+    BoxSplit splitter() {
+        if (!flat) return nullptr;
+        split_work = work;
+        return [this](const Box& b, double level, long& allowance) {
+            params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
+            long spend = std::min(allowance, split_work);
+            const long given = spend;
+            double lo = split_lowest(m, *flat, params, level, loop_trips, &spend);
+            allowance -= given - spend;
+            split_work -= given - spend;
+            return lo;
+        };
+    }
 };
 
 }  // namespace
@@ -546,10 +652,12 @@ bool support_box_open(const Module& m, int fn, int query, std::vector<std::vecto
                       int per_proof, int loop_trips, long work) {
     if (!boxable(m, fn, query, params.size())) return true;
     DistanceRange distance{m, m.functions[size_t(fn)], query, params, loop_trips, work};
+    distance.flat = splittable(m, m.functions[size_t(fn)]);
     auto range = [&](const Box& b) { return distance(b); };
+    const BoxSplit split = distance.splitter();
     for (size_t a = 0; a < 3; ++a)
         for (bool upper : {false, true})
-            if (!free_of(range, half_space(a, upper, upper ? kUnboundedAt : -kUnboundedAt), level, per_proof, work)) return true;
+            if (!free_of(range, split, half_space(a, upper, upper ? kUnboundedAt : -kUnboundedAt), level, per_proof, work)) return true;
     return false;
 }
 
@@ -560,8 +668,10 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
     auto first = first_component;
     const long budget = work;
     DistanceRange distance{m, f, query, params, loop_trips, work};
+    distance.flat = splittable(m, f);
     auto range = [&](const Box& b) { return distance(b); };
-    SupportBox out = box_sides(range, level, per_proof, work);
+    const BoxSplit split = distance.splitter();
+    SupportBox out = box_sides(range, split, level, per_proof, work);
 
     // Rotated pairs of the query's axes (see plane_pair): once more per plane, in the pair's coordinates, on a
     // copy of the function with its calls inlined and common subexpressions merged (so that cos θ and sin θ
@@ -597,7 +707,7 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
                 interval_analysis(distance.scratch, distance.values, m, *g, params, hook, loop_trips, &rotated_work);
                 return first(distance.values[g->result]);
             };
-            SupportBox v = box_sides(rotated, level, per_proof, rotated_work);
+            SupportBox v = box_sides(rotated, nullptr, level, per_proof, rotated_work);
             // (p_a, p_b) from (u, w): the same norm (orthogonal), or M⁻¹ applied to the box.
             std::array<Interval, 2> pab;
             Interval ua{v.lo[size_t(pp.a)], v.hi[size_t(pp.a)]}, wb{v.lo[size_t(pp.b)], v.hi[size_t(pp.b)]};

@@ -9,7 +9,10 @@
 // left on its boundary: unbounded), then a few times over the hull of what is left, and last best first: the
 // box with the farthest corner is split until it is small against that distance. The radius is the farthest
 // corner of a box left, so it contains the solid whatever the overestimation of intervals (which only keeps
-// more boxes, and makes the radius larger).
+// more boxes, and makes the radius larger). Where one pass of intervals leaves a box unproven and the function
+// has comparisons (a piecewise choice, a sign), the box is analysed again case by case (ir/CaseSplit.h: each
+// case narrows what it implies), whose lowest value over the cases still bounds the distance from below: the
+// hull of the octahedron's three cases alone proves no half-space free.
 #pragma once
 
 #include <array>
@@ -33,7 +36,9 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
 // An axis-aligned box that contains every point where the distance can be ≤ `level`, found side by side:
 // each side is the nearest plane c such that the half-space beyond it (x_a ≥ c, or ≤) is proven free of
 // such points (bisection on c; a proof splits the half-space into boxes, up to `per_proof` of them, and
-// gives up at once where a box's centre lies in the set). A side no plane within 2²⁰ units closes is ±∞.
+// gives up at once where the half-space's point nearest the origin, or a box's centre, lies in the set; a box
+// one pass leaves unproven is tried case by case, as support_radius does, within an allowance per proof and a
+// pool of instructions as large as `work`). A side no plane within 2²⁰ units closes is ±∞.
 // Loops of constant trip count up to `loop_trips` are analysed (interval_analysis). `work` bounds the
 // instructions analysed in all (about 10 ms per million): once spent, the sides not yet closed are ±∞. Same
 // function conventions as support_radius. Returns nothing when every side is ±∞ (no box to clip rays to).
