@@ -124,3 +124,37 @@ TEST_CASE("case splitting proves the octahedron's far half-spaces free, where th
     CHECK(r >= 0);
     CHECK(left >= 60);  // one pass and a stop, not all 64
 }
+
+TEST_CASE("case splitting keeps the case a NaN takes: a comparison of a logarithm is false both ways below 0",
+          "[case-split]") {
+    // l = log(p₂) is NaN below y = 0, where l > 0 and l ≤ 0 are both false and the `otherwise` ball at
+    // (0, −1.5, 0) is drawn. Taking "l > 0 false" for "l ≤ 0" dropped that ball from the scene's box (a trial:
+    // the box's floor at y = 0.19, the ball gone), and likewise for 0/0.
+    const std::string text = "shape\nl = log(p_2)\n"
+                             "D = { ‖p - (0, 2, 0)‖ - 0.5 if l > 0\n"
+                             "      ‖p - (1, 0.5, 0)‖ - 0.3 if l ≤ 0\n"
+                             "      ‖p - (0, -1.5, 0)‖ - 0.5 otherwise\n"
+                             "where\np ∈ ℝ³\n";
+    ir::Module m;
+    const int fn = flat_shape(m, text, "nan_pick");
+    REQUIRE(fn >= 0);
+    const ir::Function* f = &m.functions[size_t(fn)];
+    // Around the ball below: its centre's distance is −0.5.
+    std::vector<ir::Interval> below = {{-0.2, 0.2}, {-1.7, -1.3}, {-0.2, 0.2}};
+    CHECK(split_lowest(m, *f, below) <= -0.5);
+    CHECK(hull_lowest(m, *f, below) <= -0.5);
+    // Where y > 0 the logarithm is a number, and the cases still prove what they can: above y = 3 nothing.
+    std::vector<ir::Interval> above = {{-INFINITY, INFINITY}, {3, INFINITY}, {-INFINITY, INFINITY}};
+    CHECK(split_lowest(m, *f, above) > 0);
+    // The scene: its box reaches below the lower ball.
+    const std::string scene = "[modules]\nnan_pick = \"\"\"\n" + text +
+                              "\"\"\"\n[camera]\nposition = [0.5, 0.5, -7]\ntarget = [0, 0, 0]\n[[shapes]]\ntype = \"nan_pick\"\n";
+    test::Compiled c = test::compile_text("nan_pick.iq", scene);
+    INFO(c.diagnostics);
+    REQUIRE(c.result.exit_code == 0);
+    const std::string lo = "const vec3 IQC_BOX_LO = vec3(";
+    size_t at = c.result.code.find(lo);
+    REQUIRE(at != std::string::npos);
+    std::string v = c.result.code.substr(at + lo.size());
+    CHECK(std::stod(v.substr(v.find(',') + 1)) <= -2.0);
+}

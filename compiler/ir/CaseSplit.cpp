@@ -220,8 +220,9 @@ private:
                 if (x.at == ValueId(i) && x.comp == comp) return &x;
             return nullptr;
         };
+        // (Not a comparison of a value that may be NaN: both a < b and a ≥ b are false there, a third case.)
         if (in.op == Op::Compare && b.c.size() == 1 && b.c[0].lo < b.c[0].hi && r[in.args[0]].c.size() == 1 &&
-            r[in.args[1]].c.size() == 1) {
+            r[in.args[1]].c.size() == 1 && !r[in.args[0]].nan && !r[in.args[1]].nan) {
             const Choice* c = choice(0);
             int implied = -1;
             for (const Choice& x : choices)
@@ -256,7 +257,7 @@ private:
             return;
         }
         if (in.op == Op::Builtin && builtins()[size_t(in.aux)].name == std::string_view("sign") && in.args.size() == 1 &&
-            r[in.args[0]].c.size() == b.c.size()) {
+            r[in.args[0]].c.size() == b.c.size() && !r[in.args[0]].nan) {
             // sign(x) of a query-point coordinate: x > 0 or x < 0. x = 0 is a plane there: no volume, and the
             // bound of a gradient is wanted only almost everywhere (a continuous field's Lipschitz constant is the
             // essential supremum of ‖∇D‖, Rademacher's theorem). Elsewhere x = 0 may be a region (max(p₁, 0), or

@@ -267,7 +267,59 @@ int decided(CompareKind k, Interval a, Interval b) {
     return -1;
 }
 
-Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std::vector<const Bounds*>& a) {
+namespace {
+
+bool unbounded(Interval v) { return std::isinf(v.lo) || std::isinf(v.hi) || std::isnan(v.lo) || std::isnan(v.hi); }
+bool any_of(const Bounds& b, bool (*p)(Interval)) {
+    for (const Interval& v : b.c)
+        if (p(v)) return true;
+    return false;
+}
+
+// Whether instruction `in` may give NaN somewhere on the box from operands that are not NaN there (IEEE 754
+// and GLSL: 0/0, ∞/∞, ∞ − ∞, 0·∞, the logarithm or root of a negative, pow of a negative base or of 0 to a
+// power ≤ 0, asin/acos beyond ±1, a periodic or modular function of ±∞, the direction of a zero vector).
+bool makes_nan(const Instr& in, const std::vector<const Bounds*>& a) {
+    auto has_zero = [](Interval v) { return contains_zero(v) || std::isnan(v.lo) || std::isnan(v.hi); };
+    auto product = [&](size_t i, size_t j) { return (any_of(*a[i], has_zero) && any_of(*a[j], unbounded)) || (any_of(*a[j], has_zero) && any_of(*a[i], unbounded)); };
+    switch (in.op) {
+        case Op::Add:
+        case Op::Sub: {
+            auto up = [](const Bounds& b) { for (const Interval& v : b.c) if (v.hi == kInf) return true; return false; };
+            auto down = [](const Bounds& b) { for (const Interval& v : b.c) if (v.lo == -kInf) return true; return false; };
+            return in.op == Op::Add ? (up(*a[0]) && down(*a[1])) || (down(*a[0]) && up(*a[1]))
+                                    : (up(*a[0]) && up(*a[1])) || (down(*a[0]) && down(*a[1]));
+        }
+        case Op::Mul:
+        case Op::Hadamard:
+        case Op::Dot:
+        case Op::Cross: return product(0, 1);
+        case Op::Div: return (any_of(*a[0], has_zero) && any_of(*a[1], has_zero)) || (any_of(*a[0], unbounded) && any_of(*a[1], unbounded));
+        case Op::Builtin: {
+            std::string_view n = builtin(in.aux).name;
+            auto below = [&](size_t i, double c) { for (const Interval& v : a[i]->c) if (!(v.lo >= c)) return true; return false; };
+            if (n == "log" || n == "ln" || n == "log2" || n == "sqrt" || n == "inversesqrt") return below(0, 0);
+            if (n == "pow") return below(0, 0) || (any_of(*a[0], has_zero) && below(1, 1e-300)) || any_of(*a[1], unbounded);
+            if (n == "asin" || n == "acos") {
+                for (const Interval& v : a[0]->c) if (!(v.lo >= -1 && v.hi <= 1)) return true;
+                return false;
+            }
+            if (n == "sin" || n == "cos" || n == "tan" || n == "fract" || n == "mod")
+                return any_of(*a[0], unbounded) || (n == "mod" && a.size() > 1 && any_of(*a[1], has_zero));
+            if (n == "normalize") return std::all_of(a[0]->c.begin(), a[0]->c.end(), [&](Interval v) { return has_zero(v); });
+            if (n == "atan" || n == "atan2") return a.size() > 1 && any_of(*a[0], has_zero) && any_of(*a[1], has_zero);
+            if (n == "mix" || n == "smoothstep" || n == "clamp" || n == "step") {
+                for (size_t i = 0; i < a.size(); ++i)
+                    if (any_of(*a[i], unbounded)) return true;  // ∞ − ∞, 0·∞ inside
+            }
+            return false;
+        }
+        default: return false;
+    }
+}
+
+// The rule of one instruction's intervals (bounds_of adds whether it may be NaN).
+Bounds bounds_rule(const Module& m, const Function& f, const Instr& in, const std::vector<const Bounds*>& a) {
     (void)m;
     Bounds x = unknown(in.type);
     size_t comps = x.c.size();
@@ -422,6 +474,28 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
     return finish(std::move(x));
 }
 
+}  // namespace
+
+Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std::vector<const Bounds*>& a) {
+    (void)m;
+    bool operand_nan = false;
+    for (const Bounds* b : a) operand_nan |= b->nan;
+    Bounds x = bounds_rule(m, f, in, a);
+    if (in.op == Op::Compare) {
+        x.nan = false;  // a truth value: never NaN, but false for every ordered comparison of a NaN
+        if (operand_nan && x.c.size() == 1) {
+            if (CompareKind(in.aux) == CompareKind::Ne) x.c[0].hi = 1;
+            else x.c[0].lo = 0;
+        }
+    } else if (in.op == Op::Copy || in.op == Op::Index ||
+               ((in.op == Op::Select || in.op == Op::If) && a[0]->c.size() == 1 && (a[0]->c[0].lo >= 1 || a[0]->c[0].hi <= 0))) {
+        // the operand's own (a decided choice: the one taken)
+    } else {
+        x.nan = x.nan || operand_nan || makes_nan(in, a);
+    }
+    return x;
+}
+
 namespace {
 
 template <class Params>
@@ -458,7 +532,10 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
         }
         const Instr& in = f.body[i];
         if (work && --*work < 0) {  // the budget is spent: this value and the rest are unbounded
-            for (size_t j = i; j < f.body.size(); ++j) r[j] = f.body[j].op == Op::Loop ? Bounds{} : unknown(f.body[j].type);
+            for (size_t j = i; j < f.body.size(); ++j) {
+                r[j] = f.body[j].op == Op::Loop ? Bounds{} : unknown(f.body[j].type);
+                r[j].nan = true;  // anything
+            }
             return;
         }
         if (in.op == Op::Param) {
@@ -509,8 +586,13 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
         }
         if (in.op == Op::Call) {
             std::vector<IntervalVec>& args = args_buffer();
-            for (ValueId x : in.args) args.push_back(r[x].c);
+            bool nan = false;  // (the callee sees intervals only: an argument that may be NaN makes its result so)
+            for (ValueId x : in.args) {
+                args.push_back(r[x].c);
+                nan |= r[x].nan;
+            }
             r[i] = call(in.aux, args)[m.functions[size_t(in.aux)].result];
+            r[i].nan |= nan;
             continue;
         }
         if (in.op == Op::Loop) {
@@ -524,21 +606,32 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
             bool run = loop_trips > 0 && hi.lo == hi.hi && std::isfinite(hi.lo) && last - first + 1 <= loop_trips &&
                        in.args.size() >= states + 1;
             for (size_t j = 0; j < states; ++j) s.push_back(run ? r[in.args[j + 1]] : unknown(body.body[body.outputs[j].second].type));
+            // NaN in a state or an argument, or made by the body in any iteration, may reach every state.
+            bool nan = !run;
+            for (size_t c = 1; c < in.args.size(); ++c) nan |= r[in.args[c]].nan;
             for (double k = first; run && k <= last; k += 1) {
                 std::vector<IntervalVec>& args = args_buffer();
                 args.push_back({{k, k}});
                 for (size_t j = 0; j < states; ++j) args.push_back(s[j].c);
                 for (size_t c = states + 1; c < in.args.size(); ++c) args.push_back(r[in.args[c]].c);
                 const std::vector<Bounds>& v = call(in.aux, args);
-                for (size_t j = 0; j < states; ++j) s[j] = v[body.outputs[j].second];
+                for (size_t j = 0; j < states; ++j) {
+                    s[j] = v[body.outputs[j].second];
+                    nan |= s[j].nan;
+                }
             }
+            for (Bounds& b : s) b.nan |= nan;
             loop_states[i] = std::move(s);
             r[i] = Bounds{};
             continue;
         }
         if (in.op == Op::Member) {
             auto it = loop_states.find(in.args[0]);
-            r[i] = it != loop_states.end() && size_t(in.aux) < it->second.size() ? it->second[size_t(in.aux)] : unknown(in.type);
+            if (it != loop_states.end() && size_t(in.aux) < it->second.size()) r[i] = it->second[size_t(in.aux)];
+            else {
+                r[i] = unknown(in.type);
+                r[i].nan = true;
+            }
             continue;
         }
         a.clear();
