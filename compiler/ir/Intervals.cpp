@@ -269,54 +269,59 @@ int decided(CompareKind k, Interval a, Interval b) {
 
 namespace {
 
-bool unbounded(Interval v) { return std::isinf(v.lo) || std::isinf(v.hi) || std::isnan(v.lo) || std::isnan(v.hi); }
+bool holds_zero(Interval v) { return contains_zero(v) || std::isnan(v.lo) || std::isnan(v.hi); }
 bool any_of(const Bounds& b, bool (*p)(Interval)) {
     for (const Interval& v : b.c)
         if (p(v)) return true;
     return false;
 }
 
-// Whether instruction `in` may give NaN somewhere on the box from operands that are not NaN there (IEEE 754
-// and GLSL: 0/0, ∞/∞, ∞ − ∞, 0·∞, the logarithm or root of a negative, pow of a negative base or of 0 to a
-// power ≤ 0, asin/acos beyond ±1, a periodic or modular function of ±∞, the direction of a zero vector).
+// Whether instruction `in` may give NaN or ±∞ somewhere on the box from finite operands (IEEE 754 and GLSL:
+// x/0 and 0/0, the logarithm of 0 or a negative, the root of a negative, 1/√0, pow of a negative base or of 0 to
+// a power ≤ 0, asin/acos beyond ±1, exp past float's range, tan across a pole, mod by 0, the direction of a zero
+// vector, atan(0, 0)). An infinity counts: it makes NaN through 0·∞ or ∞ − ∞ downstream. Unbounded intervals
+// alone do not (a box reaching to infinity holds only finite points; a float overflows past 3.4e38, far beyond
+// any distance a march evaluates).
 bool makes_nan(const Instr& in, const std::vector<const Bounds*>& a) {
-    auto has_zero = [](Interval v) { return contains_zero(v) || std::isnan(v.lo) || std::isnan(v.hi); };
-    auto product = [&](size_t i, size_t j) { return (any_of(*a[i], has_zero) && any_of(*a[j], unbounded)) || (any_of(*a[j], has_zero) && any_of(*a[i], unbounded)); };
+    auto below = [&](size_t i, double c, bool strict) {
+        for (const Interval& v : a[i]->c)
+            if (strict ? !(v.lo > c) : !(v.lo >= c)) return true;
+        return false;
+    };
     switch (in.op) {
-        case Op::Add:
-        case Op::Sub: {
-            auto up = [](const Bounds& b) { for (const Interval& v : b.c) if (v.hi == kInf) return true; return false; };
-            auto down = [](const Bounds& b) { for (const Interval& v : b.c) if (v.lo == -kInf) return true; return false; };
-            return in.op == Op::Add ? (up(*a[0]) && down(*a[1])) || (down(*a[0]) && up(*a[1]))
-                                    : (up(*a[0]) && up(*a[1])) || (down(*a[0]) && down(*a[1]));
-        }
-        case Op::Mul:
-        case Op::Hadamard:
-        case Op::Dot:
-        case Op::Cross: return product(0, 1);
-        case Op::Div: return (any_of(*a[0], has_zero) && any_of(*a[1], has_zero)) || (any_of(*a[0], unbounded) && any_of(*a[1], unbounded));
+        case Op::Div: return any_of(*a[1], holds_zero);
         case Op::Builtin: {
             std::string_view n = builtin(in.aux).name;
-            auto below = [&](size_t i, double c) { for (const Interval& v : a[i]->c) if (!(v.lo >= c)) return true; return false; };
-            if (n == "log" || n == "ln" || n == "log2" || n == "sqrt" || n == "inversesqrt") return below(0, 0);
-            if (n == "pow") return below(0, 0) || (any_of(*a[0], has_zero) && below(1, 1e-300)) || any_of(*a[1], unbounded);
+            if (n == "log" || n == "ln" || n == "log2" || n == "inversesqrt") return below(0, 0, true);
+            if (n == "sqrt") return below(0, 0, false);
+            if (n == "pow") return below(0, 0, false) || (any_of(*a[0], holds_zero) && below(1, 0, true));
             if (n == "asin" || n == "acos") {
-                for (const Interval& v : a[0]->c) if (!(v.lo >= -1 && v.hi <= 1)) return true;
+                for (const Interval& v : a[0]->c)
+                    if (!(v.lo >= -1 && v.hi <= 1)) return true;
                 return false;
             }
-            if (n == "sin" || n == "cos" || n == "tan" || n == "fract" || n == "mod")
-                return any_of(*a[0], unbounded) || (n == "mod" && a.size() > 1 && any_of(*a[1], has_zero));
-            if (n == "normalize") return std::all_of(a[0]->c.begin(), a[0]->c.end(), [&](Interval v) { return has_zero(v); });
-            if (n == "atan" || n == "atan2") return a.size() > 1 && any_of(*a[0], has_zero) && any_of(*a[1], has_zero);
-            if (n == "mix" || n == "smoothstep" || n == "clamp" || n == "step") {
-                for (size_t i = 0; i < a.size(); ++i)
-                    if (any_of(*a[i], unbounded)) return true;  // ∞ − ∞, 0·∞ inside
+            if (n == "exp") {
+                for (const Interval& v : a[0]->c)
+                    if (!(v.hi <= 88)) return true;
+                return false;
             }
+            if (n == "tan") {
+                for (const Interval& v : a[0]->c)
+                    if (!(v.lo > -M_PI / 2 && v.hi < M_PI / 2)) return true;  // (the rule's own range: no pole within)
+                return false;
+            }
+            if (n == "mod") return a.size() > 1 && any_of(*a[1], holds_zero);
+            if (n == "normalize") return std::all_of(a[0]->c.begin(), a[0]->c.end(), [](Interval v) { return holds_zero(v); });
+            if (n == "atan" || n == "atan2") return a.size() > 1 && any_of(*a[0], holds_zero) && any_of(*a[1], holds_zero);
             return false;
         }
         default: return false;
     }
 }
+
+}  // namespace
+
+namespace {
 
 // The rule of one instruction's intervals (bounds_of adds whether it may be NaN).
 Bounds bounds_rule(const Module& m, const Function& f, const Instr& in, const std::vector<const Bounds*>& a) {

@@ -107,10 +107,11 @@ struct Bounds {
     IntervalVec c;            // per component (matrices row-major)
     double norm = std::numeric_limits<double>::infinity();
     bool unit = false;        // exactly a unit vector (or zero): normalize, v/‖v‖
-    // Some point of the box may make this value NaN (a logarithm or root of a negative, 0/0, ∞ − ∞, 0·∞, or an
-    // operand that may be NaN), which the intervals do not show: every ordered comparison of a NaN is false, so
-    // a comparison of such a value is never decided true (nor `!=` false), and case splitting (ir/CaseSplit.h)
-    // does not take its falsity to mean the opposite comparison.
+    // Some point of the box may make this value NaN or ±∞ (x/0, a logarithm of 0 or a negative, a root of a
+    // negative, or an operand that may be: an infinity makes NaN through 0·∞ or ∞ − ∞), which the intervals do
+    // not show. Every ordered comparison of a NaN is false, so a comparison of such a value is never decided
+    // true (nor `!=` false), and case splitting (ir/CaseSplit.h) does not take its falsity for the opposite
+    // comparison. An unbounded interval alone does not set it: a box reaching to infinity holds finite points.
     bool nan = false;
     int rows = 0, cols = 0;   // a matrix's shape (0: not a matrix)
     double norm_from_components() const;
