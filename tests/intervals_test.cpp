@@ -76,3 +76,57 @@ TEST_CASE("a value that may be NaN is marked, and a comparison of it is never de
     CHECK(r[10].c[0].lo == 1);
     CHECK(r[10].c[0].hi == 1);
 }
+
+TEST_CASE("NaN and infinity from domains, divisions, float's range and growth are marked, an unbounded box alone is not",
+          "[intervals]") {
+    // x ∈ [-2, 2] unless said: each value below may be NaN or ±∞ at some point (in 32-bit floats, as the shader
+    // computes), so comparisons of it stay undecided.
+    const char* text = R"(function f(x: ℝ, y: ℝ) -> ℝ {
+  %0 = ℝ Param #0 x  ; x
+  %1 = ℝ Param #1 y  ; y
+  %2 = ℝ Builtin acosh %0
+  %3 = ℝ Builtin atanh %0
+  %4 = ℝ Builtin log_2 %0
+  %5 = ℝ Const 1
+  %6 = ℝ Builtin smoothstep %5, %5, %0
+  %7 = ℝ Builtin exp %1
+  %8 = ℝ Const 10
+  %9 = ℝ Builtin pow %8, %1
+  %10 = ℝ Mul %0, %0
+  %11 = ℝ Div %5, %10
+  %12 = ℝ Const 1e20
+  %13 = ℝ Mul %12, %0
+  %14 = ℝ Mul %13, %13
+  %15 = ℝ Mul %1, %1
+  %16 = ℝ Builtin sin %1
+  %17 = ℝ Builtin tan %0
+  return %17
+}
+)";
+    ir::Module m;
+    std::string error;
+    INFO(error);
+    REQUIRE(ir::parse_module(text, m, error));
+    auto r = ir::interval_analysis(m, 0, {{{-2, 2}}, {{0, INFINITY}}});
+    CHECK(r[2].nan);   // acosh below 1
+    CHECK(r[3].nan);   // atanh at ±1 and beyond
+    CHECK(r[4].nan);   // log₂ of ≤ 0
+    CHECK(r[6].nan);   // smoothstep with equal edges (GLSL: undefined)
+    CHECK(r[7].nan);   // e^y past y = 88: float's infinity at a finite point
+    CHECK(r[9].nan);   // 10^y likewise
+    CHECK(r[11].nan);  // 1/x² at x = 0 (and where x² underflows)
+    CHECK(r[14].nan);  // (1e20 x)² past 3.4e38 at a finite x
+    CHECK(r[17].nan);  // tan across ±π/2
+    CHECK_FALSE(r[10].nan);  // x² on [-2, 2]
+    CHECK_FALSE(r[15].nan);  // y² on [0, ∞): unbounded only because the box is; finite at every point
+    CHECK_FALSE(r[16].nan);
+    // Where each is defined and finite: none.
+    r = ir::interval_analysis(m, 0, {{{1.5, 1.8}}, {{0, 10}}});
+    CHECK_FALSE(r[2].nan);
+    CHECK(r[3].nan);  // atanh beyond 1
+    CHECK_FALSE(r[4].nan);
+    CHECK_FALSE(r[7].nan);
+    CHECK_FALSE(r[9].nan);
+    CHECK_FALSE(r[11].nan);
+    CHECK(r[17].nan);  // tan on [1.5, 1.8] crosses π/2
+}

@@ -269,53 +269,128 @@ int decided(CompareKind k, Interval a, Interval b) {
 
 namespace {
 
-bool holds_zero(Interval v) { return contains_zero(v) || std::isnan(v.lo) || std::isnan(v.hi); }
+// Within float's rounding of 0 (its smallest normal number): a product of small values there is 0 on the GPU.
+bool holds_zero(Interval v) { return !(v.lo > 1.2e-38 || v.hi < -1.2e-38); }
 bool any_of(const Bounds& b, bool (*p)(Interval)) {
     for (const Interval& v : b.c)
         if (p(v)) return true;
     return false;
 }
+// Past float's range (3.4e38) at some point: a finite end beyond it, or the whole interval beyond it. (An
+// infinite end alone is an unbounded box's: its points are finite.)
+bool overflows(const Bounds& x) {
+    constexpr double kFloatMax = 3.4e38;
+    for (const Interval& v : x.c)
+        if ((std::isfinite(v.lo) && std::fabs(v.lo) > kFloatMax) || (std::isfinite(v.hi) && std::fabs(v.hi) > kFloatMax) ||
+            v.lo > kFloatMax || v.hi < -kFloatMax || std::isnan(v.lo) || std::isnan(v.hi))
+            return true;
+    return false;
+}
 
-// Whether instruction `in` may give NaN or ±∞ somewhere on the box from finite operands (IEEE 754 and GLSL:
-// x/0 and 0/0, the logarithm of 0 or a negative, the root of a negative, 1/√0, pow of a negative base or of 0 to
-// a power ≤ 0, asin/acos beyond ±1, exp past float's range, tan across a pole, mod by 0, the direction of a zero
-// vector, atan(0, 0)). An infinity counts: it makes NaN through 0·∞ or ∞ − ∞ downstream. Unbounded intervals
-// alone do not (a box reaching to infinity holds only finite points; a float overflows past 3.4e38, far beyond
-// any distance a march evaluates).
-bool makes_nan(const Instr& in, const std::vector<const Bounds*>& a) {
+// Whether instruction `in`, whose result's intervals are `x`, may give NaN or ±∞ somewhere on the box from
+// operands that are finite numbers there (IEEE 754 in 32-bit floats, as the shader computes, and GLSL's
+// undefined cases): a function outside its domain (log of ≤ 0, a root of < 0, acos beyond ±1, acosh below 1,
+// atanh at ±1, pow of a negative base or of 0 to a power ≤ 0, tan at a pole, smoothstep with edges not in
+// order), a division by what may be 0 (in float: below its smallest normal), a singular matrix's inverse, a
+// result past float's range (10^(20x), sinh(100)). An infinity counts: 0·∞ and ∞ − ∞ make NaN downstream.
+// Only operations known to stay finite on finite operands are passed; any other is taken to make NaN.
+bool makes_nan(const Instr& in, const std::vector<const Bounds*>& a, const Bounds& x) {
     auto below = [&](size_t i, double c, bool strict) {
         for (const Interval& v : a[i]->c)
             if (strict ? !(v.lo > c) : !(v.lo >= c)) return true;
         return false;
     };
+    auto pole = [&](double offset) {  // tan/sec (offset π/2) or cot/csc (0): a multiple of π plus offset within
+        for (const Interval& v : a[0]->c) {
+            if (!std::isfinite(v.lo) || !std::isfinite(v.hi) || v.hi - v.lo >= M_PI) return true;
+            if (std::floor((v.hi - offset) / M_PI) != std::floor((v.lo - offset) / M_PI) || std::fmod(v.lo - offset, M_PI) == 0) return true;
+        }
+        return false;
+    };
     switch (in.op) {
-        case Op::Div: return any_of(*a[1], holds_zero);
+        case Op::Const:
+        case Op::Param:
+        case Op::Copy:
+        case Op::Neg:
+        case Op::Transpose:
+        case Op::Construct:
+        case Op::Extract:
+        case Op::Row:
+        case Op::Column:
+        case Op::Compare:
+        case Op::And:
+        case Op::Or:
+        case Op::Select:
+        case Op::If:
+        case Op::Switch:
+        case Op::Index:
+        case Op::Element:
+        case Op::At:
+        case Op::Member:
+        case Op::Global:
+        case Op::Input: return false;
+        case Op::Add:
+        case Op::Sub:
+        case Op::Mul:
+        case Op::Hadamard:
+        case Op::Dot:
+        case Op::Cross:
+        case Op::Det: return overflows(x);
+        case Op::Div: return any_of(*a[1], holds_zero) || overflows(x);
+        case Op::IntDiv:
+        case Op::IntMod: return any_of(*a[1], holds_zero);
+        case Op::FloorInt: return !(a[0]->c[0].lo >= -2147483648.0 && a[0]->c[0].hi < 2147483648.0);
         case Op::Builtin: {
             std::string_view n = builtin(in.aux).name;
-            if (n == "log" || n == "ln" || n == "log2" || n == "inversesqrt") return below(0, 0, true);
+            if (n == "abs" || n == "ceil" || n == "clamp" || n == "cos" || n == "floor" || n == "fract" || n == "length" || n == "max" ||
+                n == "min" || n == "mix" || n == "round" || n == "sign" || n == "sin" || n == "step" || n == "tanh" || n == "asinh" ||
+                n == "arsinh" || n == "trace" || n == "tr" || n == "vec" || n == "diag" || n == "det")
+                return overflows(x);
+            // Growth past float's range at finite arguments, which an unbounded box's infinite end hides: e^x
+            // beyond x = 88 (a point 89 units out is within a march's reach).
+            if (n == "exp" || n == "sinh" || n == "cosh") {
+                for (const Interval& v : a[0]->c)
+                    if (!(v.hi <= 88 && (n == "exp" || v.lo >= -88))) return true;
+                return overflows(x);
+            }
+            if (n == "atan" || n == "arctan" || n == "atan2")
+                return a.size() > 1 && any_of(*a[0], holds_zero) && any_of(*a[1], holds_zero);
+            if (n == "log" || n == "ln" || n == "log_2" || n == "log_10" || n == "log2" || n == "log10") return below(0, 0, true);
             if (n == "sqrt") return below(0, 0, false);
-            if (n == "pow") return below(0, 0, false) || (any_of(*a[0], holds_zero) && below(1, 0, true));
-            if (n == "asin" || n == "acos") {
+            if (n == "pow") {
+                if (below(0, 0, false) || (any_of(*a[0], holds_zero) && below(1, 0, true)) || overflows(x)) return true;
+                // b^e grows past float's range at finite exponents where b > 1 and e is unbounded above (10^(20x)),
+                // or b < 1 and e unbounded below; b unbounded with a bounded exponent (x²) only past reach.
+                for (size_t k = 0; k < std::max(a[0]->c.size(), a[1]->c.size()); ++k) {
+                    Interval b = comp(*a[0], k), e = comp(*a[1], k);
+                    if ((b.hi > 1 && !std::isfinite(e.hi)) || (b.lo < 1 && !std::isfinite(e.lo))) return true;
+                }
+                return false;
+            }
+            if (n == "asin" || n == "acos" || n == "arcsin" || n == "arccos") {
                 for (const Interval& v : a[0]->c)
                     if (!(v.lo >= -1 && v.hi <= 1)) return true;
                 return false;
             }
-            if (n == "exp") {
+            if (n == "acosh" || n == "arcosh") return below(0, 1, false);
+            if (n == "atanh" || n == "artanh") {
                 for (const Interval& v : a[0]->c)
-                    if (!(v.hi <= 88)) return true;
+                    if (!(v.lo > -1 && v.hi < 1)) return true;
                 return false;
             }
-            if (n == "tan") {
-                for (const Interval& v : a[0]->c)
-                    if (!(v.lo > -M_PI / 2 && v.hi < M_PI / 2)) return true;  // (the rule's own range: no pole within)
-                return false;
-            }
+            if (n == "tan" || n == "sec") return pole(M_PI / 2) || overflows(x);
+            if (n == "cot" || n == "csc") return pole(0) || overflows(x);
             if (n == "mod") return a.size() > 1 && any_of(*a[1], holds_zero);
             if (n == "normalize") return std::all_of(a[0]->c.begin(), a[0]->c.end(), [](Interval v) { return holds_zero(v); });
-            if (n == "atan" || n == "atan2") return a.size() > 1 && any_of(*a[0], holds_zero) && any_of(*a[1], holds_zero);
-            return false;
+            if (n == "smoothstep") {  // GLSL: undefined unless edge0 < edge1
+                if (a.size() < 3) return true;
+                for (size_t k = 0; k < std::max(a[0]->c.size(), a[1]->c.size()); ++k)
+                    if (!(comp(*a[0], k).hi < comp(*a[1], k).lo)) return true;
+                return false;
+            }
+            return true;  // inv, and anything not known to stay finite
         }
-        default: return false;
+        default: return true;  // Inverse (a singular matrix), Call and Loop (their results carry it), anything new
     }
 }
 
@@ -496,7 +571,7 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
                ((in.op == Op::Select || in.op == Op::If) && a[0]->c.size() == 1 && (a[0]->c[0].lo >= 1 || a[0]->c[0].hi <= 0))) {
         // the operand's own (a decided choice: the one taken)
     } else {
-        x.nan = x.nan || operand_nan || makes_nan(in, a);
+        x.nan = x.nan || operand_nan || makes_nan(in, a, x);
     }
     return x;
 }

@@ -107,11 +107,15 @@ struct Bounds {
     IntervalVec c;            // per component (matrices row-major)
     double norm = std::numeric_limits<double>::infinity();
     bool unit = false;        // exactly a unit vector (or zero): normalize, v/‖v‖
-    // Some point of the box may make this value NaN or ±∞ (x/0, a logarithm of 0 or a negative, a root of a
-    // negative, or an operand that may be: an infinity makes NaN through 0·∞ or ∞ − ∞), which the intervals do
-    // not show. Every ordered comparison of a NaN is false, so a comparison of such a value is never decided
-    // true (nor `!=` false), and case splitting (ir/CaseSplit.h) does not take its falsity for the opposite
-    // comparison. An unbounded interval alone does not set it: a box reaching to infinity holds finite points.
+    // Some point of the box may make this value NaN or ±∞ in the shader's 32-bit floats (a function outside its
+    // domain, a division by what may be 0, a result past float's range, e^x or b^x growing past it at a finite
+    // point, or an operand that may: an infinity makes NaN through 0·∞ or ∞ − ∞), which the intervals do not
+    // show; only operations known to stay finite on finite operands leave it unset. Every ordered comparison
+    // of a NaN is false, so a comparison of such a value is never decided true (nor `!=` false), and case
+    // splitting (ir/CaseSplit.h) does not take its falsity for the opposite comparison. An unbounded interval
+    // alone does not set it (a box reaching to infinity holds finite points, x² there is finite); a product of
+    // huge constants that passes float's range only outside the box's finite ends is not seen ((1e19·x)² on
+    // x ≥ 0.1).
     bool nan = false;
     int rows = 0, cols = 0;   // a matrix's shape (0: not a matrix)
     double norm_from_components() const;
