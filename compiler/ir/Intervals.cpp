@@ -394,10 +394,6 @@ bool makes_nan(const Instr& in, const std::vector<const Bounds*>& a, const Bound
     }
 }
 
-}  // namespace
-
-namespace {
-
 // The rule of one instruction's intervals (bounds_of adds whether it may be NaN).
 Bounds bounds_rule(const Module& m, const Function& f, const Instr& in, const std::vector<const Bounds*>& a) {
     (void)m;
