@@ -310,9 +310,10 @@ namespace {
 // box unproven (the octahedron's cases take up to ~15 passes, each up to 3 rounds of narrowing).
 constexpr int kSplitPasses = 32;
 
-// A copy of `f` for case splitting: calls inlined (only a function's own comparisons are split), constants
-// folded, common subexpressions merged; nothing where it has no comparison or sign to split, or is too large.
-std::optional<Function> splittable(const Module& m, const Function& f) {
+// A copy of `f` with its calls inlined, constants folded and common subexpressions merged (the form case
+// splitting, which splits a function's own comparisons, and the rotated pairs take apart); nothing where it
+// is too large (20,000 instructions).
+std::optional<Function> flattened(const Module& m, const Function& f) {
     std::optional<Function> g;
     try {
         g = inline_calls(m, f);
@@ -322,10 +323,22 @@ std::optional<Function> splittable(const Module& m, const Function& f) {
     if (g->body.size() > 20000) return std::nullopt;
     fold_constants(m, *g);
     eliminate_common_subexpressions(*g);
-    for (const Instr& in : g->body)
+    return g;
+}
+
+// Whether `g` has a comparison or a sign for case splitting to split.
+bool has_cases(const Function& g) {
+    for (const Instr& in : g.body)
         if (in.op == Op::Compare || (in.op == Op::Builtin && builtins()[size_t(in.aux)].name == std::string_view("sign")))
-            return g;
-    return std::nullopt;
+            return true;
+    return false;
+}
+
+// flattened(m, f) where it has cases to split; nothing elsewhere.
+std::optional<Function> splittable(const Module& m, const Function& f) {
+    std::optional<Function> g = flattened(m, f);
+    if (g && !has_cases(*g)) g.reset();
+    return g;
 }
 
 // The distance's lowest value over the cases of `g` (its first component's lower end), `params` as given,
@@ -667,24 +680,18 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
     const Function& f = m.functions[size_t(fn)];
     auto first = first_component;
     const long budget = work;
+    // The flattened copy: case splitting's, where it has cases, and the rotated pairs' below.
+    const std::optional<Function> g = flattened(m, f);
     DistanceRange distance{m, f, query, params, loop_trips, work};
-    distance.flat = splittable(m, f);
+    if (g && has_cases(*g)) distance.flat = g;
     auto range = [&](const Box& b) { return distance(b); };
     const BoxSplit split = distance.splitter();
     SupportBox out = box_sides(range, split, level, per_proof, work);
 
-    // Rotated pairs of the query's axes (see plane_pair): once more per plane, in the pair's coordinates, on a
-    // copy of the function with its calls inlined and common subexpressions merged (so that cos θ and sin θ
-    // are seen to share θ), with a budget of its own.
-    std::optional<Function> g;
-    try {
-        g = inline_calls(m, f);
-    } catch (const SizeLimit&) {
-        g.reset();  // too large to inline: the axis-aligned box stands
-    }
-    if (g && g->body.size() <= 20000) {
-        fold_constants(m, *g);
-        eliminate_common_subexpressions(*g);
+    // Rotated pairs of the query's axes (see plane_pair): once more per plane, in the pair's coordinates, on
+    // the copy with its calls inlined and common subexpressions merged (so that cos θ and sin θ are seen to
+    // share θ), with a budget of its own. (Too large to inline: the axis-aligned box stands.)
+    if (g) {
         for (const PlanePair& pp : plane_pairs(*g, query)) {
             const int o = 3 - pp.a - pp.b;  // the axis the pair leaves alone
             Box cur;  // the box of (u at a, p_o at o, w at b) being analysed
