@@ -405,14 +405,9 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
             if (--budget < 0) return false;
             if (lowest_split(b) > 0) continue;
             if (level == depth) {
-                bool edge = false;
                 if (open)
                     for (int c = 0; c < 3; ++c)
-                        edge |= b.lo[size_t(c)] <= domain.lo[size_t(c)] || b.hi[size_t(c)] >= domain.hi[size_t(c)];
-                if (edge) {
-                    if (lowest_split(b) > 0) continue;  // free after all: not kept
-                    return false;
-                }
+                        if (b.lo[size_t(c)] <= domain.lo[size_t(c)] || b.hi[size_t(c)] >= domain.hi[size_t(c)]) return false;
                 kept.push_back(b);
                 continue;
             }
