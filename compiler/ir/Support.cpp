@@ -8,6 +8,7 @@
 #include <queue>
 
 #include "ir/CaseSplit.h"
+#include "ir/ConvexBound.h"
 #include "ir/passes/CSE.h"
 #include "ir/passes/Fold.h"
 #include "ir/passes/Inline.h"
@@ -362,7 +363,10 @@ double split_lowest(const Module& m, const Function& g, const std::vector<std::v
 
 }  // namespace
 
-std::optional<double> support_radius(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
+namespace {
+
+// support_radius by interval arithmetic alone (branch and bound over boxes, with case splitting).
+std::optional<double> interval_radius(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
                                       double reach, int budget) {
     if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
     const Function& f = m.functions[size_t(fn)];
@@ -488,6 +492,21 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
         }
     }
     return std::nextafter(r * (1 + 1e-9), INFINITY);
+}
+
+}  // namespace
+
+std::optional<double> support_radius(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
+                                      double reach, int budget) {
+    if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
+    // A convex polytope written as the largest of its planes' distances (ir/ConvexBound.h): its farthest
+    // vertex, where intervals find no radius (every plane's distance is unbounded below over a half-space).
+    std::optional<double> polytope;
+    if (const std::optional<Function> g = flattened(m, m.functions[size_t(fn)]))
+        if (auto pieces = convex_lower_bound(m, *g, query, params)) polytope = polytope_radius(*pieces, 0);
+    std::optional<double> r = interval_radius(m, fn, query, std::move(params), reach, budget);
+    if (polytope && (!r || *polytope < *r)) return polytope;
+    return r;
 }
 
 namespace {
@@ -682,6 +701,16 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
     auto range = [&](const Box& b) { return distance(b); };
     const BoxSplit split = distance.splitter();
     SupportBox out = box_sides(range, split, level, per_proof, work);
+    // A convex polytope written as the largest of its planes' distances (ir/ConvexBound.h): its sides, which
+    // intervals cannot close (each plane's distance is unbounded below over a half-space).
+    if (g)
+        if (auto pieces = convex_lower_bound(m, *g, query, params)) {
+            SupportBox pb = polytope_box(*pieces, level);
+            for (size_t a = 0; a < 3; ++a) {
+                out.lo[a] = std::max(out.lo[a], pb.lo[a]);
+                out.hi[a] = std::min(out.hi[a], pb.hi[a]);
+            }
+        }
 
     // Rotated pairs of the query's axes (see plane_pair): once more per plane, in the pair's coordinates, on
     // the copy with its calls inlined and common subexpressions merged (so that cos θ and sin θ are seen to

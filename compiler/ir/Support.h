@@ -13,6 +13,9 @@
 // has comparisons (a piecewise choice, a sign), the box is analysed again case by case (ir/CaseSplit.h: each
 // case narrows what it implies), whose lowest value over the cases still bounds the distance from below: the
 // hull of the octahedron's three cases alone proves no half-space free.
+// A convex polytope written as the largest of its planes' distances (a tetrahedron) is bounded by its planes
+// instead (ir/ConvexBound.h: Farkas combinations for the box's sides, the farthest vertex for the radius), where
+// intervals leave every plane's distance unbounded below over a half-space.
 #pragma once
 
 #include <array>

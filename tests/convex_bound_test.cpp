@@ -1,0 +1,191 @@
+// A convex piecewise-linear lower bound of a distance and its polytope (ir/ConvexBound.h): the standard library's
+// tetrahedron, a largest of four plane distances that interval arithmetic could box on one side only, gets its
+// exact box and circumradius; user-written polytopes (planes, |x|, constant matrices, scales, sums) are bounded
+// and sampled outside their boxes; what is not a largest of planes (a min, a norm) gets no bound; a slab is
+// bounded only across itself; a parameter's slider range takes the largest polytope.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "TestUtil.h"
+#include "ir/ConvexBound.h"
+#include "ir/Eval.h"
+#include "ir/passes/CSE.h"
+#include "ir/passes/Fold.h"
+#include "ir/passes/Inline.h"
+
+using namespace iqc;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Shape module `text` at its parameters' defaults, q -> D(q), and its flattened copy (calls inlined, constants
+// folded: the form convex_lower_bound takes), both added to `m`: {object, flat}.
+std::pair<int, int> shape(ir::Module& m, const std::string& text, const std::string& name) {
+    const int object = test::lower_shape_object(m, text, name);
+    REQUIRE(object >= 0);
+    ir::Function flat = ir::inline_calls(m, m.functions[size_t(object)]);
+    ir::fold_constants(m, flat);
+    ir::eliminate_common_subexpressions(flat);
+    flat.name = "object_flat";
+    m.functions.push_back(std::move(flat));
+    return {object, int(m.functions.size()) - 1};
+}
+
+std::optional<std::vector<ir::AffinePiece>> pieces_of(const ir::Module& m, int flat) {
+    return ir::convex_lower_bound(m, m.functions[size_t(flat)], 0, {{}});
+}
+
+// Points of the cube of half-side `reach` outside `box` (grown by `margin`) where the distance is ≤ level: none
+// for a sound box. Counts them over `n` random points.
+int inside_beyond(const ir::Module& m, int object, const ir::SupportBox& box, double level, double reach, int n = 4000) {
+    ir::Evaluator ev(m, {});
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-reach, reach);
+    int bad = 0;
+    for (int i = 0; i < n; ++i) {
+        std::vector<double> p = {u(rng), u(rng), u(rng)};
+        bool outside = false;
+        for (size_t a = 0; a < 3; ++a) outside |= p[a] < box.lo[a] || p[a] > box.hi[a];
+        if (!outside) continue;
+        double d = ev.call(object, {ir::Value{Type::vector(3), p}})[0];
+        if (d <= level) ++bad;
+    }
+    return bad;
+}
+
+}  // namespace
+
+TEST_CASE("the tetrahedron's four planes give its exact box and circumradius", "[convex-bound][box]") {
+    ir::Module m;
+    auto [object, flat] = shape(m, test::read_text(fs::path(IQC_SOURCE_DIR) / "stdlib" / "tetrahedron.iql"), "tetrahedron");
+    auto pieces = pieces_of(m, flat);
+    REQUIRE(pieces);
+    CHECK(pieces->size() == 4);
+    const double r = 0.4;  // the default inradius
+    ir::SupportBox box = ir::polytope_box(*pieces, 0);
+    // Apex (0, 3r, 0); base vertices at y = −r, 2√2·r from the axis, one toward +z, two at x = ±√6·r.
+    CHECK(box.lo[0] == Approx(-std::sqrt(6.0) * r).margin(1e-6));
+    CHECK(box.hi[0] == Approx(std::sqrt(6.0) * r).margin(1e-6));
+    CHECK(box.lo[1] == Approx(-r).margin(1e-6));
+    CHECK(box.hi[1] == Approx(3 * r).margin(1e-6));
+    CHECK(box.lo[2] == Approx(-std::sqrt(2.0) * r).margin(1e-6));
+    CHECK(box.hi[2] == Approx(2 * std::sqrt(2.0) * r).margin(1e-6));
+    // Rounded outward, never inward.
+    CHECK(box.hi[1] >= 3 * r);
+    CHECK(box.lo[1] <= -r);
+    auto radius = ir::polytope_radius(*pieces, 0);
+    REQUIRE(radius);
+    CHECK(*radius == Approx(3 * r).margin(1e-6));  // a regular tetrahedron's circumradius is 3 × its inradius
+    CHECK(*radius >= 3 * r);
+    CHECK(inside_beyond(m, object, box, 0, 3) == 0);
+    // A level above 0 (the scene box's margin): every plane moves out by it.
+    ir::SupportBox grown = ir::polytope_box(*pieces, 0.1);
+    CHECK(grown.hi[1] == Approx(3 * r + 0.3).margin(1e-6));  // the apex is where three planes meet at 1/3 each
+    CHECK(grown.lo[1] == Approx(-r - 0.1).margin(1e-6));
+    CHECK(inside_beyond(m, object, grown, 0.1, 3) == 0);
+
+    // The whole analysis: support_box closes every side (intervals alone closed y only) and support_radius
+    // gives the circumradius (intervals alone: none).
+    auto sb = ir::support_box(m, object, 0, {{}}, 0);
+    REQUIRE(sb);
+    for (size_t a = 0; a < 3; ++a) {
+        CHECK(std::isfinite(sb->lo[a]));
+        CHECK(std::isfinite(sb->hi[a]));
+    }
+    CHECK(sb->hi[0] == Approx(std::sqrt(6.0) * r).margin(1e-3));
+    auto sr = ir::support_radius(m, object, 0, {{}});
+    REQUIRE(sr);
+    CHECK(*sr == Approx(3 * r).margin(1e-6));
+}
+
+TEST_CASE("user-written polytopes: planes, |x|, constant matrices, scales and sums are bounded soundly",
+          "[convex-bound][box]") {
+    struct Case {
+        const char* name;
+        const char* d;
+        std::array<double, 3> lo, hi;  // the expected box at level 0 (NAN: not checked)
+    };
+    const Case cases[] = {
+        // A block from |x| and a wedge's two planes.
+        {"wedge", "D = max(|p_1| - 1, |p_2| - 0.5, p_3 - 2, -p_3)", {-1, -0.5, 0}, {1, 0.5, 2}},
+        // The same scaled (a Lipschitz factor written out) and offset by a constant.
+        {"scaled", "D = 0.5 max(|p_1| - 1, |p_2| - 0.5, p_3 - 2, -p_3) / 2 + 0", {-1, -0.5, 0}, {1, 0.5, 2}},
+        // An octahedron as the largest of |x|+|y|+|z|'s planes, written as a dot product with constants.
+        {"diamond", "D = (max(p⋅(1,1,1), p⋅(-1,1,1), p⋅(1,-1,1), p⋅(1,1,-1), p⋅(-1,-1,1), p⋅(-1,1,-1), p⋅(1,-1,-1), "
+                    "p⋅(-1,-1,-1)) - 1)/√3",
+         {-1, -1, -1}, {1, 1, 1}},
+        // A cube turned by a constant rotation about z (45°): its extent in x and y is √2.
+        {"turned", "D = max(|q_1|, |q_2|, |q_3|) - 1\nq = [0.7071067811865476 0.7071067811865476 0; -0.7071067811865476 "
+                   "0.7071067811865476 0; 0 0 1] p",
+         {-std::sqrt(2.0), -std::sqrt(2.0), -1}, {std::sqrt(2.0), std::sqrt(2.0), 1}},
+        // A sum of two bounds: each pair of their planes summed.
+        {"sum", "D = max(|p_1|, |p_2|) + |p_3| - 1", {-1, -1, -1}, {1, 1, 1}},
+    };
+    for (const Case& c : cases) {
+        INFO(c.name << ": " << c.d);
+        ir::Module m;
+        std::string text = std::string("shape\n") + c.d + "\nwhere\np ∈ ℝ³\n";
+        auto [object, flat] = shape(m, text, c.name);
+        auto pieces = pieces_of(m, flat);
+        REQUIRE(pieces);
+        ir::SupportBox box = ir::polytope_box(*pieces, 0);
+        for (size_t a = 0; a < 3; ++a) {
+            CHECK(box.lo[a] == Approx(c.lo[a]).margin(1e-6));
+            CHECK(box.hi[a] == Approx(c.hi[a]).margin(1e-6));
+        }
+        CHECK(inside_beyond(m, object, box, 0, 4) == 0);
+        auto radius = ir::polytope_radius(*pieces, 0);
+        REQUIRE(radius);
+        // At most the box's farthest corner, and no point of the solid beyond it (sampled along the axes).
+        double corner = 0;
+        for (size_t a = 0; a < 3; ++a) corner += std::pow(std::max(std::fabs(c.lo[a]), std::fabs(c.hi[a])), 2);
+        CHECK(*radius <= std::sqrt(corner) + 1e-6);
+        ir::SupportBox ball{{-*radius, -*radius, -*radius}, {*radius, *radius, *radius}};
+        CHECK(inside_beyond(m, object, ball, 0, 4) == 0);
+    }
+}
+
+TEST_CASE("what is not a largest of planes gets no polytope: a slab is bounded across itself only", "[convex-bound]") {
+    for (const char* d : {"D = min(‖p‖ - 1, p_2)", "D = ‖p‖ - 1", "D = max(p_1 p_2, p_3)", "D = -max(p_1, p_2)",
+                          "D = max(p_1, p_2) - max(p_2, p_3)", "D = max(|p_1|, p_2) * p_3"}) {
+        INFO(d);
+        ir::Module m;
+        auto [object, flat] = shape(m, std::string("shape\n") + d + "\nwhere\np ∈ ℝ³\n", "notconvex");
+        (void)object;
+        CHECK_FALSE(pieces_of(m, flat));
+    }
+    ir::Module m;
+    auto [object, flat] = shape(m, "shape\nD = |p_2| - 1\nwhere\np ∈ ℝ³\n", "slab");
+    auto pieces = pieces_of(m, flat);
+    REQUIRE(pieces);
+    ir::SupportBox box = ir::polytope_box(*pieces, 0);
+    CHECK(box.lo[1] == Approx(-1).margin(1e-6));
+    CHECK(box.hi[1] == Approx(1).margin(1e-6));
+    for (size_t a : {size_t(0), size_t(2)}) {
+        CHECK(std::isinf(box.lo[a]));
+        CHECK(std::isinf(box.hi[a]));
+    }
+    CHECK_FALSE(ir::polytope_radius(*pieces, 0));  // unbounded: no ball holds it
+    CHECK(inside_beyond(m, object, box, 0, 5) == 0);
+}
+
+TEST_CASE("a parameter's range takes the largest polytope it allows", "[convex-bound]") {
+    ir::Module m;
+    auto [object, flat] = shape(m, test::read_text(fs::path(IQC_SOURCE_DIR) / "stdlib" / "tetrahedron.iql"), "tetrahedron");
+    (void)object;
+    // The object's own parameters are constants; the module's function takes r as its second parameter.
+    const int fn = m.find("tetrahedron");
+    REQUIRE(fn >= 0);
+    ir::Function g = m.functions[size_t(fn)];
+    ir::fold_constants(m, g);
+    auto pieces = ir::convex_lower_bound(m, g, 0, {{}, {{0.2, 0.6}}});
+    REQUIRE(pieces);
+    auto radius = ir::polytope_radius(*pieces, 0);
+    REQUIRE(radius);
+    CHECK(*radius == Approx(3 * 0.6).margin(1e-6));
+    // A range with no end: no finite plane.
+    CHECK_FALSE(ir::convex_lower_bound(m, g, 0, {{}, {{0.2, INFINITY}}}));
+    (void)flat;
+}
