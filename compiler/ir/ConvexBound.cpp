@@ -37,6 +37,10 @@ public:
         }
     }
 
+    // Component comp of value v (−1: a scalar) as an exactly affine value of p.
+    std::optional<Affine> affine_value(ValueId v, int comp) { return affine(v, comp, 0); }
+    bool depends(ValueId v) const { return depends_[v] != 0; }
+
     std::optional<Convex> convex(ValueId v, int depth = 0) {
         if (auto it = convex_memo_.find(v); it != convex_memo_.end()) return it->second;
         std::optional<Convex> r = convex_uncached(v, depth);
@@ -53,7 +57,8 @@ private:
     std::vector<char> depends_;
     std::map<ValueId, std::optional<Convex>> convex_memo_;
     std::map<std::pair<ValueId, int>, std::optional<Affine>> affine_memo_;
-    static constexpr int kDepth = 64;  // deeper expressions are not taken apart (the recursion's stack)
+    static constexpr int kDepth = 512;  // deeper expressions are not taken apart (the recursion's stack; a max
+    // of n planes is a chain of n − 1 binary maxima)
 
     // Component `comp` of a value independent of p (its interval), if finite.
     std::optional<Interval> range(ValueId v, int comp) const {
@@ -310,6 +315,25 @@ double outward(double x, bool up) {
     return up ? x + margin : x - margin;
 }
 
+// The pieces as constraints aᵢ⋅p + bᵢ ≤ level with unit normals: (aᵢ⋅p + bᵢ − level)/‖aᵢ‖ ≤ 0, the same
+// polytope, so that a plane written 10⁶ times steeper than the others (a scale that leaves the shape as it
+// is) does not make every solve that involves it look singular (a trial's bar lost its far face's vertices
+// and got a radius of 0.71 for 2.12). A piece with no normal is a constant: `empty` when it is above the level
+// (nothing is ≤ level), else no constraint.
+std::vector<AffinePiece> unit_constraints(const std::vector<AffinePiece>& P, double level, bool& empty) {
+    std::vector<AffinePiece> out;
+    empty = false;
+    for (const AffinePiece& q : P) {
+        const double n = std::sqrt(q.a[0] * q.a[0] + q.a[1] * q.a[1] + q.a[2] * q.a[2]);
+        if (!(n > 0)) {
+            empty |= q.b > level;
+            continue;
+        }
+        out.push_back({{q.a[0] / n, q.a[1] / n, q.a[2] / n}, (q.b - level) / n});
+    }
+    return out;
+}
+
 }  // namespace
 
 std::optional<std::vector<AffinePiece>> convex_lower_bound(const Module& m, const Function& g, int query,
@@ -331,10 +355,55 @@ std::optional<std::vector<AffinePiece>> convex_lower_bound(const Module& m, cons
     return r->pieces;
 }
 
-SupportBox polytope_box(const std::vector<AffinePiece>& P, double level) {
+std::vector<AffineMap> affine_maps(const Module& m, const Function& g, int query, std::vector<std::vector<Interval>> params) {
+    std::vector<AffineMap> out;
+    if (query < 0 || size_t(query) >= params.size() || size_t(query) >= g.params.size()) return out;
+    params[size_t(query)].assign(3, Interval{});
+    long work = 200000;
+    std::vector<Bounds> values = interval_analysis(m, g, params, {}, 0, &work);
+    if (values.size() != g.body.size()) return out;
+    Rules rules(g, query, values, 1);
+    for (size_t i = 0; i < g.body.size(); ++i) {
+        const Instr& in = g.body[i];
+        if (!in.type.is_vector() || in.type.rows != 3 || !rules.depends(ValueId(i)) || in.op == Op::Param) continue;
+        AffineMap map;
+        map.value = ValueId(i);
+        bool ok = true, mixing = false;
+        for (int k = 0; k < 3 && ok; ++k) {
+            auto x = rules.affine_value(ValueId(i), k);
+            if (!x || x->b.lo != x->b.hi) {
+                ok = false;
+                break;
+            }
+            map.A[size_t(k)] = x->a;
+            map.b[size_t(k)] = x->b.lo;
+            int nonzero = 0;
+            for (double a : x->a) nonzero += a != 0;
+            mixing |= nonzero >= 2;
+        }
+        if (!ok || !mixing) continue;
+        // A⁻¹ column by column (A e_j = ... solved for each unit vector).
+        bool invertible = true;
+        for (size_t j = 0; j < 3 && invertible; ++j) {
+            std::array<double, 3> e{};
+            e[j] = 1;
+            auto col = solve3(map.A, e);
+            if (!col) invertible = false;
+            else
+                for (size_t r = 0; r < 3; ++r) map.inverse[r][j] = (*col)[r];
+        }
+        if (invertible) out.push_back(map);
+    }
+    return out;
+}
+
+SupportBox polytope_box(const std::vector<AffinePiece>& pieces, double level_in) {
     SupportBox out;
     out.lo.fill(-INFINITY);
     out.hi.fill(INFINITY);
+    bool empty = false;
+    const std::vector<AffinePiece> P = unit_constraints(pieces, level_in, empty);
+    const double level = 0;
     const size_t n = P.size();
     for (size_t k = 0; k < 3; ++k) {
         const size_t u = (k + 1) % 3, w = (k + 2) % 3;
@@ -387,34 +456,49 @@ SupportBox polytope_box(const std::vector<AffinePiece>& P, double level) {
     return out;
 }
 
-std::optional<double> polytope_radius(const std::vector<AffinePiece>& P, double level) {
-    if (P.size() > 64) return std::nullopt;
-    SupportBox box = polytope_box(P, level);
-    for (size_t k = 0; k < 3; ++k)
+std::optional<double> polytope_radius(const std::vector<AffinePiece>& pieces, double level) {
+    if (pieces.size() > 128) return std::nullopt;
+    SupportBox box = polytope_box(pieces, level);
+    double corner = 0;
+    for (size_t k = 0; k < 3; ++k) {
         if (!std::isfinite(box.lo[k]) || !std::isfinite(box.hi[k])) return std::nullopt;
+        corner += std::pow(std::max(std::fabs(box.lo[k]), std::fabs(box.hi[k])), 2);
+    }
+    corner = outward(std::sqrt(corner), true);  // the box's farthest corner: sound whatever the vertices
+    bool empty = false;
+    const std::vector<AffinePiece> P = unit_constraints(pieces, level, empty);
+    if (empty) return std::nullopt;
+    // The vertices: every three planes whose unit normals are independent. Three that are nearly dependent
+    // (|det| between rounding's 1e-14 and 1e-6) meet at a point the solve cannot place well: the box's corner then.
     double radius = -1;
     const size_t n = P.size();
     for (size_t i = 0; i < n; ++i)
         for (size_t j = i + 1; j < n; ++j)
             for (size_t l = j + 1; l < n; ++l) {
-                auto p = solve3({P[i].a, P[j].a, P[l].a}, {level - P[i].b, level - P[j].b, level - P[l].b});
-                if (!p) continue;
+                const std::array<std::array<double, 3>, 3> M = {P[i].a, P[j].a, P[l].a};
+                const double det = M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1]) -
+                                   M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0]) +
+                                   M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]);
+                if (std::fabs(det) <= 1e-14) continue;  // dependent: no vertex (parallel planes, a line)
+                if (std::fabs(det) <= 1e-6) return corner;
+                auto p = solve3(M, {-P[i].b, -P[j].b, -P[l].b});
+                if (!p) return corner;
                 const double norm = std::sqrt((*p)[0] * (*p)[0] + (*p)[1] * (*p)[1] + (*p)[2] * (*p)[2]);
                 bool inside = true;
                 for (const AffinePiece& q : P) {
                     const double at = q.a[0] * (*p)[0] + q.a[1] * (*p)[1] + q.a[2] * (*p)[2] + q.b;
-                    const double tol = 1e-9 * (1 + std::fabs(level) + std::fabs(q.b) +
-                                               (std::fabs(q.a[0]) + std::fabs(q.a[1]) + std::fabs(q.a[2])) * norm);
-                    if (at > level + tol) {
+                    if (at > 1e-9 * (1 + std::fabs(q.b) + norm)) {
                         inside = false;
                         break;
                     }
                 }
                 if (inside) radius = std::max(radius, norm);
             }
-    // A bounded polytope that is not empty has a vertex; none: empty (nothing is ≤ level), or rounding.
-    if (radius < 0) return std::nullopt;
-    return outward(radius, true);
+    // A bounded polytope that is not empty has a vertex, and one as far along each axis as the box's side.
+    double extent = 0;
+    for (size_t k = 0; k < 3; ++k) extent = std::max({extent, std::fabs(box.lo[k]), std::fabs(box.hi[k])});
+    if (radius < 0 || radius < extent * (1 - 1e-6) - 1e-9) return corner;
+    return std::min(corner, outward(radius, true));
 }
 
 }  // namespace iqc::ir

@@ -38,18 +38,33 @@ struct AffinePiece {
 // matrix products with constants (affine values, exactly); max of bounds (the union of their pieces); |x| of
 // an affine x (two pieces); a positive constant times a bound; a sum of bounds (their pieces' sums). Nothing
 // where d is something else (a min, a norm, a choice), where a coefficient of p is not one constant, or past
-// `max_pieces` pieces.
+// `max_pieces` pieces (128: the box's and the radius's searches take every three).
 std::optional<std::vector<AffinePiece>> convex_lower_bound(const Module& m, const Function& g, int query,
                                                            std::vector<std::vector<Interval>> params,
-                                                           size_t max_pieces = 64);
+                                                           size_t max_pieces = 128);
+
+// A value of `g` that is a constant affine map of the query point, v = A p + b (A's rows; A invertible and
+// mixing axes: some row has two non-zero entries), found by the same rules: a rotation written inside a
+// module, q = R p or R (p − c), which interval arithmetic cannot see through (over a half-space beyond a plane
+// each component of R p is unbounded). support_box analyses such a shape over boxes of v and maps the box
+// back through A⁻¹. In body order; where the other parameters are not single values, b is their range's
+// midpoint and nothing is returned for a b that is not one value.
+struct AffineMap {
+    ValueId value = 0;
+    std::array<std::array<double, 3>, 3> A{};
+    std::array<double, 3> b{};
+    std::array<std::array<double, 3>, 3> inverse{};  // A⁻¹
+};
+std::vector<AffineMap> affine_maps(const Module& m, const Function& g, int query, std::vector<std::vector<Interval>> params);
 
 // The box of the polytope {p : aᵢ⋅p + bᵢ ≤ level for every i} (object units), side by side as the Farkas
 // certificate above gives it, rounded outward; ±∞ on a side no combination of the pieces closes.
 SupportBox polytope_box(const std::vector<AffinePiece>& pieces, double level);
 
-// The radius of a ball around the origin holding that polytope: its farthest vertex, rounded up; nothing where
-// it is unbounded (a side of polytope_box is ±∞) or has more than 64 pieces (the vertices are searched among
-// every three planes).
+// The radius of a ball around the origin holding that polytope: its farthest vertex (every three planes solved,
+// with unit normals), rounded up, or the box's farthest corner where three planes are too nearly dependent to
+// place their vertex; nothing where it is unbounded (a side of polytope_box is ±∞), empty, or has more than
+// 128 pieces.
 std::optional<double> polytope_radius(const std::vector<AffinePiece>& pieces, double level);
 
 }  // namespace iqc::ir

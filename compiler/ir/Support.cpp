@@ -365,6 +365,10 @@ double split_lowest(const Module& m, const Function& g, const std::vector<std::v
 
 namespace {
 
+std::optional<std::pair<AffineMap, SupportBox>> mapped_box(const Module& m, const Function& g, int query,
+                                                           std::vector<std::vector<Interval>> params, double level,
+                                                           int per_proof, int loop_trips, long work);
+
 // support_radius by interval arithmetic alone (branch and bound over boxes, with case splitting).
 std::optional<double> interval_radius(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
                                       double reach, int budget) {
@@ -504,8 +508,27 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
     std::optional<double> polytope;
     if (const std::optional<Function> g = flattened(m, m.functions[size_t(fn)]))
         if (auto pieces = convex_lower_bound(m, *g, query, params)) polytope = polytope_radius(*pieces, 0);
-    std::optional<double> r = interval_radius(m, fn, query, std::move(params), reach, budget);
+    std::optional<double> r = interval_radius(m, fn, query, params, reach, budget);
     if (polytope && (!r || *polytope < *r)) return polytope;
+    // A rotation written inside the module (mapped_box): the farthest of v's box's corners mapped back through
+    // A⁻¹ (‖A⁻¹(v − b)‖ is convex in v: its largest value over the box is at a corner).
+    if (!r)
+        if (const std::optional<Function> g = flattened(m, m.functions[size_t(fn)]))
+            if (auto mb = mapped_box(m, *g, query, params, 0, 48, 16, 300000)) {
+                const auto& [map, v] = *mb;
+                double far = 0;
+                for (int corner = 0; corner < 8 && std::isfinite(far); ++corner) {
+                    double n2 = 0;
+                    for (size_t k = 0; k < 3; ++k) {
+                        double x = 0;
+                        for (size_t j = 0; j < 3; ++j)
+                            x += map.inverse[k][j] * (((corner >> j) & 1 ? v.hi[j] : v.lo[j]) - map.b[j]);
+                        n2 += x * x;
+                    }
+                    far = std::max(far, std::sqrt(n2));
+                }
+                if (std::isfinite(far)) r = std::nextafter(far * (1 + 1e-9), INFINITY);
+            }
     return r;
 }
 
@@ -675,6 +698,49 @@ struct DistanceRange {
 
 }  // namespace
 
+namespace {
+
+// A constant affine map of the query point that mixes its axes, v = A p + b (ir/ConvexBound.h's affine_maps: a
+// rotation written inside the module, q = R p or R (p − c)): over a half-space beyond a plane each of v's
+// components is unbounded, so the analysis of p's boxes closes no side. The shape is analysed over boxes of v
+// instead (p itself unbounded wherever else the shape reads it, so that what is proven holds): the last such
+// value (a composition of rotations: the whole map) and v's box, where it has a finite side; the box's search
+// as support_box's (`work` its own budget).
+std::optional<std::pair<AffineMap, SupportBox>> mapped_box(const Module& m, const Function& g, int query,
+                                                           std::vector<std::vector<Interval>> params, double level,
+                                                           int per_proof, int loop_trips, long work) {
+    std::vector<AffineMap> maps = affine_maps(m, g, query, params);
+    if (maps.empty()) return std::nullopt;
+    const AffineMap map = maps.back();
+    Box cur;
+    IntervalHook hook = [&](size_t i, std::vector<Bounds>& r) {
+        if (i == map.value) {
+            r[i].c = {{cur.lo[0], cur.hi[0]}, {cur.lo[1], cur.hi[1]}, {cur.lo[2], cur.hi[2]}};
+            r[i].norm = r[i].norm_from_components();
+            r[i].unit = false;
+        }
+        return true;
+    };
+    IntervalScratch scratch;
+    std::vector<Bounds> values;
+    auto mapped = [&](const Box& b) {
+        cur = b;
+        params[size_t(query)] = {{}, {}, {}};
+        interval_analysis(scratch, values, m, g, params, hook, loop_trips, &work);
+        Interval x = values[g.result].c.empty() ? Interval{} : values[g.result].c[0];
+        if (std::isnan(x.lo)) x.lo = -INFINITY;
+        if (std::isnan(x.hi)) x.hi = INFINITY;
+        return x;
+    };
+    SupportBox v = box_sides(mapped, nullptr, level, per_proof, work);
+    bool any = false;
+    for (size_t a = 0; a < 3; ++a) any |= std::isfinite(v.lo[a]) || std::isfinite(v.hi[a]);
+    if (!any) return std::nullopt;
+    return std::make_pair(map, v);
+}
+
+}  // namespace
+
 bool support_box_open(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params, double level,
                       int per_proof, int loop_trips, long work) {
     if (!boxable(m, fn, query, params.size())) return true;
@@ -791,6 +857,23 @@ std::optional<SupportBox> support_box(const Module& m, int fn, int query, std::v
             narrow(size_t(o), {v.lo[size_t(o)], v.hi[size_t(o)]});
         }
     }
+    // A constant affine map of the query point that mixes its axes (mapped_box): v's box mapped back through A⁻¹.
+    if (g)
+        if (auto mb = mapped_box(m, *g, query, params, level, per_proof, loop_trips, budget)) {
+            const auto& [map, v] = *mb;
+            for (size_t k = 0; k < 3; ++k) {
+                Interval x{0, 0};
+                for (size_t j = 0; j < 3; ++j) {
+                    const double c = map.inverse[k][j];
+                    if (c == 0) continue;
+                    x = iv::add(x, iv::mul({c, c}, iv::add({v.lo[j], v.hi[j]}, {-map.b[j], -map.b[j]})));
+                }
+                if (std::isnan(x.lo) || std::isnan(x.hi)) continue;
+                // Rounded outward (the solve of A⁻¹ and the sums): a relative margin.
+                out.lo[k] = std::max(out.lo[k], x.lo - 1e-9 * std::max(1.0, std::fabs(x.lo)));
+                out.hi[k] = std::min(out.hi[k], x.hi + 1e-9 * std::max(1.0, std::fabs(x.hi)));
+            }
+        }
     bool any = false;
     for (size_t a = 0; a < 3; ++a) any |= std::isfinite(out.lo[a]) || std::isfinite(out.hi[a]);
     if (!any) return std::nullopt;
