@@ -813,3 +813,45 @@ TEST_CASE("piecewise shapes are boxed case by case: the octahedron's box is its 
         CHECK(b->first[a] >= -extent[a] - mp - 0.03);
     }
 }
+
+TEST_CASE("constants the shader holds in float: a call's argument and a parameter are boxed as the shader computes them",
+          "[scene][box]") {
+    // A trial: `R_z`(10000000.49) inside a module, folded in double after inlining, turned the bar by 183°; the
+    // shader passes the float 10000000 to R_z and draws it at 155°, and the box cut it (570 pixels). A parameter
+    // default 10000000.49 is the float constant 10000000 on Shadertoy: sin of it differs by 0.48.
+    const std::string camera = "[camera]\nposition = [0, 1, -6]\ntarget = [0, 0, 0]\n";
+    auto module = [](const std::string& angle) {
+        return "[modules]\nbar = \"\"\"\nshape\n`R_z` from transformations\nh = `R_z`(" + angle +
+               ") (p, 1)\nq = (h_1, h_2, h_3)\nd = |q| - (1.5, 0.15, 0.15)\nD = ‖max(d, 0)‖ + min(max(d_1, d_2, d_3), 0)\n"
+               "where\np ∈ ℝ³\n\"\"\"\n";
+    };
+    Compiled written = compile_path(write_temp("box_big_angle.iq", module("10000000.49") + camera + "[[shapes]]\ntype = \"bar\"\n"));
+    Compiled as_float = compile_path(write_temp("box_float_angle.iq", module("10000000") + camera + "[[shapes]]\ntype = \"bar\"\n"));
+    REQUIRE(written.result.exit_code == 0);
+    REQUIRE(as_float.result.exit_code == 0);
+    CHECK_THAT(written.result.code, Catch::Contains("R_z(10000000.0)"));  // what the shader computes
+    auto a = box_of(written.result.code), b = box_of(as_float.result.code);
+    REQUIRE(a);
+    REQUIRE(b);
+    for (int k = 0; k < 3; ++k) {
+        INFO("axis " << k);
+        CHECK(a->first[k] <= b->first[k]);
+        CHECK(a->second[k] >= b->second[k]);
+    }
+    // The float angle's bar reaches y = ±(1.5 |sin 155°| + 0.15 |cos 155°|) = ±0.77 (the double angle's ±0.24).
+    CHECK(a->second[1] >= 0.77);
+    CHECK(differ_without_box(written.result, 96, 54) == 0);
+
+    const std::string ball = "[modules]\nball = \"\"\"\nshape\nsin from trigonometry\nD = ‖p‖ - (1 + sin(a))\nwhere\np ∈ ℝ³\n"
+                             "a ∈ ℝ default = 10000000.49\n\"\"\"\n";
+    Compiled c = compile_path(write_temp("box_big_parameter.iq", ball + camera + "[[shapes]]\ntype = \"ball\"\n"));
+    REQUIRE(c.result.exit_code == 0);
+    auto bb = box_of(c.result.code);
+    REQUIRE(bb);
+    const double r = 1 + std::sin(double(float(10000000.49)));  // 1.42: the shader's radius
+    for (int k = 0; k < 3; ++k) {
+        CHECK(bb->second[k] >= r);
+        CHECK(bb->first[k] <= -r);
+    }
+    CHECK(differ_without_box(c.result, 96, 54) == 0);
+}

@@ -2,7 +2,7 @@
 // by 2.2 radians per unit of height. Written by hand as the same-picture reference for
 // bench/handwritten.sh, which times iqc's shader for the scene against it; to be a fair baseline it
 // draws the same pixels, so it makes the same algorithm choices as iqc:
-//  - Lipschitz factor 5.6735716, the bound iqc derives for the twisted field's gradient: map() returns
+//  - Lipschitz factor 5.673572, the bound iqc derives for the twisted field's gradient: map() returns
 //    the bar's distance divided by it, a safe sphere-tracing step. The true bound is about 1.3 and
 //    would be much faster, but it is a different step sequence and so different silhouettes.
 //  - the scene's bounding sphere, radius 1.6: more than 0.1 outside it map() returns the (exact,
@@ -35,7 +35,7 @@ float map(vec3 p)
     float c = cos(2.2*p.y);
     float s = sin(2.2*p.y);
     vec3 q = vec3(c*p.x - s*p.z, p.y, s*p.x + c*p.z);
-    float d = sdBox(q, vec3(0.3, 1.5, 0.3))/5.6735716;  // Lipschitz bound: a safe step
+    float d = sdBox(q, vec3(0.3, 1.5, 0.3))/5.673572;  // Lipschitz bound: a safe step
     return bound > 0.1 ? bound : d;
 }
 
@@ -55,7 +55,7 @@ float raymarch(vec3 ro, vec3 rd)
     for (int i = 0; i < 128 && t <= tmax; i++)
     {
         float h = map(ro + t*rd);
-        dp = dl; dl = abs(h*5.6735716); tl = t;  // the field itself
+        dp = dl; dl = abs(h*5.673572); tl = t;  // the field itself
         if (dl < 0.001) break;
         if (dl < dm) { dm = dl; tm = t; }
         t += h;

@@ -666,6 +666,15 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
             for (ValueId x : in.args) {
                 args.push_back(r[x].c);
                 nan |= r[x].nan;
+                // A function the backend keeps receives its real arguments in float: a constant 10000000.49
+                // as 10000000 (the hull holds both, and what a building block inlined and folded in double sees).
+                const Type& t = f.body[x].type;
+                if (t.kind != Type::Integer && t.elem != Type::Integer)
+                    for (Interval& c : args.back()) {
+                        const double lo = double(float(c.lo)), hi = double(float(c.hi));
+                        if (lo < c.lo) c.lo = lo;
+                        if (hi > c.hi) c.hi = hi;
+                    }
             }
             r[i] = call(in.aux, args)[m.functions[size_t(in.aux)].result];
             r[i].nan |= nan;

@@ -317,7 +317,7 @@ constexpr int kSplitPasses = 32;
 std::optional<Function> flattened(const Module& m, const Function& f) {
     std::optional<Function> g;
     try {
-        g = inline_calls(m, f);
+        g = inline_calls_as_emitted(m, f);
     } catch (const SizeLimit&) {
         return std::nullopt;
     }

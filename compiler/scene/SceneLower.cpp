@@ -221,7 +221,8 @@ private:
                 const auto& v = plan(mi).shape_values[i];
                 if (params[i].empty()) params[i].assign(v.size(), {INFINITY, -INFINITY});
                 for (size_t c = 0; c < v.size() && c < params[i].size(); ++c)
-                    params[i][c] = ir::iv::hull(params[i][c], {v[c], v[c]});
+                    // The value and its float (the shader's constant: 10000000.49 is 10000000 there).
+                    params[i][c] = ir::iv::hull(params[i][c], ir::iv::hull({v[c], v[c]}, {double(float(v[c])), double(float(v[c]))}));
             }
             if (!o_.params_constant) {
                 const ir::ValueBounds& r = ranges[i];

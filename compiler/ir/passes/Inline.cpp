@@ -9,6 +9,7 @@ struct Inliner {
     bool only_marked;
     int inlined = 0;
     const std::function<bool(const Function&)>* keep = nullptr;
+    bool float_arguments = false;  // constant arguments of calls the backend keeps, rounded to float
 
     bool wanted(const Instr& in) const {
         if (in.op != Op::Call) return false;
@@ -25,6 +26,24 @@ struct Inliner {
             const Instr& in = callee.body[i];
             if (in.op == Op::Param) {
                 map[i] = args[size_t(in.aux)];
+                // The shader passes a constant argument to a function it keeps (not a building block) as a
+                // float literal: 10000000.49 as 10000000, whose sine differs by 0.4.
+                if (float_arguments && !callee.inline_hint && map[i] < out.body.size()) {
+                    const Instr& a = out.body[map[i]];
+                    if (a.op == Op::Const && a.type.kind != Type::Integer && a.type.elem != Type::Integer) {
+                        Instr r = a;
+                        bool changed = false;
+                        for (double& x : r.data) {
+                            const double f = double(float(x));
+                            changed |= f != x;
+                            x = f;
+                        }
+                        if (changed) {
+                            r.name.clear();
+                            map[i] = out.add(std::move(r));
+                        }
+                    }
+                }
                 continue;
             }
             std::vector<ValueId> a;
@@ -46,7 +65,8 @@ struct Inliner {
 
 }  // namespace
 
-static Function inline_some(const Module& m, const Function& f, const std::function<bool(const Function&)>* keep, bool only_marked);
+static Function inline_some(const Module& m, const Function& f, const std::function<bool(const Function&)>* keep, bool only_marked,
+                            bool float_arguments = false);
 
 Function inline_calls(const Module& m, const Function& f, bool only_marked) {
     return inline_some(m, f, nullptr, only_marked);
@@ -56,9 +76,13 @@ Function inline_calls_except(const Module& m, const Function& f, const std::func
     return inline_some(m, f, &keep, false);
 }
 
-static Function inline_some(const Module& m, const Function& f, const std::function<bool(const Function&)>* keep, bool only_marked) {
+Function inline_calls_as_emitted(const Module& m, const Function& f) { return inline_some(m, f, nullptr, false, true); }
+
+static Function inline_some(const Module& m, const Function& f, const std::function<bool(const Function&)>* keep, bool only_marked,
+                            bool float_arguments) {
     Inliner il{m, only_marked};
     il.keep = keep;
+    il.float_arguments = float_arguments;
     Function out = f;
     out.body.clear();
     out.outputs.clear();

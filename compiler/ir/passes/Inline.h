@@ -20,6 +20,12 @@ Function inline_calls(const Module& m, const Function& f, bool only_marked = fal
 // `keep` accepts (their arguments are still inlined).
 Function inline_calls_except(const Module& m, const Function& f, const std::function<bool(const Function&)>& keep);
 
+// inline_calls, with the constant arguments of calls of functions that are not `inline_hint` (the ones the
+// GLSL backend keeps as functions) rounded to float, as the shader passes them: for analyses whose results
+// must hold for the shader (a box, a radius), where a call R_z(10000000.49) folded in double turns by 183°
+// and the shader's R_z(10000000.0) by 155°.
+Function inline_calls_as_emitted(const Module& m, const Function& f);
+
 // Inlines the `inline_hint` functions into their callers, in every function; returns the calls inlined.
 int inline_marked(Module& m);
 
