@@ -188,3 +188,18 @@ TEST_CASE("eval means what the shader computes: guarded values, not NaN", "[eval
     CHECK_THAT(r.err, Catch::Contains("acos.iql:2:1: warning: acos of a value outside [-1, 1]: with the parameters' bounds it "
                                       "ranges over [0, 2]"));
 }
+
+TEST_CASE("a number outside float's range is one error: the declaration it is in stays declared", "[eval]") {
+    // A trial: a default of 1e-46 was followed by "undefined name 'a'" at every use of a.
+    for (const char* n : {"1e-46", "1e39"}) {
+        INFO(n);
+        auto f = write_temp("range_default.iql", std::string("y = 2a + 1\nwhere\na ∈ ℝ default = ") + n + "\n");
+        RunResult r = run_iqc("eval " + f.string());
+        CHECK(r.exit_code == 1);
+        CHECK_THAT(r.err, Catch::Contains("range_default.iql:3:17: error: the number"));
+        CHECK_THAT(r.err, !Catch::Contains("undefined name"));
+        size_t errors = 0;
+        for (size_t at = 0; (at = r.err.find("error:", at)) != std::string::npos; ++at) ++errors;
+        CHECK(errors == 1);
+    }
+}

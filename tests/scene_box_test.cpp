@@ -855,3 +855,49 @@ TEST_CASE("constants the shader holds in float: a call's argument and a paramete
     }
     CHECK(differ_without_box(c.result, 96, 54) == 0);
 }
+
+TEST_CASE("numbers are analysed as the float literals the shader holds, and min of a NaN takes the other operand",
+          "[scene][box]") {
+    // A trial (every one a shape cut by its box, or a shell the march stepped over): a number written in the
+    // math was analysed at its double value while the shader holds the float literal (16777217 is 16777216 there).
+    const std::string camera = "[camera]\nposition = [0, 1, -9]\ntarget = [0, 0, 0]\n";
+    struct Case {
+        const char* name;
+        const char* module;
+        double radius;  // the shader's: the box must reach it
+    };
+    const Case cases[] = {
+        {"parameter", "D = ‖p‖ - 3 + 2(16777217 - a)\nwhere\np ∈ ℝ³\na ∈ ℝ default = 16777216\n", 3},
+        {"piecewise", "D = { ‖p‖ - 1 if a < 16777217\n      ‖p‖ - 3 otherwise\nwhere\np ∈ ℝ³\na ∈ ℝ default = 16777216\n", 3},
+        {"local", "f(x) = 16777217 - x where x ∈ ℝ\nD = ‖p‖ - 3 + 2f(16777216)\nwhere\np ∈ ℝ³\n", 3},
+        {"sine", "sin from trigonometry\nD = ‖p‖ - (1 + sin(10000000.49 + a))\nwhere\np ∈ ℝ³\na ∈ ℝ default = 0\n",
+         1 + std::sin(double(float(10000000.49)))},
+        // exp(89) and exp(88.8) overflow float: ∞/∞ is NaN, and llvmpipe's min(NaN, 3) is 3 (intervals gave e^0.2).
+        {"overflow", "D = ‖p‖ - min(exp(a)/exp(a - 0.2), 3)\nwhere\np ∈ ℝ³\na ∈ ℝ default = 89\n", 3},
+    };
+    for (const Case& c : cases) {
+        INFO(c.name);
+        Compiled r = compile_path(write_temp(std::string("box_float_") + c.name + ".iq",
+                                             "[modules]\nball = \"\"\"\nshape\n" + std::string(c.module) + "\"\"\"\n" + camera +
+                                                 "[[shapes]]\ntype = \"ball\"\n"));
+        INFO(r.diagnostics);
+        REQUIRE(r.result.exit_code == 0);
+        auto b = box_of(r.result.code);
+        REQUIRE(b);
+        for (int k = 0; k < 3; ++k) {
+            CHECK(b->second[k] >= c.radius);
+            CHECK(b->first[k] <= -c.radius);
+        }
+        CHECK(differ_without_box(r.result, 96, 54) == 0);
+    }
+    // The Lipschitz factor of a field scaled by 5 + 5 sin(100206355.14): 6e-6 in double, so no divisor was
+    // written, where the shader's float argument gives a factor of 10 and the march stepped over the shell.
+    Compiled shell = compile_path(write_temp(
+        "lipschitz_float_shell.iq", "[modules]\nshell = \"\"\"\nshape\nsin from trigonometry\nD = (|‖p‖ - 1| - 0.05)(5 + "
+                                    "5sin(100206355.14 + a))\nwhere\np ∈ ℝ³\na ∈ ℝ default = 0\n\"\"\"\n" +
+                                        camera + "[[shapes]]\ntype = \"shell\"\n"));
+    REQUIRE(shell.result.exit_code == 0);
+    std::smatch k;
+    REQUIRE(std::regex_search(shell.result.code, k, std::regex(R"(shell_1_lipschitz = ([0-9.e+]+);)")));
+    CHECK(std::stod(k[1]) >= 9.99);
+}

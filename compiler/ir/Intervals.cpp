@@ -403,7 +403,15 @@ Bounds bounds_rule(const Module& m, const Function& f, const Instr& in, const st
     switch (in.op) {
         case Op::Const:
             x.c.clear();
-            for (double v : in.data) x.c.push_back({v, v});
+            for (double v : in.data) {
+                // The shader holds a constant as a float: where that moves it by more than 1e-6 (16777217 is
+                // 16777216, 10000000.49 is 10000000), the interval holds both: `16777217 - a` with a = 16777216
+                // was boxed at radius 1 and drawn at 3, sin(100206355.14 + a) bounded a Lipschitz factor by 6e-6
+                // where the shader's is 10 (a trial). Below that the box's level covers the difference.
+                const double fv = double(float(v));
+                x.c.push_back(in.type.kind != Type::Integer && std::fabs(fv - v) > 1e-6 ? Interval{std::min(v, fv), std::max(v, fv)}
+                                                                                     : Interval{v, v});
+            }
             if (x.c.empty()) x.c.push_back({0, 0});
             break;
         case Op::Copy: return *a[0];
@@ -568,6 +576,16 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
         // the operand's own (a decided choice: the one taken)
     } else {
         x.nan = x.nan || operand_nan || makes_nan(in, a, x);
+        // min, max and clamp of a NaN take another operand (LLVM's minnum/maxnum: llvmpipe's min(NaN, 3) is 3),
+        // a value the rule above, on the NaN operand's finite interval, does not hold: min(exp(89)/exp(88.8), 3)
+        // is e^0.2 by intervals and 3 in the shader (∞/∞), and a trial's ball of radius 3 was boxed at 1.23.
+        if (operand_nan && in.op == Op::Builtin) {
+            std::string_view n = builtin(in.aux).name;
+            if (n == "min" || n == "max" || n == "clamp")
+                for (size_t k = 0; k < x.c.size(); ++k)
+                    for (const Bounds* b : a)
+                        if (!b->c.empty()) x.c[k] = iv::hull(x.c[k], comp(*b, std::min(k, b->c.size() - 1)));
+        }
     }
     return x;
 }

@@ -262,9 +262,13 @@ private:
     // A number literal's value: within the range of the 32-bit floats shaders compute in, else a located error.
     double literal_value(const Token& t) {
         double v = std::strtod(t.text.c_str(), nullptr);
-        if (!(std::fabs(v) <= double(std::numeric_limits<float>::max())))
-            fail(t.span, fmt::format("the number {} is outside the range of 32-bit floats (at most about 3.4e38), "
-                                     "which shaders compute in", t.text));
+        // Both range errors are reported without abandoning the statement, so that what it declares stays declared
+        // (a parameter's default of 1e-46 was followed by "undefined name 'a'" at every use).
+        if (!(std::fabs(v) <= double(std::numeric_limits<float>::max()))) {
+            diags_.error(t.span, fmt::format("the number {} is outside the range of 32-bit floats (at most about 3.4e38), "
+                                             "which shaders compute in", t.text));
+            return std::copysign(double(std::numeric_limits<float>::max()), v);
+        }
         // Below the smallest normal float a shader computes 0 (or a denormal a GPU may flush to 0): 1e-50 as
         // a guard, max(‖q‖, 1e-50), would guard nothing.
         // (A literal so small that even a double is 0, 1e-400, has a nonzero digit before its exponent.)
@@ -273,9 +277,12 @@ private:
             if (c == 'e' || c == 'E') break;
             written_nonzero |= c >= '1' && c <= '9';
         }
-        if ((v != 0 || written_nonzero) && std::fabs(v) < double(std::numeric_limits<float>::min()))
-            fail(t.span, fmt::format("the number {} is below the smallest normal 32-bit float (about 1.2e-38), which "
-                                     "shaders compute in: it would be 0 there (a guard such as max(x, 1e-30) works)", t.text));
+        if ((v != 0 || written_nonzero) && std::fabs(v) < double(std::numeric_limits<float>::min())) {
+            diags_.error(t.span, fmt::format("the number {} is below the smallest normal 32-bit float (about 1.2e-38), which "
+                                             "shaders compute in: it would be 0 there (a guard such as max(x, 1e-30) works)",
+                                             t.text));
+            return 0;
+        }
         return v;
     }
     const Token& expect(Tok k, const char* what) {
