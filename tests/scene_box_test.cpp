@@ -890,6 +890,17 @@ TEST_CASE("numbers are analysed as the float literals the shader holds, and min 
         }
         CHECK(differ_without_box(r.result, 96, 54) == 0);
     }
+    // A polytope whose face offset comes from a local function's literal: the flattened copy (convex bounds, case
+    // splitting, rotations) folded 16777217 − 16777216 to 1 in double and boxed x at ±1; the shader's is 0 (±2).
+    Compiled poly = compile_path(write_temp(
+        "box_float_polytope.iq", "[modules]\npoly = \"\"\"\nshape\nf(x) = 16777217 - x where x ∈ ℝ\nD = max(|p_1| + f(16777216) - 2, "
+                                 "|p_2| - 1, |p_3| - 1)\nwhere\np ∈ ℝ³\n\"\"\"\n" + camera + "[[shapes]]\ntype = \"poly\"\n"));
+    REQUIRE(poly.result.exit_code == 0);
+    auto pb = box_of(poly.result.code);
+    REQUIRE(pb);
+    CHECK(pb->second[0] >= 2);
+    CHECK(pb->first[0] <= -2);
+    CHECK(differ_without_box(poly.result, 96, 54) == 0);
     // The Lipschitz factor of a field scaled by 5 + 5 sin(100206355.14): 6e-6 in double, so no divisor was
     // written, where the shader's float argument gives a factor of 10 and the march stepped over the shell.
     Compiled shell = compile_path(write_temp(

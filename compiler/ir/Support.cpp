@@ -322,6 +322,13 @@ std::optional<Function> flattened(const Module& m, const Function& f) {
         return std::nullopt;
     }
     if (g->body.size() > 20000) return std::nullopt;
+    // A constant that float moves by more than 1e-6 (16777217 in a local function's body): folded here in double,
+    // with the argument the shader passes, it would be neither the shader's value nor a range holding it (the
+    // interval analysis holds both: ir/Intervals.cpp). The analyses of the flattened copy are not made then.
+    for (const Instr& in : g->body)
+        if (in.op == Op::Const && in.type.kind != Type::Integer && in.type.elem != Type::Integer)
+            for (double v : in.data)
+                if (std::fabs(double(float(v)) - v) > 1e-6) return std::nullopt;
     fold_constants(m, *g);
     eliminate_common_subexpressions(*g);
     return g;
