@@ -113,6 +113,43 @@ Evaluations count_evaluations(const std::filesystem::path& path, CompileOptions 
     return n;
 }
 
+// Scene `s` (a group without `bound`) compiled: it must derive a bound from the shape, and its scene
+// evaluations at W×H evaluate at most `per_eval` shapes each on average (the hierarchy culls the rest).
+Compiled derived_group(const std::string& s, const std::string& name, int W, int H, double per_eval = 4) {
+    auto path = write_temp(name, s);
+    Compiled c = compile_path(path, CompileOptions{});
+    INFO(c.diagnostics);
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.result.code, Catch::Contains("derived from the shape"));
+    Evaluations counts = count_evaluations(path, CompileOptions{}, W, H);
+    INFO(counts.shapes / counts.evals << " shapes per scene evaluation");
+    CHECK(counts.evals > W * H);
+    CHECK(counts.shapes / counts.evals <= per_eval);
+    return c;
+}
+
+// Pixels of scene `s` (compiled as `c`) that differ by more than 2/255 in a channel from the same scene with
+// `bound = R` written before each instance's shape_params: a derived bound draws what a written one does.
+int differ_from_bounded(const std::string& s, const Compiled& c, double R, const std::string& name, int W, int H) {
+    std::string b = s;
+    const std::string line = fmt::format("bound = {}\n", R);
+    for (size_t at = 0; (at = b.find("shape_params", at)) != std::string::npos; at += line.size() + 12) b.insert(at, line);
+    Compiled bounded = compile_path(write_temp(name, b), CompileOptions{});
+    REQUIRE(bounded.result.exit_code == 0);
+    render::RenderResult x = render_compiled(c.result, W, H), y = render_compiled(bounded.result, W, H);
+    REQUIRE(x.ok);
+    REQUIRE(y.ok);
+    int differ = 0;
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i)
+            for (int k = 0; k < 3; ++k)
+                if (std::fabs(x.image.pixel(i, j)[k] - y.image.pixel(i, j)[k]) > 2.0 / 255) {
+                    ++differ;
+                    break;
+                }
+    return differ;
+}
+
 }  // namespace
 
 TEST_CASE("1000 rings are one loop and one case of each dispatch on every target", "[instancing]") {
@@ -501,32 +538,9 @@ TEST_CASE("a piecewise shape without bound gets one by case splitting: 100 octah
     for (int k = 0; k < 100; ++k)
         s += fmt::format("[[shapes]]\ntype = \"octahedron\"\nshape_params = {{ s = 0.35 }}\ntransform = \"T(({}, {}, 0))⋅`R_x`({})\"\n",
                          k % 10 - 4.5, k / 10 - 4.5, 0.4 * (k % 7));
-    auto path = write_temp("octahedra_derived.iq", s);
-    Compiled c = compile_path(path, CompileOptions{});
-    INFO(c.diagnostics);
-    REQUIRE(c.result.exit_code == 0);
-    CHECK_THAT(c.result.code, Catch::Contains("derived from the shape"));
-    Evaluations counts = count_evaluations(path, CompileOptions{}, W, H);
-    INFO(counts.shapes / counts.evals << " shapes per scene evaluation");
-    CHECK(counts.evals > W * H);
-    CHECK(counts.shapes / counts.evals <= 4);
+    Compiled c = derived_group(s, "octahedra_derived.iq", W, H);
     // The picture: the same as with a `bound` written (0.36, just over the octahedron's 0.35).
-    std::string b = s;
-    for (size_t at = 0; (at = b.find("shape_params", at)) != std::string::npos; at += 20) b.insert(at, "bound = 0.36\n");
-    Compiled bounded = compile_path(write_temp("octahedra_bounded.iq", b), CompileOptions{});
-    REQUIRE(bounded.result.exit_code == 0);
-    render::RenderResult x = render_compiled(c.result, W, H), y = render_compiled(bounded.result, W, H);
-    REQUIRE(x.ok);
-    REQUIRE(y.ok);
-    int differ = 0;
-    for (int j = 0; j < H; ++j)
-        for (int i = 0; i < W; ++i)
-            for (int k = 0; k < 3; ++k)
-                if (std::fabs(x.image.pixel(i, j)[k] - y.image.pixel(i, j)[k]) > 2.0 / 255) {
-                    ++differ;
-                    break;
-                }
-    CHECK(differ <= W * H / 100);
+    CHECK(differ_from_bounded(s, c, 0.36, "octahedra_bounded.iq", W, H) <= W * H / 100);
 }
 
 TEST_CASE("a polytope shape without bound gets one from its planes: 100 tetrahedra, few shapes per evaluation",
@@ -540,33 +554,10 @@ TEST_CASE("a polytope shape without bound gets one from its planes: 100 tetrahed
     for (int k = 0; k < 100; ++k)
         s += fmt::format("[[shapes]]\ntype = \"tetrahedron\"\nshape_params = {{ r = 0.25 }}\ntransform = \"T(({}, 0, {}))\"\n",
                          k % 10 - 4.5, k / 10 - 4.5);
-    auto path = write_temp("tetrahedra_derived.iq", s);
-    Compiled c = compile_path(path, CompileOptions{});
-    INFO(c.diagnostics);
-    REQUIRE(c.result.exit_code == 0);
-    CHECK_THAT(c.result.code, Catch::Contains("derived from the shape"));
+    Compiled c = derived_group(s, "tetrahedra_derived.iq", W, H);
     CHECK_THAT(c.result.code, !Catch::Contains("1.0e+30"));  // the scene's box is closed on every side
-    Evaluations counts = count_evaluations(path, CompileOptions{}, W, H);
-    INFO(counts.shapes / counts.evals << " shapes per scene evaluation");
-    CHECK(counts.evals > W * H);
-    CHECK(counts.shapes / counts.evals <= 4);
     // The picture: the same as with a `bound` written (0.76, just over the circumradius 0.75).
-    std::string b = s;
-    for (size_t at = 0; (at = b.find("shape_params", at)) != std::string::npos; at += 20) b.insert(at, "bound = 0.76\n");
-    Compiled bounded = compile_path(write_temp("tetrahedra_bounded.iq", b), CompileOptions{});
-    REQUIRE(bounded.result.exit_code == 0);
-    render::RenderResult x = render_compiled(c.result, W, H), y = render_compiled(bounded.result, W, H);
-    REQUIRE(x.ok);
-    REQUIRE(y.ok);
-    int differ = 0;
-    for (int j = 0; j < H; ++j)
-        for (int i = 0; i < W; ++i)
-            for (int k = 0; k < 3; ++k)
-                if (std::fabs(x.image.pixel(i, j)[k] - y.image.pixel(i, j)[k]) > 2.0 / 255) {
-                    ++differ;
-                    break;
-                }
-    CHECK(differ <= W * H / 100);
+    CHECK(differ_from_bounded(s, c, 0.76, "tetrahedra_bounded.iq", W, H) <= W * H / 100);
 }
 
 TEST_CASE("a shape turned inside its module by a constant rotation gets a bound: 100 turned boxes", "[instancing][bvh][box]") {
@@ -581,16 +572,8 @@ TEST_CASE("a shape turned inside its module by a constant rotation gets a bound:
         "[camera]\nposition = [0, 6, -16]\ntarget = [0, 0, 0]\n";
     for (int k = 0; k < 100; ++k)
         s += fmt::format("[[shapes]]\ntype = \"turned\"\ntransform = \"T(({}, 0, {}))\"\n", (k % 10 - 4.5) * 2.5, (k / 10 - 4.5) * 2.5);
-    auto path = write_temp("turned_boxes.iq", s);
-    Compiled c = compile_path(path, CompileOptions{});
-    INFO(c.diagnostics);
-    REQUIRE(c.result.exit_code == 0);
-    CHECK_THAT(c.result.code, Catch::Contains("derived from the shape"));
+    Compiled c = derived_group(s, "turned_boxes.iq", W, H);
     CHECK_THAT(c.result.code, !Catch::Contains("1.0e+30"));  // the scene's box is closed on every side
-    Evaluations counts = count_evaluations(path, CompileOptions{}, W, H);
-    INFO(counts.shapes / counts.evals << " shapes per scene evaluation");
-    CHECK(counts.evals > W * H);
-    CHECK(counts.shapes / counts.evals <= 4);
 }
 
 TEST_CASE("the hierarchy serves the unbounded scene only for exact shapes", "[instancing]") {
