@@ -376,9 +376,10 @@ std::optional<std::pair<AffineMap, SupportBox>> mapped_box(const Module& m, cons
                                                            std::vector<std::vector<Interval>> params, double level,
                                                            int per_proof, int loop_trips, long work);
 
-// support_radius by interval arithmetic alone (branch and bound over boxes, with case splitting).
+// support_radius by interval arithmetic alone (branch and bound over boxes, with case splitting on `flat`, the
+// function's flattened copy, where it has cases).
 std::optional<double> interval_radius(const Module& m, int fn, int query, std::vector<std::vector<Interval>> params,
-                                      double reach, int budget) {
+                                      double reach, int budget, const std::optional<Function>& flat) {
     if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
     const Function& f = m.functions[size_t(fn)];
     if (!f.body[f.result].type.is_scalar()) return std::nullopt;
@@ -392,7 +393,7 @@ std::optional<double> interval_radius(const Module& m, int fn, int query, std::v
     };
     // The same, and where one pass leaves the box unproven, by case splitting on a flattened copy (its
     // instructions count against the budget, a box's worth per function's length).
-    const std::optional<Function> g = splittable(m, f);
+    const Function* g = flat && has_cases(*flat) ? &*flat : nullptr;
     auto lowest_split = [&](const Box& b) {
         double lo = lowest(b);
         if (lo > 0 || !g) return lo;
@@ -512,30 +513,31 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
     if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
     // A convex polytope written as the largest of its planes' distances (ir/ConvexBound.h): its farthest
     // vertex, where intervals find no radius (every plane's distance is unbounded below over a half-space).
+    // The flattened copy, once: case splitting's, the polytope's and the rotation's.
+    const std::optional<Function> g = flattened(m, m.functions[size_t(fn)]);
     std::optional<double> polytope;
-    if (const std::optional<Function> g = flattened(m, m.functions[size_t(fn)]))
+    if (g)
         if (auto pieces = convex_lower_bound(m, *g, query, params)) polytope = polytope_radius(*pieces, 0);
-    std::optional<double> r = interval_radius(m, fn, query, params, reach, budget);
+    std::optional<double> r = interval_radius(m, fn, query, params, reach, budget, g);
     if (polytope && (!r || *polytope < *r)) return polytope;
     // A rotation written inside the module (mapped_box): the farthest of v's box's corners mapped back through
     // A⁻¹ (‖A⁻¹(v − b)‖ is convex in v: its largest value over the box is at a corner).
-    if (!r)
-        if (const std::optional<Function> g = flattened(m, m.functions[size_t(fn)]))
-            if (auto mb = mapped_box(m, *g, query, params, 0, 48, 16, 300000)) {
-                const auto& [map, v] = *mb;
-                double far = 0;
-                for (int corner = 0; corner < 8 && std::isfinite(far); ++corner) {
-                    double n2 = 0;
-                    for (size_t k = 0; k < 3; ++k) {
-                        double x = 0;
-                        for (size_t j = 0; j < 3; ++j)
-                            x += map.inverse[k][j] * (((corner >> j) & 1 ? v.hi[j] : v.lo[j]) - map.b[j]);
-                        n2 += x * x;
-                    }
-                    far = std::max(far, std::sqrt(n2));
+    if (!r && g)
+        if (auto mb = mapped_box(m, *g, query, params, 0, 48, 16, 300000)) {
+            const auto& [map, v] = *mb;
+            double far = 0;
+            for (int corner = 0; corner < 8 && std::isfinite(far); ++corner) {
+                double n2 = 0;
+                for (size_t k = 0; k < 3; ++k) {
+                    double x = 0;
+                    for (size_t j = 0; j < 3; ++j)
+                        x += map.inverse[k][j] * (((corner >> j) & 1 ? v.hi[j] : v.lo[j]) - map.b[j]);
+                    n2 += x * x;
                 }
-                if (std::isfinite(far)) r = std::nextafter(far * (1 + 1e-9), INFINITY);
+                far = std::max(far, std::sqrt(n2));
             }
+            if (std::isfinite(far)) r = std::nextafter(far * (1 + 1e-9), INFINITY);
+        }
     return r;
 }
 
