@@ -47,8 +47,8 @@ std::optional<std::vector<AffinePiece>> convex_lower_bound(const Module& m, cons
 // mixing axes: some row has two non-zero entries), found by the same rules: a rotation written inside a
 // module, q = R p or R (p − c), which interval arithmetic cannot see through (over a half-space beyond a plane
 // each component of R p is unbounded). support_box analyses such a shape over boxes of v and maps the box
-// back through A⁻¹. In body order; where the other parameters are not single values, b is their range's
-// midpoint and nothing is returned for a b that is not one value.
+// back through A⁻¹. In body order; a value whose A or b is not one number (a parameter's range, a slider, a
+// constant the shader's float would move) is not one.
 struct AffineMap {
     ValueId value = 0;
     std::array<std::array<double, 3>, 3> A{};
