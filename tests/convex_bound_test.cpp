@@ -265,3 +265,65 @@ TEST_CASE("a box turned inside its module by a constant rotation gets a box and 
     ir::SupportBox ball{{-*radius, -*radius, -*radius}, {*radius, *radius, *radius}};
     CHECK(inside_beyond(m, object, ball, 0, 3) == 0);
 }
+
+TEST_CASE("a union of parts turned differently, or beside an unturned ball, is boxed part by part", "[convex-bound][box]") {
+    // A trial: min(box(M p), box(N (p − c))) and min(box(M p), ball) got no box: the rotated analysis of the whole
+    // leaves the other part's coordinates unbounded. The points of a union are those of some operand: the hull of
+    // the operands' boxes, each by the analysis that closes it.
+    const double M[3][3] = {{0.7648421872844885, 0.2508701838500143, 0.5933637833613874},
+                            {0.0, 0.9210609940028851, -0.3894183423086505},
+                            {-0.644217687237691, 0.2978435767000479, 0.7044663052755917}};
+    const double N[3][3] = {{0.39806804630419473, -0.8912073600614354, -0.21746556482323487},
+                            {0.7821080382182704, 0.4535961214255773, -0.42726756860548354},
+                            {0.479425538604203, 0.0, 0.8775825618903728}};
+    auto matrix = [](const double A[3][3]) {
+        return fmt::format("[{} {} {}; {} {} {}; {} {} {}]", A[0][0], A[0][1], A[0][2], A[1][0], A[1][1], A[1][2], A[2][0],
+                           A[2][1], A[2][2]);
+    };
+    const std::string box_fn =
+        "box(x, b) = ‖max(|x| - b, 0)‖ + min(max((|x| - b)_1, (|x| - b)_2, (|x| - b)_3), 0) where x ∈ ℝ³, b ∈ ℝ³\n";
+    // The extent along k of a box of half-sizes h turned by A (p = Aᵀ q + c), centred at c.
+    auto extent = [](const double A[3][3], const std::array<double, 3>& h, size_t k) {
+        double e = 0;
+        for (size_t j = 0; j < 3; ++j) e += std::fabs(A[j][k]) * h[j];
+        return e;
+    };
+    const std::array<double, 3> h1 = {1, 0.2, 0.3}, h2 = {0.2, 0.9, 0.2}, c2 = {0.5, 0.5, 0};
+    {
+        ir::Module m;
+        auto [object, flat] = shape(m,
+                                    "shape\n" + box_fn + "D = min(box(" + matrix(M) + " p, (1, 0.2, 0.3)), box(" + matrix(N) +
+                                        " (p - (0.5, 0.5, 0)), (0.2, 0.9, 0.2)))\nwhere\np ∈ ℝ³\n",
+                                    "union2");
+        (void)flat;
+        auto box = ir::support_box(m, object, 0, {{}}, 0);
+        REQUIRE(box);
+        for (size_t k = 0; k < 3; ++k) {
+            const double lo = std::min(-extent(M, h1, k), c2[k] - extent(N, h2, k));
+            const double hi = std::max(extent(M, h1, k), c2[k] + extent(N, h2, k));
+            INFO("axis " << k << ": [" << box->lo[k] << ", " << box->hi[k] << "] for [" << lo << ", " << hi << "]");
+            CHECK(box->lo[k] <= lo);
+            CHECK(box->hi[k] >= hi);
+            CHECK(box->lo[k] >= lo - 0.01);
+            CHECK(box->hi[k] <= hi + 0.01);
+        }
+        CHECK(inside_beyond(m, object, *box, 0, 3) == 0);
+    }
+    {
+        ir::Module m;
+        auto [object, flat] = shape(m,
+                                    "shape\n" + box_fn + "D = min(box(" + matrix(M) + " p, (1, 0.2, 0.3)), ‖p - (2, 0, 0)‖ - 0.5)\n"
+                                                         "where\np ∈ ℝ³\n",
+                                    "mixed");
+        (void)flat;
+        auto box = ir::support_box(m, object, 0, {{}}, 0);
+        REQUIRE(box);
+        CHECK(box->hi[0] >= 2.5);
+        CHECK(box->hi[0] <= 2.51);
+        for (size_t k = 1; k < 3; ++k) {
+            CHECK(box->hi[k] >= std::max(extent(M, h1, k), 0.5));
+            CHECK(box->lo[k] <= -std::max(extent(M, h1, k), 0.5));
+        }
+        CHECK(inside_beyond(m, object, *box, 0, 4) == 0);
+    }
+}
