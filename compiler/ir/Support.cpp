@@ -538,6 +538,21 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
             }
             if (std::isfinite(far)) r = std::nextafter(far * (1 + 1e-9), INFINITY);
         }
+    // Else the farthest corner of the box support_box finds at level 0 (a union of a turned part and a ball: its
+    // operands are boxed one by one there).
+    // Not where that box is empty (nothing is ≤ 0: nothing to bound) or reaches past `reach` (as above: a part
+    // that far is no bound's business).
+    if (!r)
+        if (auto box = support_box(m, fn, query, params, 0)) {
+            double far = 0;
+            bool empty = false;
+            for (size_t k = 0; k < 3; ++k) {
+                empty |= box->lo[k] > box->hi[k];
+                far += std::pow(std::max(std::fabs(box->lo[k]), std::fabs(box->hi[k])), 2);
+            }
+            far = std::sqrt(far);
+            if (!empty && far <= reach) r = std::nextafter(far * (1 + 1e-9), INFINITY);
+        }
     return r;
 }
 
