@@ -326,4 +326,21 @@ TEST_CASE("a union of parts turned differently, or beside an unturned ball, is b
         }
         CHECK(inside_beyond(m, object, *box, 0, 4) == 0);
     }
+    // Through a rounding or a scale of the union (a trial): k·min(…) + c is ≤ 0 where the union is ≤ −c/k.
+    for (const char* outer : {"min({}, {}) - 0.3", "0.5 min({}, {}) - 0.15", "(min({}, {}) - 0.6)/2 + 0.15"}) {
+        INFO(outer);
+        ir::Module m;
+        const std::string d = fmt::format(fmt::runtime(outer), "box(" + matrix(M) + " p, (1, 0.2, 0.3))", "‖p - (2, 0, 0)‖ - 0.5");
+        auto [object, flat] = shape(m, "shape\n" + box_fn + "D = " + d + "\nwhere\np ∈ ℝ³\n", "rounded");
+        (void)flat;
+        auto box = ir::support_box(m, object, 0, {{}}, 0);
+        REQUIRE(box);
+        CHECK(box->hi[0] >= 2.8);  // the ball's side, 0.3 further
+        CHECK(box->hi[0] <= 2.82);
+        for (size_t k = 0; k < 3; ++k) {
+            CHECK(std::isfinite(box->lo[k]));
+            CHECK(std::isfinite(box->hi[k]));
+        }
+        CHECK(inside_beyond(m, object, *box, 0, 4) == 0);
+    }
 }

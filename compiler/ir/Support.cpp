@@ -917,8 +917,51 @@ SupportBox box_of(const Module& m, const Function& f, const std::optional<Functi
     bool open = false;
     for (size_t a = 0; a < 3; ++a) open |= !std::isfinite(out.lo[a]) || !std::isfinite(out.hi[a]);
     if (open && g && depth < 1 && g->body.size() <= 160 && g->body[g->result].type.is_scalar()) {
+        // Through a rounding or a scale of the union, k·min(…) + c with constants k > 0 and c (a rounded union,
+        // min(a, b) − 0.1): it is ≤ level where the union is ≤ (level − c)/k.
         ValueId r = g->result;
-        while (g->body[r].op == Op::Copy) r = g->body[r].args[0];
+        double part_level = level;
+        auto constant = [&](ValueId v) -> std::optional<double> {
+            const Instr& c = g->body[v];
+            if (c.op != Op::Const || c.data.size() != 1 || !std::isfinite(c.data[0])) return std::nullopt;
+            return c.data[0];
+        };
+        for (int steps = 0; steps < 16; ++steps) {
+            const Instr& x = g->body[r];
+            if (x.op == Op::Copy) {
+                r = x.args[0];
+                continue;
+            }
+            if (x.op == Op::Add || x.op == Op::Sub) {
+                auto c1 = constant(x.args[1]);
+                auto c0 = x.op == Op::Add ? constant(x.args[0]) : std::nullopt;
+                if (c1) {
+                    part_level += x.op == Op::Add ? -*c1 : *c1;
+                    r = x.args[0];
+                } else if (c0) {
+                    part_level -= *c0;
+                    r = x.args[1];
+                } else {
+                    break;
+                }
+                continue;
+            }
+            if (x.op == Op::Mul || x.op == Op::Div) {
+                auto c1 = constant(x.args[1]);
+                auto c0 = x.op == Op::Mul ? constant(x.args[0]) : std::nullopt;
+                if (c1 && *c1 > 0) {
+                    part_level = x.op == Op::Mul ? part_level / *c1 : part_level * *c1;
+                    r = x.args[0];
+                } else if (c0 && *c0 > 0) {
+                    part_level /= *c0;
+                    r = x.args[1];
+                } else {
+                    break;
+                }
+                continue;
+            }
+            break;
+        }
         const Instr& in = g->body[r];
         if (in.op == Op::Builtin && builtin(in.aux).name == std::string_view("min") && in.args.size() >= 2 &&
             in.args.size() <= 8 && g->body[in.args[0]].type.is_scalar() && g->body[in.args[1]].type.is_scalar()) {
@@ -928,7 +971,7 @@ SupportBox box_of(const Module& m, const Function& f, const std::optional<Functi
             for (ValueId operand : in.args) {
                 std::optional<Function> part = *g;
                 part->result = operand;
-                SupportBox b = box_of(m, *part, part, query, params, level, per_proof, loop_trips,
+                SupportBox b = box_of(m, *part, part, query, params, part_level, per_proof, loop_trips,
                                       budget / (4 * long(in.args.size())), depth + 1);
                 for (size_t a = 0; a < 3; ++a) {
                     hull.lo[a] = std::min(hull.lo[a], b.lo[a]);
