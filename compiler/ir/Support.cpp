@@ -375,6 +375,10 @@ namespace {
 std::optional<std::pair<AffineMap, SupportBox>> mapped_box(const Module& m, const Function& g, int query,
                                                            std::vector<std::vector<Interval>> params, double level,
                                                            int per_proof, int loop_trips, long work);
+bool boxable(const Module& m, int fn, int query, size_t params);
+SupportBox box_of(const Module& m, const Function& f, const std::optional<Function>& g, int query,
+                  std::vector<std::vector<Interval>> params, double level, int per_proof, int loop_trips, long work,
+                  int depth);
 
 // support_radius by interval arithmetic alone (branch and bound over boxes, with case splitting on `flat`, the
 // function's flattened copy, where it has cases).
@@ -539,20 +543,20 @@ std::optional<double> support_radius(const Module& m, int fn, int query, std::ve
             if (std::isfinite(far)) r = std::nextafter(far * (1 + 1e-9), INFINITY);
         }
     // Else the farthest corner of the box support_box finds at level 0 (a union of a turned part and a ball: its
-    // operands are boxed one by one there).
-    // Not where that box is empty (nothing is ≤ 0: nothing to bound) or reaches past `reach` (as above: a part
-    // that far is no bound's business).
-    if (!r)
-        if (auto box = support_box(m, fn, query, params, 0)) {
-            double far = 0;
-            bool empty = false;
-            for (size_t k = 0; k < 3; ++k) {
-                empty |= box->lo[k] > box->hi[k];
-                far += std::pow(std::max(std::fabs(box->lo[k]), std::fabs(box->hi[k])), 2);
-            }
-            far = std::sqrt(far);
-            if (!empty && far <= reach) r = std::nextafter(far * (1 + 1e-9), INFINITY);
+    // operands are boxed one by one there), on the flattened copy above (support_box's own analyses, with its
+    // default budgets). Not where that box is empty (nothing is ≤ 0: nothing to bound) or reaches past `reach`
+    // (as above: a part that far is no bound's business).
+    if (!r && boxable(m, fn, query, params.size())) {
+        const SupportBox box = box_of(m, m.functions[size_t(fn)], g, query, params, 0, 48, 16, 1500000, 0);
+        double far = 0;
+        bool empty = false;
+        for (size_t k = 0; k < 3; ++k) {
+            empty |= box.lo[k] > box.hi[k];
+            far += std::pow(std::max(std::fabs(box.lo[k]), std::fabs(box.hi[k])), 2);
         }
+        far = std::sqrt(far);
+        if (!empty && far <= reach) r = std::nextafter(far * (1 + 1e-9), INFINITY);
+    }
     return r;
 }
 
