@@ -862,10 +862,6 @@ SupportBox box_of(const Module& m, const Function& f, const std::optional<Functi
                 return true;
             };
             long rotated_work = budget;
-        // Its case splits from a pool of an eighth of the budget: with all that the first search left, a scene of
-        // two cones and a solid angle compiled in 0.56 s instead of 0.07 (a trial's), with an eighth 0.27 (the
-        // cone's x and z sides 0.93 for its 0.78 instead of 0.78; the capped_cone_ab's x side stays open).
-        distance.split_work = std::min(distance.split_work, budget / 8);
             auto rotated = [&](const Box& b) {
                 cur = b;
                 // p_a and p_b themselves are unknown (wherever else the shape reads them); p_o is the box's.
