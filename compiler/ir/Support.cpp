@@ -575,7 +575,7 @@ constexpr double kUnboundedAt = 1048576.0;              // 2^20: beyond this, a 
 // with `rotate` the next after the axis the box was last split along: a half-space beyond a plane along x, split
 // along x alone, stays a half-space (its far half is unbounded again) and never has its other axes narrowed,
 // where a fold needs them (the hexagonal prism's reflection p − 2 min(k⋅p, 0) k proves its x side only over
-// bounded y; stop 48). box_sides rotates only on a side the first order leaves open.
+// bounded y; stop 48). box_of asks for it only on the sides every other analysis leaves open.
 bool free_of(const BoxRange& range, const BoxSplit& split, const Box& start, double level, int per_proof, long& work,
              bool rotate = false) {
     // A point inside an interval, and its halves (an unbounded side grows geometrically).
@@ -648,9 +648,9 @@ SupportBox box_sides(const BoxRange& range, const BoxSplit& split, double level,
         auto beyond = [&](double c) { return free_of(range, split, half_space(a, upper, c), level, per_proof, work, rotate); };
         const double sgn = upper ? 1 : -1;
         // (Rotating, the first proof with half the splits: a side that stays open, a ground or the hills of
-        // examples/christmas_tree.iq, pays for it; with all of them that scene's compile took 0.71 s instead
-        // of 0.55, with half 0.65, and every side the rotation closes is closed; a quarter left the prisms and
-        // the cone open.)
+        // examples/christmas_tree.iq, pays for it; measured in a first arrangement that retried within this
+        // search, with all of them that scene's compile took 0.71 s instead of 0.55, with half 0.65, and every
+        // side the rotation closes was closed; a quarter left the prisms and the cone open.)
         if (!(rotate ? free_of(range, split, half_space(a, upper, sgn * R), level, per_proof / 2, work, true) : beyond(sgn * R)))
             return sgn * INFINITY;
         // A plane that is not proven (in) and one that is (out): planes ±1, ±2, ±4, … from 0 outward (or
