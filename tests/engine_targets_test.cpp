@@ -544,3 +544,140 @@ TEST_CASE("plain parameters past 11 uniform blocks go into the data texture: no 
     auto j = nlohmann::json::parse(read_text(temp_dir() / "r400.json"));
     CHECK(int(j["texture"]["height"]) > 0);
 }
+
+TEST_CASE("a sequence past a uniform block's 16 KiB, read whole, is gathered from the data texture; matrices past mat4 are "
+          "errors on every target",
+          "[engine-targets][wgsl][render]") {
+    // A new user's trial: a sequence parameter of 1,025 numbers, passed whole to the module's function, went into
+    // the data texture (16,400 bytes of std140: past a block's 16 KiB) and was read by a name nothing declared
+    // (glslang rejected the shader: exit 3 on webgl2, spirv and wgsl). A function now gathers it.
+    std::string values;
+    for (int k = 0; k < 1025; ++k) values += fmt::format("{}{}", k ? ", " : "", (k % 7) * 0.5);
+    // (a scene with a fixed camera: a shape module alone is framed by its box, and balls of two radii look alike)
+    auto scene = [](const std::string& distance, const std::string& params = "") {
+        return "[modules]\nm = \"\"\"\nshape\n" + distance + "\nwhere\np ∈ ℝ³\n" + params + "\"\"\"\n[camera]\nposition = [0, 0, -3]\ntarget = [0, 0, 0]\n"
+               "[[shapes]]\ntype = \"m\"\n";
+    };
+    auto seq = write_temp("seq_1025.iq", scene("D = ‖p‖ - 0.3 - ∑_i x_i 2e-4", "x_i ∈ ℝ default = {" + values + "}\n"));
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled web = compile_path(seq, o);
+    INFO(web.diagnostics);
+    REQUIRE(web.result.exit_code == 0);
+    CHECK_THAT(web.result.code, Catch::Contains("float[1025] m_1_shape_x() {  // x ∈ ℝ[1025]\n    return float[1025](iqc_fetch(0).x, iqc_fetch(1).x, "));
+    // It draws the ball of radius 0.3 + Σ x_k 2e-4 (0.6069): the texture's values are read. (Shadertoy's constant
+    // table of 1,025 floats took Mesa's compiler past 3 GB, so the references are plain balls.)
+    const int W = 32, H = 18;
+    auto ball = [&](const char* name, const char* r) {
+        Compiled c = compile_path(write_temp(name, scene(std::string("D = ‖p‖ - ") + r)), {});
+        REQUIRE(c.result.exit_code == 0);
+        render::RenderResult img = render_compiled(c.result, W, H);
+        REQUIRE(img.ok);
+        return img.image;
+    };
+    render::Image big_ball = ball("ball_06069.iq", "0.6069"), small_ball = ball("ball_03.iq", "0.3");
+    render::RenderResult b = render_compiled(web.result, W, H);
+    INFO(b.error);
+    REQUIRE(b.ok);
+    CHECK(differing_pixels(b.image, big_ball) == 0);
+    CHECK(differing_pixels(b.image, small_ball) > 10);
+    std::string zero_values;
+    for (int k = 0; k < 1025; ++k) zero_values += k ? ", 0" : "0";
+    auto zeros = write_temp("seq_1025_0.iq", scene("D = ‖p‖ - 0.3 - ∑_i x_i 2e-4", "x_i ∈ ℝ default = {" + zero_values + "}\n"));
+    Compiled web0 = compile_path(zeros, o);
+    REQUIRE(web0.result.exit_code == 0);
+    render::RenderResult c = render_compiled(web0.result, W, H);
+    REQUIRE(c.ok);
+    CHECK(differing_pixels(c.image, small_ball) == 0);
+    for (const char* target : {"spirv", "wgsl", "threejs"}) {
+        INFO(target);
+        RunResult r = run_iqc(seq.string() + " --target " + target + " -q -o " + (temp_dir() / (std::string("seq_1025.") + target)).string());
+        INFO(r.err);
+        CHECK(r.exit_code == 0);
+        if (std::string(target) == "wgsl") CHECK(tint_errors({temp_dir() / "seq_1025.wgsl"}).empty());
+    }
+
+    // A matrix past mat4 has no std140 or texel layout: packing it wrote past its element (heap corruption,
+    // exit 134, on spirv, hlsl and wgsl; a sequence of them on webgl2 too). The error, located, on every target.
+    auto big = write_temp("mat7.iql", "shape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\nC ∈ ℝ^(7×7)\n");
+    std::string m7 = "[1 1 1 1 1 1 1";
+    for (int r = 1; r < 7; ++r) m7 += "; 1 1 1 1 1 1 1";
+    m7 += "]";
+    auto big_seq = write_temp("mat7_seq.iql", "shape\nD = ‖p‖ - x_1,1,1\nwhere\np ∈ ℝ³\nx_i ∈ ℝ^(7×7) default = {" + m7 + ", " + m7 + ", " + m7 + "}\n");
+    for (const auto& in : {big, big_seq})
+        for (const char* target : {"shadertoy", "webgl2", "glsl330", "spirv", "hlsl", "wgsl", "threejs", "cpp", "html"}) {
+            INFO(in.string() << " " << target);
+            auto out = temp_dir() / (in.stem().string() + "." + target);
+            fs::remove(out);
+            RunResult r = run_iqc(in.string() + " --target " + target + " -o " + out.string());
+            CHECK(r.exit_code == 1);
+            CHECK_THAT(r.err, Catch::Contains(in.filename().string() + ":5:1: error: cannot generate GLSL: ℝ^(7×7) is larger than "
+                                              "GLSL's largest matrix (mat4)"));
+            CHECK_THAT(r.err, Catch::Contains("\n  ^"));
+            CHECK_FALSE(fs::exists(out));
+        }
+}
+
+TEST_CASE("instances sharing a shape with sequence parameters compile on every target, with an --meta entry per element",
+          "[engine-targets][wgsl][render]") {
+    // A new user's trial: four instances of a shape with x_i ∈ ℝ³ became a group whose per-member table of sequences
+    // was an array of arrays (invalid IR, exit 3, on every target but Shadertoy), and Shadertoy's --meta read past
+    // the shared sequence (entries for x[2] and x[3] of a 2-element array, garbage defaults, different every run).
+    std::string scene = "[modules]\nblob = \"\"\"\nshape\nD = ‖p‖ - r + 0.01(x_2,1 + w_1)\nwhere\np ∈ ℝ³\nr ∈ [0.05,0.5] default = 0.2\n"
+                        "x_i ∈ ℝ³ default = {(1, 0, 0), (0, 1, 0)}\nw_j ∈ ℝ default = {0.5, 0.25, 0.125}\n\"\"\"\n";
+    for (int i = 0; i < 4; ++i) scene += fmt::format("[[shapes]]\ntype = \"blob\"\ntransform = \"T(({}, 0, 6))\"\n", i - 2);
+    auto in = write_temp("seq_group.iq", scene);
+    for (const char* target : {"shadertoy", "webgl2", "glsl330", "spirv", "hlsl", "wgsl", "threejs", "cpp", "html"}) {
+        INFO(target);
+        auto out = temp_dir() / (std::string("seq_group.") + target), meta = temp_dir() / (std::string("seq_group_") + target + ".json");
+        RunResult r = run_iqc(in.string() + " --target " + target + " -q -o " + out.string() + " --meta " + meta.string());
+        INFO(r.err);
+        REQUIRE(r.exit_code == 0);
+        std::string first = read_text(meta);
+        RunResult again = run_iqc(in.string() + " --target " + target + " -q -o " + out.string() + " --meta " + meta.string());
+        REQUIRE(again.exit_code == 0);
+        CHECK(read_text(meta) == first);
+        auto j = nlohmann::json::parse(first);
+        // per instance: r, x_1, x_2, w_1, w_2, w_3
+        REQUIRE(j["parameters"].size() == 24);
+        int x2 = 0;
+        for (const auto& p : j["parameters"]) {
+            if (p["name"] == "x_2") {
+                ++x2;
+                CHECK(p["type"] == "vec3");
+                CHECK(p["default"] == nlohmann::json::array({0.0, 1.0, 0.0}));
+            }
+            CHECK(p["name"] != "x");
+        }
+        CHECK(x2 == 4);
+        if (std::string(target) == "wgsl") CHECK(tint_errors({out}).empty());
+    }
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled toy = compile_path(in, {}), web = compile_path(in, o);
+    REQUIRE(toy.result.exit_code == 0);
+    REQUIRE(web.result.exit_code == 0);
+    render::RenderResult a = render_compiled(toy.result, 96, 54), b = render_compiled(web.result, 96, 54);
+    REQUIRE(a.ok);
+    REQUIRE(b.ok);
+    CHECK(differing_pixels(a.image, b.image) == 0);
+}
+
+TEST_CASE("names that are keywords of GLSL 4.50, HLSL or their reserved words are renamed on every target", "[engine-targets][wgsl]") {
+    // A new user's trial: an instance named `sampler`, a module `float3`, a parameter `shared` reached the Vulkan
+    // GLSL or SPIRV-Cross's HLSL as they were, and glslang refused them (exit 3).
+    for (const char* name : {"sampler", "shared", "coherent", "texture2D", "itexture3D", "subpassInput", "float3", "half4x4",
+                             "auto", "new", "operator", "typename", "private", "globallycoherent", "lerp", "saturate", "matrix"}) {
+        INFO(name);
+        std::string scene = fmt::format("[modules]\n{0} = \"\"\"\nshape\nD = ‖p‖ - `{0}`\nwhere\np ∈ ℝ³\n`{0}` ∈ [0.1, 2] default = 1\n\"\"\"\n"
+                                        "[[shapes]]\nname = \"{0}\"\ntype = \"{0}\"\n",
+                                        name);
+        auto in = write_temp(std::string("kw_") + name + ".iq", scene);
+        for (const char* target : {"shadertoy", "glsl330", "spirv", "hlsl", "wgsl"}) {
+            INFO(target);
+            RunResult r = run_iqc(in.string() + " --target " + target + " -q -o " + (temp_dir() / (std::string("kw.") + target)).string());
+            INFO(r.err);
+            CHECK(r.exit_code == 0);
+        }
+    }
+}

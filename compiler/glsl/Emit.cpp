@@ -57,6 +57,20 @@ std::string float_literal(double v) {
     return mant + exp;
 }
 
+std::string texture_fetch(const GlobalStorage& s, const Type& t, const std::string& k, bool k_const) {
+    auto texel = [&](int col) {
+        std::string i = s.texels == 1 ? k : fmt::format("{} * {}", s.texels, k_const ? k : "(" + k + ")");
+        if (s.texel + col != 0) i = k == "0" ? std::to_string(s.texel + col) : fmt::format("{} + {}", s.texel + col, i);
+        return fmt::format("iqc_fetch({})", i);
+    };
+    if (t.kind == Type::Integer) return fmt::format("int({}.x)", texel(0));  // stored as an exact float (< 2^24)
+    if (t.is_scalar()) return texel(0) + ".x";
+    if (t.is_vector()) return texel(0) + "." + std::string("xyzw", size_t(t.rows));
+    std::vector<std::string> cols;
+    for (int c = 0; c < t.cols; ++c) cols.push_back(texel(c) + "." + std::string("xyzw", size_t(t.rows)));
+    return fmt::format("{}({})", type_name(t), fmt::join(cols, ", "));
+}
+
 namespace {
 
 // The components of a value of type t (not an array) as GLSL constructor arguments, column-major.
@@ -321,6 +335,9 @@ struct FunctionEmitter {
         const GlobalStorage* s = storage(in.aux);
         // A plain parameter in the data texture (targets without uniform blocks): its texels.
         if (s && s->kind == GlobalStorage::Kind::Texture && !in.type.is_array()) return fetch(s, in.type, "0", true, in.span);
+        // An array in the data texture read whole (a module's sequence parameter passed on as one value): the
+        // function the declarations define for it gathers its elements.
+        if (s && s->kind == GlobalStorage::Kind::Texture) return s->name + "()";
         return s ? s->name : identifier(m.globals[size_t(in.aux)].name);
     }
 
@@ -335,17 +352,8 @@ struct FunctionEmitter {
 
     // Element k (an int expression; `k_const` when a literal) of type t stored in the data texture at s.
     std::string fetch(const GlobalStorage* s, const Type& t, const std::string& k, bool k_const, const Span& span) {
-        auto texel = [&](int col) {
-            std::string i = s->texels == 1 ? k : fmt::format("{} * {}", s->texels, k_const ? k : "(" + k + ")");
-            if (s->texel + col != 0) i = k == "0" ? std::to_string(s->texel + col) : fmt::format("{} + {}", s->texel + col, i);
-            return fmt::format("iqc_fetch({})", i);
-        };
-        if (t.kind == Type::Integer) return fmt::format("int({}.x)", texel(0));  // stored as an exact float (< 2^24)
-        if (t.is_scalar()) return texel(0) + ".x";
-        if (t.is_vector()) return texel(0) + "." + std::string(kSwizzle, size_t(t.rows));
-        std::vector<std::string> cols;
-        for (int c = 0; c < t.cols; ++c) cols.push_back(texel(c) + "." + std::string(kSwizzle, size_t(t.rows)));
-        return fmt::format("{}({})", type_of(t, span), fmt::join(cols, ", "));
+        if (t.is_matrix() && t.rows > 1 && type_of(t, span).empty()) return "0.0";
+        return texture_fetch(*s, t, k, k_const);
     }
 
     // An array's declarator after the name (`vec3 P[3]`); empty for other types.
@@ -688,12 +696,13 @@ struct FunctionEmitter {
     std::string lazy(ValueId v, const std::string& indent) {
         const Instr& in = f.body[v];
         std::string vn = locals.unique(in.name.empty() ? "tmp" : in.name);
-        std::string tn = type_of(in.type, in.span);
+        // (a choice of arrays, a sequence parameter per instance: `vec3 tmp[2];`)
+        std::string tn = type_of(in.type, in.span), decl = vn + array_suffix(in.type);
         std::string inner = indent + "    ";
         std::string out;
         std::string comment = in.source.empty() ? "" : " // " + one_line(in.source);
         if (in.op == Op::If) {
-            out += fmt::format("{}{} {};{}\n{}if ({}) {{\n", indent, tn, vn, comment, indent, arg(in, 0, false));
+            out += fmt::format("{}{} {};{}\n{}if ({}) {{\n", indent, tn, decl, comment, indent, arg(in, 0, false));
             out += arm(v, 1, vn, inner);
             out += indent + "} else {\n" + arm(v, 2, vn, inner) + indent + "}\n";
             var[v] = vn;
@@ -710,11 +719,11 @@ struct FunctionEmitter {
         // Nothing to compute first, and the default safe to compute for any selector: it is the initial value.
         auto computed = [&](ValueId x) { return !var[x].empty(); };
         if (fallback.empty() && ir::speculatable_expression(f.body, in.args[1], computed)) {
-            out += fmt::format("{}{} {} = {};{}\n", indent, tn, vn, arg(in, 1, false), comment);
+            out += fmt::format("{}{} {} = {};{}\n", indent, tn, decl, arg(in, 1, false), comment);
         } else {
             std::vector<std::string> any;
             for (int k = 0; k < cases; ++k) any.push_back("(" + cond(k) + ")");
-            out += fmt::format("{}{} {};{}\n{}if (!({})) {{\n{}{}{} = {};\n{}}}\n", indent, tn, vn, comment, indent,
+            out += fmt::format("{}{} {};{}\n{}if (!({})) {{\n{}{}{} = {};\n{}}}\n", indent, tn, decl, comment, indent,
                                fmt::join(any, " || "), fallback, inner, vn, arg(in, 1, false), indent);
         }
         for (int k = 0; k < cases; ++k) {
@@ -743,7 +752,7 @@ struct FunctionEmitter {
         for (size_t j = 0; j < states; ++j) {
             const Type& t = body.params[j + 1].type;
             std::string n = locals.unique(body.outputs[j].first);
-            out += fmt::format("{}{} {} = {};\n", indent, type_of(t, in.span), n, arg(in, j + 1, false));
+            out += fmt::format("{}{} {}{} = {};\n", indent, type_of(t, in.span), n, array_suffix(t), arg(in, j + 1, false));
             names.push_back(n);
         }
         loop_states[v] = names;

@@ -37,10 +37,14 @@ std::string compact_constant(const Type& t, const std::vector<double>& row_major
 // Where a global lives on the target.
 struct GlobalStorage {
     enum class Kind { Const, Uniform, BlockMember, Private, Texture } kind = Kind::Const;
-    std::string name;  // its GLSL name (Texture: unused)
+    std::string name;  // its GLSL name (Texture: the function that gathers a whole array, `name()`, where one is read whole)
     int texel = 0;     // Texture: the texel of element 0's first column
     int texels = 1;    // Texture: texels per element (one per matrix column)
 };
+
+// Element k (a GLSL int expression; `k_const` when a literal) of type t (a scalar, ℤ, vector or matrix GLSL
+// has) stored in the data texture at s: `iqc_fetch(texel).xyz`, a matrix from one texel per column.
+std::string texture_fetch(const GlobalStorage& s, const Type& t, const std::string& k, bool k_const);
 
 class Emitter {
 public:

@@ -1,6 +1,9 @@
 #include "glsl/Names.h"
 
+#include <cctype>
+#include <cstring>
 #include <fmt/format.h>
+#include <set>
 
 #include "source/Source.h"
 
@@ -167,9 +170,63 @@ bool is_reserved(const std::string& n) {
         "mainImage", "fragColor", "fragCoord", "iResolution", "iTime", "iTimeDelta", "iFrame", "iFrameRate",
         "iChannelTime", "iChannelResolution", "iMouse", "iDate", "iSampleRate", "iChannel0", "iChannel1",
         "iChannel2", "iChannel3",
+        // GLSL ES 3.10+ and 4.50 keywords (the spirv, hlsl and wgsl targets compile Vulkan GLSL 4.50; a trial's
+        // instance named `sampler` was glslang's error: exit 3)
+        "atomic_uint", "coherent", "readonly", "restrict", "writeonly", "shared", "buffer", "precise", "sampler",
+        "samplerShadow", "subpassInput", "isubpassInput", "usubpassInput", "subroutine", "dmat2", "dmat3", "dmat4", "dmat2x2", "dmat2x3", "dmat2x4", "dmat3x2",
+        "dmat3x3", "dmat3x4", "dmat4x2", "dmat4x3", "dmat4x4", "bvec", "demote", "terminate",
+        // HLSL keywords, reserved words and types (SPIRV-Cross keeps the Vulkan shader's names, and glslang's HLSL
+        // front end refused `float3`, `auto`, `new`, ... as names)
+        "AppendStructuredBuffer", "asm_fragment", "BlendState", "Buffer", "ByteAddressBuffer", "cbuffer",
+        "column_major", "compile", "compile_fragment", "CompileShader", "ComputeShader", "ConsumeStructuredBuffer",
+        "DepthStencilState", "DepthStencilView", "DomainShader", "dword", "export", "fxgroup", "GeometryShader",
+        "groupshared", "Hullshader", "HullShader", "InputPatch", "line", "lineadj", "linear", "LineStream", "matrix",
+        "nointerpolation", "NULL", "OutputPatch", "packoffset", "pass", "pixelfragment", "PixelShader", "point",
+        "PointStream", "RasterizerState", "RenderTargetView", "register", "row_major", "RWBuffer",
+        "RWByteAddressBuffer", "RWStructuredBuffer", "RWTexture1D", "RWTexture1DArray", "RWTexture2D",
+        "RWTexture2DArray", "RWTexture3D", "SamplerState", "SamplerComparisonState", "snorm", "stateblock",
+        "stateblock_state", "string", "StructuredBuffer", "tbuffer", "technique", "technique10", "technique11",
+        "Texture1D", "Texture1DArray", "Texture2D", "Texture2DArray", "Texture2DMS", "Texture2DMSArray",
+        "Texture3D", "TextureCube", "TextureCubeArray", "triangle", "triangleadj", "TriangleStream", "unorm",
+        "vector", "vertexfragment", "VertexShader", "globallycoherent", "auto", "catch", "char", "const_cast",
+        "delete", "dynamic_cast", "explicit", "friend", "mutable", "new", "operator", "private", "protected",
+        "reinterpret_cast", "signed", "static_cast", "throw", "try", "typename", "virtual", "min16float",
+        "min10float", "min16int", "min12int", "min16uint",
+        // HLSL intrinsics a module's name would shadow
+        "saturate", "lerp", "frac", "rsqrt", "mul", "atan2", "fmod", "ddx", "ddy", "ddx_coarse", "ddy_coarse",
+        "ddx_fine", "ddy_fine", "clip", "rcp", "sincos", "log10", "mad", "asfloat", "asint", "asuint", "asdouble",
+        "countbits", "firstbithigh", "firstbitlow", "reversebits", "isfinite", "f16tof32", "f32tof16", "noise",
+        "abort", "errorf", "printf", "dst", "lit", "msad4", "tex1D", "tex2D", "tex3D", "texCUBE",
     };
-    return words.count(n) > 0 || n.rfind("gl_", 0) == 0 || n.rfind("iqc_", 0) == 0 || n.rfind("IQC_", 0) == 0 ||
-           n.find("__") != std::string::npos;
+    if (words.count(n) > 0 || n.rfind("gl_", 0) == 0 || n.rfind("iqc_", 0) == 0 || n.rfind("IQC_", 0) == 0 ||
+        n.find("__") != std::string::npos)
+        return true;
+    // Families: GLSL's opaque types (i/u + sampler, image, texture, subpassInput + a dimension), HLSL's vector and
+    // matrix types (float3, half4x4, uint2, min16float3, ...).
+    auto family = [&](const char* prefix) {
+        size_t k = 0;
+        if (!n.empty() && (n[0] == 'i' || n[0] == 'u') && n.compare(1, std::strlen(prefix), prefix) == 0) k = 1;
+        if (n.compare(k, std::strlen(prefix), prefix) != 0) return false;
+        size_t rest = k + std::strlen(prefix);
+        // a dimension and its qualifiers (2D, CubeArray, 2DMSArray, Shadow): letters and digits only, so that the
+        // renamed `image2D_2` is free (else Namer::unique never finds a name)
+        if (rest >= n.size() || !(std::isdigit(static_cast<unsigned char>(n[rest])) || std::isupper(static_cast<unsigned char>(n[rest]))))
+            return false;
+        for (size_t c = rest; c < n.size(); ++c)
+            if (!std::isalnum(static_cast<unsigned char>(n[c]))) return false;
+        return true;
+    };
+    if (family("sampler") || family("image") || family("texture") || family("subpassInput")) return true;
+    for (const char* t : {"bool", "int", "uint", "half", "float", "double", "dword", "min16float", "min10float", "min16int",
+                          "min12int", "min16uint", "uint64_t", "int64_t", "float16_t", "int16_t", "uint16_t"}) {
+        size_t l = std::strlen(t);
+        if (n.compare(0, l, t) != 0 || n.size() == l) continue;
+        const std::string rest = n.substr(l);
+        if ((rest.size() == 1 && rest[0] >= '1' && rest[0] <= '4') ||
+            (rest.size() == 3 && rest[0] >= '1' && rest[0] <= '4' && rest[1] == 'x' && rest[2] >= '1' && rest[2] <= '4'))
+            return true;
+    }
+    return false;
 }
 
 bool Namer::taken(const std::string& name) const {

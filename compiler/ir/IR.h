@@ -173,7 +173,10 @@ struct Global {
     Kind kind = Kind::Constant;
     std::vector<double> value; // row-major components, arrays element after element (Prepared: unused)
     ValueBounds bounds;        // per element component; `input` is false for parameters and constants
-    std::vector<GlobalParam> params;  // Parameter: one per element (one for a non-array)
+    std::vector<GlobalParam> params;  // Parameter: one per element of a per-member table, else one per instance it serves
+    // Parameter: an array of one element per member of a group of instances (a table), not a sequence parameter
+    // (x_i ∈ ℝ³, an array one instance owns whole; a sequence is never per member: GLSL ES has no arrays of arrays).
+    bool per_member = false;
     std::string comment;       // what the value is (the declaration's comment)
     std::string owner;         // whose value it is, for grouping declarations: "floor_1: floor with lit"
 };

@@ -119,7 +119,11 @@ struct Layout {
         int vectors = 13;  // iResolution, iTime, iMouse, iFrame; the camera (position, basis 3, focal, projection 4)
         for (size_t i = 0; i < n; ++i) {
             const Global& g = m.globals[i];
-            if (g.kind == Global::Kind::Prepared) storage[i].kind = Kind::Private;
+            // A type GLSL has no name for (a matrix past mat4: the function emitter reports it at its use) has
+            // no std140 or texel layout either: it is left out of the blocks and the texture, whose packing
+            // would write past its element (a trial's ℝ^(7×7) parameter corrupted the heap on spirv).
+            if (glsl::type_name(g.type).empty()) storage[i].kind = Kind::Const;
+            else if (g.kind == Global::Kind::Prepared) storage[i].kind = Kind::Private;
             else if (g.kind == Global::Kind::Constant && (!g.type.is_array() || g.type.count < kMinTableForBuffer))
                 storage[i].kind = Kind::Const;
             else if (g.kind == Global::Kind::Parameter && !g.type.is_array()) {
@@ -307,6 +311,24 @@ struct Declarations {
         return out.empty() ? "" : "// ---- " + title + " ----\n" + out + "\n";
     }
 
+    // The arrays in the data texture that some function reads whole (not only an element at a time), in order.
+    std::vector<size_t> read_whole() const {
+        std::vector<char> whole(m.globals.size(), 0);
+        for (const auto& f : m.functions)
+            for (const auto& in : f.body)
+                for (size_t k = 0; k < in.args.size(); ++k) {
+                    const ir::Instr& a = f.body[in.args[k]];
+                    if (a.op != ir::Op::Global || !a.type.is_array()) continue;
+                    if (lay.storage[size_t(a.aux)].kind != Kind::Texture) continue;
+                    if (in.op == ir::Op::Index && k == 0) continue;
+                    whole[size_t(a.aux)] = 1;
+                }
+        std::vector<size_t> out;
+        for (size_t i = 0; i < whole.size(); ++i)
+            if (whole[i]) out.push_back(i);
+        return out;
+    }
+
     std::string run() const {
         auto is = [&](size_t i, Kind k) { return lay.storage[i].kind == k; };
         auto light = [&](size_t i) { return !m.globals[i].params.empty() && m.globals[i].params[0].role == "light"; };
@@ -342,6 +364,22 @@ struct Declarations {
                                t.width, t.height,
                                o.vulkan ? fmt::format("layout(set = 0, binding = {}) ", code.inputs.blocks.size() + 1) : "", t.name,
                                t.name, t.width, t.width);
+            // An array read whole (a module passes its sequence parameter on as one value): a function that
+            // gathers it, element by element (a trial's sequence of 1,025 numbers, past a uniform block's
+            // 16 KiB, was read by a name nothing declared).
+            for (size_t i : read_whole()) {
+                const Global& g = m.globals[i];
+                const GlobalStorage& st = lay.storage[i];
+                Type e = g.type.element();
+                std::string tn = glsl::type_name(e);
+                // One constructor of constant fetches, not a loop into a local array: llvmpipe took 25 s to compile
+                // the loop's 1,025 dynamic stores; constant indices let LLVM keep the elements in registers.
+                std::vector<std::string> items;
+                for (int k = 0; k < g.type.count; ++k) items.push_back(glsl::texture_fetch(st, e, std::to_string(k), true));
+                out += fmt::format("{}[{}] {}() {{  // {}\n    return {}[{}]({});\n}}\n\n", tn, g.type.count, st.name,
+                                   g.comment.empty() ? "the sequence " + g.name : glsl::comment_text(g.comment), tn,
+                                   g.type.count, fmt::join(items, ", "));
+            }
         }
         out += section("computed once per pixel (iqc_prepare)", [&](size_t i) { return is(i, Kind::Private); });
         return out;
@@ -354,51 +392,57 @@ nlohmann::ordered_json describe(const ir::Module& m, const Layout& lay, const Sh
         const Global& g = m.globals[i];
         if (g.kind != Global::Kind::Parameter) continue;
         const GlobalStorage& s = lay.storage[i];
+        // A per-member table (a group's parameter): member k's element. A sequence parameter (x_i ∈ ℝ³, an array
+        // one instance owns, or a group shares): one entry per element, named as the math subscripts it (x_1, x_2).
+        const bool table = g.per_member && g.type.is_array();
+        const bool sequence = !table && g.type.is_array();
         Type e = g.type.is_array() ? g.type.element() : g.type;
         size_t per = size_t(std::max(1, e.components()));
         for (size_t k = 0; k < g.params.size(); ++k) {
-            const ir::GlobalParam& p = g.params[k];
-            size_t elem = g.type.is_array() ? k : 0;
-            nlohmann::ordered_json j;
-            j["instance"] = p.instance;
-            j["module"] = p.module;
-            j["role"] = p.role;
-            j["name"] = p.name;
-            switch (s.kind) {
-                // A member of a group: its element of the array (a tool edits that one, as with a block's member).
-                case Kind::Const:
-                    j["storage"] = "constant";
-                    j["constant"] = g.type.is_array() ? fmt::format("{}[{}]", s.name, elem) : s.name;
-                    break;
-                case Kind::Uniform:
-                    j["storage"] = "uniform";
-                    j["uniform"] = g.type.is_array() ? fmt::format("{}[{}]", s.name, elem) : s.name;
-                    break;
-                case Kind::BlockMember:
-                    j["storage"] = "block";
-                    j["block"] = in.blocks[size_t(lay.block_of[i])].name;
-                    j["member"] = g.type.is_array() ? fmt::format("{}[{}]", s.name, elem) : s.name;
-                    j["offsets"] = std::vector<int>(lay.offsets[i].begin() + long(elem * per), lay.offsets[i].begin() + long((elem + 1) * per));
-                    break;
-                case Kind::Texture:
-                    j["storage"] = "texture";
-                    j["texture"] = in.texture.name;
-                    j["offsets"] = std::vector<int>(lay.offsets[i].begin() + long(elem * per), lay.offsets[i].begin() + long((elem + 1) * per));
-                    break;
-                case Kind::Private: break;
+            for (int q = 0; q < (sequence ? g.type.count : 1); ++q) {
+                const ir::GlobalParam& p = g.params[k];
+                size_t elem = table ? k : sequence ? size_t(q) : 0;
+                nlohmann::ordered_json j;
+                j["instance"] = p.instance;
+                j["module"] = p.module;
+                j["role"] = p.role;
+                j["name"] = sequence ? fmt::format("{}_{}", p.name, q + 1) : p.name;
+                switch (s.kind) {
+                    // A member of a group: its element of the array (a tool edits that one, as with a block's member).
+                    case Kind::Const:
+                        j["storage"] = "constant";
+                        j["constant"] = g.type.is_array() ? fmt::format("{}[{}]", s.name, elem) : s.name;
+                        break;
+                    case Kind::Uniform:
+                        j["storage"] = "uniform";
+                        j["uniform"] = g.type.is_array() ? fmt::format("{}[{}]", s.name, elem) : s.name;
+                        break;
+                    case Kind::BlockMember:
+                        j["storage"] = "block";
+                        j["block"] = in.blocks[size_t(lay.block_of[i])].name;
+                        j["member"] = g.type.is_array() ? fmt::format("{}[{}]", s.name, elem) : s.name;
+                        j["offsets"] = std::vector<int>(lay.offsets[i].begin() + long(elem * per), lay.offsets[i].begin() + long((elem + 1) * per));
+                        break;
+                    case Kind::Texture:
+                        j["storage"] = "texture";
+                        j["texture"] = in.texture.name;
+                        j["offsets"] = std::vector<int>(lay.offsets[i].begin() + long(elem * per), lay.offsets[i].begin() + long((elem + 1) * per));
+                        break;
+                    case Kind::Private: break;
+                }
+                j["type"] = glsl::type_name(e);
+                j["components"] = e.components();
+                if (!g.bounds.lo.empty()) {
+                    nlohmann::ordered_json b = nlohmann::ordered_json::array();
+                    for (size_t c = 0; c < g.bounds.lo.size(); ++c) b.push_back({g.bounds.lo[c], g.bounds.hi[c]});
+                    j["bounds"] = b;
+                } else {
+                    j["bounds"] = nullptr;
+                }
+                j["default"] = std::vector<double>(g.value.begin() + long(elem * per), g.value.begin() + long((elem + 1) * per));
+                j["description"] = p.description;
+                list.push_back(j);
             }
-            j["type"] = glsl::type_name(e);
-            j["components"] = e.components();
-            if (!g.bounds.lo.empty()) {
-                nlohmann::ordered_json b = nlohmann::ordered_json::array();
-                for (size_t c = 0; c < g.bounds.lo.size(); ++c) b.push_back({g.bounds.lo[c], g.bounds.hi[c]});
-                j["bounds"] = b;
-            } else {
-                j["bounds"] = nullptr;
-            }
-            j["default"] = std::vector<double>(g.value.begin() + long(elem * per), g.value.begin() + long((elem + 1) * per));
-            j["description"] = p.description;
-            list.push_back(j);
         }
     }
     return list;

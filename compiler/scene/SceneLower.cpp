@@ -557,6 +557,25 @@ private:
         return it;
     }
 
+    // Whether instances of one shape and material can be a group as far as their sequence parameters (x_i ∈ ℝ³:
+    // an array per instance) go: a group's per-member table of them would be an array of arrays, which GLSL ES
+    // has not (a trial's four instances of a shape with a sequence: invalid IR, exit 3, and --meta read past the
+    // sequence). They group where the sequences are constants equal in every member (one shared array).
+    bool sequences_shared(const std::vector<size_t>& members) const {
+        const InstancePlan& a = plan(members[0]);
+        auto same = [&](const CheckedModule* mod, const std::vector<std::vector<double>> InstancePlan::*values) {
+            if (!mod) return true;
+            for (size_t k = 0; k < mod->params.size(); ++k) {
+                if (!mod->params[k].type.is_array()) continue;
+                if (!o_.params_constant) return false;
+                for (size_t mi : members)
+                    if ((plan(mi).*values)[k] != (a.*values)[k]) return false;
+            }
+            return true;
+        };
+        return same(a.shape, &InstancePlan::shape_values) && same(a.material, &InstancePlan::material_values);
+    }
+
     void make_items() {
         // Instances that can share code: one shape, one material, a transform known at compile time, `bound`
         // or not. In order of first appearance; members keep their order.
@@ -575,7 +594,7 @@ private:
         }
         for (const auto& key : order) {
             const auto& members = kinds[key];
-            if (int(members.size()) < o_.min_group) {
+            if (int(members.size()) < o_.min_group || !sequences_shared(members)) {
                 for (size_t i : members) items_.push_back(single(i));
                 continue;
             }
@@ -893,6 +912,7 @@ private:
         g.name = unique_name(base);
         g.kind = Global::Kind::Parameter;
         g.type = (it.group && !shared) ? Type::array(pi.type, int(values.size())) : pi.type;
+        g.per_member = it.group && !shared;
         for (const auto& v : (it.group && !shared) ? values : std::vector<std::vector<double>>{values[0]})
             g.value.insert(g.value.end(), v.begin(), v.end());
         g.bounds.input = false;
