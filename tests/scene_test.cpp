@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "TestUtil.h"
@@ -518,4 +519,74 @@ TEST_CASE("an override whose constant expression leaves the 32-bit float range i
     CHECK_THAT(c.diagnostics, Catch::Contains("override_range.iq:3:22: error: 't' must be a number, an array, or a constant "
                                               "expression such as \"√2\"; this string is not one: the value of 't' is outside "
                                               "the range of 32-bit floats"));
+}
+
+TEST_CASE("the default step cap grows by the factor steps are shortened by: a box made thin by a scale draws as the thin box",
+          "[scene][render][march]") {
+    // A new user's trial: S((0.05, 1, 1)) multiplies a box's distance by 0.05, 20 times too small above and beside
+    // it; rays passing near it ran out of the 128 steps and showed the background, a funnel through the ground
+    // behind it (a twisted plate with K = 23.8 lost its top the same way, a terrain's ridges got dotted lines).
+    auto scene = [](const std::string& box, const std::string& render) {
+        return "[camera]\nposition = [0, 3, -7]\ntarget = [0, 0, 0]\n" + render +
+               "[[shapes]]\ntype = \"plane\"\n[[shapes]]\ntype = \"box\"\n" + box;
+    };
+    auto scaled = compile_text("thin_scaled.iq", scene("transform = \"S((0.05, 1, 1))\"\n", ""));
+    INFO(scaled.diagnostics);
+    REQUIRE(scaled.result.exit_code == 0);
+    CHECK_THAT(scaled.result.code, Catch::Contains("const int IQC_MAX_STEPS = 2048;  // max_steps 128 × 16: steps are up to that much "
+                                                   "shorter than the distance to a surface here"));
+    auto thin = compile_text("thin_params.iq", scene("shape_params = { b = [0.05, 0.6, 0.8] }\n", ""));
+    REQUIRE(thin.result.exit_code == 0);
+    CHECK_THAT(thin.result.code, Catch::Contains("const int IQC_MAX_STEPS = 128;\n"));
+    // a step cap the scene sets is kept
+    auto capped = compile_text("thin_capped.iq", scene("transform = \"S((0.05, 1, 1))\"\n", "[render]\nmax_steps = 128\n"));
+    REQUIRE(capped.result.exit_code == 0);
+    CHECK_THAT(capped.result.code, Catch::Contains("const int IQC_MAX_STEPS = 128;\n"));
+    const int W = 320, H = 180;
+    render::Image a = render_code(scaled.result.code, W, H), b = render_code(thin.result.code, W, H),
+                  c = render_code(capped.result.code, W, H);
+    auto differing = [&](const render::Image& x, const render::Image& y) {
+        int n = 0;
+        for (size_t i = 0; i < x.rgba.size(); i += 4) {
+            float d = 0;
+            for (int k = 0; k < 3; ++k) d = std::max(d, std::fabs(x.rgba[i + size_t(k)] - y.rgba[i + size_t(k)]));
+            n += d > 3.0f / 255;
+        }
+        return n;
+    };
+    int grown = differing(a, b), kept = differing(c, b);
+    INFO("differing pixels: grown cap " << grown << ", 128 steps " << kept);
+    CHECK(grown <= W * H / 200);
+    CHECK(kept > 4 * grown + 40);
+}
+
+TEST_CASE("soft shadows of a scene a thousand times smaller darken only what hard shadows darken", "[scene][render][effects]") {
+    // A new user's trial: the penumbra's h / t was read at t ≥ 1e-4 (an absolute floor) while a scene a thousandth
+    // of the size, with hit 1e-7, samples at t < 1e-4: every lit surface darkened (the floor 169 -> 70 of 255).
+    auto scene = [](const char* shadows) {
+        return fmt::format(
+            "[camera]\nposition = [0, 0.002, -0.005]\ntarget = [0, 0, 0]\n[render]\nmax_dist = 0.1\nhit = 1e-7\noutput = \"linear\"\n"
+            "[effects]\nshadows = \"{}\"\n[[lights]]\ndirection = [-0.5, 0.7, -0.4]\n"
+            "[[shapes]]\ntype = \"plane\"\nmaterial = \"lambert\"\nshape_params = {{ h = 0.001 }}\n"
+            "[[shapes]]\ntype = \"torus\"\nmaterial = \"lambert\"\ntransform = \"S((0.001, 0.001, 0.001))⋅T((-1.5, 0, 0))⋅`R_x`(1.2)\"\n"
+            "[[shapes]]\ntype = \"sphere\"\nmaterial = \"lambert\"\ntransform = \"S((0.001, 0.001, 0.001))⋅T((0, 0.2, 1.5))\"\n"
+            "shape_params = {{ r = 0.7 }}\n",
+            shadows);
+    };
+    auto soft = compile_text("tiny_soft.iq", scene("soft")), hard = compile_text("tiny_hard.iq", scene("hard"));
+    INFO(soft.diagnostics);
+    REQUIRE(soft.result.exit_code == 0);
+    REQUIRE(hard.result.exit_code == 0);
+    const int W = 160, H = 90;
+    render::Image s = render_code(soft.result.code, W, H), h = render_code(hard.result.code, W, H);
+    CHECK(nan_pixels(s) == 0);
+    int darker = 0, lit = 0;
+    for (size_t i = 0; i < s.rgba.size(); i += 4) {
+        float ls = s.rgba[i] + s.rgba[i + 1] + s.rgba[i + 2], lh = h.rgba[i] + h.rgba[i + 1] + h.rgba[i + 2];
+        lit += lh > 0.05f;
+        darker += lh > 0.05f && ls < 0.8f * lh;
+    }
+    INFO("lit pixels " << lit << ", of them darker with soft shadows " << darker);
+    CHECK(lit > W * H / 4);
+    CHECK(darker < lit / 50);
 }

@@ -6,7 +6,7 @@
 // - camera: look-at from (0, 1.6, -4) to (0, 0, 4), world up +y, focal 1/tan(30deg);
 // - p.y - h(x, z) is not a distance (its gradient reaches 2.06), so each step is divided by
 //   iqc's Lipschitz factor 2.734959 while the hit test reads the undivided value: |d| < 0.001,
-//   at most 128 steps, miss past t = 30;
+//   at most 351 steps (iqc's default cap of 128 grown by that factor), miss past t = 30;
 // - at the step cap the far, grazing rays decide as iqc does: the last sample counts if the ray
 //   was still closing in and it lies within the pixel's cone (t / (res.y * focal)), else the
 //   closest sample if it came within 10 tolerances and the ray went on by no more than
@@ -36,7 +36,7 @@ float raymarch(vec3 ro, vec3 rd)
     float tl = 0.0, hl = 1e20;   // last sample
     float tb = 0.0, hb = 1e20;   // closest sample
     bool closing = true;
-    for (int i = 0; i < 128; i++)
+    for (int i = 0; i < 351; i++)
     {
         float h = map(ro + t * rd);
         float a = abs(h);

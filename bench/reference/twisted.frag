@@ -6,7 +6,8 @@
 //    map() returns half the box distance, a safe sphere-tracing step.
 //  - hit when the field itself (twice the step) is under 0.001, not the halved step (a surface thicker
 //    by a tolerance).
-//  - sphere tracing from where the ray enters the box (below), at most 128 steps, far plane 100. A few rays grazing the twisted edges
+//  - sphere tracing from where the ray enters the box (below), at most 256 steps (iqc's default cap of 128 grown by the factor 2
+//    its steps are shortened by), far plane 100. A few rays grazing the twisted edges
 //    run out of steps; like iqc, such a ray still hits if it was closing in within its pixel's cone, or
 //    came within 10 tolerances and stalled there (without this, about 20 edge pixels change).
 //    The eye is outside the shape, so there is no inside-start case to handle.
@@ -46,7 +47,7 @@ float raymarch(vec3 ro, vec3 rd)
     float dm = 1e20, tm = 0.0;  // closest approach
     float dl = 1e20, tl = 0.0;  // last sample
     float dp = 1e20;            // the one before it
-    for (int i = 0; i < 128 && t <= tmax; i++)
+    for (int i = 0; i < 256 && t <= tmax; i++)
     {
         float h = map(ro + t*rd);
         dp = dl; dl = abs(2.0*h); tl = t;  // the field itself

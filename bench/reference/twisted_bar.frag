@@ -10,7 +10,8 @@
 //    both sides of an `if` anyway.
 //  - hit when the field itself (the step times the factor again) is under 0.001: testing the divided
 //    step instead would thicken the surface by 5.7 tolerances.
-//  - sphere tracing from where the ray enters the box (below), at most 128 steps, far plane 100. Some rays grazing the twisted edges
+//  - sphere tracing from where the ray enters the box (below), at most 727 steps (iqc's default cap of 128 grown by the factor
+//    5.67 its steps are shortened by), far plane 100. Some rays grazing the twisted edges
 //    run out of steps; like iqc, such a ray still hits if it was closing in within its pixel's cone, or
 //    came within 10 tolerances and stalled there. The eye is outside the shape, so there is no
 //    inside-start case to handle.
@@ -52,7 +53,7 @@ float raymarch(vec3 ro, vec3 rd)
     float dm = 1e20, tm = 0.0;  // closest approach
     float dl = 1e20, tl = 0.0;  // last sample
     float dp = 1e20;            // the one before it
-    for (int i = 0; i < 128 && t <= tmax; i++)
+    for (int i = 0; i < 727 && t <= tmax; i++)
     {
         float h = map(ro + t*rd);
         dp = dl; dl = abs(h*5.673572); tl = t;  // the field itself

@@ -266,7 +266,7 @@ const std::vector<Pass>& passes() {
          }},
         {{"lipschitz", "each shape's Lipschitz bound, derived from its gradient; distances divided by it"},
          [](Module& m, const PipelineOptions&, PipelineResult& r) {
-             for (auto& w : apply_lipschitz_bounds(m, &r.lipschitz)) r.warnings.push_back(std::move(w));
+             for (auto& w : apply_lipschitz_bounds(m, &r.lipschitz, &r.lipschitz_largest)) r.warnings.push_back(std::move(w));
          }},
         {{"inline", "inline the scene's building blocks into the scene functions"},
          [](Module& m, const PipelineOptions&, PipelineResult&) { inline_marked(m); }},

@@ -46,6 +46,7 @@ struct PipelineResult {
     std::vector<RangeIssue> warnings;                     // what else a pass wants the user to know (gradient, lipschitz)
     std::string segment_refused;                          // why the segment pass kept iqc_segment_gain at 1 ("": it did not)
     std::vector<std::string> lipschitz;                   // per scene item: derived, sampled and applied bounds
+    double lipschitz_largest = 1;                         // the largest Lipschitz factor a distance was divided by
     std::vector<StableRewrite> rewrites;                  // what the stable pass rewrote, where
     std::string dump;                                     // the module after `dump_after`
     std::vector<std::pair<std::string, double>> pass_ms;  // wall time per pass

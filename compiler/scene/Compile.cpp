@@ -28,6 +28,10 @@ namespace iqc {
 
 namespace {
 
+// The most the default step cap grows for steps shortened by Lipschitz factors and non-uniform scales (the 128
+// default becomes at most 2,048).
+constexpr double kMaxStepGrowth = 16;
+
 std::string vec3_literal(const std::array<double, 3>& v) { return glsl::constant(Type::vector(3), {v[0], v[1], v[2]}); }
 
 // The scene's camera as the uniform targets take it (runtime_templates/scene.glsl), as the host sets it:
@@ -152,6 +156,9 @@ private:
     static bool exact_distances(const std::vector<InstancePlan>& plans);
     bool exact_ = false;
     bool segment_refused_ = false;  // march = "segment", but the segment pass derived no bounds
+    // How much shorter than the distance to the nearest surface sphere tracing's steps may be: the largest
+    // Lipschitz factor a distance is divided by, times the largest condition number of an instance's transform.
+    double step_shortening_ = 1;
     // An instance whose glow the shader gathers: a glow that is not black, outside the per-instance baseline
     // and the debug views (which show values). The lowering emits iqc_distance_of for exactly these.
     bool gathers_glow(const InstanceDesc& in) const {
@@ -287,6 +294,7 @@ bool SceneCompiler::optimize(SceneIR& scene) {
         else d_.warning(issue.span, issue.message);
     }
     for (const auto& w : pr.warnings) d_.warning(w.span, w.message);
+    step_shortening_ *= pr.lipschitz_largest;
     segment_refused_ = !pr.segment_refused.empty();
     if (segment_refused_)
         d_.warning(s_.render.march_span, "segment tracing takes sphere-tracing steps in this scene: " + pr.segment_refused);
@@ -336,6 +344,20 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     const RenderDesc& render = s_.render;
     const EffectsDesc& fx = s_.effects;
     int max_steps = opts_.max_steps.value_or(render.max_steps);
+    // max_steps is a budget of steps as long as the distance to the nearest surface. Where a distance is divided by
+    // a Lipschitz factor K, or a non-uniform scale multiplies it by 1/σ_max, steps are up to that factor F shorter,
+    // and rays that the budget would carry to a surface stop short of it and show the background (a new user's
+    // trial: S((0.05, 1, 1)) on a box cut a funnel of sky through the ground behind it; a twisted plate with K 23.8
+    // lost its top; dotted sky along a terrain's ridges). The default grows by F (at most 16×); a max_steps the
+    // scene sets is kept as it is (the hard cases set theirs and agree with the double-precision reference).
+    double shortening = std::min(kMaxStepGrowth, step_shortening_);
+    std::string max_steps_doc;
+    if (!opts_.max_steps && !render.max_steps_span.valid() && shortening > 1.05) {
+        max_steps_doc = fmt::format("  // max_steps {} × {:.3g}: steps are up to that much shorter than the distance to a "
+                                    "surface here (a Lipschitz factor, a non-uniform scale)",
+                                    max_steps, shortening);
+        max_steps = int(std::min<double>(kMaxStepsSetting, std::ceil(max_steps * shortening)));
+    }
     bool lights = scene.lights > 0;
     double focal = 1.0 / std::tan(s_.camera.fov * M_PI / 360.0);
     TemplateArgs ta;
@@ -346,6 +368,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     V["SOURCE"] = glsl::comment_text(std::filesystem::path(s_.path).filename().string());
     V["TARGET"] = target_name(opts_.target);
     V["MAX_STEPS"] = std::to_string(max_steps);
+    V["MAX_STEPS_DOC"] = max_steps_doc;
     V["MAX_DIST"] = glsl::float_literal(render.max_dist);
     V["HIT"] = glsl::float_literal(hit());
     V["HIT_DOC"] = render.hit_relative ? "hit tolerance per unit of distance along the ray" : "hit tolerance (world units)";
@@ -701,6 +724,7 @@ CompileResult SceneCompiler::run_checked() {
     for (const auto& m : s_.modules) lib_.add(m);  // a document's blocks with one name are already one module
     std::vector<InstancePlan> plans;
     bool planned = plan_instances(s_, lib_, sm_, d_, plans, opts_.strict_ranges);
+    for (const auto& p : plans) step_shortening_ = std::max(step_shortening_, p.step_shortening);
     lap("parse + check + transforms");
     if (!planned || d_.error_count() != before) return std::move(res_);
     try {

@@ -39,7 +39,11 @@ std::string view(std::string_view s) { return fmt::format("std::string_view({}, 
 std::string number(double x) {
     if (std::isinf(x)) return x > 0 ? "std::numeric_limits<float>::infinity()" : "-std::numeric_limits<float>::infinity()";
     if (std::isnan(x)) return "std::numeric_limits<float>::quiet_NaN()";
-    std::string s = fmt::format("{:.9g}", x);
+    // The float the shader holds (1e-50 is 0, as the GLSL constant is): a literal below float's range stopped g++'s
+    // -Werror ("floating constant truncated to zero", a new user's trial).
+    float f = static_cast<float>(x);
+    if (std::isinf(f)) return f > 0 ? "std::numeric_limits<float>::max()" : "-std::numeric_limits<float>::max()";
+    std::string s = fmt::format("{:.9g}", f == 0.0f ? 0.0 : double(f));
     if (s.find_first_of(".eE") == std::string::npos) s += ".0";
     return s + "f";
 }

@@ -174,7 +174,7 @@ std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& nam
                         fmt::format("the value of '{}' is not a finite number ({})", name, ir::format_value(v)));
                 return std::nullopt;
             }
-            if (std::fabs(x) > double(std::numeric_limits<float>::max())) {  // like a literal: shaders compute in float
+            if (!std::isfinite(static_cast<float>(x))) {  // like a literal: shaders compute in float (FLT_MAX as printed rounds to it)
                 d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
                         fmt::format("the value of '{}' is outside the range of 32-bit floats (at most about 3.4e38), which "
                                     "shaders compute in ({})", name, ir::format_value(v)));

@@ -282,6 +282,9 @@ struct Planner {
         plan.inv_offset = {inv[3], inv[7], inv[11]};
         double norm = spectral_norm3(plan.inv_linear);
         plan.scale = std::fabs(norm - 1) < 1e-9 ? 1.0 : 1.0 / norm;
+        // ‖L⁻¹‖‖L‖, the spectral condition number: 1 for rotations and uniform scales, σ_max/σ_min for S((0.05, 1, 1)).
+        plan.step_shortening = std::max(1.0, norm * spectral_norm3({a, b, c, e, f, g, h, i, j}));
+        if (plan.step_shortening < 1 + 1e-9) plan.step_shortening = 1;
         // What the shader computes with — the inverse, its offset and the scale — must be float32 numbers: past
         // 3.4·10³⁸ they were clamped, below 1.2·10⁻³⁸ flushed to 0 or denormal (S((10⁶⁰, …)) drew everything
         // inside the shape; T((3e38, …))⋅T((3e38, …)) moved it silently).

@@ -44,6 +44,10 @@ struct InstancePlan {
     std::vector<double> inv_linear{1, 0, 0, 0, 1, 0, 0, 0, 1};  // world -> object at the parameters' values, row-major
     std::vector<double> inv_offset{0, 0, 0};
     double scale = 1;                    // 1 / Lipschitz factor of the world -> object map
+    // How much shorter than the distance to the surface sphere tracing's steps near this instance may be, from
+    // its transform alone: the world → object map's condition number ‖M‖‖M⁻¹‖ at the parameters' values (a
+    // non-uniform scale: the distance is multiplied by 1/‖M‖, exact only along the most stretched axis).
+    double step_shortening = 1;
     std::string transform_comment;       // the transform as written, one line, with its parameters' values
     bool has_transform = false;
     int blend = -1;                      // the [[blends]] entry it is part of, or -1

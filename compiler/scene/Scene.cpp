@@ -219,7 +219,8 @@ private:
         // toml++ gives no double for an integer beyond 2^53 (it would round): such an integer is read as the
         // nearest double, as a literal would be (it was silently 0).
         double v = n.is_integer() ? double(*n.value<int64_t>()) : n.value<double>().value_or(std::nan(""));
-        if (std::fabs(v) <= double(std::numeric_limits<float>::max())) return v;
+        // Within range where it rounds to a finite float (3.4028235e38, FLT_MAX as printed, rounds down to it).
+        if (std::isfinite(v) && std::isfinite(static_cast<float>(v))) return v;
         d_.error(span_of(n), fmt::format("'{}' must be a finite number within the range of 32-bit floats (about ±3.4e38), "
                                          "not {}", key, v));
         return std::nullopt;
@@ -504,7 +505,10 @@ void SceneReader::read_render(const toml::table& root) {
             auto& t = *n->as_table();
             check_keys(t, kRenderKeys, " in [render]");
             if (auto* x = t.get("max_steps"))
-                if (auto v = get_int(*x, "max_steps", 1, kMaxStepsSetting)) s_.render.max_steps = *v;
+                if (auto v = get_int(*x, "max_steps", 1, kMaxStepsSetting)) {
+                    s_.render.max_steps = *v;
+                    s_.render.max_steps_span = span_of(*x);
+                }
             if (auto* x = t.get("max_dist"))
                 if (auto v = get_number(*x, "max_dist")) {
                     if (*v <= 0) d_.error(span_of(*x), "'max_dist' must be positive");

@@ -73,6 +73,7 @@ struct RenderDesc {
     March march = March::Sphere;
     Span march_span;  // where `march` is written (empty: the default)
     int max_steps = 128;
+    Span max_steps_span;  // where `max_steps` is written (empty: the default, which grows with shortened steps)
     double max_dist = 100;
     double hit = 1e-3;
     bool hit_relative = false;  // hit_mode = "relative": the tolerance grows with distance (hit · t)

@@ -1861,6 +1861,11 @@ ExprPtr Parser::parse_primary() {
             e->number = t.text == "𝟙" ? 1.0 : literal_value(t);
             e->text = t.text;
             advance();
+            // `1.2.3` lexes as 1.2 then .3, which juxtaposition would multiply (0.36), and `1e5.5` as 1e5 then .5: a
+            // number written straight after a number is a typo, not a product (a new user's trial).
+            if (at(Tok::Number) && !cur().space_before && !cur().text.empty() && cur().text[0] == '.')
+                fail(Span{e->span.file, e->span.begin, cur().span.end},
+                     fmt::format("'{}{}' is not a number: a second decimal point (write a space for a product)", e->text, cur().text));
             if (e->text == "𝟙" && !((at(Tok::Sub) || at(Tok::Underscore)) && !cur().space_before))
                 fail(e->span, "𝟙 needs its size, as in 𝟙_3 (a vector of ones) or 𝟙_2,3 (a matrix of ones)");
             return e;

@@ -1651,8 +1651,9 @@ Clusters analysis_clusters(const Module& m) {
     return c;
 }
 
-std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::string>* report) {
+std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::string>* report, double* largest) {
     std::vector<RangeIssue> warnings;
+    if (largest) *largest = 1;
     bool scaled = false;
     std::map<int, LipschitzEstimate> estimated;  // by object function: a shape's variants share one estimate
     const Clusters clusters = analysis_clusters(m);  // before the loop: it changes the functions it bounds
@@ -1810,6 +1811,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                             d, at[0], at[1], at[2])});
         }
         if (repeat) warnings.resize(warned);
+        if (largest && applied > *largest) *largest = applied;
         if (applied > 1 + 1e-9) {
             if (!divide_object_calls(m, int(fi), spec.object_fn, applied)) divide_result(m, int(fi), applied);
             if (spec.factor_global >= 0 && size_t(spec.factor_global) < m.globals.size()) {

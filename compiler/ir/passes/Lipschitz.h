@@ -77,7 +77,8 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
 double combinator_factor(const std::string& function_name);
 
 // The pass: every function with a LipschitzSpec. Returns the warnings (located at the instances) and, in
-// `report`, one line per item ("shape 'twisted': K ≤ 7.6 derived, 3.9 sampled, 7.6 applied").
-std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::string>* report = nullptr);
+// `report`, one line per item ("shape 'twisted': K ≤ 7.6 derived, 3.9 sampled, 7.6 applied"); in `largest`, the
+// largest factor applied (1 where none is divided): sphere tracing's steps near that item are K times shorter.
+std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::string>* report = nullptr, double* largest = nullptr);
 
 }  // namespace iqc::ir
