@@ -156,3 +156,28 @@ TEST_CASE("a recurrence's first element cannot read itself, the result or a late
     INFO(ok.diagnostics);
     CHECK(ok.ok);
 }
+
+TEST_CASE("an error in a module written as a TOML string with escapes points at the file's own line and column", "[diag]") {
+    // A new user's trial: `blob = "shape\nD = ‖p‖ - q\n…"` was reported at line 3 of a file whose line 3 is empty,
+    // quoting a line the file does not have; a line-ending backslash and \u escapes shifted lines and columns too.
+    struct Case {
+        const char* name;
+        std::string scene, expected;
+    };
+    const std::vector<Case> cases = {
+        {"escaped.iq", "[modules]\nblob = \"shape\\nD = ‖p‖ - q\\nwhere\\np ∈ ℝ³\\n\"\n\n[[shapes]]\ntype = \"blob\"\n",
+         "escaped.iq:2:26: error: undefined name 'q'\n  blob = \"shape\\nD = ‖p‖ - q\\nwhere\\np ∈ ℝ³\\n\"\n                           ^\n"},
+        {"continued.iq", "[modules]\nblob = \"\"\"\nshape\nD = ‖p‖ - \\\n  r + `zz`\nwhere\np ∈ ℝ³\nr ∈ [0,1] default = 0.5\n\"\"\"\n"
+                         "[[shapes]]\ntype = \"blob\"\n",
+         "continued.iq:5:7: error: undefined name 'zz'\n    r + `zz`\n        ^~~~\n"},
+        {"unicode_escape.iq", "[[shapes]]\ntype = \"sphere\"\ntransform = \"\\u0054((1, 0, `zz`))\"\n",
+         "unicode_escape.iq:3:28: error: undefined name 'zz'\n  transform = \"\\u0054((1, 0, `zz`))\"\n                             ^~~~\n"},
+    };
+    for (const auto& c : cases) {
+        INFO(c.name);
+        Compiled r = compile_text(c.name, c.scene);
+        CHECK(r.result.exit_code == 1);
+        INFO(r.diagnostics);
+        CHECK(r.diagnostics.find(c.expected) != std::string::npos);
+    }
+}

@@ -269,21 +269,87 @@ private:
         std::string_view t = sm_.text(file_);
         uint32_t off = s.begin;
         uint32_t content = off;
+        bool basic = false, multiline = false;
         if (t.substr(off, 3) == "\"\"\"" || t.substr(off, 3) == "'''") {
+            basic = t[off] == '"';
+            multiline = true;
             content = off + 3;
             if (t.substr(content, 1) == "\n") content += 1;
             else if (t.substr(content, 2) == "\r\n") content += 2;
         } else if (t.substr(off, 1) == "\"" || t.substr(off, 1) == "'") {
+            basic = t[off] == '"';
             content = off + 1;
         }
         if (t.substr(content, value.size()) == value) {
             ms.file = file_;
             ms.ranges = {{content, uint32_t(content + value.size())}};
         } else {
-            ms.file = sm_.add_embedded(sm_.name(file_), value, file_, content);
+            std::vector<uint32_t> map;
+            if (basic) map = escapes_map(t, content, multiline, value);
+            ms.file = map.empty() ? sm_.add_embedded(sm_.name(file_), value, file_, content)
+                                  : sm_.add_embedded(sm_.name(file_), value, file_, std::move(map));
             ms.ranges = {{0, uint32_t(value.size())}};
         }
         return ms;
+    }
+
+    // For a TOML basic string whose text starts at `content` of the file `t`: the file offset of each byte of its
+    // value (and of its end), reading its escapes (\n, \", \\, \uXXXX, \UXXXXXXXX, a line-ending backslash of a
+    // multi-line string); empty where the value does not follow from the text (then the string's start is used,
+    // and diagnostics count lines within the value). A new user's trial: a module written "shape\nD = …\n" was
+    // reported at lines the file does not have.
+    static std::vector<uint32_t> escapes_map(std::string_view t, uint32_t content, bool multiline, const std::string& value) {
+        std::vector<uint32_t> map;
+        map.reserve(value.size() + 1);
+        size_t r = content, v = 0;
+        auto hex = [&](size_t at, int n, uint32_t& cp) {
+            cp = 0;
+            for (int k = 0; k < n; ++k) {
+                if (at + size_t(k) >= t.size() || !std::isxdigit(static_cast<unsigned char>(t[at + size_t(k)]))) return false;
+                char c = t[at + size_t(k)];
+                cp = cp * 16 + uint32_t(std::isdigit(static_cast<unsigned char>(c)) ? c - '0' : (std::tolower(c) - 'a' + 10));
+            }
+            return true;
+        };
+        while (v < value.size()) {
+            if (r >= t.size()) return {};
+            char c = t[r];
+            if (c == '\\') {
+                if (r + 1 >= t.size()) return {};
+                char e = t[r + 1];
+                size_t raw = 2, bytes = 1;
+                if (e == 'u' || e == 'U') {
+                    int n = e == 'u' ? 4 : 8;
+                    uint32_t cp;
+                    if (!hex(r + 2, n, cp)) return {};
+                    raw = 2 + size_t(n);
+                    bytes = cp < 0x80 ? 1 : cp < 0x800 ? 2 : cp < 0x10000 ? 3 : 4;
+                } else if (multiline && (e == ' ' || e == '\t' || e == '\n' || e == '\r')) {
+                    // a line-ending backslash: it and the whitespace and newlines after it are no part of the value
+                    size_t k = r + 1;
+                    while (k < t.size() && (t[k] == ' ' || t[k] == '\t' || t[k] == '\n' || t[k] == '\r')) ++k;
+                    r = k;
+                    continue;
+                } else if (std::string_view("btnfr\"\\e").find(e) == std::string_view::npos) {
+                    return {};
+                }
+                if (v + bytes > value.size()) return {};
+                for (size_t k = 0; k < bytes; ++k) map.push_back(uint32_t(r));
+                v += bytes;
+                r += raw;
+            } else if (c == '\r' && r + 1 < t.size() && t[r + 1] == '\n' && value[v] == '\n') {
+                map.push_back(uint32_t(r));
+                ++v;
+                r += 2;
+            } else {
+                if (value[v] != c) return {};
+                map.push_back(uint32_t(r));
+                ++v;
+                ++r;
+            }
+        }
+        map.push_back(uint32_t(r));
+        return map;
     }
 
     void read_params(const toml::node& n, const std::string& key, std::vector<ParamOverride>& out) {

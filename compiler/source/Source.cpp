@@ -128,6 +128,22 @@ FileId SourceManager::add_embedded(std::string name, std::string text, FileId ou
     return id;
 }
 
+FileId SourceManager::add_embedded(std::string name, std::string text, FileId outer, std::vector<uint32_t> outer_map) {
+    uint32_t at = outer_map.empty() ? 0 : outer_map.front();
+    FileId id = add_embedded(std::move(name), std::move(text), outer, at);
+    if (outer_map.size() == files_[id].text.size() + 1) files_[id].outer_map = std::move(outer_map);
+    return id;
+}
+
+Span SourceManager::display(Span s) const {
+    if (s.file >= files_.size()) return s;
+    const File& f = files_[s.file];
+    if (!f.embedded || f.outer_map.empty()) return s;
+    auto at = [&](uint32_t o) { return f.outer_map[std::min<size_t>(o, f.outer_map.size() - 1)]; };
+    uint32_t b = at(s.begin), e = at(s.end);
+    return display(Span{f.outer, b, std::max(b, e)});
+}
+
 bool read_source_file(const std::string& path, size_t already, std::string& out, std::string& err) {
     // O_NONBLOCK: opening a named pipe must not wait for a writer; the mode is checked before any read.
     int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
@@ -292,8 +308,10 @@ static std::string printable(std::string_view text, bool keep_newlines) {
     return out;
 }
 
-std::string Diagnostics::render(const Diagnostic& d) const {
+std::string Diagnostics::render(const Diagnostic& given) const {
     std::string out;
+    Diagnostic d = given;
+    if (d.has_span) d.span = sm_.display(d.span);  // a TOML string with escapes: the file's own line
     if (!d.has_span) {
         out += fmt::format("iqc: {}: {}\n", severity_name(d.severity), printable(d.message, true));
     } else {

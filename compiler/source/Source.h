@@ -39,6 +39,12 @@ public:
     // text differs from the file's bytes): diagnostics report the outer file's name and the line where the
     // string starts, plus the line within the string.
     FileId add_embedded(std::string name, std::string text, FileId outer, uint32_t outer_offset);
+    // The same, with each byte's offset in the outer file (`outer_map`: text.size() + 1 entries, the last where the
+    // text ends): a TOML string with escapes (`"shape\nD = …"`), whose lines are not the file's. Diagnostics then
+    // point into the outer file itself (display).
+    FileId add_embedded(std::string name, std::string text, FileId outer, std::vector<uint32_t> outer_map);
+    // Where a span is shown: for an embedded file with an offset map, the span in its outer file; else itself.
+    Span display(Span s) const;
 
     const std::string& name(FileId f) const { return files_[f].name; }
     std::string_view text(FileId f) const { return files_[f].text; }
@@ -61,6 +67,7 @@ private:
         bool from_disk = false;
         FileId outer = 0;
         uint32_t outer_offset = 0;
+        std::vector<uint32_t> outer_map;  // per byte of text (and its end): the offset in `outer` (empty: none)
     };
     std::vector<File> files_;
     size_t total_bytes_ = 0;
