@@ -545,7 +545,7 @@ TEST_CASE("plain parameters past 11 uniform blocks go into the data texture: no 
     CHECK(int(j["texture"]["height"]) > 0);
 }
 
-TEST_CASE("a sequence past a uniform block's 16 KiB, read whole, is gathered from the data texture; matrices past mat4 are "
+TEST_CASE("a sequence past a uniform block's 16 KiB, read whole, is gathered from the data texture: matrices past mat4 are "
           "errors on every target",
           "[engine-targets][wgsl][render]") {
     // A new user's trial: a sequence parameter of 1,025 numbers, passed whole to the module's function, went into
