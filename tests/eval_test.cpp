@@ -1,6 +1,7 @@
 // `iqc eval`: outputs in source order at full precision, --set with the language's literals, errors.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fmt/format.h>
 
 #include "TestUtil.h"
 
@@ -202,4 +203,40 @@ TEST_CASE("a number outside float's range is one error: the declaration it is in
         for (size_t at = 0; (at = r.err.find("error:", at)) != std::string::npos; ++at) ++errors;
         CHECK(errors == 1);
     }
+}
+
+TEST_CASE("a sum over a long sequence is a loop: its values are the sum's, conditions, indices, nesting and "
+          "recurrences included",
+          "[eval]") {
+    // ∑ over 32 or more elements of a sequence lowers to a Loop (Mesa compiled an unrolled sum of 100 lengths of
+    // uniform-array elements in 2.5 s, a loop in 0.17 s). The values: the sums computed here term by term.
+    const int n = 40;
+    std::string xs, ys;
+    for (int k = 1; k <= n; ++k) {
+        xs += fmt::format("{}{}", k > 1 ? ", " : "", k);
+        ys += fmt::format("{}({}, {}, {})", k > 1 ? ", " : "", k, 2 * k, 3 * k);
+    }
+    auto f = write_temp("long_sums.iql", "a = ∑_i x_i\nb = ∑_i i x_i\nc = ∑_(i for x_i > 20) x_i\nd = ∑_i y_i,2\ne = ∑_i ∑_j y_i,j\n"
+                                         "g = ∑_i ∑_k x_i x_k\nh = ∑_i f(x_i)\nu = ∑_i y_i\nz_1 = 0\nz_(k+1) = z_k + k ∑_i x_i for k ∈ 1..3\n"
+                                         "where\nx_i ∈ ℝ default = {" + xs + "}\ny_i ∈ ℝ³ default = {" + ys + "}\nf(t) = t² where t ∈ ℝ\n");
+    double a = 0, b = 0, c = 0, g = 0, h = 0;
+    for (int k = 1; k <= n; ++k) {
+        a += k, b += k * k, h += k * k;
+        if (k > 20) c += k;
+        for (int q = 1; q <= n; ++q) g += k * q;
+    }
+    RunResult r = run_iqc("eval " + f.string());
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.out == fmt::format("a = {}\nb = {}\nc = {}\nd = {}\ne = {}\ng = {}\nh = {}\nu = ({}, {}, {})\nz_4 = {}\n", a, b, c, 2 * a,
+                               6 * a, g, h, a, 2 * a, 3 * a, (1 + 2 + 3) * a));
+    // ... and a loop in the IR and in the shader (a module shown alone on a uniform target).
+    auto shape = write_temp("long_sum_shape.iql", "shape\nD = ‖p‖ - ∑_i ‖x_i‖/400\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" + ys + "}\n");
+    RunResult s = run_iqc(shape.string() + " --target webgl2 --dump-ir=after-lower -o " + (temp_dir() / "long_sum.frag").string());
+    INFO(s.err);
+    REQUIRE(s.exit_code == 0);
+    CHECK_THAT(s.err, Catch::Contains("Loop from 0 "));
+    std::string code = read_text(temp_dir() / "long_sum.frag");
+    CHECK_THAT(code, Catch::Contains("for (int "));
+    CHECK_THAT(code, !Catch::Contains("x[39]"));
 }

@@ -333,6 +333,9 @@ struct FunctionEmitter {
 
     std::string global(const Instr& in) {
         const GlobalStorage* s = storage(in.aux);
+        // (a global GLSL cannot declare, a sequence of matrices past mat4 that a module's function now reads in
+        // place: the error where its parameter is declared, as for the parameter it was)
+        if (in.type.is_array()) type_of(in.type, in.span);
         // A plain parameter in the data texture (targets without uniform blocks): its texels.
         if (s && s->kind == GlobalStorage::Kind::Texture && !in.type.is_array()) return fetch(s, in.type, "0", true, in.span);
         // An array in the data texture read whole (a module's sequence parameter passed on as one value): the
@@ -652,6 +655,9 @@ struct FunctionEmitter {
                 out += lazy(i, indent);
                 continue;
             }
+            // A global array (a sequence parameter bound in place by the pass `arrays`, whose name the
+            // parameter's was) is read where it is indexed: a local copy would load every element.
+            if (in.op == Op::Global && in.type.is_array()) continue;
             bool named = !in.name.empty();
             // How deep this value's expression would nest: past kMaxInlineDepth it gets a variable, so no
             // expression (a min of 20,000 arguments, a piecewise of 5,000 cases) nests deeper than that in
@@ -746,7 +752,9 @@ struct FunctionEmitter {
         // Captured values are read every iteration: give costly ones a variable first.
         for (size_t k = states + 1; k < in.args.size(); ++k) {
             ValueId a = in.args[k];
-            if (var[a].empty() && !trivial(a) && f.body[a].op != Op::Member) out += materialize(a, "tmp", indent, "");
+            if (var[a].empty() && !trivial(a) && f.body[a].op != Op::Member &&
+                !(f.body[a].op == Op::Global && f.body[a].type.is_array()))  // (a global array is read in place)
+                out += materialize(a, "tmp", indent, "");
         }
         std::vector<std::string> names;
         for (size_t j = 0; j < states; ++j) {

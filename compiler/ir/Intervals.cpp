@@ -723,6 +723,52 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                     nan |= s[j].nan;
                 }
             }
+            if (!run && hi.lo == hi.hi && std::isfinite(hi.lo) && last >= first && in.args.size() >= states + 1) {
+                // An accumulation (a rolled ∑: each state s_j ← s_j + t_j, no t_j reading a state): t_j once,
+                // with k over [first, last], and s_j = s_j(0) + n·t_j for the n iterations (sound: each term
+                // lies in t_j's bounds, whatever k).
+                std::vector<ValueId> term(states, ValueId(-1));
+                std::vector<char> reads_state(body.body.size(), 0);
+                for (size_t b = 0; b < body.body.size(); ++b) {
+                    const Instr& bi = body.body[b];
+                    reads_state[b] = bi.op == Op::Param && bi.aux >= 1 && size_t(bi.aux) <= states;
+                    for (ValueId x : bi.args) reads_state[b] |= reads_state[x];
+                }
+                bool accumulates = true;
+                for (size_t j = 0; j < states && accumulates; ++j) {
+                    const Instr& out = body.body[body.outputs[j].second];
+                    auto is_state = [&](ValueId x) { return body.body[x].op == Op::Param && size_t(body.body[x].aux) == j + 1; };
+                    accumulates = out.op == Op::Add && out.args.size() == 2;
+                    if (accumulates && is_state(out.args[0])) term[j] = out.args[1];
+                    else if (accumulates && is_state(out.args[1])) term[j] = out.args[0];
+                    accumulates = accumulates && term[j] != ValueId(-1) && !reads_state[term[j]];
+                }
+                if (accumulates) {
+                    std::vector<IntervalVec>& args = args_buffer();
+                    args.push_back({{first, last}});
+                    for (size_t j = 0; j < states; ++j) args.push_back(r[in.args[j + 1]].c);
+                    for (size_t c = states + 1; c < in.args.size(); ++c) args.push_back(r[in.args[c]].c);
+                    const std::vector<Bounds>& v = call(in.aux, args);
+                    const double n = last - first + 1;
+                    nan = false;
+                    for (size_t c = 1; c < in.args.size(); ++c) nan |= r[in.args[c]].nan;
+                    for (size_t j = 0; j < states; ++j) {
+                        const Bounds& init = r[in.args[j + 1]];
+                        const Bounds& t = v[term[j]];
+                        if (init.c.size() != t.c.size()) continue;  // (s stays unknown)
+                        s[j] = init;
+                        s[j].unit = false;
+                        s[j].norm = init.norm + n * t.norm;  // ‖s + Σ t‖ ≤ ‖s‖ + n·max ‖t‖
+                        for (size_t q = 0; q < t.c.size(); ++q) {
+                            s[j].c[q].lo = init.c[q].lo + n * t.c[q].lo;
+                            s[j].c[q].hi = init.c[q].hi + n * t.c[q].hi;
+                            if (std::isnan(s[j].c[q].lo) || std::isnan(s[j].c[q].hi)) s[j].c[q] = Interval{};
+                        }
+                        s[j] = finish(std::move(s[j]));
+                        nan |= t.nan;
+                    }
+                }
+            }
             for (Bounds& b : s) b.nan |= nan;
             loop_states[i] = std::move(s);
             r[i] = Bounds{};

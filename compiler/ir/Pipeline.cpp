@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <functional>
 
+#include "ir/passes/BindArrays.h"
 #include "ir/passes/CSE.h"
 #include "ir/passes/DCE.h"
 #include "ir/passes/Differentiate.h"
@@ -288,6 +289,8 @@ const std::vector<Pass>& passes() {
          [](Module& m, const PipelineOptions&, PipelineResult&) { exhaustive_dispatch(m); }},
         {{"select", "if-conversion: a call's switched argument whose arms are cheap and safe to compute becomes selects"},
          [](Module& m, const PipelineOptions&, PipelineResult&) { convert_cheap_choices(m); }},
+        {{"arrays", "array arguments: a call that passes a global array whole (a sequence parameter) calls a copy of its callee that reads the global in place (uniform targets)"},
+         [](Module& m, const PipelineOptions&, PipelineResult&) { bind_array_arguments(m); }},
         {{"simplify", "fold and CSE again"},
          [](Module& m, const PipelineOptions&, PipelineResult&) {
              fold_all(m);

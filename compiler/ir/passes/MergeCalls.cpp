@@ -46,6 +46,16 @@ int merge_switch_calls(Module& m) {
                     for (int k : cases) distinct |= in.args[size_t(k) + 2] != in.args[size_t(cases[0]) + 2];
                     if (!distinct) continue;
                     const Instr& first = old[in.args[size_t(cases[0]) + 2]];
+                    // An array argument that differs between the cases (each instance's own sequence, x_i ∈ ℝ³)
+                    // would be switched whole: a local copy of the array per evaluation, which llvmpipe runs as
+                    // stores and loads of every element (a trial's three instances with 300-vector sequences in
+                    // uniform blocks: 71 s a frame at 160x90 against 62 ms with constants). Those calls stay apart.
+                    bool array_differs = false;
+                    for (size_t a = 0; a < first.args.size(); ++a) {
+                        if (!old[first.args[a]].type.is_array()) continue;
+                        for (int k : cases) array_differs |= old[in.args[size_t(k) + 2]].args[a] != first.args[a];
+                    }
+                    if (array_differs) continue;
                     std::vector<ValueId> args;
                     for (size_t a = 0; a < first.args.size(); ++a) {
                         bool same = true;
