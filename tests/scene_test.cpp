@@ -558,6 +558,28 @@ TEST_CASE("the default step cap grows by the factor steps are shortened by: a bo
     INFO("differing pixels: grown cap " << grown << ", 128 steps " << kept);
     CHECK(grown <= W * H / 200);
     CHECK(kept > 4 * grown + 40);
+
+    // A transform that moves or has sliders is sized as thin as it gets at the sampled moments and slider ends, not
+    // at time 0 or the slider's default (a trial: S((0.55 + 0.5 sin(time), 1, 1)) kept a cap for 0.55, and at time
+    // 10.1, a width of 0.24, the funnel came back; a slider S((s, 1, 1)) with s ∈ [0.05, 1] kept 128 on webgl2).
+    auto moving = compile_text("thin_moving.iq", scene("transform = \"\"\"\nS((0.55 + 0.5 sin(time), 1, 1))\nwhere\nsin from "
+                                                       "trigonometry\n\"\"\"\n", ""));
+    INFO(moving.diagnostics);
+    REQUIRE(moving.result.exit_code == 0);
+    CHECK_THAT(moving.result.code, Catch::Contains("const int IQC_MAX_STEPS = 2048;"));
+    CompileOptions web;
+    web.target = Target::WebGL2;
+    Compiled slider = compile_path(write_temp("thin_slider.iq", scene("transform = \"\"\"\nS((s, 1, 1))\nwhere\ns ∈ [0.05, 1] "
+                                                                     "default = 1\n\"\"\"\n", "")), web);
+    INFO(slider.diagnostics);
+    REQUIRE(slider.result.exit_code == 0);
+    CHECK_THAT(slider.result.code, Catch::Contains("const int IQC_MAX_STEPS = 2048;"));
+    // At time 10.1 the moving box draws as the box scaled by its width then, 0.55 + 0.5 sin(10.1).
+    auto still = compile_text("thin_still.iq", scene(fmt::format("transform = \"S(({:.9f}, 1, 1))\"\n", 0.55 + 0.5 * std::sin(10.1)), ""));
+    REQUIRE(still.result.exit_code == 0);
+    render::Image m = render_code(moving.result.code, W, H, 10.1f), st = render_code(still.result.code, W, H);
+    INFO("moving box at 10.1 s against the still box: " << differing(m, st) << " pixels differ");
+    CHECK(differing(m, st) <= W * H / 200);
 }
 
 TEST_CASE("soft shadows of a scene a thousand times smaller darken only what hard shadows darken", "[scene][render][effects]") {

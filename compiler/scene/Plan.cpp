@@ -42,8 +42,9 @@ std::string join_values(const std::vector<double>& v) {
     return fmt::format("({})", fmt::join(v, ", "));
 }
 
-// Largest singular value of a 3×3 matrix (row-major): sqrt of the largest eigenvalue of LᵀL (Jacobi).
-double spectral_norm3(const std::vector<double>& L) {
+// Largest and smallest singular values of a 3×3 matrix (row-major): square roots of the extreme eigenvalues of
+// LᵀL (Jacobi).
+std::pair<double, double> singular_values3(const std::vector<double>& L) {
     double a[3][3];
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {
@@ -73,7 +74,16 @@ double spectral_norm3(const std::vector<double>& L) {
                 }
             }
     }
-    return std::sqrt(std::max({a[0][0], a[1][1], a[2][2], 0.0}));
+    return {std::sqrt(std::max({a[0][0], a[1][1], a[2][2], 0.0})), std::sqrt(std::max(std::min({a[0][0], a[1][1], a[2][2]}), 0.0))};
+}
+
+// Largest singular value of a 3×3 matrix (row-major).
+double spectral_norm3(const std::vector<double>& L) { return singular_values3(L).first; }
+
+// σ_max/σ_min of a 4×4 affine map's linear part (row-major), at most 10⁶ (a map through a singular moment).
+double condition_number(const std::vector<double>& w) {
+    auto [hi, lo] = singular_values3({w[0], w[1], w[2], w[4], w[5], w[6], w[8], w[9], w[10]});
+    return hi <= 1e6 * lo ? std::max(1.0, hi / lo) : 1e6;
 }
 
 bool uses_inputs(const ir::Module& m, int fn) {
@@ -217,15 +227,23 @@ struct Planner {
         // last row is taken to be (0, 0, 0, 1) and never read. It must be so at other moments and slider values
         // too: [1 0 0 0; 0 1 0 0; 0 0 1 0; time 0 0 1], affine at time 0 only, was accepted and drew as if time
         // were 0 (a new user's trial, stop 38). Checked at six moments, the sliders at their ends in turn.
+        // The same samples give the largest condition number the map reaches (the step cap's growth: a scale that
+        // thins with time, S((0.55 + 0.5 sin(time), 1, 1)), or with a slider, was sized at time 0 and at the
+        // slider's default, and its rays stopped short at other moments: a trial's funnel of sky at time 10.1).
+        // Moving maps are sampled over the first 32 seconds too, every 0.25 s (not a proof: a map can thin
+        // between samples or later; `max_steps` in [render] sets the cap outright).
         bool sliders = false;
         for (const auto& p : m->params) sliders |= p.bounded;
+        double sampled_cond = 1;
         if (plan.transform_uses_inputs || sliders) {
-            const double moments[] = {0.37, 1, 2.5, 10, 41.3, 117};
-            for (int k = 0; k < 6; ++k) {
+            std::vector<double> moments = {0.37, 1, 2.5, 10, 41.3, 117};
+            if (plan.transform_uses_inputs)
+                for (int q = 1; q <= 128; ++q) moments.push_back(0.25 * q);
+            for (int k = 0; k < int(moments.size()); ++k) {
                 ir::EvalInputs in;
-                in.time = moments[k];
-                in.mouse[0] = 0.13 + 0.15 * k;
-                in.mouse[1] = 0.91 - 0.15 * k;
+                in.time = moments[size_t(k)];
+                in.mouse[0] = 0.13 + 0.15 * (k % 6);
+                in.mouse[1] = 0.91 - 0.15 * (k % 6);
                 std::vector<ir::Value> at;
                 std::vector<std::string> where;
                 if (plan.transform_uses_inputs) where.push_back(fmt::format("time = {:g}, mouse = ({:g}, {:g})", in.time, in.mouse[0], in.mouse[1]));
@@ -244,6 +262,7 @@ struct Planner {
                 for (double x : w) finite &= std::isfinite(x);
                 if (!finite) continue;  // a singular moment (a scale through 0): the run time copes
                 if (!affine(w, fmt::format("{}", fmt::join(where, ", ")))) return false;
+                sampled_cond = std::max(sampled_cond, condition_number(w));
             }
         }
         // Invertible when the linear part L is: its condition number ‖L‖_F·‖L⁻¹‖_F, L⁻¹ = adj(L)/det(L) (cofactors),
@@ -283,7 +302,7 @@ struct Planner {
         double norm = spectral_norm3(plan.inv_linear);
         plan.scale = std::fabs(norm - 1) < 1e-9 ? 1.0 : 1.0 / norm;
         // ‖L⁻¹‖‖L‖, the spectral condition number: 1 for rotations and uniform scales, σ_max/σ_min for S((0.05, 1, 1)).
-        plan.step_shortening = std::max(1.0, norm * spectral_norm3({a, b, c, e, f, g, h, i, j}));
+        plan.step_shortening = std::max({1.0, norm * spectral_norm3({a, b, c, e, f, g, h, i, j}), sampled_cond});
         if (plan.step_shortening < 1 + 1e-9) plan.step_shortening = 1;
         // What the shader computes with — the inverse, its offset and the scale — must be float32 numbers: past
         // 3.4·10³⁸ they were clamped, below 1.2·10⁻³⁸ flushed to 0 or denormal (S((10⁶⁰, …)) drew everything
