@@ -40,6 +40,18 @@ TEST_CASE("help and version flags and usage errors", "[cli]") {
     CHECK(run_iqc("").exit_code == 2);
     CHECK(run_iqc("--no-such-flag x.md").exit_code == 2);
     CHECK(run_iqc("x.md --target nowhere").exit_code == 2);
+    // An empty file name (`-o "$OUT"` with OUT unset) is a usage error, not standard output.
+    auto ball = write_temp("usage_ball.iql", "shape\nD = ‖p‖ - 1\nwhere\np ∈ ℝ³\n");
+    for (const char* opt : {"-o ''", "--meta ''", "--depfile ''", "-o x.frag --meta ''"}) {
+        INFO(opt);
+        RunResult r = run_iqc(ball.string() + " " + opt);
+        CHECK(r.exit_code == 2);
+        CHECK(r.out.empty());
+        CHECK_THAT(r.err, Catch::Contains("an empty file name"));
+    }
+    RunResult png = run_iqc("render " + ball.string() + " -o ''");
+    CHECK(png.exit_code == 2);
+    CHECK_THAT(png.err, Catch::Contains("an empty file name"));
 }
 
 TEST_CASE("a successful compile writes the file and exits 0", "[cli]") {
@@ -370,7 +382,7 @@ TEST_CASE("iqc render draws a Shadertoy shader as it is", "[cli][render]") {
     CHECK(e.exit_code == 1);
     CHECK_THAT(e.err, Catch::Contains(bad.string() + ":3:11: error: `undeclared' undeclared\n"
                                       "  \tc = vec4(undeclared);\n"
-                                      "            ^~~~~~~~~~\n"));
+                                      "  \t         ^~~~~~~~~~\n"));  // (the caret's indent keeps the line's tab)
     CHECK_THAT(e.err, Catch::Contains(bad.string() + ":4:10: error: no function with name 'nope'\n"
                                       "      c += nope(c);\n"
                                       "           ^~~~\n"));

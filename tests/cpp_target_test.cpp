@@ -36,12 +36,12 @@ TEST_CASE("cpp target: headers of every example compile and hold the webgl2 shad
                             (i % 7) / 7.0, (i % 11) / 11.0, (i % 13) / 13.0, 0.3 + 0.01 * (i % 9), i % 70 - 35, i / 70 - 30);
     inputs.push_back(write_temp("cpp_many_members.iq", many));
     // A value below float's range (g++ -Werror stopped at `1e-50f`: "floating constant truncated to zero", a new
-    // user's trial), FLT_MAX as printed (3.4028235e38 rounds to it; it was refused), and four instances sharing a
+    // user's trial; a number written so is an error now, a product computed so is not), FLT_MAX as printed (3.4028235e38 rounds to it; it was refused), and four instances sharing a
     // shape with sequence parameters (their --meta read past the sequence: an entry per element now).
     inputs.push_back(write_temp("cpp_extreme_numbers.iq", "[modules]\nblob = \"\"\"\nshape\nD = ‖p‖ - r + 1e-30 a + 1e-30 b + "
                                                           "0.01(x_2,1 + w_1)\nwhere\np ∈ ℝ³\nr ∈ [0.05,0.5] default = 0.2\na ∈ ℝ\nb ∈ ℝ\n"
                                                           "x_i ∈ ℝ³ default = {(1, 0, 0), (0, 1, 0)}\nw_j ∈ ℝ default = {0.5, 0.25, 0.125}\n"
-                                                          "\"\"\"\n[[shapes]]\ntype = \"blob\"\nshape_params = { a = 1e-50, b = 3.4028235e38 }\n"
+                                                          "\"\"\"\n[[shapes]]\ntype = \"blob\"\nshape_params = { a = \"1e-30 * 1e-30\", b = 3.4028235e38 }\n"
                                                           "transform = \"T((-2, 0, 6))\"\n"
                                                           "[[shapes]]\ntype = \"blob\"\ntransform = \"T((-1, 0, 6))\"\n"
                                                           "[[shapes]]\ntype = \"blob\"\ntransform = \"T((0, 0, 6))\"\n"

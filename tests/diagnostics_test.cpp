@@ -141,6 +141,14 @@ TEST_CASE("a literal outside the 32-bit float range is a located error", "[diag]
     CHECK(ok.ok);
 }
 
+TEST_CASE("π cannot be declared or assigned", "[diag]") {
+    // A trial: `π = 3` (and `π ∈ ℝ`) were accepted, and every π after them was 3.
+    CHECK(errors_of("π = 3\ny = π\n") == "test.iql:1:1: error: 'π' is the constant 3.14159…: it cannot be assigned; choose another name\n"
+                                           "  π = 3\n  ^\n");
+    CHECK_THAT(errors_of("y = π x\nwhere\nπ ∈ ℝ\nx ∈ ℝ\n"),
+               Catch::Contains("test.iql:3:1: error: 'π' is the constant 3.14159…: it cannot be declared; choose another name"));
+}
+
 TEST_CASE("a recurrence's first element cannot read itself, the result or a later sequence", "[diag]") {
     // Found by the ir fuzzer (tests/fuzz/ir/first_element_reads_itself.iql): these lowered to a missing value,
     // an internal error (exit 3).
@@ -180,4 +188,10 @@ TEST_CASE("an error in a module written as a TOML string with escapes points at 
         INFO(r.diagnostics);
         CHECK(r.diagnostics.find(c.expected) != std::string::npos);
     }
+}
+
+TEST_CASE("the caret under a line indented with tabs keeps the tabs", "[diag]") {
+    // A trial: a module indented with tabs got its caret columns to the left of the name (spaces only, where a
+    // terminal widens each tab to its next stop).
+    CHECK(errors_of("y = x +\tzz\nwhere\nx ∈ ℝ\n").find("  y = x +\tzz\n         \t^") != std::string::npos);
 }

@@ -28,6 +28,17 @@ TEST_CASE("eval takes matrices, expressions and backticked names", "[eval]") {
     CHECK(r.out == "y = (-1, -1)\nz = 2.5707963267948966\n");
 }
 
+TEST_CASE("a backticked name with a subscript is that name subscripted, where the joined name is declared too", "[eval]") {
+    // A trial: with the sequence `ab`_i and the parameter `ab_2` both declared, `ab`_2 read ab_2 (10), not element 2
+    // of ab (2): the backticks say where the name ends. Without a sequence `ab`, `ab`_2 still names ab_2.
+    auto both = write_temp("backtick_sub.iql", "y = `ab`_2 + `ab_2`\nwhere\n`ab`_i ∈ ℝ default = {1, 2, 3}\n`ab_2` ∈ ℝ default = 10\n");
+    RunResult r = run_iqc("eval " + both.string());
+    INFO(r.err);
+    CHECK(r.out == "y = 12\n");
+    auto only = write_temp("backtick_sub2.iql", "y = `ab`_2\nwhere\n`ab_2` ∈ ℝ default = 10\n");
+    CHECK(run_iqc("eval " + only.string()).out == "y = 10\n");
+}
+
 TEST_CASE("eval picks a module of a document and prints the bare expression as ret", "[eval]") {
     auto f = write_temp("lib.iql", "sin from trigonometry\nsin(x) + 1\nwhere\nx ∈ ℝ\n");
     RunResult r = run_iqc("eval " + f.string() + " --set x=0");
@@ -203,6 +214,40 @@ TEST_CASE("a number outside float's range is one error: the declaration it is in
         for (size_t at = 0; (at = r.err.find("error:", at)) != std::string::npos; ++at) ++errors;
         CHECK(errors == 1);
     }
+}
+
+TEST_CASE("one range rule for numbers: a module's literal, a scene's number and a scene's string alike", "[eval]") {
+    // A trial: 3.4028235e38 (FLT_MAX as printed, which rounds to it) was a number in a scene but an error as a
+    // module's literal and as a scene string; 1e-50 was an error as a literal and as a string ("1e-50") but
+    // silently 0 as a scene number. A value fits where it rounds to a finite float and is 0 or not below the
+    // smallest normal float.
+    auto lit = [](const char* v) {
+        return run_iqc("eval " + write_temp("range_literal.iql", std::string("y = x + ") + v + "\nwhere\nx ∈ [0, " + v + "]\n").string() +
+                       " --set x=0");
+    };
+    CHECK(lit("3.4028235e38").exit_code == 0);
+    RunResult over = lit("3.5e38");
+    CHECK(over.exit_code == 1);
+    CHECK_THAT(over.err, Catch::Contains("range_literal.iql:1:9: error: the number 3.5e38 is outside the range of 32-bit floats"));
+    auto scene = [](const std::string& v) {
+        return run_iqc(write_temp("range_scene.iq", "[[shapes]]\ntype = \"sphere\"\nshape_params = { r = " + v + " }\n").string() +
+                       " -o " + (temp_dir() / "range_scene.frag").string());
+    };
+    for (const char* v : {"3.4028235e38", "\"3.4028235e38\""}) {
+        INFO(v);
+        RunResult r = scene(v);
+        CHECK(r.exit_code == 0);
+        CHECK_THAT(r.err, Catch::Contains("outside its slider bounds"));  // (a warning: the slider goes to 3)
+    }
+    RunResult tiny = scene("1e-50"), tiny_string = scene("\"1e-50\"");
+    CHECK(tiny.exit_code == 1);
+    CHECK_THAT(tiny.err, Catch::Contains("range_scene.iq:3:22: error: 'r' is 1e-50, below the smallest normal 32-bit float"));
+    CHECK(tiny_string.exit_code == 1);
+    CHECK_THAT(tiny_string.err, Catch::Contains("range_scene.iq:3:22: error: 'r' must be a number, an array, or a constant expression"));
+    CHECK_THAT(tiny_string.err, Catch::Contains("below the smallest normal 32-bit float"));
+    RunResult huge = scene("3.5e38");
+    CHECK(huge.exit_code == 1);
+    CHECK_THAT(huge.err, Catch::Contains("range_scene.iq:3:22: error: 'r' must be a finite number within the range of 32-bit floats"));
 }
 
 TEST_CASE("a sum over a long sequence is a loop: its values are the sum's, conditions, indices, nesting and "

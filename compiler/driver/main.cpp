@@ -464,7 +464,12 @@ static int run(int argc, char** argv) {
     bool time = false;
     app.add_option("input", input, "scene (.iq), document (.md) or shape module (.iql); with --target wgsl also a Shadertoy "
                                    "shader (.frag, .glsl: mainImage), translated as it is");
-    app.add_option("-o,--output", output, "where to write the shader (default: standard output)");
+    // A file name given empty (`-o "$OUT"` with OUT unset) is a usage error: it wrote to standard output as if
+    // -o were left out (a new user's trial).
+    const CLI::Validator file_name(
+        [](std::string& s) { return s.empty() ? std::string("an empty file name (leave the option out, or write - for standard output)") : std::string(); },
+        "FILE");
+    app.add_option("-o,--output", output, "where to write the shader (default: standard output; - too)")->check(file_name);
     app.add_option("--target", target,
                    "output kind: shadertoy (default: mainImage, parameters as constants), webgl2 (GLSL ES 3.00 with a "
                    "uniform per parameter), glsl330 (desktop core profile, uniforms), html (one offline page: the webgl2 "
@@ -480,11 +485,11 @@ static int run(int argc, char** argv) {
         ->check(CLI::IsMember({"shadertoy", "webgl2", "glsl330", "html", "cpp", "spirv", "hlsl", "wgsl", "threejs"}));
     std::string meta;
     app.add_option("--meta", meta, "also write a JSON description of every parameter (instance, module, role, "
-                                   "uniform or constant name, type, bounds, default, description)");
+                                   "uniform or constant name, type, bounds, default, description)")->check(file_name);
     std::string depfile;
     app.add_option("--depfile", depfile,
                    "also write a Makefile-syntax depfile: the outputs, then every file the compile read (the scene, "
-                   "included and looked-up modules), for Ninja's and Make's rebuilds (CMake: iqc_add_shader)");
+                   "included and looked-up modules), for Ninja's and Make's rebuilds (CMake: iqc_add_shader)")->check(file_name);
     bool quiet = false;
     app.add_flag("-q,--quiet", quiet, "print only diagnostics (no 'wrote' lines); outputs whose bytes did not change are "
                                       "never rewritten, quiet or not");
@@ -520,7 +525,7 @@ static int run(int argc, char** argv) {
     render->add_option("input", r_input, "scene (.iq), document (.md) or shape module (.iql); or a Shadertoy shader (.frag, .glsl: "
                                          "mainImage, as pasted into Shadertoy) to render as it is, e.g. one written by hand")
         ->required();
-    render->add_option("-o,--output", r_output, "the PNG to write (with --frames: numbered, out_0000.png, ...)")->required();
+    render->add_option("-o,--output", r_output, "the PNG to write (with --frames: numbered, out_0000.png, ...)")->required()->check(file_name);
     render->add_option("--size", r_size, "image size WxH (default 640x360; at most 4096x4096)");
     render->add_option("--time", r_time, "iTime in seconds (default 0)");
     render->add_option("--frames", r_frames, "render an animation of N frames")->check(CLI::Range(1, 100000));
@@ -544,9 +549,9 @@ static int run(int argc, char** argv) {
     int b_frames = 5;
     bench->add_option("input", b_input, "scene (.iq), document (.md) or shape module (.iql)")->required();
     bench->add_option("--size", b_size, "image size WxH (default 160x90; at most 1920x1080 pixels)");
-    bench->add_option("--csv", b_csv, "write the results as CSV");
+    bench->add_option("--csv", b_csv, "write the results as CSV")->check(file_name);
     bench->add_option("--plot", b_plot, "write an SVG plot of scene evaluations per pixel against depth error (log axes, the "
-                                        "Pareto front and its settings named)");
+                                        "Pareto front and its settings named)")->check(file_name);
     std::string b_replot;
     bench->add_option("--replot", b_replot, "plot the results of an earlier --csv instead of measuring (with --plot)");
     bench->add_option("--frames", b_frames, "timed frames per setting, after a warm-up (default 5)")->check(CLI::Range(1, 1000));

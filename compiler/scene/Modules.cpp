@@ -174,7 +174,7 @@ std::optional<ir::Value> ModuleLibrary::evaluate_constant(const std::string& nam
                         fmt::format("the value of '{}' is not a finite number ({})", name, ir::format_value(v)));
                 return std::nullopt;
             }
-            if (!std::isfinite(static_cast<float>(x))) {  // like a literal: shaders compute in float (FLT_MAX as printed rounds to it)
+            if (!limits::fits_float(x)) {  // like a literal: shaders compute in float (FLT_MAX as printed rounds to it)
                 d.error({f, 0, uint32_t(std::max<size_t>(1, text.size()))},
                         fmt::format("the value of '{}' is outside the range of 32-bit floats (at most about 3.4e38), which "
                                     "shaders compute in ({})", name, ir::format_value(v)));
@@ -297,7 +297,7 @@ std::unique_ptr<CheckedModule> ModuleLibrary::parse_check(const ModuleSource& sr
                     else if (!ok && !v.empty())
                         d_.error(vat, fmt::format("'# lipschitz: K' needs a decimal number K ≥ 1 (how much D can change per unit "
                                                   "of distance, e.g. 2.5 or 1e3), not '{}'", escape_controls(std::string(v))));
-                    else if (!(k >= 1) || !(k <= limits::kFloatMax))
+                    else if (!(k >= 1) || !limits::fits_float(k))
                         d_.error(vat, "'# lipschitz: K' needs a number K ≥ 1 (how much D can change per unit of distance), within "
                                       "32-bit floats (at most about 3.4e38)");
                     else if (pragma(at, "lipschitz"))

@@ -220,10 +220,19 @@ private:
         // nearest double, as a literal would be (it was silently 0).
         double v = n.is_integer() ? double(*n.value<int64_t>()) : n.value<double>().value_or(std::nan(""));
         // Within range where it rounds to a finite float (3.4028235e38, FLT_MAX as printed, rounds down to it).
-        if (std::isfinite(v) && std::isfinite(static_cast<float>(v))) return v;
-        d_.error(span_of(n), fmt::format("'{}' must be a finite number within the range of 32-bit floats (about ±3.4e38), "
-                                         "not {}", key, v));
-        return std::nullopt;
+        if (!limits::fits_float(v)) {
+            d_.error(span_of(n), fmt::format("'{}' must be a finite number within the range of 32-bit floats (about ±3.4e38), "
+                                             "not {}", key, v));
+            return std::nullopt;
+        }
+        // Below the smallest normal float a shader has 0 (or a denormal a GPU may flush): the rule of a literal
+        // in a module, and of the same number written as a string ("1e-50").
+        if (limits::below_normal_float(v)) {
+            d_.error(span_of(n), fmt::format("'{}' is {}, below the smallest normal 32-bit float (about 1.2e-38), which shaders "
+                                             "compute in: it would be 0 there", key, v));
+            return std::nullopt;
+        }
+        return v;
     }
     std::optional<std::vector<double>> get_numbers(const toml::node& n, const std::string& key) {
         if (n.is_number()) {

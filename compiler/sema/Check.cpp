@@ -143,7 +143,7 @@ using limits::kFloatMax;
 std::string unrepresentable(const std::vector<double>& v, bool integer) {
     for (double x : v) {
         if (std::isnan(x)) return "is not a number (0/0, √-1, …)";
-        if (!std::isfinite(x) || std::fabs(x) > kFloatMax)
+        if (!limits::fits_float(x))
             return fmt::format("is {}, outside the range of 32-bit floats (at most about 3.4e38)", x);
         if (integer && (x != std::floor(x) || !limits::is_int32(x)))
             return fmt::format("is {}, not a 32-bit integer (a shader's int: -2147483648 … 2147483647)", x);
@@ -389,6 +389,10 @@ void Checker::collect_declarations() {
     for (auto& decl : m_.ast.decls) {
         for (size_t ni = 0; ni < decl.names.size(); ++ni) {
             auto& [name, span] = decl.names[ni];
+            if (name == "π") {  // (a trial: `π ∈ ℝ` and `π = 3` were accepted, and every π after them was 3)
+                d_.error(span, "'π' is the constant 3.14159…: it cannot be declared; choose another name");
+                continue;
+            }
             if (decl_spans_.count(name)) {
                 auto& e = d_.error(span, fmt::format("'{}' is declared twice", name));
                 Diagnostics::note(e, decl_spans_[name].second, "first declared here");
@@ -425,8 +429,7 @@ void Checker::collect_declarations() {
                     auto lo = constant(*iv.lo), hi = constant(*iv.hi);
                     if (!lo || lo->size() != 1) { d_.error(iv.lo->span, "an interval bound must be a constant number"); continue; }
                     if (!hi || hi->size() != 1) { d_.error(iv.hi->span, "an interval bound must be a constant number"); continue; }
-                    if (!std::isfinite((*lo)[0]) || !std::isfinite((*hi)[0]) || std::fabs((*lo)[0]) > kFloatMax ||
-                        std::fabs((*hi)[0]) > kFloatMax) {
+                    if (!limits::fits_float((*lo)[0]) || !limits::fits_float((*hi)[0])) {
                         d_.error(iv.span, fmt::format("an interval bound must be a finite 32-bit float, not [{}, {}] (leave "
                                                       "'{}' unbounded: '{} ∈ ℝ')", (*lo)[0], (*hi)[0], name, name));
                         continue;
@@ -618,6 +621,10 @@ void Checker::collect_statements() {
     for (const auto* r : recs) defined.emplace(r->name, r->name_span);
     for (const auto& s : m_.ast.stmts) {
         if (s.kind == StmtKind::Assign || s.kind == StmtKind::Function) {
+            if (s.name == "π") {
+                d_.error(s.name_span, "'π' is the constant 3.14159…: it cannot be assigned; choose another name");
+                continue;
+            }
             if (auto it = defined.find(s.name); it != defined.end()) {
                 auto& e = d_.error(s.name_span, decl_spans_.count(s.name)
                                                     ? fmt::format("'{}' is a declared parameter and cannot be assigned", s.name)

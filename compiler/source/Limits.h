@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string_view>
@@ -44,8 +45,14 @@ constexpr size_t kMaxFunctionInstructions = 1'000'000;
 // The largest 32-bit float, and the range of a 32-bit int: the numbers a shader computes with. Values outside
 // them are located errors where they are written (literals, defaults, overrides, --set).
 constexpr double kFloatMax = 3.4028234663852886e38;
+// Whether x is a value a shader's 32-bit float holds: finite once rounded to float. 3.4028235e38 (FLT_MAX as
+// printed) rounds down to FLT_MAX and fits; 3.5e38 does not. The one range rule of literals, scene values,
+// constant expressions and bounds.
+inline bool fits_float(double x) { return std::isfinite(static_cast<float>(x)); }
 // The smallest normal 32-bit float: below it GPUs may flush to 0 (denormals are optional in GLSL ES).
 constexpr double kFloatMinNormal = 1.1754943508222875e-38;
+// Whether x is nonzero but below the smallest normal float (what a shader may flush to 0).
+inline bool below_normal_float(double x) { return x != 0 && std::fabs(x) < kFloatMinNormal; }
 inline bool is_int32(double x) { return x >= -2147483648.0 && x <= 2147483647.0; }
 
 // A size as counted (a literal such as `3` in ℝ^3, a sum of block heights, a concatenation's length):

@@ -343,7 +343,18 @@ std::string Diagnostics::render(const Diagnostic& given) const {
         if (e.line != b.line) len = std::max<size_t>(1, line_width > start ? line_width - start : 1);
         std::string marks(len, '~');
         marks[0] = '^';
-        out += fmt::format("  {}{}\n", std::string(start, ' '), marks);
+        // The caret's indent keeps the line's tabs (a terminal widens a tab to its next stop in both lines alike):
+        // with spaces only, a caret under a line indented by tabs pointed columns to the left of its place.
+        std::string indent = prefix.empty() ? "" : " ";
+        for (size_t i = 0; indent.size() < start && i < line.size();) {
+            const size_t from = i;
+            char32_t cp = utf8::decode(line, i);
+            if (i == from) ++i;  // (never stalls)
+            if (utf8::is_combining(cp)) continue;
+            indent += cp == U'\t' ? '\t' : ' ';
+        }
+        indent.resize(std::max(indent.size(), start), ' ');
+        out += fmt::format("  {}{}\n", indent, marks);
     }
     for (const auto& n : d.notes) out += render(n);
     return out;

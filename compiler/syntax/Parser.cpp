@@ -264,7 +264,7 @@ private:
         double v = std::strtod(t.text.c_str(), nullptr);
         // Both range errors are reported without abandoning the statement, so that what it declares stays declared
         // (a parameter's default of 1e-46 was followed by "undefined name 'a'" at every use).
-        if (!(std::fabs(v) <= double(std::numeric_limits<float>::max()))) {
+        if (!limits::fits_float(v)) {
             diags_.error(t.span, fmt::format("the number {} is outside the range of 32-bit floats (at most about 3.4e38), "
                                              "which shaders compute in", t.text));
             return std::copysign(double(std::numeric_limits<float>::max()), v);
@@ -393,7 +393,10 @@ std::pair<std::string, Span> Parser::parse_name() {
     advance();
     if (at(Tok::Underscore) && !cur().space_before) {
         const Token& sub = peek_raw(1);
-        if ((is_name_token(sub) || sub.kind == Tok::Number) && !sub.space_before && known_.count(n + "_" + sub.text)) {
+        // (A name in backticks that is declared itself, `ab`_2 with `ab`_i a sequence, is subscripted even where
+        // `ab_2` is declared too: the backticks say where the name ends. A trial's `ab`_2 read ab_2.)
+        bool delimited = t.kind == Tok::Backtick && known_.count(n);
+        if ((is_name_token(sub) || sub.kind == Tok::Number) && !sub.space_before && known_.count(n + "_" + sub.text) && !delimited) {
             advance();
             n += "_" + sub.text;
             s = Span::join(s, advance().span);
