@@ -109,3 +109,18 @@ int main(int, char** argv) {
     CHECK((hostile.find("x)iqc\\042 ; int injected") != std::string::npos));
     CHECK((hostile.find("\n    R\"iqc0(#version 300 es") != std::string::npos));
 }
+
+TEST_CASE("cpp target: the namespace is a name C++ does not reserve", "[cpp-target]") {
+    // A trial: `a__b.iq` and `_x.iq` gave namespaces iqc_a__b and iqc__x (C++ reserves every identifier with a
+    // double underscore). Runs of '_' are one, and none ends the name.
+    for (auto [stem, ns] : {std::pair<const char*, const char*>{"a__b", "iqc_a_b"}, {"_x", "iqc_x"}, {"odd--name_", "iqc_odd_name"}}) {
+        INFO(stem);
+        auto in = write_temp(std::string(stem) + ".iq", "[[shapes]]\ntype = \"sphere\"\n");
+        auto out = temp_dir() / (std::string(stem) + ".hpp");
+        RunResult r = run_iqc(in.string() + " --target cpp -o " + out.string());
+        REQUIRE(r.exit_code == 0);
+        std::string text = read_text(out);
+        CHECK_THAT(text, Catch::Contains(std::string("\nnamespace ") + ns + " {\n"));
+        CHECK_THAT(text, Catch::Contains(std::string("}  // namespace ") + ns + "\n"));
+    }
+}

@@ -48,10 +48,18 @@ std::string number(double x) {
     return s + "f";
 }
 
+// The namespace: iqc_ and the stem, other characters as '_', runs of '_' as one (C++ reserves every identifier
+// with a double underscore: a trial's `a__b.iq` and `_x.iq` gave iqc_a__b and iqc__x), no '_' at the end.
 std::string identifier(std::string_view stem) {
     std::string id = "iqc_";
-    for (char c : stem) id += (std::isalnum(static_cast<unsigned char>(c)) ? c : '_');
-    return id.size() > 64 ? id.substr(0, 64) : id;
+    for (char c : stem) {
+        char k = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+        if (k == '_' && id.back() == '_') continue;
+        id += k;
+    }
+    if (id.size() > 64) id.resize(64);
+    while (id.size() > 4 && id.back() == '_') id.pop_back();
+    return id;
 }
 
 // The shader as adjacent raw string literals with a delimiter that occurs nowhere in it.
