@@ -481,6 +481,18 @@ TEST_CASE("wgsl: a Shadertoy shader (.frag) translates to WGSL: its errors are l
     CHECK(j["inputs_block"]["members"][5]["name"] == "iMouse");
     CHECK(j["inputs_block"]["members"][5]["offset"] == 32);
     CHECK(tint_errors({out}).empty());
+    // A shader that declares the wrapper's names itself (a trial: `vec3 iqc_fragColor` was "redefinition", exit 1):
+    // the wrapper takes others, and --meta names the block as declared.
+    auto clash = write_temp("clash.frag", "vec3 iqc_fragColor = vec3(1.0, 0.5, 0.2);\nstruct ShadertoyInputs { float x; };\n"
+                                          "float iqc_color = 0.5;\nvoid mainImage(out vec4 fragColor, in vec2 fragCoord) {\n"
+                                          "    ShadertoyInputs s; s.x = iqc_color;\n    fragColor = vec4(iqc_fragColor * s.x, 1.0);\n}\n");
+    auto clash_out = temp_dir() / "clash.wgsl", clash_meta = temp_dir() / "clash.json";
+    RunResult c = run_iqc(clash.string() + " --target wgsl -o " + clash_out.string() + " --meta " + clash_meta.string());
+    INFO(c.err);
+    REQUIRE(c.exit_code == 0);
+    CHECK(nlohmann::json::parse(read_text(clash_meta))["inputs_block"]["name"] == "ShadertoyInputs_2");
+    CHECK_THAT(read_text(clash_out), Catch::Contains("Inputs: ShadertoyInputs_2 (@group(0) @binding(0)"));
+    CHECK(tint_errors({clash_out}).empty());
     // a GLSL error: the file's own line, the message, the line shown; exit 1, nothing written
     auto bad = write_temp("bad.frag", "void mainImage(out vec4 c, in vec2 p) {\n    c = vec4(undeclared_thing);\n}\n");
     fs::remove(temp_dir() / "bad.wgsl");

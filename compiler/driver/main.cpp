@@ -825,7 +825,7 @@ static int run(int argc, char** argv) {
             std::string name = std::filesystem::path(input).filename().string();
             std::string text = "// " + iqc::glsl::comment_text(name) + ": a Shadertoy shader translated to WGSL by iqc " IQC_VERSION
                                " (Vulkan GLSL, SPIR-V, WGSL).\n// Entry points: vs_main (a full-screen triangle, 3 vertices) "
-                               "and fs_main. Inputs: ShadertoyInputs (@group(0) @binding(0), std140: iResolution 0, iTime 12, "
+                               "and fs_main. Inputs: " + w.inputs_block + " (@group(0) @binding(0), std140: iResolution 0, iTime 12, "
                                "iTimeDelta 16, iFrameRate 20, iFrame 24, iMouse 32, iDate 48; 64 bytes).\n" + w.text;
             nlohmann::ordered_json j;
             j["title"] = name;
@@ -833,7 +833,7 @@ static int run(int argc, char** argv) {
             nlohmann::ordered_json members = nlohmann::ordered_json::array();
             for (const auto& in : iqc::glsl::kShadertoyInputs)
                 members.push_back({{"name", in.name}, {"type", in.type}, {"offset", in.offset}});
-            j["inputs_block"] = {{"name", "ShadertoyInputs"}, {"set", 0}, {"binding", 0},
+            j["inputs_block"] = {{"name", w.inputs_block}, {"set", 0}, {"binding", 0},
                                  {"bytes", iqc::glsl::kShadertoyInputsBytes}, {"members", members}};
             j["blocks"] = nlohmann::ordered_json::array();
             j["texture"] = nullptr;

@@ -10,6 +10,7 @@
 #include <spirv_cross/spirv.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -1642,19 +1643,35 @@ WgslResult spirv_to_wgsl(const std::vector<uint32_t>& words) {
     return r;
 }
 
+// `base`, or base_2, base_3, ...: the first that `code` does not contain as a whole word (a name the wrapper
+// declares must not be one the shader declares: a trial's `vec3 iqc_fragColor` was "redefinition", exit 1).
+static std::string unused_name(const std::string& code, const std::string& base) {
+    auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+    auto used = [&](const std::string& n) {
+        for (size_t at = code.find(n); at != std::string::npos; at = code.find(n, at + 1))
+            if ((at == 0 || !word(code[at - 1])) && (at + n.size() >= code.size() || !word(code[at + n.size()]))) return true;
+        return false;
+    };
+    std::string n = base;
+    for (int k = 2; used(n); ++k) n = base + "_" + std::to_string(k);
+    return n;
+}
+
 ShadertoyWgsl shadertoy_to_wgsl(const std::string& code) {
     ShadertoyWgsl r;
+    r.inputs_block = unused_name(code, "ShadertoyInputs");
+    const std::string out = unused_name(code, "iqc_fragColor"), colour = unused_name(code, "iqc_color");
     std::string src =
         "#version 450\n"
-        "layout(std140, set = 0, binding = 0) uniform ShadertoyInputs {\n"
+        "layout(std140, set = 0, binding = 0) uniform " + r.inputs_block + " {\n"
         "    vec3 iResolution; float iTime; float iTimeDelta; float iFrameRate; int iFrame; vec4 iMouse; vec4 iDate;\n"
         "};\n"
-        "layout(location = 0) out vec4 iqc_fragColor;\n"
+        "layout(location = 0) out vec4 " + out + ";\n"
         "#line 1\n" + code +
         "\nvoid main() {\n"
-        "    vec4 color = vec4(0.0, 0.0, 0.0, 1.0);\n"
-        "    mainImage(color, vec2(gl_FragCoord.x, iResolution.y - gl_FragCoord.y));\n"
-        "    iqc_fragColor = vec4(color.rgb, 1.0);\n"
+        "    vec4 " + colour + " = vec4(0.0, 0.0, 0.0, 1.0);\n"
+        "    mainImage(" + colour + ", vec2(gl_FragCoord.x, iResolution.y - gl_FragCoord.y));\n"
+        "    " + out + " = vec4(" + colour + ".rgb, 1.0);\n"
         "}\n";
     SpirvResult spv = compile_vulkan_fragment(src);
     if (!spv.ok) {

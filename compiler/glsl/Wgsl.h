@@ -44,6 +44,9 @@ struct ShadertoyWgsl {
     bool user_error = false;
     std::string log;
     std::string text;
+    // The inputs block's name: ShadertoyInputs, or ShadertoyInputs_2, ... where the shader uses that name itself
+    // (so do the wrapper's output, iqc_fragColor, and its local: never a name the shader declares).
+    std::string inputs_block = "ShadertoyInputs";
 };
 ShadertoyWgsl shadertoy_to_wgsl(const std::string& code);
 
