@@ -195,3 +195,10 @@ TEST_CASE("the caret under a line indented with tabs keeps the tabs", "[diag]") 
     // terminal widens each tab to its next stop).
     CHECK(errors_of("y = x +\tzz\nwhere\nx ∈ ℝ\n").find("  y = x +\tzz\n         \t^") != std::string::npos);
 }
+
+TEST_CASE("a declaration with a subscript digit says how to name the parameter", "[diag]") {
+    // A trial: `x₁ ∈ ℝ` got "expected '∈' in the declaration, found subscript" (x₁ is component 1 of x).
+    CHECK_THAT(errors_of("y = x_1\nwhere\nx₁ ∈ ℝ default = 2\n"),
+               Catch::Contains("test.iql:3:1: error: 'x₁' is a component of x, not a name: to declare a parameter named x_1, "
+                               "write x_1 (and use it as x_1)\n  x₁ ∈ ℝ default = 2\n  ^~\n"));
+}

@@ -647,6 +647,16 @@ Decl Parser::parse_decl() {
         } else if (at(Tok::Sub) && !cur().space_before && !std::isdigit(static_cast<unsigned char>(cur().text[0]))) {
             index = cur().text;
             name.second = Span::join(name.second, advance().span);
+        } else if (at(Tok::Sub) && !cur().space_before) {
+            // x₁ ∈ ℝ: a subscript digit is a component of x, not part of a name (a trial got "expected '∈' ...,
+            // found subscript" and "undefined name 'x'" at each use). Declared as x_1, with the spelling to use.
+            Span sub = cur().span;
+            const std::string digits = cur().text;
+            diags_.error(Span::join(name.second, sub),
+                         fmt::format("'{}{}' is a component of {}, not a name: to declare a parameter named {}_{}, write {}_{} (and "
+                                     "use it as {}_{})", name.first, sm_.slice(sub), name.first, name.first, digits, name.first,
+                                     digits, name.first, digits));
+            throw Bail{};
         }
         d.names.push_back(name);
         d.indices.push_back(index);
