@@ -582,6 +582,22 @@ TEST_CASE("the default step cap grows by the factor steps are shortened by: a bo
     CHECK(differing(m, st) <= W * H / 200);
 }
 
+TEST_CASE("fixed steps divide the reach by the step budget as set, not as grown for shortened steps", "[scene][march]") {
+    // A trial: the grown cap (427 for S((0.3, 1, 1))) made `fixed`'s default step 3.3x shorter, and its cost per ray
+    // 3.3x higher, though a fixed march takes no step by a distance. The step is the box's diagonal over 128.
+    Compiled c = compile_text("fixed_scaled.iq", "[render]\nmarch = \"fixed\"\n[[shapes]]\ntype = \"box\"\ntransform = \"S((0.3, 1, 1))\"\n");
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.result.code, Catch::Contains("const int IQC_MAX_STEPS = 427;"));  // (shadows are sphere-traced: grown)
+    std::smatch lo, hi, step;
+    const std::string& code = c.result.code;
+    REQUIRE(std::regex_search(code, lo, std::regex(R"(IQC_BOX_LO = vec3\(([-0-9.e]+), ([-0-9.e]+), ([-0-9.e]+)\))")));
+    REQUIRE(std::regex_search(code, hi, std::regex(R"(IQC_BOX_HI = vec3\(([-0-9.e]+), ([-0-9.e]+), ([-0-9.e]+)\))")));
+    REQUIRE(std::regex_search(code, step, std::regex(R"(IQC_FIXED_STEP = ([0-9.e-]+);)")));
+    double d2 = 0;
+    for (int k = 1; k <= 3; ++k) d2 += std::pow(std::stod(hi[k]) - std::stod(lo[k]), 2);
+    CHECK(std::stod(step[1]) == Approx(std::sqrt(d2) / 128).epsilon(1e-5));
+}
+
 TEST_CASE("soft shadows of a scene a thousand times smaller darken only what hard shadows darken", "[scene][render][effects]") {
     // A new user's trial: the penumbra's h / t was read at t ≥ 1e-4 (an absolute floor) while a scene a thousandth
     // of the size, with hit 1e-7, samples at t < 1e-4: every lit surface darkened (the floor 169 -> 70 of 255).

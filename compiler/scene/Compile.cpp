@@ -351,6 +351,7 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
     // lost its top; dotted sky along a terrain's ridges). The default grows by F (at most 16×); a max_steps the
     // scene sets is kept as it is (the hard cases set theirs and agree with the double-precision reference).
     double shortening = std::min(kMaxStepGrowth, step_shortening_);
+    const int budget_steps = max_steps;  // before the growth: what `fixed`'s default step divides the reach by
     std::string max_steps_doc;
     if (!opts_.max_steps && !render.max_steps_span.valid() && shortening > 1.05) {
         max_steps_doc = fmt::format("  // max_steps {} × {:.3g}: steps are up to that much shorter than the distance to a "
@@ -390,7 +391,10 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         }
         if (closed) fixed_reach = std::min(fixed_reach, std::sqrt(d2));
     }
-    V["FIXED_STEP"] = glsl::float_literal(render.step > 0 ? render.step : fixed_reach / max_steps);
+    // (Over the step budget as the scene gives it, not as grown for shortened steps: `fixed` takes no step by a
+    // distance, and 16x the samples per ray on a scene with a thin scale bought nothing; its loop, and the sphere-
+    // traced shadows', keep the grown cap.)
+    V["FIXED_STEP"] = glsl::float_literal(render.step > 0 ? render.step : fixed_reach / budget_steps);
     // A default step longer than the thinnest instance can take a ray over it: a wall 0.2 thick drew nothing
     // with steps of 0.47 (max_dist 60 over 128 steps; a trial's finding, stop 44). Steps from each ray's own way
     // through the box were tried (stop 45): thin walls in open boxes were drawn, but every ray that missed took
