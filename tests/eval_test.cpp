@@ -199,6 +199,13 @@ TEST_CASE("eval means what the shader computes: guarded values, not NaN", "[eval
     CHECK(r.out == "y = 0\n");  // acos(clamp(1.5, -1, 1)), as the emitted GLSL
     CHECK_THAT(r.err, Catch::Contains("acos.iql:2:1: warning: acos of a value outside [-1, 1]: with the parameters' bounds it "
                                       "ranges over [0, 2]"));
+    // ℤ arithmetic wraps as a shader's 32-bit int does (a trial: k·k at k = 100,000 was 10¹⁰ in eval, 1,410,065,408
+    // in the shader: 10¹⁰ mod 2³²); −k is a real number (as in the shader: -float(k)), so it does not wrap.
+    auto ints = write_temp("int_wrap.iql", "y = k k\nz = -k\nwhere\nk ∈ ℤ\n");
+    RunResult w = run_iqc("eval " + ints.string() + " --set k=100000");
+    INFO(w.err);
+    CHECK(w.out == fmt::format("y = {}\nz = -100000\n", int64_t(10000000000LL % 4294967296LL)));
+    CHECK(run_iqc("eval " + ints.string() + " --set k=-2147483648").out == "y = 0\nz = 2147483648\n");
 }
 
 TEST_CASE("a number outside float's range is one error: the declaration it is in stays declared", "[eval]") {
