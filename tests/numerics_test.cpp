@@ -188,6 +188,39 @@ TEST_CASE("render --stats counts the rays that met a NaN or infinite distance", 
     CHECK(stat(good.out, "nan_distance_pixels") == 0);
 }
 
+TEST_CASE("a smooth union of many points, -k log of a sum of exponentials, meets no NaN distance on any target",
+          "[numerics][render][stats]") {
+    // A new user's trial: -k log ∑_i e^(-(‖p - x_i‖ - r)/k) over 17 points met 0/0 at every pixel (the stable pass
+    // rewrote sums of at most 16 terms), and over 32 or more the ∑ is a loop, which it did not rewrite at all. Now
+    // both are m + log ∑ e^(x_i - m), the loop as two loops.
+    auto stat = [](const std::string& out, const std::string& key) {
+        size_t at = out.find(key + ": ");
+        REQUIRE(at != std::string::npos);
+        return std::stod(out.substr(at + key.size() + 2));
+    };
+    for (int n : {17, 40, 300}) {
+        std::string points;
+        for (int k = 0; k < n; ++k) {
+            double a = 2 * M_PI * k / n;
+            points += fmt::format("{}({:.4f}, {:.4f}, {:.4f})", k ? ", " : "", 1.2 * std::cos(a), 0.4 * std::sin(3 * a), 1.2 * std::sin(a));
+        }
+        auto path = write_temp(fmt::format("lse_{}.iq", n),
+                               "[modules]\nblob = \"\"\"\nshape\nD = -k log(∑_i exp(-(‖p - x_i‖ - r)/k))\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ "
+                               "default = {" + points + "}\nk ∈ [0.01,0.5] default = 0.1\nr ∈ [0.05,1] default = 0.25\n\"\"\"\n"
+                               "[camera]\nposition = [0, 4, -11]\nfov = 25\ntarget = [0, 0, 0]\n[[shapes]]\ntype = \"blob\"\n");
+        for (const char* target : {"shadertoy", "webgl2"}) {
+            INFO(n << " points, " << target);
+            RunResult r = run_iqc("render " + path.string() + " -o " + (temp_dir() / "lse.png").string() + " --size 32x18 --stats --target " + target);
+            INFO(r.err);
+            REQUIRE(r.exit_code == 0);
+            CHECK(stat(r.out, "nan_distance_pixels") == 0);
+            CHECK(stat(r.out, "nan_pixels") == 0);
+        }
+        RunResult ir = run_iqc(path.string() + " --target webgl2 --dump-ir -o /dev/null");
+        CHECK_THAT(ir.err, Catch::Contains("; stable: log-sum-exp in blob"));
+    }
+}
+
 TEST_CASE("10,000 units from the origin looks like the origin", "[numerics][render][far]") {
     const int W = 160, H = 90;
     auto colour = [&](const char* name) {

@@ -1,13 +1,19 @@
 #include "ir/passes/Stable.h"
 
 #include "ir/Builder.h"
+
+#include <map>
+#include <optional>
 #include "sema/Builtins.h"
 
 namespace iqc::ir {
 
 namespace {
 
-constexpr size_t kMaxTerms = 16;  // a longer sum is left as written (and so is its cost)
+// A longer unrolled sum is left as written. (A ∑ over 32 or more sequence elements is a loop on targets with
+// uniforms, over 256 on Shadertoy: ir/Lower.cpp; a loop of exponentials is rewritten as loops, below. A trial's
+// smooth union of 17 points, -k log ∑ e^(-d_i/k), was 0/0 far from the points when the limit was 16.)
+constexpr size_t kMaxTerms = 256;
 
 bool is_builtin(const Instr& in, const char* name) {
     return in.op == Op::Builtin && std::string_view(builtin(in.aux).name) == name;
@@ -28,10 +34,85 @@ bool sum_terms(const std::vector<Instr>& body, ValueId v, std::vector<ValueId>& 
     return out.size() <= kMaxTerms;
 }
 
+// A rolled ∑ of exponentials (a Loop whose body adds e^x to its one state, x not reading the state): x's value in
+// the body, else none.
+std::optional<ValueId> rolled_exp_sum(const Function& body) {
+    if (body.outputs.size() != 1 || body.params.size() < 2) return std::nullopt;
+    const Instr& out = body.body[body.outputs[0].second];
+    if (out.op != Op::Add || !out.type.is_scalar()) return std::nullopt;
+    auto is_state = [&](ValueId v) { return body.body[v].op == Op::Param && body.body[v].aux == 1; };
+    ValueId e = is_state(out.args[0]) ? out.args[1] : is_state(out.args[1]) ? out.args[0] : ValueId(-1);
+    if (e == ValueId(-1) || !is_builtin(body.body[e], "exp")) return std::nullopt;
+    std::vector<char> reads(body.body.size(), 0);
+    for (size_t i = 0; i < body.body.size(); ++i) {
+        reads[i] = is_state(ValueId(i));
+        for (ValueId a : body.body[i].args) reads[i] |= reads[a];
+    }
+    ValueId x = body.body[e].args[0];
+    if (reads[x]) return std::nullopt;
+    return x;
+}
+
+// The bodies of the two loops that replace a rolled log-sum-exp: the running maximum of x, and the sum of
+// e^(x − hi) with hi a capture (the last parameter).
+std::pair<Function, Function> split_exp_sum(const Module& m, const Function& body, ValueId x) {
+    Function hi = body, shifted = body;
+    hi.name += ".max";
+    hi.glsl_name = hi.name;
+    {
+        Builder b(m, hi);
+        ValueId state = ValueId(-1);
+        for (size_t i = 0; i < hi.body.size(); ++i)
+            if (hi.body[i].op == Op::Param && hi.body[i].aux == 1) state = ValueId(i);
+        ValueId v = b.builtin("max", {state, x});
+        hi.outputs = {{"hi", v}};
+        hi.result = v;
+    }
+    shifted.name += ".shifted";
+    shifted.glsl_name = shifted.name;
+    {
+        Builder b(m, shifted);
+        ValueId state = ValueId(-1);
+        for (size_t i = 0; i < shifted.body.size(); ++i)
+            if (shifted.body[i].op == Op::Param && shifted.body[i].aux == 1) state = ValueId(i);
+        ValueId h = b.param("hi", Type::scalar());
+        ValueId v = b.op(Op::Add, {state, b.builtin("exp", {b.op(Op::Sub, {x, h})})});
+        shifted.outputs = {{"sum", v}};
+        shifted.result = v;
+    }
+    return {std::move(hi), std::move(shifted)};
+}
+
 }  // namespace
 
 std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
     std::vector<StableRewrite> fired;
+    // Rolled sums of exponentials under a log: their two replacement bodies, made first (functions are added
+    // to the module here, not while a function is being rebuilt), by the original body's index.
+    std::map<int, std::pair<int, int>> split;
+    {
+        std::vector<std::pair<int, ValueId>> found;
+        for (const Function& f : m.functions)
+            for (const Instr& in : f.body) {
+                if (!in.type.is_scalar() || !(is_builtin(in, "log") || is_builtin(in, "ln"))) continue;
+                const Instr& a = f.body[in.args[0]];
+                if (a.op != Op::Member || a.aux != 0 || f.body[a.args[0]].op != Op::Loop) continue;
+                const Instr& loop = f.body[a.args[0]];
+                if (split.count(loop.aux) || loop.args.size() < 2) continue;
+                const Instr& init = f.body[loop.args[1]];
+                if (init.op != Op::Const || init.data.size() != 1 || init.data[0] != 0) continue;
+                if (auto x = rolled_exp_sum(m.functions[size_t(loop.aux)])) {
+                    split[loop.aux] = {-1, -1};
+                    found.push_back({loop.aux, *x});
+                }
+            }
+        for (auto [body, x] : found) {
+            auto [hi, shifted] = split_exp_sum(m, m.functions[size_t(body)], x);
+            m.functions.push_back(std::move(hi));
+            m.functions.push_back(std::move(shifted));
+            split[body] = {int(m.functions.size()) - 2, int(m.functions.size()) - 1};
+        }
+    }
     for (Function& f : m.functions) {
         std::vector<Instr> old = std::move(f.body);
         f.body.clear();
@@ -42,7 +123,36 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
             const Instr& in = old[i];
             ValueId made = ValueId(-1);
             std::string what;
-            if (in.type.is_scalar() && (is_builtin(in, "log") || is_builtin(in, "ln"))) {
+            const Instr* member = in.args.empty() ? nullptr : &old[in.args[0]];
+            const bool rolled = in.type.is_scalar() && (is_builtin(in, "log") || is_builtin(in, "ln")) && member->op == Op::Member &&
+                                member->aux == 0 && old[member->args[0]].op == Op::Loop && split.count(old[member->args[0]].aux) &&
+                                split.at(old[member->args[0]].aux).first >= 0 && old[old[member->args[0]].args[1]].op == Op::Const;
+            if (rolled) {
+                // log ∑_i e^(x_i), a loop: hi = max_i x_i in one loop, then hi + log ∑_i e^(x_i − hi) in another (one
+                // term is e^0 = 1: the sum is at least 1).
+                const Instr loop = f.body[map[member->args[0]]];  // (a copy: already rebuilt, its arguments are new values)
+                auto [max_fn, sum_fn] = split.at(old[member->args[0]].aux);
+                Instr l1 = loop;
+                l1.aux = max_fn;
+                l1.args[1] = b.scalar(-3.4028234663852886e38);
+                l1.name.clear();
+                ValueId hi_loop = f.add(std::move(l1));
+                Instr mh;
+                mh.op = Op::Member;
+                mh.type = Type::scalar();
+                mh.args = {hi_loop};
+                ValueId hi = f.add(mh);
+                Instr l2 = loop;
+                l2.aux = sum_fn;
+                l2.args.push_back(hi);
+                l2.name.clear();
+                ValueId sum_loop = f.add(std::move(l2));
+                Instr ms = mh;
+                ms.args = {sum_loop};
+                ValueId sum = b.builtin("max", {f.add(ms), b.scalar(1)});
+                made = b.op(Op::Add, {hi, b.builtin("log", {sum})});
+                what = "log-sum-exp";
+            } else if (in.type.is_scalar() && (is_builtin(in, "log") || is_builtin(in, "ln"))) {
                 // log-sum-exp: every term of the argument's sum is e^(something).
                 std::vector<ValueId> terms;
                 if (sum_terms(old, in.args[0], terms) && terms.size() >= 2) {
