@@ -27,6 +27,24 @@ TEST_CASE("a division by a slider range containing 0 is warned, located", "[rang
     CHECK_THAT(r.err, Catch::Contains("error: division by a value that can be 0"));
 }
 
+TEST_CASE("a sum that is a loop is bounded as the unrolled sum: the same warnings", "[ranges]") {
+    // A new user's trial: 1/∑_i w_i warned with 31 weights (an unrolled sum of unbounded parameters) and not with
+    // 32 (a loop, which the analysis did not look into). A sum of squares plus 0.5 over 40 weights is at least 20:
+    // nothing is warned, as for 31.
+    for (int n : {31, 40}) {
+        std::string w;
+        for (int k = 0; k < n; ++k) w += k ? ", 0.05" : "0.05";
+        INFO(n);
+        Compiled c = compile_text("sum_div.md", doc("D = ‖p‖ - 1/∑_i w_i", "w_i ∈ ℝ default = {" + w + "}\n"));
+        REQUIRE(c.result.exit_code == 0);
+        CHECK_THAT(c.diagnostics, Catch::Contains("sum_div.md:4:11: warning: division by a value that can be 0: with the parameters' "
+                                                  "bounds it ranges over [-∞, ∞]"));
+        Compiled safe = compile_text("sum_div_ok.md", doc("D = ‖p‖ - 1/∑_i (w_i² + 0.5)", "w_i ∈ ℝ default = {" + w + "}\n"));
+        REQUIRE(safe.result.exit_code == 0);
+        CHECK(safe.diagnostics.empty());
+    }
+}
+
 TEST_CASE("a parameter value outside its slider bounds is an error under --strict-ranges", "[ranges]") {
     // Found by a new-user trial: a vesica's width overridden to 0 (its sliders start at 0.05) made the distance
     // NaN at every pixel, and --strict-ranges passed it: range analysis proves its guards within the bounds only.
