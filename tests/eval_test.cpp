@@ -282,6 +282,19 @@ TEST_CASE("a sum over a long sequence is a loop: its values are the sum's, condi
     REQUIRE(r.exit_code == 0);
     CHECK(r.out == fmt::format("a = {}\nb = {}\nc = {}\nd = {}\ne = {}\ng = {}\nh = {}\nu = ({}, {}, {})\nz_4 = {}\n", a, b, c, 2 * a,
                                6 * a, g, h, a, 2 * a, 3 * a, (1 + 2 + 3) * a));
+    // Nested loops over two sequences of 500: 250,000 terms within eval's step limit (a new user's trial: reading a
+    // captured array counted its 500 components every iteration, 250 million steps, and eval stopped).
+    std::string ws, us;
+    double sw = 0, su = 0;
+    for (int k = 0; k < 500; ++k) {
+        ws += fmt::format("{}{}", k ? ", " : "", k % 7 + 1);
+        us += fmt::format("{}{}", k ? ", " : "", k % 5 + 1);
+        sw += k % 7 + 1, su += k % 5 + 1;
+    }
+    auto nested = write_temp("nested_500.iql", "n = ∑_i ∑_j w_i u_j\nwhere\nw_i ∈ ℝ default = {" + ws + "}\nu_j ∈ ℝ default = {" + us + "}\n");
+    RunResult nr = run_iqc("eval " + nested.string());
+    INFO(nr.err);
+    CHECK(nr.out == fmt::format("n = {}\n", sw * su));
     // ... and a loop in the IR and in the shader (a module shown alone on a uniform target).
     auto shape = write_temp("long_sum_shape.iql", "shape\nD = ‖p‖ - ∑_i ‖x_i‖/400\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" + ys + "}\n");
     RunResult s = run_iqc(shape.string() + " --target webgl2 --dump-ir=after-lower -o " + (temp_dir() / "long_sum.frag").string());

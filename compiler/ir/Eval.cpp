@@ -329,7 +329,11 @@ struct Frame {
 
     void run(ValueId i) {
         const Instr& in = f.body[i];
-        ev.steps_ += 1 + plan.size[i];
+        // A step per instruction and per component it computes; reading a parameter, a global, an array's element
+        // or a loop's result only points at it (a rolled ∑'s body reads its captured arrays every iteration: counted
+        // by size, 500 × 500 terms took 250 million steps and hit the limit, where unrolled they took 1.3 million).
+        const bool alias = in.op == Op::Param || in.op == Op::Global || in.op == Op::Copy || in.op == Op::Index || in.op == Op::Member;
+        ev.steps_ += alias ? 1 : 1 + plan.size[i];
         if (ev.steps_ > ev.inputs_.max_steps) throw EvalLimit{in.span};
         switch (in.op) {
             case Op::Param: at[i] = args[in.aux]; return;
