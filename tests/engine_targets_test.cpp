@@ -598,6 +598,32 @@ TEST_CASE("instances with sequence parameters read them in place, in a loop: no 
     CHECK(differing_pixels(a.image, c.image) > 20);
 }
 
+TEST_CASE("a sum over pairs of a sequence's points draws on webgl2 as on Shadertoy", "[engine-targets][render]") {
+    // A new user's trial: ∑_i ∑_j ‖x_i - x_j‖ over 40 points, two nested loops on webgl2, drew a wrong rim (306
+    // pixels at 160x90): llvmpipe ends a shader invocation after 65,535 loop iterations in all, and 1,640 per
+    // evaluation ran out on the rays that take the most steps. The inner sum is unrolled in the outer loop now.
+    std::string points;
+    for (int k = 0; k < 40; ++k) {
+        double a = 2 * M_PI * k / 40;
+        points += fmt::format("{}({:.4f}, {:.4f}, {:.4f})", k ? ", " : "", 1.2 * std::cos(a), 0.7 * std::sin(2 * a), 1.2 * std::sin(a));
+    }
+    auto path = write_temp("pairs_40.iq", "[modules]\nblob = \"\"\"\nshape\nD = ‖p‖ - 0.2 - s/1600\ns = ∑_i ∑_j ‖x_i - x_j‖\nwhere\n"
+                                          "p ∈ ℝ³\nx_i ∈ ℝ³ default = {" + points + "}\n\"\"\"\n[camera]\nposition = [0, 1, -3]\n"
+                                          "target = [0, 0, 0]\n[[shapes]]\ntype = \"blob\"\n");
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled web = compile_path(path, o), st = compile_path(path, {});
+    REQUIRE(web.result.exit_code == 0);
+    REQUIRE(st.result.exit_code == 0);
+    CHECK_THAT(web.result.code, Catch::Contains("for (int i = 0; i <= 39; i++) {"));
+    CHECK_THAT(web.result.code, !Catch::Contains("for (int j"));
+    const int W = 96, H = 54;
+    render::RenderResult a = render_compiled(web.result, W, H), b = render_compiled(st.result, W, H);
+    REQUIRE(a.ok);
+    REQUIRE(b.ok);
+    CHECK(differing_pixels(a.image, b.image) == 0);
+}
+
 TEST_CASE("a sequence past a block's 16 KiB is read in place from the data texture, and matrices past mat4 are errors",
           "[engine-targets][wgsl][render]") {
     // A new user's trial: a sequence parameter of 1,025 numbers, passed whole to the module's function, went into

@@ -628,3 +628,24 @@ TEST_CASE("soft shadows of a scene a thousand times smaller darken only what har
     CHECK(lit > W * H / 4);
     CHECK(darker < lit / 50);
 }
+
+TEST_CASE("a sequence parameter's override takes its elements as rows, and says so where its length differs", "[scene]") {
+    // A new user's trial: x = [[…], […]] for x_i ∈ ℝ³ was "'x' is ℝ³[3] but the value is 3 rows of 3" (only the string
+    // form was taken), and 5 points where the module's default has 3 said "has 15 components".
+    auto scene = [](const std::string& value) {
+        return "[modules]\nchain = \"\"\"\nshape\nD = ‖p - x_1‖ + ‖p - x_3‖ - 1\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {(0, 0, 0), (1, 0, 0), "
+               "(2, 0, 0)}\n\"\"\"\n[[shapes]]\ntype = \"chain\"\nshape_params = { x = " + value + " }\n";
+    };
+    Compiled rows = compile_text("seq_rows.iq", scene("[[-1, 0, 0], [0, 0.5, 0], [1, 0, 0]]"));
+    Compiled text = compile_text("seq_text.iq", scene("\"{(-1, 0, 0), (0, 0.5, 0), (1, 0, 0)}\""));
+    INFO(rows.diagnostics);
+    REQUIRE(rows.result.exit_code == 0);
+    REQUIRE(text.result.exit_code == 0);
+    auto body = [](const std::string& code) { return code.substr(code.find("// ---- parameters")); };
+    CHECK(body(rows.result.code) == body(text.result.code));
+    CHECK_THAT(rows.result.code, Catch::Contains("vec3(-1.0, 0.0, 0.0)"));
+    Compiled longer = compile_text("seq_long.iq", scene("[[-1, 0, 0], [0, 0.5, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]"));
+    CHECK(longer.result.exit_code == 1);
+    CHECK_THAT(longer.diagnostics, Catch::Contains("seq_long.iq:11:18: error: 'x' is a sequence of 3 elements (ℝ³[3]), as the module's "
+                                                   "default has; this value has 5: an instance keeps the module's length"));
+}

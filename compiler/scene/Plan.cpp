@@ -128,7 +128,20 @@ struct Planner {
                 continue;
             }
             const ParamInfo& p = m.params[size_t(pi)];
-            if (ov.rows > 0 && !(p.type.is_matrix() && p.type.rows == ov.rows && p.type.cols == ov.cols)) {
+            // A sequence's elements as rows: x = [[1, 0, 0], [0, 1, 0]] for x_i ∈ ℝ³ (a trial's override in this form
+            // was "'x' is ℝ³[2] but the value is 2 rows of 3"; only a string "{(1, 0, 0), (0, 1, 0)}" was taken).
+            const bool element_rows = ov.rows > 0 && p.type.is_array() && !p.type.element().is_matrix() &&
+                                      std::max(1, p.type.element().components()) == ov.cols;
+            if (p.type.is_array() && int(ov.value.size()) != p.type.components() &&
+                int(ov.value.size()) % std::max(1, p.type.element().components()) == 0) {
+                d.error(ov.span, fmt::format("'{}' is a sequence of {} elements ({}), as the module's default has; this value has {}: "
+                                             "an instance keeps the module's length (the module's function is compiled for it)",
+                                             ov.name, p.type.count, p.type.str(),
+                                             int(ov.value.size()) / std::max(1, p.type.element().components())));
+                ok = false;
+                continue;
+            }
+            if (ov.rows > 0 && !element_rows && !(p.type.is_matrix() && p.type.rows == ov.rows && p.type.cols == ov.cols)) {
                 d.error(ov.span, fmt::format("'{}' is {} but the value is {} row{} of {}", ov.name, p.type.str(), ov.rows,
                                              ov.rows == 1 ? "" : "s", ov.cols));
                 ok = false;

@@ -5,8 +5,10 @@
 
 namespace iqc::ir {
 
+// On targets whose parameters are constants, arrays of this many elements or more are bound.
+constexpr int kBoundConstantArray = 64;
+
 int bind_array_arguments(Module& m) {
-    if (m.constant_parameters) return 0;
     // (callee, the global bound to each argument or -1) -> the copy
     std::map<std::pair<int, std::vector<int>>, int> copies;
     int rebound = 0;
@@ -25,6 +27,10 @@ int bind_array_arguments(Module& m) {
                 const Instr& x = m.functions[fi].body[in.args[a]];
                 if (x.op != Op::Global || !x.type.is_array()) continue;
                 if (m.globals[size_t(x.aux)].kind != Global::Kind::Parameter) continue;
+                // Constants (Shadertoy): only long arrays, whose copies Mesa's compile chokes on (three
+                // instances' `const vec3 x[1100]` passed by value six times: no first frame in 120 s); the driver
+                // folds a short one's values into the code.
+                if (m.constant_parameters && x.type.count < kBoundConstantArray) continue;
                 bound[a] = x.aux;
                 any = true;
             }

@@ -12,9 +12,11 @@
 // A loop's captured global array (a rolled ∑ over a sequence: ir/Lower.cpp) binds in its body the same way.
 //
 // One copy per callee and binding (calls that pass the same global share it); copies are bound again where
-// they pass the global on. Only on targets whose parameters are not constants (Shadertoy's constant arrays are
-// folded by the driver: a copy per instance would only grow the code). The originals nothing calls any more
-// go with dead-code elimination.
+// they pass the global on. Where parameters are constants (Shadertoy) only arrays of kBoundConstantArray (64)
+// elements or more: the driver folds a short constant array's values into the code (a copy of the function per
+// instance would only grow it), but three instances' `const vec3 x[1100]` passed by value to six calls kept
+// Mesa's compile from finishing in 120 s (7 s bound). The originals nothing calls any more go with dead-code
+// elimination.
 #pragma once
 
 #include "ir/IR.h"

@@ -39,6 +39,7 @@ constexpr size_t kSplitMaxInstructions = 2000;  // a function larger than this i
 // The work of one sampled evaluation (a gradient through a recurrence of 10⁸ steps is not sampled: its
 // samples stop at the first evaluation past this, with what was seen so far).
 constexpr uint64_t kSampleSteps = 1000000;
+constexpr uint64_t kJumpWork = 40000000;  // find_jump's evaluator steps, in all
 
 constexpr size_t kMaxFlat = 20000;  // a flattened function larger than this is not taken apart
 
@@ -505,7 +506,9 @@ void find_jump(const Module& m, int fn, const std::vector<Interval>& region, con
     };
     std::priority_queue<Pair> steepest;
     try {
-        for (int s = 0; s < pairs; ++s) {
+        // At most kJumpWork evaluator steps in all: a shape whose one evaluation is costly gets fewer pairs (a
+        // trial's double sum over 200 points, 40,000 terms per evaluation, spent 20 s of its compile here).
+        for (int s = 0; s < pairs && ev.work() < kJumpWork; ++s) {
             Point a, dir;
             for (size_t c = 0; c < 3; ++c) a[c] = region[c].lo + (region[c].hi - region[c].lo) * next();
             if (ball > 0 && a[0] * a[0] + a[1] * a[1] + a[2] * a[2] > ball * ball) continue;
@@ -529,7 +532,7 @@ void find_jump(const Module& m, int fn, const std::vector<Interval>& region, con
         for (; !steepest.empty(); steepest.pop()) {
             Pair p = steepest.top();
             double apart = delta;
-            for (int level = 0; level < 16; ++level) {
+            for (int level = 0; level < 16 && ev.work() < 2 * kJumpWork; ++level) {
                 Point mid = {0.5 * (p.a[0] + p.b[0]), 0.5 * (p.a[1] + p.b[1]), 0.5 * (p.a[2] + p.b[2])};
                 double fm = at(mid);
                 if (std::isnan(fm)) break;

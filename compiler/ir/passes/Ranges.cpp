@@ -180,6 +180,7 @@ struct Analyzer {
         Analyzer sub{m, body, {}, {}};
         sub.params = &args;
         sub.r.resize(body.body.size());
+        sub.underflows.assign(body.body.size(), 0);
         for (size_t b = 0; b <= t; ++b) sub.r[b] = sub.eval(b);
         const Range& init = r[loop.args[1]];
         const Range& term = sub.r[t];
