@@ -202,3 +202,13 @@ TEST_CASE("a declaration with a subscript digit says how to name the parameter",
                Catch::Contains("test.iql:3:1: error: 'x₁' is a component of x, not a name: to declare a parameter named x_1, "
                                "write x_1 (and use it as x_1)\n  x₁ ∈ ℝ default = 2\n  ^~\n"));
 }
+
+TEST_CASE("an empty sequence {} says so", "[diag]") {
+    // A trial: `--set 'x={}'` said "a piecewise definition needs at least one 'if' case".
+    CHECK(errors_of("y = {}\n") == "test.iql:1:5: error: '{}' is an empty sequence: a sequence has at least one element, as in {1, 2}\n"
+                                   "  y = {}\n      ^~\n");
+    auto f = write_temp("empty_set.iql", "y = ∑_i x_i\nwhere\nx_i ∈ ℝ default = {1, 2}\n");
+    RunResult r = run_iqc("eval " + f.string() + " --set 'x={}'");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("--set x:1:1: error: '{}' is an empty sequence"));
+}

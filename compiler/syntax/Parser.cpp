@@ -1826,6 +1826,8 @@ ExprPtr Parser::parse_sequence_literal(Span open, ExprPtr first) {
 ExprPtr Parser::parse_piecewise(Span open) {
     ctx_.push_back(Ctx::Brace);
     auto p = make(ExprKind::Piecewise, open);
+    // `{}`: an empty sequence (`--set 'x={}'` said "a piecewise definition needs at least one 'if' case").
+    if (at(Tok::RBrace)) fail(Span::join(open, cur().span), "'{}' is an empty sequence: a sequence has at least one element, as in {1, 2}");
     while (true) {
         while (at(Tok::Newline)) advance();
         if (at(Tok::RBrace)) { advance(); break; }
