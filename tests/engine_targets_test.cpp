@@ -624,6 +624,32 @@ TEST_CASE("a sum over pairs of a sequence's points draws on webgl2 as on Shadert
     CHECK(differing_pixels(a.image, b.image) == 0);
 }
 
+TEST_CASE("rolled sums are unrolled further where a pixel's evaluations would run out llvmpipe's loop budget",
+          "[engine-targets]") {
+    // llvmpipe ends an invocation after 65,535 loop iterations in all. A trial's 30 instances with two 40-point sums
+    // each (2,400 iterations per scene evaluation) drew blocks of the blobs wrong. The emitter counts a pixel's
+    // evaluations (the step cap here) and unrolls the sums' loops until their iterations fit.
+    std::string points;
+    for (int k = 0; k < 40; ++k) points += fmt::format("{}({}, 0, 0)", k ? ", " : "", 0.01 * k);
+    auto scene = [&](int max_steps) {
+        return "[render]\nmax_steps = " + std::to_string(max_steps) + "\n[modules]\nblob = \"\"\"\nshape\nD = ‖p‖ - 0.3 - ∑_i ‖x_i‖ 1e-3\nwhere\n"
+               "p ∈ ℝ³\nx_i ∈ ℝ³ default = {" + points + "}\n\"\"\"\n[[shapes]]\ntype = \"blob\"\n[[shapes]]\ntype = \"blob\"\n"
+               "transform = \"T((1, 0, 0))\"\nshape_params = { x = \"{" + points + "}\" }\n";
+    };
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled few = compile_path(write_temp("budget_128.iq", scene(128)), o);
+    Compiled many = compile_path(write_temp("budget_4000.iq", scene(4000)), o);
+    REQUIRE(few.result.exit_code == 0);
+    REQUIRE(many.result.exit_code == 0);
+    // 128 steps: 80 iterations per evaluation fit (60,000 / 132); 4,000 steps: 15 per evaluation, so each sum's
+    // loop runs 7 iterations of 6 terms.
+    CHECK_THAT(few.result.code, Catch::Contains("for (int i = 0; i <= 39; i++) {"));
+    CHECK_THAT(few.result.code, !Catch::Contains("(unrolled by"));
+    CHECK_THAT(many.result.code, !Catch::Contains("for (int i = 0; i <= 39; i++) {"));
+    CHECK_THAT(many.result.code, Catch::Contains("i0 += 6) {  // (unrolled by 6)"));
+}
+
 TEST_CASE("a sequence past a block's 16 KiB is read in place from the data texture, and matrices past mat4 are errors",
           "[engine-targets][wgsl][render]") {
     // A new user's trial: a sequence parameter of 1,025 numbers, passed whole to the module's function, went into

@@ -168,6 +168,77 @@ const char* kSwizzle = "xyzw";
 // most kMaxUnroll (see FunctionEmitter::loop: llvmpipe's limit of 65,535 loop iterations per invocation).
 constexpr long long kLoopTripsRolled = 64;
 constexpr long long kMaxUnroll = 16;
+
+namespace {
+constexpr double kSumLoopBudget = 48;  // rolled sums' loop iterations per call of a root where the calls are unknown
+constexpr double kLoopIterations = 60000;  // of llvmpipe's 65,535 per invocation, for the IR's loops
+
+// Iterations per trip by default: long loops run ceil(trips / kLoopTripsRolled) per trip, at most kMaxUnroll.
+int default_unroll(long long trips) {
+    return trips > kLoopTripsRolled ? int(std::min<long long>(kMaxUnroll, (trips + kLoopTripsRolled - 1) / kLoopTripsRolled)) : 1;
+}
+
+// A loop's constant trip count (hi - lo + 1), or -1.
+long long loop_trips(const ir::Function& f, const ir::Instr& in) {
+    const ir::Instr& hi = f.body[in.args[0]];
+    if (hi.op != ir::Op::Const || hi.data.empty() || in.data.empty()) return -1;
+    return std::llround(hi.data[0]) - std::llround(in.data[0]) + 1;
+}
+}  // namespace
+
+}  // namespace
+
+int Emitter::unroll_of(int body_fn, long long trips) const {
+    auto it = unroll_.find(body_fn);
+    return int(std::min<long long>(trips, it != unroll_.end() ? it->second : default_unroll(trips)));
+}
+
+void Emitter::limit_loop_iterations(const std::vector<int>& roots, double evaluations) {
+    // Loop iterations per call: (all loops, rolled sums' loops), with the unrolling chosen so far.
+    std::map<int, std::pair<double, double>> memo;
+    std::function<std::pair<double, double>(int)> count = [&](int fn) -> std::pair<double, double> {
+        if (auto it = memo.find(fn); it != memo.end()) return it->second;
+        memo[fn] = {0, 0};  // (no recursion in the IR; a guard all the same)
+        const ir::Function& f = m_.functions[size_t(fn)];
+        double all = 0, sums = 0;
+        for (const ir::Instr& in : f.body) {
+            if (in.op == ir::Op::Call) {
+                auto [a, s] = count(in.aux);
+                all += a, sums += s;
+            } else if (in.op == ir::Op::Loop) {
+                long long trips = loop_trips(f, in);
+                if (trips <= 0) trips = kLoopTripsRolled;  // (a bound known only when running: a guess)
+                const double iterations = std::ceil(double(trips) / unroll_of(in.aux, trips));
+                auto [a, s] = count(in.aux);
+                all += iterations + double(trips) * a;
+                sums += (m_.functions[size_t(in.aux)].rolled_sum ? iterations : 0) + double(trips) * s;
+            }
+        }
+        return memo[fn] = {all, sums};
+    };
+    double sums = 0, others = 0;
+    for (int r : roots) {
+        auto [a, s] = count(r);
+        sums = std::max(sums, s);
+        others = std::max(others, a - s);
+    }
+    const double budget = evaluations > 0 ? std::max(0.0, kLoopIterations / evaluations - others) : kSumLoopBudget;
+    if (sums <= budget) return;
+    // Each rolled sum's loop runs `ratio` of its iterations (at least one trip: fully unrolled).
+    const double ratio = budget / sums;
+    for (size_t fn = 0; fn < m_.functions.size(); ++fn)
+        for (const ir::Instr& in : m_.functions[fn].body) {
+            if (in.op != ir::Op::Loop || !m_.functions[size_t(in.aux)].rolled_sum) continue;
+            long long trips = loop_trips(m_.functions[fn], in);
+            if (trips <= 0) continue;
+            const double iterations = std::ceil(double(trips) / default_unroll(trips));
+            const double fewer = std::max(1.0, std::floor(iterations * ratio));
+            unroll_[in.aux] = int(std::min<double>(double(trips), std::ceil(double(trips) / fewer)));
+        }
+}
+
+namespace {
+
 constexpr int kSwizzleSize = 4;  // GLSL's widest vector; a larger IR vector has no GLSL type (already reported)
 
 // Statement text (a formula as written) for a `//` comment: one line, nothing that could end the comment.
@@ -805,7 +876,7 @@ struct FunctionEmitter {
         };
         std::string comment = in.source.empty() ? "" : "  // " + one_line(in.source);
         std::string inner = indent + "    ";
-        int unroll = trips > kLoopTripsRolled ? int(std::min<long long>(kMaxUnroll, (trips + kLoopTripsRolled - 1) / kLoopTripsRolled)) : 1;
+        int unroll = trips > 0 ? em.unroll_of(in.aux, trips) : 1;
         if (unroll == 1) {
             std::string k = locals.unique(body.params[0].name);
             out += fmt::format("{}for (int {} = {}; {} <= {}; {}++) {{{}\n", indent, k, lo, k, hi_text, k, comment);

@@ -67,12 +67,25 @@ public:
 
     const std::vector<GlobalStorage>* storage() const { return storage_; }
 
+    // llvmpipe ends a shader invocation after 65,535 loop iterations in all (LP_MAX_TGSI_LOOP_ITERATIONS: one
+    // counter for every loop, whether its lanes are active or not). Counts the loop iterations one call of each
+    // root makes, and where the rolled sums' loops (ir::Function::rolled_sum) make more than the budget (60,000
+    // over `evaluations`, less the other loops' iterations), unrolls them further, down to no loop at all. A trial's 30 instances with two 40-point
+    // sums each made 2,400 per evaluation and drew blocks of the blobs wrong after ~27. Other loops (groups of
+    // instances, recurrences) keep their unrolling. Call before emitting.
+    // `evaluations`: how many times a pixel's invocation calls the roots at most (0: unknown, kSumLoopBudget
+    // iterations per call are kept).
+    void limit_loop_iterations(const std::vector<int>& roots, double evaluations = 0);
+    // How many iterations a loop of `trips` trips over body `body_fn` runs per trip.
+    int unroll_of(int body_fn, long long trips) const;
+
 private:
     const ir::Module& m_;
     Namer& globals_;
     Diagnostics& diags_;
     const std::vector<GlobalStorage>* storage_;
     std::map<int, std::string> names_;
+    std::map<int, int> unroll_;  // rolled sums' bodies -> iterations per trip, where limit_loop_iterations chose
 };
 
 }  // namespace iqc::glsl

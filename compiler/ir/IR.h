@@ -136,6 +136,9 @@ struct Function {
     std::vector<ValueBounds> param_bounds;  // per parameter (empty: every parameter is an input)
     bool inline_hint = false;          // a building block of the scene functions: the inline pass inlines it
     bool entry = false;                // called from outside the IR (the runtime, the evaluator's user)
+    // The body of a rolled ∑ (ir/Lower.cpp): the emitter may unroll it further to keep llvmpipe's loop budget
+    // (glsl::Emitter::limit_loop_iterations). Not in the IR text.
+    bool rolled_sum = false;
     LipschitzSpec lipschitz;           // an item distance function: divide its result by the shape's bound
     std::vector<Instr> body;
     ValueId result = 0;                // the primary output (D, C, or the bare expression)

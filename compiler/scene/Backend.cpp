@@ -502,6 +502,7 @@ SceneCode emit_scene(const SceneIR& scene, const BackendOptions& o, Diagnostics&
         bool counted = o.instrument && f.name == ir::names::kScene;
         em.set_function_name(int(i), counted ? std::string(ir::names::kScene) + "_counted" : f.name);
     }
+    em.limit_loop_iterations(roots, o.evaluations_per_pixel);
     std::string out;
     for (int fn : em.closure(roots)) {
         const ir::Function& f = m.functions[size_t(fn)];

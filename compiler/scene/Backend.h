@@ -78,6 +78,10 @@ struct BackendOptions {
     // std140 bytes); per-instance data goes into the data texture, a DataTexture there.
     bool blocks = true;
     bool instrument = false;   // iqc_scene is emitted as iqc_scene_counted (the runtime counts evaluations)
+    // The most scene evaluations one pixel's shader invocation makes (the march's step cap, the normal's taps,
+    // shadow marches, AO samples, bounces, antialiasing samples): the emitter keeps the rolled sums' loop
+    // iterations within llvmpipe's 65,535 per invocation (glsl::Emitter::limit_loop_iterations). 0: unknown.
+    double evaluations_per_pixel = 0;
     // Comments for module functions by IR function name ("torus" -> "shape torus").
     std::map<std::string, std::string> comments;
 };

@@ -745,6 +745,17 @@ CompileResult SceneCompiler::run_checked() {
         bo.vulkan = through_spirv(opts_.target);
         bo.blocks = opts_.target != Target::ThreeJS;
         bo.instrument = opts_.instrument || opts_.bench;
+        {
+            // (the step cap as assemble() grows it; shadow marches take as many; AO 5 samples, the normal 4 taps)
+            const RenderDesc& render = s_.render;
+            double steps = opts_.max_steps.value_or(render.max_steps);
+            if (!opts_.max_steps && !render.max_steps_span.valid())
+                steps = std::min<double>(kMaxStepsSetting, std::ceil(steps * std::min(kMaxStepGrowth, step_shortening_)));
+            const EffectsDesc& fx = s_.effects;
+            double per_ray = steps + 4 + (fx.ao ? 5 : 0) + (fx.shadows != Shadows::None ? double(s_.lights.size()) * steps : 0);
+            double rays = (1.0 + fx.reflections + (fx.refraction ? 2 : 0)) * double(fx.antialias) * double(fx.antialias);
+            bo.evaluations_per_pixel = per_ray * rays;
+        }
         for (const auto& p : plans) {
             bo.comments[p.shape->ast.name] = "shape " + p.shape->ast.name;
             if (p.material) {
