@@ -82,6 +82,24 @@ std::unordered_map<std::string_view, int> Module::global_index() const {
     return index;
 }
 
+std::optional<ValueId> accumulated_term(const Function& body, size_t j) {
+    const size_t states = body.outputs.size();
+    if (j >= states) return std::nullopt;
+    const Instr& out = body.body[body.outputs[j].second];
+    if (out.op != Op::Add || out.args.size() != 2) return std::nullopt;
+    auto is_state = [&](ValueId v) { return body.body[v].op == Op::Param && size_t(body.body[v].aux) == j + 1; };
+    const ValueId t = is_state(out.args[0]) ? out.args[1] : is_state(out.args[1]) ? out.args[0] : ValueId(-1);
+    if (t == ValueId(-1)) return std::nullopt;
+    std::vector<char> reads(size_t(t) + 1, 0);
+    for (size_t i = 0; i <= t; ++i) {
+        const Instr& in = body.body[i];
+        reads[i] = in.op == Op::Param && in.aux >= 1 && size_t(in.aux) <= states;
+        for (ValueId a : in.args) reads[i] |= reads[a];
+    }
+    if (reads[t]) return std::nullopt;
+    return t;
+}
+
 Type result_type(Op op, const std::vector<Type>& a, int aux) {
     auto is_num = [](const Type& t) { return t.is_numeric(); };
     switch (op) {

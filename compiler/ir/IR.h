@@ -17,6 +17,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -274,5 +275,10 @@ std::string verify(const Module& m);
 // The result type of `op` applied to operands of the given types, or Invalid (the rules the verifier,
 // the lowering and the folder share).
 Type result_type(Op op, const std::vector<Type>& args, int aux);
+
+// A loop body that accumulates into its state j (0-based; parameter j + 1): output j is `state + t` or `t + state`
+// and t reads no state. Returns t, else none. (A rolled ∑'s body, ir/Lower.cpp; the analyses of loops in
+// Intervals and the ranges pass, and the stable pass's log-sum-exp, read it so.)
+std::optional<ValueId> accumulated_term(const Function& body, size_t j);
 
 }  // namespace iqc::ir

@@ -728,20 +728,11 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                 // with k over [first, last], and s_j = s_j(0) + n·t_j for the n iterations (sound: each term
                 // lies in t_j's bounds, whatever k).
                 std::vector<ValueId> term(states, ValueId(-1));
-                std::vector<char> reads_state(body.body.size(), 0);
-                for (size_t b = 0; b < body.body.size(); ++b) {
-                    const Instr& bi = body.body[b];
-                    reads_state[b] = bi.op == Op::Param && bi.aux >= 1 && size_t(bi.aux) <= states;
-                    for (ValueId x : bi.args) reads_state[b] |= reads_state[x];
-                }
                 bool accumulates = true;
                 for (size_t j = 0; j < states && accumulates; ++j) {
-                    const Instr& out = body.body[body.outputs[j].second];
-                    auto is_state = [&](ValueId x) { return body.body[x].op == Op::Param && size_t(body.body[x].aux) == j + 1; };
-                    accumulates = out.op == Op::Add && out.args.size() == 2;
-                    if (accumulates && is_state(out.args[0])) term[j] = out.args[1];
-                    else if (accumulates && is_state(out.args[1])) term[j] = out.args[0];
-                    accumulates = accumulates && term[j] != ValueId(-1) && !reads_state[term[j]];
+                    auto t = accumulated_term(body, j);
+                    accumulates = t.has_value();
+                    if (t) term[j] = *t;
                 }
                 if (accumulates) {
                     std::vector<IntervalVec>& args = args_buffer();

@@ -158,17 +158,9 @@ struct Analyzer {
         if (body.outputs.size() != 1 || loop.args.size() < 2 || loop.data.empty()) return std::nullopt;
         const Instr& hi = f.body[loop.args[0]];
         if (hi.op != Op::Const || hi.data.size() != 1) return std::nullopt;
-        const Instr& out = body.body[body.outputs[0].second];
-        auto is_state = [&](ValueId v) { return body.body[v].op == Op::Param && body.body[v].aux == 1; };
-        if (out.op != Op::Add) return std::nullopt;
-        ValueId t = is_state(out.args[0]) ? out.args[1] : is_state(out.args[1]) ? out.args[0] : ValueId(-1);
-        if (t == ValueId(-1)) return std::nullopt;
-        std::vector<char> reads(body.body.size(), 0);
-        for (size_t b = 0; b <= t; ++b) {
-            reads[b] = is_state(ValueId(b));
-            for (ValueId a : body.body[b].args) reads[b] |= reads[a];
-        }
-        if (reads[t]) return std::nullopt;
+        const auto term_value = accumulated_term(body, 0);
+        if (!term_value) return std::nullopt;
+        const ValueId t = *term_value;
         const double first = loop.data[0], last = std::floor(hi.data[0] + 0.5);
         if (!(last >= first)) return std::nullopt;
         std::vector<Range> args;

@@ -37,20 +37,17 @@ bool sum_terms(const std::vector<Instr>& body, ValueId v, std::vector<ValueId>& 
 // A rolled ∑ of exponentials (a Loop whose body adds e^x to its one state, x not reading the state): x's value in
 // the body, else none.
 std::optional<ValueId> rolled_exp_sum(const Function& body) {
-    if (body.outputs.size() != 1 || body.params.size() < 2) return std::nullopt;
-    const Instr& out = body.body[body.outputs[0].second];
-    if (out.op != Op::Add || !out.type.is_scalar()) return std::nullopt;
-    auto is_state = [&](ValueId v) { return body.body[v].op == Op::Param && body.body[v].aux == 1; };
-    ValueId e = is_state(out.args[0]) ? out.args[1] : is_state(out.args[1]) ? out.args[0] : ValueId(-1);
-    if (e == ValueId(-1) || !is_builtin(body.body[e], "exp")) return std::nullopt;
-    std::vector<char> reads(body.body.size(), 0);
-    for (size_t i = 0; i < body.body.size(); ++i) {
-        reads[i] = is_state(ValueId(i));
-        for (ValueId a : body.body[i].args) reads[i] |= reads[a];
-    }
-    ValueId x = body.body[e].args[0];
-    if (reads[x]) return std::nullopt;
-    return x;
+    if (body.outputs.size() != 1 || !body.body[body.outputs[0].second].type.is_scalar()) return std::nullopt;
+    auto e = accumulated_term(body, 0);
+    if (!e || !is_builtin(body.body[*e], "exp")) return std::nullopt;
+    return body.body[*e].args[0];
+}
+
+// The state parameter (the running sum, parameter 1) of a loop body.
+ValueId state_param(const Function& body) {
+    for (size_t i = 0; i < body.body.size(); ++i)
+        if (body.body[i].op == Op::Param && body.body[i].aux == 1) return ValueId(i);
+    return ValueId(-1);
 }
 
 // The bodies of the two loops that replace a rolled log-sum-exp: the running maximum of x, and the sum of
@@ -61,10 +58,7 @@ std::pair<Function, Function> split_exp_sum(const Module& m, const Function& bod
     hi.glsl_name = hi.name;
     {
         Builder b(m, hi);
-        ValueId state = ValueId(-1);
-        for (size_t i = 0; i < hi.body.size(); ++i)
-            if (hi.body[i].op == Op::Param && hi.body[i].aux == 1) state = ValueId(i);
-        ValueId v = b.builtin("max", {state, x});
+        ValueId v = b.builtin("max", {state_param(hi), x});
         hi.outputs = {{"hi", v}};
         hi.result = v;
     }
@@ -72,9 +66,7 @@ std::pair<Function, Function> split_exp_sum(const Module& m, const Function& bod
     shifted.glsl_name = shifted.name;
     {
         Builder b(m, shifted);
-        ValueId state = ValueId(-1);
-        for (size_t i = 0; i < shifted.body.size(); ++i)
-            if (shifted.body[i].op == Op::Param && shifted.body[i].aux == 1) state = ValueId(i);
+        const ValueId state = state_param(shifted);
         ValueId h = b.param("hi", Type::scalar());
         ValueId v = b.op(Op::Add, {state, b.builtin("exp", {b.op(Op::Sub, {x, h})})});
         shifted.outputs = {{"sum", v}};
