@@ -24,6 +24,15 @@ int lower_local_function(const CheckedModule& m, int fi, const std::vector<Type>
 int lower_module_cached(const CheckedModule& m, LowerContext& ctx);
 namespace {
 
+// f(child) for each operand of x: its arguments, a piecewise's or a matrix's rows, the `otherwise` case.
+template <typename F>
+void for_each_child(const Expr& x, F&& f) {
+    for (const auto& a : x.args) f(*a);
+    for (const auto& r : x.rows)
+        for (const auto& a : r) f(*a);
+    if (x.otherwise) f(*x.otherwise);
+}
+
 ValueId add_param(ir::Function& f, const std::string& name, Type t, Span span = {});
 
 struct Env {
@@ -129,10 +138,7 @@ struct Env {
                     else if (t.is_vector()) n = t.rows;
                     else if (t.is_matrix()) n = pos == 0 ? t.rows : t.cols;
                 }
-            for (const auto& a : x.args) walk(*a);
-            for (const auto& r : x.rows)
-                for (const auto& a : r) walk(*a);
-            if (x.otherwise) walk(*x.otherwise);
+            for_each_child(x, walk);
         };
         walk(body);
         return n;
@@ -296,10 +302,7 @@ struct Env {
                     ValueId base = k == 0 ? lower(*x.args[0]) : ValueId(-1);
                     if (k != 0 || !type_of(base).is_array() || f.body[base].op == Op::Construct) ok = false;
                 }
-            for (const auto& a : x.args) walk(*a);
-            for (const auto& r : x.rows)
-                for (const auto& a : r) walk(*a);
-            if (x.otherwise) walk(*x.otherwise);
+            for_each_child(x, walk);
         };
         walk(body);
         return ok;
@@ -388,10 +391,7 @@ struct Env {
                 t += double(sum_range(*y.args[0], y.text)) * inner_terms(*y.args[0]);
                 return;
             }
-            for (const auto& a : y.args) walk(*a);
-            for (const auto& r : y.rows)
-                for (const auto& a : r) walk(*a);
-            if (y.otherwise) walk(*y.otherwise);
+            for_each_child(y, walk);
         };
         walk(x);
         return std::max(1.0, t);
