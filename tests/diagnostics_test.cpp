@@ -203,6 +203,19 @@ TEST_CASE("a declaration with a subscript digit says how to name the parameter",
                                "write x_1 (and use it as x_1)\n  x₁ ∈ ℝ default = 2\n  ^~\n"));
 }
 
+TEST_CASE("a failed sequence declaration is said once", "[diag]") {
+    // A trial: a local function's parameter declared as a sequence typed `a` as ℝ³ and its `a_i` as a component
+    // ("cannot subtract ℝ from ℝ³" at p - a_i); a sequence with bounds added "cannot tell the range of ∑_i".
+    std::string d = errors_of("y = f(x_1)\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {(1, 0, 0), (0, 1, 0)}\n"
+                              "f(a) = ∑_i ‖p - a_i‖ where a_i ∈ ℝ³\n");
+    CHECK(d == "test.iql:5:3: error: the parameter 'a' of 'f' is declared as a sequence (a_i ∈ …): a local function's "
+               "parameters are single values; read the module's sequence in the function instead (f() = ∑_i … x_i …)\n"
+               "  f(a) = ∑_i ‖p - a_i‖ where a_i ∈ ℝ³\n    ^\n");
+    std::string b = errors_of("y = ∑_i w_i/∑_j w_j\nwhere\nw_i ∈ [0.5,1] default = {0.5, 0.6, 0.7}\n");
+    CHECK(b == "test.iql:3:7: error: the sequence 'w' cannot have bounds (give its elements' type, such as ℝ³)\n"
+               "  w_i ∈ [0.5,1] default = {0.5, 0.6, 0.7}\n        ^~~~~~~\n");
+}
+
 TEST_CASE("an empty sequence {} says so", "[diag]") {
     // A trial: `--set 'x={}'` said "a piecewise definition needs at least one 'if' case".
     CHECK(errors_of("y = {}\n") == "test.iql:1:5: error: '{}' is an empty sequence: a sequence has at least one element, as in {1, 2}\n"

@@ -45,6 +45,29 @@ TEST_CASE("a sum that is a loop is bounded as the unrolled sum: the same warning
     }
 }
 
+TEST_CASE("a loop's term is analysed with its captures' ranges", "[ranges]") {
+    // A trial: w_i/∑_j w_j warned with 3 weights and not with 40 (the divisor, an index-free sum, is computed
+    // before the loop and captured; the loop's body alone knew nothing of it). Its other warnings too: a square
+    // root of a captured slider's value. A divisor of squares plus 0.5 warns of nothing.
+    for (int n : {3, 40}) {
+        std::string w;
+        for (int k = 0; k < n; ++k) w += k ? ", 0.5" : "0.5";
+        INFO(n);
+        Compiled c = compile_text("loop_div.md", doc("D = ‖p‖ - 1 + 0.01 ∑_i w_i/∑_j w_j", "w_i ∈ ℝ default = {" + w + "}\n"));
+        REQUIRE(c.result.exit_code == 0);
+        CHECK_THAT(c.diagnostics, Catch::Contains("loop_div.md:4:24: warning: division by a value that can be 0: with the "
+                                                  "parameters' bounds it ranges over [-∞, ∞]"));
+        Compiled root = compile_text("loop_sqrt.md", doc("D = ‖p‖ - 1 + 0.01 ∑_i w_i √(r - 1)",
+                                                         "w_i ∈ ℝ default = {" + w + "}\nr ∈ [0,2] default = 1.5\n"));
+        REQUIRE(root.result.exit_code == 0);
+        CHECK_THAT(root.diagnostics, Catch::Contains("square root of a value that can be negative: it ranges over [-1, 1]"));
+        Compiled safe = compile_text("loop_div_ok.md", doc("D = ‖p‖ - 1 + 0.01 ∑_i w_i/∑_j (w_j² + 0.5)",
+                                                           "w_i ∈ ℝ default = {" + w + "}\n"));
+        REQUIRE(safe.result.exit_code == 0);
+        CHECK(safe.diagnostics.empty());
+    }
+}
+
 TEST_CASE("a parameter value outside its slider bounds is an error under --strict-ranges", "[ranges]") {
     // Found by a new-user trial: a vesica's width overridden to 0 (its sliders start at 0.05) made the distance
     // NaN at every pixel, and --strict-ranges passed it: range analysis proves its guards within the bounds only.

@@ -972,6 +972,13 @@ Type Checker::check_name(Expr& e) {
     return {};
 }
 
+// The index letter of `name` where `decl` declares it a sequence (x_i ∈ ℝ³: "i"), else "".
+static std::string sequence_index(const Decl& decl, const std::string& name) {
+    for (size_t k = 0; k < decl.names.size() && k < decl.indices.size(); ++k)
+        if (decl.names[k].first == name) return decl.indices[k];
+    return "";
+}
+
 void Checker::check_function(LocalFunction& f, Span call_site, const std::vector<Type>* args) {
     const Stmt& s = *f.stmt;
     std::vector<const Decl*> decls;
@@ -1022,6 +1029,14 @@ void Checker::check_function(LocalFunction& f, Span call_site, const std::vector
         } else if (!decl) {
             d_.error(pspan, fmt::format("the parameter '{}' of '{}' has no type: add 'where {} ∈ ℝ' (or its type)", pname,
                                         s.name, pname));
+        } else if (std::string index = sequence_index(*decl, pname); !index.empty()) {
+            // I♥LA passes sequences to functions; iqc's local functions take single values (its ∑ over a sequence
+            // needs the sequence's length where the sum is written). Said at the declaration; the parameter
+            // stays untyped, so its uses say nothing more (`p - a_i` said ℝ³ minus ℝ).
+            d_.error(pspan, fmt::format("the parameter '{}' of '{}' is declared as a sequence ({}_{} ∈ …): a local "
+                                        "function's parameters are single values; read the module's sequence in the "
+                                        "function instead ({}() = ∑_{} … x_{} …)", pname, s.name, pname, index, s.name,
+                                        index, index));
         } else if (!decl->bounds.empty()) {
             t = Type::vector(int(decl->bounds.size()));
         } else {
@@ -2018,7 +2033,7 @@ Type Checker::check_sequence_index(Expr& e) {
 // -1 after reporting a disagreement.
 int Checker::sum_range(const Expr& body, const std::string& index) {
     int n = 0;
-    bool bad = false;
+    bool bad = false, reported = false;
     std::function<void(const Expr&)> walk = [&](const Expr& x) {
         if (x.kind == ExprKind::Index) {
             for (size_t k = 0; k < x.indices.size(); ++k) {
@@ -2028,6 +2043,10 @@ int Checker::sum_range(const Expr& body, const std::string& index) {
                 allow_sequence_ = x.args[0]->kind == ExprKind::Name;
                 Type bt = check(const_cast<Expr&>(*x.args[0]));
                 allow_sequence_ = false;
+                if (!bt.valid()) {  // an error already said (a sequence whose declaration failed): not again here
+                    reported = true;
+                    continue;
+                }
                 size_t pos = k;
                 if (bt.is_array() && k > 0) bt = bt.element(), pos = k - 1;  // x_i,j: a component of an element
                 int size = 0;
@@ -2048,7 +2067,7 @@ int Checker::sum_range(const Expr& body, const std::string& index) {
         if (x.otherwise) walk(*x.otherwise);
     };
     walk(body);
-    return bad ? -1 : n;
+    return bad || (n == 0 && reported) ? -1 : n;
 }
 
 void Checker::run() {

@@ -16,6 +16,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 using limits::kFloatMax;
 constexpr double kExpOverflow = 88.72283905206835;   // ln(kFloatMax)
 
+enum GuardKind { kNone, kClampUnit, kNonNegative, kPowBase, kAtan2, kNormalize, kDivLength };
+
 struct Range {
     std::vector<Interval> c;  // per component
     bool known = false;       // derived from constants and parameters only
@@ -184,6 +186,141 @@ struct Analyzer {
         return x;
     }
 
+    // Every instruction's range, in order, with the warnings (the loop bodies' too, with their captures' ranges:
+    // eval's Op::Loop) and, where `needs` is given, the guard each needs (kClampUnit…).
+    void scan(std::vector<int>* needs_out) {
+        r.assign(f.body.size(), {});
+        underflows.assign(f.body.size(), 0);
+        std::vector<int> needs(f.body.size(), 0);
+        std::vector<bool> beyond(f.body.size(), false);  // a value past the largest float wherever it is
+        for (size_t i = 0; i < f.body.size(); ++i) {
+            const Instr& in = f.body[i];
+            if (in.op == Op::Builtin) {
+                std::string n = iqc::builtin(in.aux).name;
+                auto arg = [&](size_t k) { return r[in.args[k]]; };
+                auto any = [&](const Range& x, auto pred) {
+                    for (const auto& c : x.c)
+                        if (pred(c)) return true;
+                    return false;
+                };
+                Range x = arg(0);
+                if (n == "acos" || n == "asin") {
+                    if (any(x, [](Interval c) { return c.lo < -1 || c.hi > 1; })) {
+                        needs[i] = kClampUnit;
+                        if (x.known)
+                            warn(in, fmt::format("{} of a value outside [-1, 1]: with the parameters' bounds {}", n,
+                                                   ranges_over(x.c[0])));
+                    }
+                } else if (n == "sqrt") {
+                    if (any(x, [](Interval c) { return c.lo < 0; })) {
+                        needs[i] = kNonNegative;
+                        if (x.known && any(x, [](Interval c) { return c.lo < 0; }))
+                            warn(in, fmt::format("square root of a value that can be negative: {}", ranges_over(x.c[0])));
+                    }
+                } else if (n == "log" || n == "ln") {
+                    if (x.known && any(x, [](Interval c) { return c.lo <= 0; }))
+                        warn(in, fmt::format("logarithm of a value that can be 0 or negative: {}", ranges_over(x.c[0])));
+                } else if (n == "pow") {
+                    if (any(x, [](Interval c) { return c.lo < 0; })) {
+                        needs[i] = kPowBase;
+                        if (x.known)
+                            warn(in, fmt::format("a power of a base that can be negative: {}", ranges_over(x.c[0])));
+                    }
+                } else if (n == "normalize") {
+                    bool zero = true;
+                    for (const auto& c : x.c) zero &= contains_zero(c);
+                    if (zero) needs[i] = kNormalize;  // 0 / 0: the zero vector instead of NaN
+                    if (x.known && zero) warn(in, "normalize of a vector that can be zero");
+                } else if (n == "exp") {
+                    // e^x is ∞ in a 32-bit float past x = ln(3.4e38) ≈ 88.72 (iqc eval, in double, still has a number).
+                    if (x.known && any(x, [](Interval c) { return c.hi > kExpOverflow; }))
+                        warn(in, fmt::format("exp of a value that can exceed {:.4g}: a shader's 32-bit float overflows to ∞ "
+                                               "there; {}", kExpOverflow, ranges_over(x.c[0])));
+                } else if (n == "acosh") {
+                    // acosh is defined from 1 on, atanh strictly inside (-1, 1): NaN or ±∞ elsewhere, in a shader too.
+                    if (x.known && any(x, [](Interval c) { return c.lo < 1; }))
+                        warn(in, fmt::format("acosh of a value that can be below 1 (NaN there): {}", ranges_over(x.c[0])));
+                } else if (n == "atanh") {
+                    if (x.known && any(x, [](Interval c) { return c.lo <= -1 || c.hi >= 1; }))
+                        warn(in, fmt::format("atanh of a value that can reach ±1 or beyond (±∞ or NaN there): {}",
+                                               ranges_over(x.c[0])));
+                } else if (n == "mod") {
+                    Range y = arg(1);
+                    if (y.known && any(y, [](Interval c) { return contains_zero(c); }))
+                        warn(in, fmt::format("mod by a value that can be 0: {}", ranges_over(y.c[0])));
+                } else if (n == "atan2") {
+                    Range y = arg(0), xx = arg(1);
+                    if (any(y, [](Interval c) { return contains_zero(c); }) && any(xx, [](Interval c) { return contains_zero(c); }))
+                        needs[i] = kAtan2;
+                }
+            }
+            // v / ‖v‖ where v can be 0: the zero vector instead of NaN (the same guard as normalize).
+            if (in.op == Op::Div && in.type.is_vector()) {
+                const Instr& den = f.body[in.args[1]];
+                if (den.op == Op::Builtin && std::string(iqc::builtin(den.aux).name) == "length" && den.args[0] == in.args[0] &&
+                    contains_zero(r[in.args[1]].c[0]))
+                    needs[i] = kDivLength;
+            }
+            r[i] = eval(i);
+            // In 32-bit floats a nonzero value below the smallest normal (1.2e-38) may be 0 (GPUs flush denormals):
+            // e^-100, 1e-20·1e-20. Its range takes 0 in, so a division by it is a division by a value that can be 0.
+            if (in.type.kind != Type::Integer && in.op != Op::Compare)
+                for (auto& c : r[i].c) {
+                    if (c.lo > 0 && c.lo < limits::kFloatMinNormal) c.lo = 0, underflows[i] = 1;
+                    if (c.hi < 0 && c.hi > -limits::kFloatMinNormal) c.hi = 0, underflows[i] = 1;
+                }
+            // A value of constants and parameters that is beyond the largest float wherever it is (10^40): the
+            // shader computes ∞ where iqc eval, in double, prints a number.
+            // Said once, where it starts (a folded constant keeps the span of what it was folded from).
+            if (r[i].known && in.type.kind != Type::Integer && !r[i].c.empty()) {
+                for (const auto& c : r[i].c)
+                    beyond[i] = beyond[i] || (std::min(std::fabs(c.lo), std::fabs(c.hi)) > kFloatMax && c.lo * c.hi > 0 &&
+                                              std::isfinite(c.lo) && std::isfinite(c.hi));
+                bool inherited = false;
+                for (ValueId arg : in.args) inherited |= beyond[arg];
+                if (beyond[i] && !inherited && in.span.valid())
+                    warn(in, fmt::format("this value is beyond the largest 32-bit float (3.4e38): a shader computes ∞; {}",
+                                           ranges_over(r[i].c[0])));
+                // Nonzero but below the smallest normal float wherever it is (a product of 1e-20 and 1e-20): a shader
+                // may compute 0. Said where it starts.
+                bool tiny = underflows[i] != 0;
+                for (const auto& c : r[i].c) tiny = tiny && std::max(std::fabs(c.lo), std::fabs(c.hi)) < limits::kFloatMinNormal;
+                bool tiny_inherited = false;
+                for (ValueId arg : in.args) tiny_inherited |= underflows[arg] && r[arg].known;
+                if (tiny && !tiny_inherited && in.span.valid())
+                    warn(in, fmt::format("this value is below the smallest normal 32-bit float ({:.2g}): a shader may compute 0; {}",
+                                           limits::kFloatMinNormal, ranges_over(r[i].c[0])));
+            }
+            // A guarded operation's result is in range.
+            if (needs[i] == kNonNegative)
+                for (auto& c : r[i].c) c.lo = std::max(c.lo, 0.0);
+        }
+        if (needs_out) *needs_out = std::move(needs);
+    }
+
+    // The warnings of a loop's body (a rolled ∑, ir/Lower.cpp), analysed with the index over its range and the
+    // captures' ranges: the body alone knows nothing of its parameters, so `w_i / ∑_j w_j` over 40 elements,
+    // whose divisor the loop captures, went unwarned where 3 elements (unrolled) warned. The states change from
+    // trip to trip: nothing is assumed of them.
+    void loop_warnings(const Instr& loop) {
+        const Function& body = m.functions[size_t(loop.aux)];
+        const size_t states = body.outputs.size();
+        std::vector<Range> args;
+        Range k = all_unknown(Type::integer());
+        const Instr& hi = f.body[loop.args[0]];
+        if (!loop.data.empty() && hi.op == Op::Const && hi.data.size() == 1 && hi.data[0] >= loop.data[0]) {
+            k.known = true;
+            k.c = {{loop.data[0], std::floor(hi.data[0] + 0.5)}};
+        }
+        args.push_back(k);
+        for (size_t a = 1; a < loop.args.size(); ++a)
+            args.push_back(a <= states ? all_unknown(f.body[loop.args[a]].type) : r[loop.args[a]]);
+        Analyzer sub{m, body, {}, {}};
+        sub.params = &args;
+        sub.scan(nullptr);
+        for (auto& issue : sub.issues) issues.push_back(std::move(issue));
+    }
+
     Range eval(size_t i) {
         const Instr& in = f.body[i];
         Range x = all_unknown(in.type);
@@ -224,8 +361,10 @@ struct Analyzer {
                 if (in.aux == 0 && f.body[in.args[0]].op == Op::Loop)
                     if (auto s = accumulated(f.body[in.args[0]])) return *s;
                 return all_unknown(in.type);
-            case Op::Input:
             case Op::Loop:
+                loop_warnings(in);
+                return all_unknown(in.type);
+            case Op::Input:
             case Op::Call:
                 return all_unknown(in.type);
             case Op::Add:
@@ -319,115 +458,8 @@ struct Analyzer {
 std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
     Function& f = m.functions[size_t(fn)];
     Analyzer a{m, f, {}, {}};
-    a.r.resize(f.body.size());
-    a.underflows.assign(f.body.size(), 0);
-    // Analysis and warnings.
     std::vector<int> needs;  // per instruction: 0 none, else the guard kind
-    needs.assign(f.body.size(), 0);
-    std::vector<bool> beyond(f.body.size(), false);  // a value past the largest float wherever it is
-    enum { kNone, kClampUnit, kNonNegative, kPowBase, kAtan2, kNormalize, kDivLength };
-    for (size_t i = 0; i < f.body.size(); ++i) {
-        const Instr& in = f.body[i];
-        if (in.op == Op::Builtin) {
-            std::string n = builtin(in.aux).name;
-            auto arg = [&](size_t k) { return a.r[in.args[k]]; };
-            auto any = [&](const Range& x, auto pred) {
-                for (const auto& c : x.c)
-                    if (pred(c)) return true;
-                return false;
-            };
-            Range x = arg(0);
-            if (n == "acos" || n == "asin") {
-                if (any(x, [](Interval c) { return c.lo < -1 || c.hi > 1; })) {
-                    needs[i] = kClampUnit;
-                    if (x.known)
-                        a.warn(in, fmt::format("{} of a value outside [-1, 1]: with the parameters' bounds {}", n,
-                                               ranges_over(x.c[0])));
-                }
-            } else if (n == "sqrt") {
-                if (any(x, [](Interval c) { return c.lo < 0; })) {
-                    needs[i] = kNonNegative;
-                    if (x.known && any(x, [](Interval c) { return c.lo < 0; }))
-                        a.warn(in, fmt::format("square root of a value that can be negative: {}", ranges_over(x.c[0])));
-                }
-            } else if (n == "log" || n == "ln") {
-                if (x.known && any(x, [](Interval c) { return c.lo <= 0; }))
-                    a.warn(in, fmt::format("logarithm of a value that can be 0 or negative: {}", ranges_over(x.c[0])));
-            } else if (n == "pow") {
-                if (any(x, [](Interval c) { return c.lo < 0; })) {
-                    needs[i] = kPowBase;
-                    if (x.known)
-                        a.warn(in, fmt::format("a power of a base that can be negative: {}", ranges_over(x.c[0])));
-                }
-            } else if (n == "normalize") {
-                bool zero = true;
-                for (const auto& c : x.c) zero &= contains_zero(c);
-                if (zero) needs[i] = kNormalize;  // 0 / 0: the zero vector instead of NaN
-                if (x.known && zero) a.warn(in, "normalize of a vector that can be zero");
-            } else if (n == "exp") {
-                // e^x is ∞ in a 32-bit float past x = ln(3.4e38) ≈ 88.72 (iqc eval, in double, still has a number).
-                if (x.known && any(x, [](Interval c) { return c.hi > kExpOverflow; }))
-                    a.warn(in, fmt::format("exp of a value that can exceed {:.4g}: a shader's 32-bit float overflows to ∞ "
-                                           "there; {}", kExpOverflow, ranges_over(x.c[0])));
-            } else if (n == "acosh") {
-                // acosh is defined from 1 on, atanh strictly inside (-1, 1): NaN or ±∞ elsewhere, in a shader too.
-                if (x.known && any(x, [](Interval c) { return c.lo < 1; }))
-                    a.warn(in, fmt::format("acosh of a value that can be below 1 (NaN there): {}", ranges_over(x.c[0])));
-            } else if (n == "atanh") {
-                if (x.known && any(x, [](Interval c) { return c.lo <= -1 || c.hi >= 1; }))
-                    a.warn(in, fmt::format("atanh of a value that can reach ±1 or beyond (±∞ or NaN there): {}",
-                                           ranges_over(x.c[0])));
-            } else if (n == "mod") {
-                Range y = arg(1);
-                if (y.known && any(y, [](Interval c) { return contains_zero(c); }))
-                    a.warn(in, fmt::format("mod by a value that can be 0: {}", ranges_over(y.c[0])));
-            } else if (n == "atan2") {
-                Range y = arg(0), xx = arg(1);
-                if (any(y, [](Interval c) { return contains_zero(c); }) && any(xx, [](Interval c) { return contains_zero(c); }))
-                    needs[i] = kAtan2;
-            }
-        }
-        // v / ‖v‖ where v can be 0: the zero vector instead of NaN (the same guard as normalize).
-        if (in.op == Op::Div && in.type.is_vector()) {
-            const Instr& den = f.body[in.args[1]];
-            if (den.op == Op::Builtin && std::string(builtin(den.aux).name) == "length" && den.args[0] == in.args[0] &&
-                contains_zero(a.r[in.args[1]].c[0]))
-                needs[i] = kDivLength;
-        }
-        a.r[i] = a.eval(i);
-        // In 32-bit floats a nonzero value below the smallest normal (1.2e-38) may be 0 (GPUs flush denormals):
-        // e^-100, 1e-20·1e-20. Its range takes 0 in, so a division by it is a division by a value that can be 0.
-        if (in.type.kind != Type::Integer && in.op != Op::Compare)
-            for (auto& c : a.r[i].c) {
-                if (c.lo > 0 && c.lo < limits::kFloatMinNormal) c.lo = 0, a.underflows[i] = 1;
-                if (c.hi < 0 && c.hi > -limits::kFloatMinNormal) c.hi = 0, a.underflows[i] = 1;
-            }
-        // A value of constants and parameters that is beyond the largest float wherever it is (10^40): the
-        // shader computes ∞ where iqc eval, in double, prints a number.
-        // Said once, where it starts (a folded constant keeps the span of what it was folded from).
-        if (a.r[i].known && in.type.kind != Type::Integer && !a.r[i].c.empty()) {
-            for (const auto& c : a.r[i].c)
-                beyond[i] = beyond[i] || (std::min(std::fabs(c.lo), std::fabs(c.hi)) > kFloatMax && c.lo * c.hi > 0 &&
-                                          std::isfinite(c.lo) && std::isfinite(c.hi));
-            bool inherited = false;
-            for (ValueId arg : in.args) inherited |= beyond[arg];
-            if (beyond[i] && !inherited && in.span.valid())
-                a.warn(in, fmt::format("this value is beyond the largest 32-bit float (3.4e38): a shader computes ∞; {}",
-                                       ranges_over(a.r[i].c[0])));
-            // Nonzero but below the smallest normal float wherever it is (a product of 1e-20 and 1e-20): a shader
-            // may compute 0. Said where it starts.
-            bool tiny = a.underflows[i] != 0;
-            for (const auto& c : a.r[i].c) tiny = tiny && std::max(std::fabs(c.lo), std::fabs(c.hi)) < limits::kFloatMinNormal;
-            bool tiny_inherited = false;
-            for (ValueId arg : in.args) tiny_inherited |= a.underflows[arg] && a.r[arg].known;
-            if (tiny && !tiny_inherited && in.span.valid())
-                a.warn(in, fmt::format("this value is below the smallest normal 32-bit float ({:.2g}): a shader may compute 0; {}",
-                                       limits::kFloatMinNormal, ranges_over(a.r[i].c[0])));
-        }
-        // A guarded operation's result is in range.
-        if (needs[i] == kNonNegative)
-            for (auto& c : a.r[i].c) c.lo = std::max(c.lo, 0.0);
-    }
+    a.scan(&needs);
     if (!guard) return a.issues;
     // Rewrite with guards.
     Function g = f;
