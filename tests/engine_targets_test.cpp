@@ -567,7 +567,8 @@ TEST_CASE("instances with sequence parameters read them in place, in a loop: no 
     // copy of the function reads its instance's array in place (`arrays`) and the sum is a loop.
     std::string points;
     for (int k = 0; k < 300; ++k) points += fmt::format("{}({}, {}, {})", k ? ", " : "", (k % 7) * 0.01, (k % 5) * 0.01, (k % 3) * 0.01);
-    std::string text = "[modules]\nm = \"\"\"\nshape\nD = ‖p‖ - 0.3 - ∑_i ‖x_i‖ 1e-3\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" + points +
+    // (a sum that reads p: one that does not is computed once per pixel, before marching: the pass `hoist`)
+    std::string text = "[modules]\nm = \"\"\"\nshape\nD = ‖p‖ - 0.3 - ∑_i ‖p - x_i‖ 1e-4\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" + points +
                        "}\n\"\"\"\n[camera]\nposition = [0.5, 0, -3]\ntarget = [0.5, 0, 0]\n";
     for (int k = 0; k < 3; ++k) text += fmt::format("[[shapes]]\ntype = \"m\"\ntransform = \"T(({}, 0, 0))\"\n", k * 0.5);
     auto path = write_temp("seq_300_x3.iq", text);
@@ -589,7 +590,7 @@ TEST_CASE("instances with sequence parameters read them in place, in a loop: no 
     REQUIRE(a.ok);
     REQUIRE(b.ok);
     CHECK(differing_pixels(a.image, b.image) == 0);
-    // (and the sums are the balls' radii: a ball of 0.3 alone differs)
+    // (and the sums shrink the balls: a ball of 0.3 alone differs)
     Compiled small = compile_path(write_temp("seq_300_ball.iq", "[camera]\nposition = [0.5, 0, -3]\ntarget = [0.5, 0, 0]\n"
                                              "[[shapes]]\ntype = \"sphere\"\nshape_params = { r = 0.3 }\n"), {});
     REQUIRE(small.result.exit_code == 0);
@@ -624,6 +625,51 @@ TEST_CASE("a sum over pairs of a sequence's points draws on webgl2 as on Shadert
     CHECK(differing_pixels(a.image, b.image) == 0);
 }
 
+TEST_CASE("a sum that reads nothing of p is computed once per pixel before marching", "[engine-targets][render]") {
+    // A trial: a blob centred on the weighted centroid of its 100 points, c = ∑_i w_i x_i / ∑_j w_j, ran both sums
+    // at every step (two 100-trip loops per evaluation); a constant ∑_i ∑_j ∑_k over 100 points on webgl2 did not
+    // draw in 120 s. The pass `hoist` makes c a prepared global that iqc_prepare computes: the scene function reads
+    // it and holds no loop. The evaluator (iqc bench's reference) computes it the same way.
+    const int n = 100;
+    std::string points, weights;
+    double sw = 0, sx[3] = {0, 0, 0};
+    for (int k = 0; k < n; ++k) {
+        double a = 2 * M_PI * k / n, x[3] = {0.3 * std::cos(a) + 0.2, 0.2 * std::sin(a), 0.1 * std::sin(3 * a)}, w = 1 + 0.5 * std::sin(k);
+        points += fmt::format("{}({}, {}, {})", k ? ", " : "", x[0], x[1], x[2]);
+        weights += fmt::format("{}{}", k ? ", " : "", w);
+        sw += w;
+        for (int c = 0; c < 3; ++c) sx[c] += w * x[c];
+    }
+    auto path = write_temp("centroid.iq", "[modules]\nblob = \"\"\"\nshape\nD = ‖p - c‖ - 0.5\nc = ∑_i w_i x_i / ∑_j w_j\nwhere\n"
+                                          "p ∈ ℝ³\nx_i ∈ ℝ³ default = {" + points + "}\nw_i ∈ ℝ default = {" + weights + "}\n\"\"\"\n"
+                                          "[camera]\nposition = [0, 0.5, -3]\ntarget = [0, 0, 0]\n[[shapes]]\ntype = \"blob\"\n");
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled web = compile_path(path, o), st = compile_path(path, {});
+    REQUIRE(web.result.exit_code == 0);
+    REQUIRE(st.result.exit_code == 0);
+    for (const std::string* code : {&web.result.code, &st.result.code}) {
+        const std::string& c = *code;
+        size_t prepare = c.find("void iqc_prepare() {"), scene = c.find("vec2 iqc_scene(vec3 p) {");
+        REQUIRE(prepare != std::string::npos);
+        CHECK(c.find("for (", prepare) < c.find("\n}", prepare));  // the sums' loops are in iqc_prepare
+        CHECK_THAT(c, Catch::Contains("pixel_c = "));
+        REQUIRE(scene != std::string::npos);
+        CHECK(c.find("for (", scene) > c.find("\n}", scene));  // and none in the scene's distance
+    }
+    // The reference (the evaluator, which runs iqc_prepare at the first read of a prepared global).
+    REQUIRE(web.result.model);
+    for (auto p : {std::array<double, 3>{0, 0, 0}, std::array<double, 3>{1, -0.5, 2}}) {
+        double d = std::hypot(p[0] - sx[0] / sw, p[1] - sx[1] / sw, p[2] - sx[2] / sw) - 0.5;
+        CHECK(web.result.model->distance(p) == Approx(d).epsilon(1e-12));
+    }
+    const int W = 64, H = 36;
+    render::RenderResult a = render_compiled(web.result, W, H), b = render_compiled(st.result, W, H);
+    REQUIRE(a.ok);
+    REQUIRE(b.ok);
+    CHECK(differing_pixels(a.image, b.image) == 0);
+}
+
 TEST_CASE("rolled sums are unrolled further where a pixel's evaluations would run out llvmpipe's loop budget",
           "[engine-targets]") {
     // llvmpipe ends an invocation after 65,535 loop iterations in all. A trial's 30 instances with two 40-point sums
@@ -632,7 +678,7 @@ TEST_CASE("rolled sums are unrolled further where a pixel's evaluations would ru
     std::string points;
     for (int k = 0; k < 40; ++k) points += fmt::format("{}({}, 0, 0)", k ? ", " : "", 0.01 * k);
     auto scene = [&](int max_steps) {
-        return "[render]\nmax_steps = " + std::to_string(max_steps) + "\n[modules]\nblob = \"\"\"\nshape\nD = ‖p‖ - 0.3 - ∑_i ‖x_i‖ 1e-3\nwhere\n"
+        return "[render]\nmax_steps = " + std::to_string(max_steps) + "\n[modules]\nblob = \"\"\"\nshape\nD = ‖p‖ - 0.3 - ∑_i ‖p - x_i‖ 1e-4\nwhere\n"
                "p ∈ ℝ³\nx_i ∈ ℝ³ default = {" + points + "}\n\"\"\"\n[[shapes]]\ntype = \"blob\"\n[[shapes]]\ntype = \"blob\"\n"
                "transform = \"T((1, 0, 0))\"\nshape_params = { x = \"{" + points + "}\" }\n";
     };

@@ -340,18 +340,30 @@ TEST_CASE("a sum over a long sequence is a loop: its values are the sum's, condi
     double pair_sum = 0;
     for (int a = 1; a <= n; ++a)
         for (int b = 1; b <= n; ++b) pair_sum += std::abs(a - b) * std::sqrt(14.0);
-    // A sum over a sequence the module computes element-wise stays unrolled: each term reads its element's
-    // expression (a loop kept the whole array built per evaluation: 12 s a frame on webgl2, a trial).
-    auto elem = write_temp("elementwise.iql", "shape\nD = ‖p‖ - 1 + s/1e9\ny_i = 2x_i + (1, 0, 0)\ns = ∑_i ‖y_i‖\nwhere\np ∈ ℝ³\n"
-                                              "x_i ∈ ℝ³ default = {" + ys + "}\n");
-    RunResult ed = run_iqc(elem.string() + " --target webgl2 --dump-ir=after-lower -o /dev/null");
-    REQUIRE(ed.exit_code == 0);
-    CHECK(count_loops(ed.err) == 0);
-    double elem_sum = 0;
-    for (int k = 1; k <= n; ++k) elem_sum += std::sqrt(std::pow(2.0 * k + 1, 2) + std::pow(4.0 * k, 2) + std::pow(6.0 * k, 2));
-    RunResult ev = run_iqc("eval " + elem.string() + " --set 'p=(0,0,0)'");
-    REQUIRE(ev.out.find("s = ") != std::string::npos);
-    CHECK(std::stod(ev.out.substr(ev.out.find("s = ") + 4)) == Approx(elem_sum).epsilon(1e-12));
+    // A sum over a sequence the module computes element-wise is a loop whose term reads the element's expression
+    // with the loop's index (a loop over the array built where y is defined kept it built whole per evaluation:
+    // 12 s a frame on webgl2, a trial; then it stayed unrolled), also where the definition uses another letter and
+    // where the term reads a component of the element.
+    double elem_sum = 0, second = 0;
+    for (int k = 1; k <= n; ++k) {
+        elem_sum += std::sqrt(std::pow(2.0 * k + 1, 2) + std::pow(4.0 * k, 2) + std::pow(6.0 * k, 2));
+        second += 4.0 * k;
+    }
+    for (const char* def : {"y_i = 2x_i + (1, 0, 0)", "y_j = 2x_j + (1, 0, 0)"}) {
+        INFO(def);
+        auto elem = write_temp("elementwise.iql", std::string("shape\nD = ‖p‖ - 1 + s/1e9 + t/1e9\n") + def +
+                                                      "\ns = ∑_i ‖y_i‖\nt = ∑_i y_i,2\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" + ys + "}\n");
+        RunResult ed = run_iqc(elem.string() + " --target webgl2 --dump-ir=after-lower -o " + (temp_dir() / "elem.frag").string());
+        REQUIRE(ed.exit_code == 0);
+        CHECK(count_loops(ed.err) == 2);
+        CHECK_THAT(read_text(temp_dir() / "elem.frag"), !Catch::Contains("vec3[" + std::to_string(n) + "]("));  // no array built
+        RunResult ev = run_iqc("eval " + elem.string() + " --set 'p=(0,0,0)'");
+        INFO(ev.out);
+        REQUIRE(ev.out.find("s = ") != std::string::npos);
+        CHECK(std::stod(ev.out.substr(ev.out.find("s = ") + 4)) == Approx(elem_sum).epsilon(1e-12));
+        REQUIRE(ev.out.find("t = ") != std::string::npos);
+        CHECK(std::stod(ev.out.substr(ev.out.find("t = ") + 4)) == Approx(second).epsilon(1e-12));
+    }
     RunResult pv = run_iqc("eval " + pairs.string() + " --set 'p=(0,0,0)'");
     INFO(pv.out);
     REQUIRE(pv.out.find("s = ") != std::string::npos);

@@ -216,13 +216,20 @@ void Emitter::limit_loop_iterations(const std::vector<int>& roots, double evalua
         }
         return memo[fn] = {all, sums};
     };
-    double sums = 0, others = 0;
+    // iqc_prepare runs once per pixel (ir/passes/Hoist.h: the sums that read nothing of the query point), the
+    // other roots at each of the pixel's evaluations.
+    double sums = 0, others = 0, once = 0;
     for (int r : roots) {
         auto [a, s] = count(r);
+        if (m_.functions[size_t(r)].name == ir::names::kPrepare) {
+            once = a;
+            continue;
+        }
         sums = std::max(sums, s);
         others = std::max(others, a - s);
     }
-    const double budget = evaluations > 0 ? std::max(0.0, kLoopIterations / evaluations - others) : kSumLoopBudget;
+    const double budget =
+        evaluations > 0 ? std::max(0.0, std::max(0.0, kLoopIterations - once) / evaluations - others) : kSumLoopBudget;
     if (sums <= budget) return;
     // Each rolled sum's loop runs `ratio` of its iterations (at least one trip: fully unrolled).
     const double ratio = budget / sums;

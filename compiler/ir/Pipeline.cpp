@@ -9,6 +9,7 @@
 #include "ir/passes/DCE.h"
 #include "ir/passes/Differentiate.h"
 #include "ir/passes/Fold.h"
+#include "ir/passes/Hoist.h"
 #include "ir/passes/Inline.h"
 #include "ir/passes/IntervalExtension.h"
 #include "ir/passes/Lipschitz.h"
@@ -291,6 +292,8 @@ const std::vector<Pass>& passes() {
          [](Module& m, const PipelineOptions&, PipelineResult&) { convert_cheap_choices(m); }},
         {{"arrays", "array arguments: a call that passes a global array whole (a sequence parameter) calls a copy of its callee that reads the global in place (uniform targets)"},
          [](Module& m, const PipelineOptions&, PipelineResult&) { bind_array_arguments(m); }},
+        {{"hoist", "values holding a loop that read nothing of the query point (a ∑ over a sequence): computed once per pixel by iqc_prepare"},
+         [](Module& m, const PipelineOptions&, PipelineResult&) { hoist_pixel_invariants(m); }},
         {{"simplify", "fold and CSE again"},
          [](Module& m, const PipelineOptions&, PipelineResult&) {
              fold_all(m);
