@@ -583,6 +583,42 @@ TEST_CASE("a bound too small for its shape gets a located warning", "[numerics]"
     }
 }
 
+TEST_CASE("a sum weighted by a sequence of constants is bounded by its weights", "[numerics]") {
+    // A trial: D = ∑_i w_i (‖p - x_i‖ - 0.8)/N with constant weights w_i ∈ ℝ (Shadertoy) had no bound at all (K ≤ ∞:
+    // the interval rule knew an array's element read by the loop's index, not one read by a constant index), so
+    // it was marched with 1.25 times its steepest sample, unproven. Its gradient is at most ∑|w_i|/N (1.5 here,
+    // the weights 1 and 2 over 2): derived now, unrolled (2 weights) and as a loop (40). With sliders (webgl2)
+    // the weights are unbounded (a sequence has no slider bounds): no bound, and the warning says so.
+    auto derived = [](const Compiled& c) {
+        for (const auto& l : c.result.lipschitz)
+            if (l.rfind("wsum (", 0) == 0) return std::stod(l.substr(l.find("K ≤ ") + std::string("K ≤ ").size()));
+        return -1.0;
+    };
+    for (int n : {2, 40}) {
+        INFO(n);
+        std::string points, weights;
+        for (int k = 0; k < n; ++k) {
+            points += fmt::format("{}({}, 0, 0)", k ? ", " : "", 0.05 * k);
+            weights += fmt::format("{}{}", k ? ", " : "", k % 2 ? 2 : 1);
+        }
+        std::string scene = "[modules]\nwsum = \"\"\"\nshape\nD = ∑_i w_i (‖p - x_i‖ - 0.5)/" + std::to_string(n) +
+                            "\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" + points + "}\nw_i ∈ ℝ default = {" + weights + "}\n\"\"\"\n"
+                            "[[shapes]]\ntype = \"wsum\"\n";
+        Compiled c = compile_text("wsum.iq", scene);
+        REQUIRE(c.result.exit_code == 0);
+        INFO(c.diagnostics);
+        CHECK(derived(c) >= 1.5);
+        CHECK(derived(c) < 3);
+        CHECK_THAT(c.diagnostics, !Catch::Contains("not a proven bound"));
+        CompileOptions o;
+        o.target = Target::WebGL2;
+        Compiled web = compile_path(write_temp("wsum_web.iq", scene), o);
+        REQUIRE(web.result.exit_code == 0);
+        CHECK(std::isinf(derived(web)));
+        CHECK_THAT(web.diagnostics, Catch::Contains("not a proven bound"));
+    }
+}
+
 TEST_CASE("smooth unions of shapes keep the bound of their shapes", "[numerics]") {
     // A new user's trial (stop 37): a smooth union of a rounded box, a capsule and a cone with a sphere
     // smoothly subtracted got K = 9.92 derived (one interval evaluation of the whole gradient bounds each of the

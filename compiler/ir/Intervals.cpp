@@ -527,7 +527,16 @@ Bounds bounds_rule(const Module& m, const Function& f, const Instr& in, const st
             break;
         }
         case Op::Index:  // any element: the array's bounds are per element component already
+        case Op::Element:  // (a constant index: the hull holds it too; w_i ∈ ℝ over 3 weights had no bound at all)
             if (a[0]->c.size() == comps) return *a[0];
+            break;
+        case Op::At:  // an element, or a component chosen when running: the hull of what it may choose
+            if (f.body[in.args[0]].type.is_array()) {
+                if (a[0]->c.size() == comps) return *a[0];
+            } else if (comps == 1 && !a[0]->c.empty()) {
+                x.c = {a[0]->c[0]};
+                for (const auto& c : a[0]->c) x.c[0] = hull(x.c[0], c);
+            }
             break;
         case Op::IntDiv:
             if (comp(*a[0], 0).lo >= 0 && comp(*a[1], 0).lo > 0)
