@@ -211,9 +211,29 @@ TEST_CASE("a failed sequence declaration is said once", "[diag]") {
     CHECK(d == "test.iql:5:3: error: the parameter 'a' of 'f' is declared as a sequence (a_i ∈ …): a local function's "
                "parameters are single values; read the module's sequence in the function instead (f() = ∑_i … x_i …)\n"
                "  f(a) = ∑_i ‖p - a_i‖ where a_i ∈ ℝ³\n    ^\n");
+    // Passing it the module's sequence is not a second error (it was: "'x' is a sequence", listed first), nor
+    // where the parameter takes the module's declaration of a sequence of its name.
+    CHECK(errors_of("y = f(x)\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {(1, 0, 0), (0, 1, 0)}\n"
+                    "f(a) = ∑_i ‖p - a_i‖ where a_i ∈ ℝ³\n") == d);
+    CHECK_THAT(errors_of("y = f(x)\nf(a) = ∑_i ‖p - a_i‖\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {(1, 0, 0)}\n"
+                         "a_i ∈ ℝ³ default = {(1, 0, 0)}\n"),
+               Catch::StartsWith("test.iql:2:3: error: the parameter 'a' of 'f' is declared as a sequence") &&
+                   !Catch::Contains("'x' is a sequence"));
     std::string b = errors_of("y = ∑_i w_i/∑_j w_j\nwhere\nw_i ∈ [0.5,1] default = {0.5, 0.6, 0.7}\n");
     CHECK(b == "test.iql:3:7: error: the sequence 'w' cannot have bounds (give its elements' type, such as ℝ³)\n"
                "  w_i ∈ [0.5,1] default = {0.5, 0.6, 0.7}\n        ^~~~~~~\n");
+}
+
+TEST_CASE("the same error at the same place is said once", "[diag]") {
+    // A trial: `a(sin(r), 0, 0)` (a product or a call: the checker tries both readings) said "'sin' needs an
+    // import" twice, "2 errors".
+    auto f = write_temp("twice.iql", "shape\nc = a(sin(r), 0, 0)\nD = c_1\nwhere\np ∈ ℝ³\na ∈ ℝ\nr ∈ ℝ\n");
+    RunResult r = run_iqc(f.string() + " -o /dev/null");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("twice.iql:2:7: error: 'sin' needs an import: add 'sin from trigonometry'"));
+    size_t first = r.err.find("needs an import");
+    CHECK(r.err.find("needs an import", first + 1) == std::string::npos);
+    CHECK_THAT(r.err, !Catch::Contains("2 errors"));
 }
 
 TEST_CASE("an empty sequence {} says so", "[diag]") {

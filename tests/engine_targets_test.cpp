@@ -427,6 +427,24 @@ TEST_CASE("wgsl: control flow, std140 strides, inverses and integer operations t
     CHECK(tint_errors({f}).empty());
 }
 
+TEST_CASE("wgsl: the largest float is a literal Tint accepts", "[engine-targets][wgsl]") {
+    // A trial: a smooth union of 40 points, -k log ∑_i e^(-d_i/k), is two loops (the stable pass: the largest term,
+    // then the sum shifted by it), the first starting from the largest negative float, which the translation wrote
+    // as -3.4028235e+38f: the shortest decimal that reads back as that float, but past it, and Tint refused it.
+    std::string points;
+    for (int k = 0; k < 40; ++k) points += fmt::format("{}({:.3f}, {:.3f}, 0)", k ? ", " : "", std::cos(0.1 * k), std::sin(0.1 * k));
+    auto path = write_temp("lse_40.iql", "shape\nD = -0.1 log(∑_i exp(-(‖p - x_i‖ - 0.2)/0.1))\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" +
+                                         points + "}\n");
+    fs::path out = temp_dir() / "lse_40.wgsl";
+    RunResult r = run_iqc(path.string() + " --target wgsl -q -o " + out.string());
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    std::string w = read_text(out);
+    CHECK_THAT(w, Catch::Contains("3.4028234663852886e+38f"));
+    CHECK_THAT(w, !Catch::Contains("3.4028235e+38f"));
+    CHECK(tint_errors({out}).empty());
+}
+
 TEST_CASE("wgsl: names that are WGSL keywords or reserved words are renamed", "[engine-targets][wgsl]") {
     std::string w = wgsl_of(R"(#version 450
 layout(location = 0) out vec4 colour;

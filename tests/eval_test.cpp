@@ -364,6 +364,21 @@ TEST_CASE("a sum over a long sequence is a loop: its values are the sum's, condi
         REQUIRE(ev.out.find("t = ") != std::string::npos);
         CHECK(std::stod(ev.out.substr(ev.out.find("t = ") + 4)) == Approx(second).epsilon(1e-12));
     }
+    // An element-wise sequence that reads p (y_i = x_i - p): its rolled sum is a loop on every target, and the
+    // Lipschitz pass's derivative takes each element's own (a trial: the array's derivative was a 3×3 matrix of
+    // 96 rows, a heap overflow when folded: exit 134 on webgl2). Unrolled (31) and rolled (40) alike.
+    for (int count : {31, 40}) {
+        std::string pts;
+        for (int k = 1; k <= count; ++k) pts += fmt::format("{}({}, 0, 0)", k > 1 ? ", " : "", 0.01 * k);
+        auto moving = write_temp("elem_p.iql", "shape\ny_i = x_i - p\nD = ∑_i ‖y_i‖/" + std::to_string(count) + " - 1\nwhere\np ∈ ℝ³\n"
+                                               "x_i ∈ ℝ³ default = {" + pts + "}\n");
+        for (const char* target : {"webgl2", "shadertoy"}) {
+            INFO(count << " " << target);
+            RunResult c = run_iqc(moving.string() + " --target " + target + " --dump-ir -o /dev/null");
+            REQUIRE(c.exit_code == 0);
+            CHECK_THAT(c.err, Catch::Contains("K ≤ 1 derived"));
+        }
+    }
     RunResult pv = run_iqc("eval " + pairs.string() + " --set 'p=(0,0,0)'");
     INFO(pv.out);
     REQUIRE(pv.out.find("s = ") != std::string::npos);

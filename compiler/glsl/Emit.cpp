@@ -231,9 +231,20 @@ void Emitter::limit_loop_iterations(const std::vector<int>& roots, double evalua
     const double budget =
         evaluations > 0 ? std::max(0.0, std::max(0.0, kLoopIterations - once) / evaluations - others) : kSumLoopBudget;
     if (sums <= budget) return;
-    // Each rolled sum's loop runs `ratio` of its iterations (at least one trip: fully unrolled).
+    // Each rolled sum's loop runs `ratio` of its iterations (at least one trip: fully unrolled), those the
+    // evaluations run (iqc_prepare's, once per pixel, stay loops).
     const double ratio = budget / sums;
-    for (size_t fn = 0; fn < m_.functions.size(); ++fn)
+    std::vector<char> per_evaluation(m_.functions.size(), 0);
+    std::function<void(int)> reach = [&](int fn) {
+        if (per_evaluation[size_t(fn)]) return;
+        per_evaluation[size_t(fn)] = 1;
+        for (const ir::Instr& in : m_.functions[size_t(fn)].body)
+            if (in.op == ir::Op::Call || in.op == ir::Op::Loop) reach(in.aux);
+    };
+    for (int r : roots)
+        if (m_.functions[size_t(r)].name != ir::names::kPrepare) reach(r);
+    for (size_t fn = 0; fn < m_.functions.size(); ++fn) {
+        if (!per_evaluation[fn]) continue;
         for (const ir::Instr& in : m_.functions[fn].body) {
             if (in.op != ir::Op::Loop || !m_.functions[size_t(in.aux)].rolled_sum) continue;
             long long trips = loop_trips(m_.functions[fn], in);
@@ -242,6 +253,7 @@ void Emitter::limit_loop_iterations(const std::vector<int>& roots, double evalua
             const double fewer = std::max(1.0, std::floor(iterations * ratio));
             unroll_[in.aux] = int(std::min<double>(double(trips), std::ceil(double(trips) / fewer)));
         }
+    }
 }
 
 namespace {

@@ -14,6 +14,8 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <cstdlib>
+#include <limits>
 #include <functional>
 #include <map>
 #include <set>
@@ -142,6 +144,13 @@ std::string f32_literal(uint32_t bits) {
     }
     auto r = std::to_chars(buf, buf + sizeof buf, f);
     std::string s(buf, r.ptr);
+    // The shortest decimal that reads back as f can lie past the largest f32 (3.4028235e38 > 3.40282347e38), which
+    // WGSL rejects ("value cannot be represented as 'f32'": a rolled log-sum-exp's first maximum): there the exact
+    // value as a double.
+    if (std::fabs(std::strtod(s.c_str(), nullptr)) > double(std::numeric_limits<float>::max())) {
+        r = std::to_chars(buf, buf + sizeof buf, double(f));
+        s.assign(buf, r.ptr);
+    }
     s += "f";
     return s[0] == '-' ? "(" + s + ")" : s;
 }

@@ -204,6 +204,7 @@ private:
     void collect_declarations();
     void declare_sequence(const Decl& decl, const std::string& name, Span span, const std::string& index);
     void bind_function(const Decl& decl, const std::string& name, Span span);
+    const Decl* param_decl(const LocalFunction& f, size_t i) const;
     std::set<std::string> unbound_functions_;  // function parameters without a definition, and sequences whose
                                                // declaration failed (already reported: not undefined at each use)
     std::map<std::string, int> seq_lengths_;  // a sequence index letter -> the length of its sequences
@@ -979,17 +980,25 @@ static std::string sequence_index(const Decl& decl, const std::string& name) {
     return "";
 }
 
+// The declaration of parameter i of a local function: its own `where`, else the module's (none for a function
+// parameter of the module, typed by its declared signature).
+const Decl* Checker::param_decl(const LocalFunction& f, size_t i) const {
+    const Stmt& s = *f.stmt;
+    const std::string& pname = s.params[i].first;
+    const Decl* decl = nullptr;
+    for (auto& ld : s.local_decls)
+        for (auto& nm : ld.names)
+            if (nm.first == pname) decl = &ld;
+    if (!decl && !f.declared)
+        if (auto it = decls_.find(pname); it != decls_.end()) decl = it->second;
+    return decl;
+}
+
 void Checker::check_function(LocalFunction& f, Span call_site, const std::vector<Type>* args) {
     const Stmt& s = *f.stmt;
     std::vector<const Decl*> decls;
     for (size_t i = 0; i < s.params.size(); ++i) {
-        const std::string& pname = s.params[i].first;
-        const Decl* decl = nullptr;
-        for (auto& ld : s.local_decls)
-            for (auto& nm : ld.names)
-                if (nm.first == pname) decl = &ld;
-        if (!decl && !f.declared)
-            if (auto it = decls_.find(pname); it != decls_.end()) decl = it->second;
+        const Decl* decl = param_decl(f, i);
         decls.push_back(decl);
         // A parameter of a symbolic size (x ∈ ℝ^n, or f: ℝ^(k×k) → ℝ) makes the function generic.
         const TypeSpec* spec = decl ? &decl->type : f.declared ? &f.declared->params[i] : nullptr;
@@ -1065,8 +1074,19 @@ Type Checker::check_call(Expr& e) {
     const std::string& n = e.text;
     std::vector<Type> at;
     bool args_ok = true;
-    for (auto& a : e.args) {
+    // A local function whose parameter is declared as a sequence: that is the error (check_function), said at the
+    // declaration; a sequence passed to it is not another one.
+    const int local = m_.find_function(n);
+    for (size_t k = 0; k < e.args.size(); ++k) {
+        auto& a = e.args[k];
+        bool seq_param = false;
+        if (local >= 0 && a->kind == ExprKind::Name && k < m_.functions[size_t(local)].stmt->params.size())
+            if (const Decl* d = param_decl(m_.functions[size_t(local)], k))
+                seq_param = !sequence_index(*d, m_.functions[size_t(local)].stmt->params[k].first).empty();
+        allow_sequence_ = seq_param;
         at.push_back(check(*a));
+        allow_sequence_ = false;
+        if (seq_param && at.back().is_array()) at.back() = {};  // (the call is not checked further)
         args_ok &= at.back().valid();
     }
     auto check_args = [&](const std::vector<Type>& params, const std::string& fname) -> bool {

@@ -230,6 +230,14 @@ std::string SourceManager::location(Span s) const {
 }
 
 Diagnostic& Diagnostics::add(Diagnostic d) {
+    // The same message at the same place once: a checker that tries two readings of `a(sin(r), 0, 0)` (a call, a
+    // product) checked the arguments twice and said "'sin' needs an import" twice. (Its notes go with the copy.)
+    for (const Diagnostic& o : list_)
+        if (o.severity == d.severity && o.has_span == d.has_span && o.message == d.message &&
+            (!d.has_span || (o.span.file == d.span.file && o.span.begin == d.span.begin && o.span.end == d.span.end))) {
+            duplicate_ = std::move(d);
+            return duplicate_;
+        }
     if (d.severity == Severity::Error) ++errors_;
     if (list_.size() >= kMaxKept) {
         ++dropped_;

@@ -118,6 +118,7 @@ private:
     const SourceManager& sm_;
     std::vector<Diagnostic> list_;
     Diagnostic overflow_;  // where a diagnostic past kMaxKept goes (its notes too)
+    Diagnostic duplicate_;  // where a diagnostic already reported goes (its notes too)
     size_t errors_ = 0, dropped_ = 0;
 };
 

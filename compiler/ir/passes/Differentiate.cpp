@@ -123,6 +123,9 @@ struct Differentiator {
         auto P = [&](size_t k) { return primal[in.args[k]]; };
         auto T = [&](size_t k) { return tangent[in.args[k]]; };
         auto PT = [&](size_t k) { return f.body[in.args[k]].type; };
+        // An element of a sequence the module computes element-wise (y_i = x_i - p, unrolled): its element's own.
+        if (in.op == Op::Element && f.body[in.args[0]].op == Op::Construct && f.body[in.args[0]].type.is_array())
+            return tangent[f.body[in.args[0]].args[size_t(in.aux)]];
         bool all_zero = true, poisoned = false;
         for (size_t k = 0; k < in.args.size(); ++k) {
             all_zero &= T(k) == kZero;
@@ -142,7 +145,6 @@ struct Differentiator {
             case Op::And:
             case Op::Or:
             case Op::Global:  // globals (sliders, per-instance data) do not depend on the query point
-            case Op::Index:
             case Op::IntDiv:  // ℤ
             case Op::IntMod:
             case Op::FloorInt:
@@ -207,8 +209,14 @@ struct Differentiator {
             case Op::Inverse:
             case Op::Det:
                 return no_rule("a matrix");
+            case Op::Index:  // (an array that depends on the query point: no rule, below)
+                return no_rule("an element of a sequence computed from the query point");
             case Op::Construct: {
                 if (in.type.is_matrix()) return no_rule("a matrix");
+                // A sequence of values that depend on it (y_i = x_i - p as an array): its elements read whole have
+                // no rule (Element reads of it take their element's tangent, above). The Jacobian's rows below are
+                // a vector's: an array of 32 vectors made a 3×3 matrix of 96 rows (a heap overflow when folded).
+                if (in.type.is_array()) return no_rule("a sequence computed from the query point");
                 std::vector<ValueId> rows;
                 for (size_t k = 0; k < in.args.size(); ++k) {
                     const Type& t = PT(k);

@@ -63,6 +63,22 @@ int hoist_pixel_invariants(Module& m) {
         };
         mark(prep);
     }
+    // Per function, transitively through its calls and loops: whether it reads a prepared global (per pixel, computed
+    // in order by iqc_prepare: a call reading one is left alone) and whether it runs a loop.
+    std::vector<char> reads_prepared(nf, 0), has_loop(nf, 0), walked(nf, 0);
+    std::function<void(int)> walk = [&](int fn) {
+        if (walked[size_t(fn)]) return;
+        walked[size_t(fn)] = 1;
+        for (const Instr& in : m.functions[size_t(fn)].body) {
+            if (in.op == Op::Global && m.globals[size_t(in.aux)].kind == Global::Kind::Prepared) reads_prepared[size_t(fn)] = 1;
+            if (in.op == Op::Call || in.op == Op::Loop) {
+                walk(in.aux);
+                reads_prepared[size_t(fn)] |= reads_prepared[size_t(in.aux)];
+                has_loop[size_t(fn)] |= in.op == Op::Loop || has_loop[size_t(in.aux)];
+            }
+        }
+    };
+    for (size_t fi = 0; fi < nf; ++fi) walk(int(fi));
     // Parameters every call passes the same global or constant: found from below (none known), a round per
     // level of calls (the IR has no recursion).
     Sources sources(nf);
@@ -118,18 +134,28 @@ int hoist_pixel_invariants(Module& m) {
                 case Op::Const: case Op::Input: inv[i] = 1; break;
                 case Op::Global: inv[i] = m.globals[size_t(in.aux)].kind != Global::Kind::Prepared; break;
                 case Op::Param: inv[i] = size_t(in.aux) < sources[fi].size() && sources[fi][size_t(in.aux)].has_value(); break;
-                case Op::Call: inv[i] = 0; break;
+                case Op::Call:  // a function of invariant arguments that reads no prepared global (a local function's ∑)
+                    inv[i] = !reads_prepared[size_t(in.aux)];
+                    for (ValueId a : in.args) inv[i] &= inv[a];
+                    break;
                 default:
                     inv[i] = 1;
                     for (ValueId a : in.args) inv[i] &= inv[a];
             }
-            loops[i] = in.op == Op::Loop;
+            loops[i] = in.op == Op::Loop || (in.op == Op::Call && has_loop[size_t(in.aux)]);
             for (ValueId a : in.args) loops[i] |= loops[a];
-            if (!inv[i])
-                for (ValueId a : in.args) used_variant[a] = 1;
         }
         used_variant[f.result] = 1;
-        for (const auto& [name, v] : f.outputs) used_variant[v] = 1;
+        // What the function's result needs: its other outputs (named values) are no caller's (a call gives its
+        // result): a material's ambient copy, called with P_L = 0, kept a sum of the light term that nothing read.
+        std::vector<char> needed(n, 0);
+        needed[f.result] = 1;
+        for (size_t i = n; i-- > 0;)
+            if (needed[i])
+                for (ValueId a : f.body[i].args) {
+                    needed[a] = 1;
+                    if (!inv[i]) used_variant[a] = 1;
+                }
         // The values to hoist: invariant, holding a loop, used by what is not; of a type a global can hold (else
         // their operands).
         std::vector<ValueId> chosen;
@@ -173,7 +199,7 @@ int hoist_pixel_invariants(Module& m) {
             if (auto it = global_of.find(pv); it != global_of.end()) g = it->second;
             else {
                 const Instr& in = f.body[v];
-                std::string base = "pixel_" + (in.name.empty() ? std::string("sum") : in.name);
+                std::string base = "pixel_" + (in.name.empty() ? std::string("value") : in.name);
                 std::string name = base;
                 for (int k = 2; m.find_global(name) >= 0 || std::any_of(new_globals.begin(), new_globals.end(),
                                                                           [&](const Global& x) { return x.name == name; });

@@ -67,7 +67,19 @@ struct Analyzer {
             if (!r[a].known) return false;
         return true;
     }
-    void warn(const Instr& in, std::string msg) { issues.push_back({in.span, std::move(msg)}); }
+    // Per instruction: whether the function's result or an output reads it (scan). The stable pass leaves the
+    // forms it rewrote behind (log(e^a + e^b)'s e^a) until dead-code removal: their warnings would be false.
+    std::vector<char> live = {};
+    bool source_spans = false;  // the function has instructions of the source (scan): not IR text
+    // A warning at an instruction that the result needs. In a function of the source, code a pass made (no span:
+    // the stable pass's e^(x_i - max_j x_j), which is at most 1) is the pass's to keep in range: said at 1:1, a
+    // trial's "exp of a value that can exceed 88.72" pointed at `shape`.
+    void warn(const Instr& in, std::string msg) {
+        if (source_spans && !in.span.valid()) return;
+        const size_t i = size_t(&in - f.body.data());
+        if (i < live.size() && !live[i]) return;
+        issues.push_back({in.span, std::move(msg)});
+    }
 
     Range builtin(const Instr& in) {
         const BuiltinInfo& b = iqc::builtin(in.aux);
@@ -191,6 +203,15 @@ struct Analyzer {
     void scan(std::vector<int>* needs_out) {
         r.assign(f.body.size(), {});
         underflows.assign(f.body.size(), 0);
+        live.assign(f.body.size(), 0);
+        source_spans = std::any_of(f.body.begin(), f.body.end(), [](const Instr& in) { return in.span.valid(); });
+        if (!f.body.empty()) {
+            live[f.result] = 1;
+            for (const auto& [name, v] : f.outputs) live[v] = 1;
+            for (size_t i = f.body.size(); i-- > 0;)
+                if (live[i])
+                    for (ValueId a : f.body[i].args) live[a] = 1;
+        }
         std::vector<int> needs(f.body.size(), 0);
         std::vector<bool> beyond(f.body.size(), false);  // a value past the largest float wherever it is
         for (size_t i = 0; i < f.body.size(); ++i) {
@@ -362,7 +383,7 @@ struct Analyzer {
                     if (auto s = accumulated(f.body[in.args[0]])) return *s;
                 return all_unknown(in.type);
             case Op::Loop:
-                loop_warnings(in);
+                if (i >= live.size() || live[i]) loop_warnings(in);  // (a loop the stable pass replaced: not)
                 return all_unknown(in.type);
             case Op::Input:
             case Op::Call:
