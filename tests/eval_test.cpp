@@ -364,6 +364,25 @@ TEST_CASE("a sum over a long sequence is a loop: its values are the sum's, condi
         REQUIRE(ev.out.find("t = ") != std::string::npos);
         CHECK(std::stod(ev.out.substr(ev.out.find("t = ") + 4)) == Approx(second).epsilon(1e-12));
     }
+    // An element-wise definition of numbers (u_i = w_i²) is a vector, and GLSL has none past 4 components: a sum over
+    // it read the vector (a trial: "ℝ⁴⁰ is larger than GLSL's largest vector", exit 1, where eval ran); each term
+    // reads its element's expression now, rolled (40) or unrolled (10).
+    for (int count : {10, 40}) {
+        std::string ws;
+        double squares = 0;
+        for (int k = 1; k <= count; ++k) ws += fmt::format("{}{}", k > 1 ? ", " : "", 0.1 * k), squares += 0.01 * k * k;
+        auto scalar = write_temp("elem_scalar.iql", "shape\nu_i = w_i²\ns = ∑_i u_i\nD = ‖p‖ - 0.01s\nwhere\np ∈ ℝ³\n"
+                                                    "w_i ∈ ℝ default = {" + ws + "}\n");
+        for (const char* target : {"webgl2", "shadertoy"}) {
+            INFO(count << " " << target);
+            RunResult c = run_iqc(scalar.string() + " --target " + target + " -o /dev/null");
+            INFO(c.err);
+            CHECK(c.exit_code == 0);
+        }
+        RunResult v = run_iqc("eval " + scalar.string() + " --set 'p=(0,0,0)'");
+        REQUIRE(v.out.find("s = ") != std::string::npos);
+        CHECK(std::stod(v.out.substr(v.out.find("s = ") + 4)) == Approx(squares).epsilon(1e-12));
+    }
     // An element-wise sequence that reads p (y_i = x_i - p): its rolled sum is a loop on every target, and the
     // Lipschitz pass's derivative takes each element's own (a trial: the array's derivative was a 3×3 matrix of
     // 96 rows, a heap overflow when folded: exit 134 on webgl2). Unrolled (31) and rolled (40) alike.

@@ -309,8 +309,8 @@ struct Env {
                     // over it kept it built whole per evaluation, 12 s a frame against 0.17 s with the sum written
                     // out on webgl2; unrolled, each term reads its element's expression)
                     ValueId base = k == 0 ? lower(*x.args[0]) : ValueId(-1);
-                    if (k != 0 || !type_of(base).is_array()) ok = false;
-                    else if (f.body[base].op == Op::Construct) {
+                    if (k != 0 || !(type_of(base).is_array() || type_of(base).is_vector())) ok = false;
+                    else if (f.body[base].op == Op::Construct || !type_of(base).is_array()) {
                         // Its definition's expression, read with the loop's index (index()): rollable as that is.
                         const Stmt* def = elementwise_sequence(*x.args[0]);
                         if (!def || !rollable(*def->value, def->elem_indices[0].first)) ok = false;
@@ -493,20 +493,28 @@ struct Env {
         // y is defined kept it built whole per evaluation (a trial: 100 points, 12.4 s a frame on webgl2 against
         // 0.17 s with the sum written out).
         if (e.indices[0].value == -2 && e.indices[0].expr)
-            if (auto k = rolled_index(e.indices[0].expr->text))
-                if (const Stmt* def = elementwise_sequence(*e.args[0])) {
+            if (const Stmt* def = elementwise_sequence(*e.args[0])) {
+                const std::string& index = e.indices[0].expr->text;
+                const auto k = rolled_index(index);
+                const auto unrolled = sum_index.find(index);
+                if (k || unrolled != sum_index.end()) {
+                    // (unrolled too: a definition of numbers, u_i = w_i², is a vector, and GLSL has none past 4)
                     const std::string& letter = def->elem_indices[0].first;
+                    const int at = k ? 0 : unrolled->second;
                     auto shadowed_rolled = rolled.extract(letter);
                     auto shadowed_unrolled = sum_index.extract(letter);
-                    rolled[letter] = *k;
+                    if (k) rolled[letter] = *k;
+                    else sum_index[letter] = at;
                     ValueId element = lower(*def->value);
                     rolled.erase(letter);
+                    sum_index.erase(letter);
                     if (!shadowed_rolled.empty()) rolled.insert(std::move(shadowed_rolled));
                     if (!shadowed_unrolled.empty()) sum_index.insert(std::move(shadowed_unrolled));
                     if (e.indices.size() == 1) return element;
                     a = element;
                     first = 1;
                 }
+            }
         if (first == 0) a = lower(*e.args[0]);
         auto constant = [&](size_t k) {
             const IndexItem& it = e.indices[k];
