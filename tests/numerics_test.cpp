@@ -69,6 +69,16 @@ Coverage coverage(const std::filesystem::path& path, int W = 96, int H = 54) {
 
 }  // namespace
 
+namespace {
+// The Lipschitz bound the compiler derived for `shape` (its line in the result: "shape (fn): K ≤ 1.5 derived, …"),
+// -1 where there is none.
+double derived_bound(const Compiled& c, const std::string& shape) {
+    for (const auto& l : c.result.lipschitz)
+        if (l.rfind(shape + " (", 0) == 0) return std::stod(l.substr(l.find("K ≤ ") + std::string("K ≤ ").size()));
+    return -1.0;
+}
+}  // namespace
+
 TEST_CASE("fields that are not 1-Lipschitz keep their surface without a pragma", "[numerics][render]") {
     for (const char* name : {"displaced_torus.iq", "twisted_bar.iq"}) {
         Coverage cov = coverage(scene(name));
@@ -589,11 +599,7 @@ TEST_CASE("a sum weighted by a sequence of constants is bounded by its weights",
     // it was marched with 1.25 times its steepest sample, unproven. Its gradient is at most ∑|w_i|/N (1.5 here,
     // the weights 1 and 2 over 2): derived now, unrolled (2 weights) and as a loop (40). With sliders (webgl2)
     // the weights are unbounded (a sequence has no slider bounds): no bound, and the warning says so.
-    auto derived = [](const Compiled& c) {
-        for (const auto& l : c.result.lipschitz)
-            if (l.rfind("wsum (", 0) == 0) return std::stod(l.substr(l.find("K ≤ ") + std::string("K ≤ ").size()));
-        return -1.0;
-    };
+    auto derived = [](const Compiled& c) { return derived_bound(c, "wsum"); };
     for (int n : {2, 40}) {
         INFO(n);
         std::string points, weights;
@@ -632,11 +638,7 @@ TEST_CASE("smooth unions of shapes keep the bound of their shapes", "[numerics]"
         "u = p - (-0.9, 0.3, 0)\nv = (1.8, 0.9, 0.3)\nt = clamp(u⋅v/(v⋅v), 0, 1)\nc = ‖u - t v‖ - 0.15\n"
         "w = p - (0, 1.6, 0)\nk = max(0.8 ‖(w_1, w_3)‖ + 0.6 w_2, -w_2 - 0.7)\n"
         "s = ‖p - (0.3, 0.9, -0.5)‖ - 0.35\nwhere\np ∈ ℝ³\n";
-    auto derived = [](const Compiled& c) {
-        for (const auto& l : c.result.lipschitz)
-            if (l.rfind("blob (", 0) == 0) return std::stod(l.substr(l.find("K ≤ ") + std::string("K ≤ ").size()));
-        return -1.0;
-    };
+    auto derived = [](const Compiled& c) { return derived_bound(c, "blob"); };
     std::string scene = "[modules]\nblob = \"\"\"\n" + blob + "\"\"\"\n[camera]\nposition = [2.2, 1.8, -3.5]\ntarget = [0, 0.6, 0]\n"
                         "[[shapes]]\ntype = \"blob\"\n";
     Compiled c = compile_text("smooth_blob.iq", scene);
@@ -674,11 +676,7 @@ TEST_CASE("smooth minima written in the module are bounded as blends of their di
     // derived where every sample is within 1: interval arithmetic bounds the blend's weights h and 1 - h each
     // on its own. A call of a function of scalars is now a combinator whose factor, Σ|∂f/∂x_i| over its
     // arguments' ranges, is found by branch and bound (ir/passes/Lipschitz.cpp, blend_factor).
-    auto derived = [](const Compiled& c) {
-        for (const auto& l : c.result.lipschitz)
-            if (l.rfind("blob (", 0) == 0) return std::stod(l.substr(l.find("K ≤ ") + std::string("K ≤ ").size()));
-        return -1.0;
-    };
+    auto derived = [](const Compiled& c) { return derived_bound(c, "blob"); };
     auto scene = [](const std::string& m, int spheres, const std::string& extra = "") {
         std::string text = "[modules]\nblob = \"\"\"\nshape\n" + m + " where a ∈ ℝ, b ∈ ℝ, k ∈ ℝ\n";
         std::string expr = "`d0`";
