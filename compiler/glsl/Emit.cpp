@@ -235,14 +235,8 @@ void Emitter::limit_loop_iterations(const std::vector<int>& roots, double evalua
     // evaluations run (iqc_prepare's, once per pixel, stay loops).
     const double ratio = budget / sums;
     std::vector<char> per_evaluation(m_.functions.size(), 0);
-    std::function<void(int)> reach = [&](int fn) {
-        if (per_evaluation[size_t(fn)]) return;
-        per_evaluation[size_t(fn)] = 1;
-        for (const ir::Instr& in : m_.functions[size_t(fn)].body)
-            if (in.op == ir::Op::Call || in.op == ir::Op::Loop) reach(in.aux);
-    };
     for (int r : roots)
-        if (m_.functions[size_t(r)].name != ir::names::kPrepare) reach(r);
+        if (m_.functions[size_t(r)].name != ir::names::kPrepare) ir::mark_reachable(m_, r, per_evaluation);
     for (size_t fn = 0; fn < m_.functions.size(); ++fn) {
         if (!per_evaluation[fn]) continue;
         for (const ir::Instr& in : m_.functions[fn].body) {

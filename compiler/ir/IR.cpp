@@ -100,6 +100,18 @@ std::optional<ValueId> accumulated_term(const Function& body, size_t j) {
     return t;
 }
 
+void mark_reachable(const Module& m, int fn, std::vector<char>& seen) {
+    std::vector<int> stack = {fn};
+    while (!stack.empty()) {
+        int f = stack.back();
+        stack.pop_back();
+        if (seen[size_t(f)]) continue;
+        seen[size_t(f)] = 1;
+        for (const Instr& in : m.functions[size_t(f)].body)
+            if ((in.op == Op::Call || in.op == Op::Loop) && !seen[size_t(in.aux)]) stack.push_back(in.aux);
+    }
+}
+
 Type result_type(Op op, const std::vector<Type>& a, int aux) {
     auto is_num = [](const Type& t) { return t.is_numeric(); };
     switch (op) {

@@ -281,4 +281,8 @@ Type result_type(Op op, const std::vector<Type>& args, int aux);
 // Intervals and the ranges pass, and the stable pass's log-sum-exp, read it so.)
 std::optional<ValueId> accumulated_term(const Function& body, size_t j);
 
+// Marks fn and every function it calls or runs as a loop body, transitively, in `seen` (one entry per function
+// of m; marked entries are not visited again).
+void mark_reachable(const Module& m, int fn, std::vector<char>& seen);
+
 }  // namespace iqc::ir

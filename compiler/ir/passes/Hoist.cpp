@@ -61,15 +61,7 @@ int hoist_pixel_invariants(Module& m) {
         for (const Instr& in : f.body)
             if (in.op == Op::Loop) body[size_t(in.aux)] = 1;
     int prep = m.find(names::kPrepare);
-    if (prep >= 0) {
-        std::function<void(int)> mark = [&](int fn) {
-            if (prepares[size_t(fn)]) return;
-            prepares[size_t(fn)] = 1;
-            for (const Instr& in : m.functions[size_t(fn)].body)
-                if (in.op == Op::Call || in.op == Op::Loop) mark(in.aux);
-        };
-        mark(prep);
-    }
+    if (prep >= 0) mark_reachable(m, prep, prepares);
     // The functions the march runs at each step (the scene's distance, an instance's, its gradient, segment
     // tracing's bounds): only there does a value computed per evaluation cost per step. A material runs once per
     // pixel (and light) whatever: hoisting its sums gained nothing and kept their values live across the whole
@@ -77,15 +69,9 @@ int hoist_pixel_invariants(Module& m) {
     // trial's five point clouds, each with a hoisted centroid and a material's hoisted ∑_j v_j: 1.2 s with four,
     // 14 s with five, no first frame in 120 s with six; 0.7 s with the centroids alone).
     std::vector<char> marched(nf, 0);
-    std::function<void(int)> mark_marched = [&](int fn) {
-        if (marched[size_t(fn)]) return;
-        marched[size_t(fn)] = 1;
-        for (const Instr& in : m.functions[size_t(fn)].body)
-            if (in.op == Op::Call || in.op == Op::Loop) mark_marched(in.aux);
-    };
     for (const char* entry : {names::kScene, names::kSceneUnbounded, names::kDistanceOf, names::kGradient, names::kSegmentGain,
                               names::kSegmentClear, names::kInstanceDistance})
-        if (int fn = m.find(entry); fn >= 0) mark_marched(fn);
+        if (int fn = m.find(entry); fn >= 0) mark_reachable(m, fn, marched);
     // Per function, transitively through its calls and loops: whether it reads a prepared global (per pixel, computed
     // in order by iqc_prepare: a call reading one is left alone) and whether it runs a loop.
     std::vector<char> reads_prepared(nf, 0), has_loop(nf, 0), walked(nf, 0);
