@@ -364,6 +364,20 @@ TEST_CASE("a sum over a long sequence is a loop: its values are the sum's, condi
         REQUIRE(ev.out.find("t = ") != std::string::npos);
         CHECK(std::stod(ev.out.substr(ev.out.find("t = ") + 4)) == Approx(second).epsilon(1e-12));
     }
+    // Inside a recurrence, a sum over such a sequence: the recurrence captured the whole array to learn the sum's
+    // range, and then had no derivative (a trial: "cannot differentiate it"); the range comes from the definition.
+    {
+        std::string pts;
+        for (int k = 1; k <= 40; ++k) pts += fmt::format("{}({}, 0, 0)", k > 1 ? ", " : "", 0.01 * k);
+        auto rec = write_temp("elem_rec.iql", "shape\ny_i = x_i - p\ns_1 = 0\ns_(k+1) = s_k + ∑_i exp(-k‖y_i‖²) / 40   for k ∈ 1..3\n"
+                                              "D = ‖p‖ - 0.5 - 0.1 s_4\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" + pts + "}\n");
+        for (const char* target : {"webgl2", "shadertoy"}) {
+            INFO(target);
+            RunResult c = run_iqc(rec.string() + " --target " + target + " -o /dev/null");
+            REQUIRE(c.exit_code == 0);
+            CHECK_THAT(c.err, !Catch::Contains("cannot differentiate"));
+        }
+    }
     // An element-wise definition of numbers (u_i = w_i²) is a vector, and GLSL has none past 4 components: a sum over
     // it read the vector (a trial: "ℝ⁴⁰ is larger than GLSL's largest vector", exit 1, where eval ran); each term
     // reads its element's expression now, rolled (40) or unrolled (10).

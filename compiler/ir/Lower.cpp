@@ -124,6 +124,19 @@ struct Env {
     }
 
     // The range of ∑_index: the size of what it subscripts (the checker made sure all uses agree).
+    // The type of a subscripted base, for a sum's range: a value the module assigned is typed where it was
+    // assigned, without lowering it here (in a recurrence's body that captured it: an element-wise sequence built
+    // from p, y_i = x_i - p, captured whole left the recurrence without a derivative, though each term reads its
+    // element's expression).
+    Type base_type(const Expr& x) {
+        if (x.kind == ExprKind::Name && x.resolved == R_Value && parent) {
+            const Env* root = this;
+            while (root->parent) root = root->parent;
+            if (auto it = root->values.find(x.text); it != root->values.end()) return root->f.body[it->second].type;
+        }
+        return type_of(lower(x));
+    }
+
     int sum_range(const Expr& body, const std::string& index) {
         int n = 0;
         std::function<void(const Expr&)> walk = [&](const Expr& x) {
@@ -131,7 +144,7 @@ struct Env {
                 for (size_t k = 0; k < x.indices.size(); ++k) {
                     const auto& it = x.indices[k];
                     if (!it.expr || it.expr->kind != ExprKind::Name || it.expr->text != index) continue;
-                    Type t = type_of(lower(*x.args[0]));
+                    Type t = base_type(*x.args[0]);
                     size_t pos = k;
                     if (t.is_array() && k > 0) t = t.element(), pos = k - 1;  // x_i,j: a component of an element
                     if (t.is_array()) n = t.count;
@@ -308,12 +321,15 @@ struct Env {
                     // (a sequence the module computes, y_i = 2x_i + …, is an array built where it is defined: a loop
                     // over it kept it built whole per evaluation, 12 s a frame against 0.17 s with the sum written
                     // out on webgl2; unrolled, each term reads its element's expression)
-                    ValueId base = k == 0 ? lower(*x.args[0]) : ValueId(-1);
-                    if (k != 0 || !(type_of(base).is_array() || type_of(base).is_vector())) ok = false;
-                    else if (f.body[base].op == Op::Construct || !type_of(base).is_array()) {
-                        // Its definition's expression, read with the loop's index (index()): rollable as that is.
-                        const Stmt* def = elementwise_sequence(*x.args[0]);
-                        if (!def || !rollable(*def->value, def->elem_indices[0].first)) ok = false;
+                    if (k != 0) {
+                        ok = false;
+                    } else if (const Stmt* def = elementwise_sequence(*x.args[0])) {
+                        // Its definition's expression, read with the loop's index (index()): rollable as that is. (Not
+                        // lowered here: inside a recurrence that captured the whole array, built from p, and the
+                        // recurrence had no derivative.)
+                        if (!rollable(*def->value, def->elem_indices[0].first)) ok = false;
+                    } else if (ValueId base = lower(*x.args[0]); !type_of(base).is_array() || f.body[base].op == Op::Construct) {
+                        ok = false;
                     }
                 }
             for_each_child(x, walk);

@@ -210,13 +210,13 @@ struct Differentiator {
             case Op::Det:
                 return no_rule("a matrix");
             case Op::Index:  // (an array that depends on the query point: no rule, below)
-                return no_rule("an element of a sequence computed from the query point");
+                return no_rule("a sequence read at a loop's index");
             case Op::Construct: {
                 if (in.type.is_matrix()) return no_rule("a matrix");
                 // A sequence of values that depend on it (y_i = x_i - p as an array): its elements read whole have
                 // no rule (Element reads of it take their element's tangent, above). The Jacobian's rows below are
                 // a vector's: an array of 32 vectors made a 3×3 matrix of 96 rows (a heap overflow when folded).
-                if (in.type.is_array()) return no_rule("a sequence computed from the query point");
+                if (in.type.is_array()) return no_rule("a sequence read whole (an array)");
                 std::vector<ValueId> rows;
                 for (size_t k = 0; k < in.args.size(); ++k) {
                     const Type& t = PT(k);
