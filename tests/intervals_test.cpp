@@ -130,3 +130,93 @@ TEST_CASE("NaN and infinity from domains, divisions, float's range and growth ar
     CHECK_FALSE(r[11].nan);
     CHECK(r[17].nan);  // tan on [1.5, 1.8] crosses π/2
 }
+
+TEST_CASE("an array of known values read by a known index is that element, not the hull", "[intervals]") {
+    // A trial (stop 51): a weighted mean ∑_i w_i t_i/∑_j w_j over constant weights got K ≤ 11 (unrolled) or no
+    // bound at all (a loop), where it is 1: every element read was the hull of all the weights, so ∑_j w_j was
+    // 40 times the hull. Known values (a constant global, Bounds::elements) reach a callee through its argument
+    // and a loop's body through its capture; an element read by a constant index, by a point, or by a range of
+    // indices is that element or the hull of those it may read. A choice between two arrays knows neither.
+    const char* text = R"(global @0 w: ℝ[4] constant = 1, 2, 3, 4
+global @1 v: ℝ[4] constant = 5, 6, 7, 8
+function sum_j(j: ℤ, sum: ℝ, w: ℝ[4]) -> ℝ {
+  %0 = ℤ Param #0 j  ; j
+  %1 = ℝ[4] Param #2 w  ; w
+  %2 = ℝ Index %1, %0
+  %3 = ℝ Param #1 sum  ; sum
+  %4 = ℝ Add %3, %2
+  return %4
+  output sum = %4
+}
+function g(w: ℝ[4], k: ℝ) -> ℝ {
+  %0 = ℝ[4] Param #0 w  ; w
+  %1 = ℝ Param #1 k  ; k
+  %2 = ℝ Element [2] %0
+  %3 = ℝ At %0, %1
+  %4 = ℝ Mul %2, %3
+  return %4
+}
+function f(k: ℝ, c: ℝ) -> ℝ {
+  %0 = ℝ Param #0 k  ; k
+  %1 = ℝ Param #1 c  ; c
+  %2 = ℝ[4] Global @0 w
+  %3 = ℝ Call g %2, %0
+  %4 = ℝ Const 3
+  %5 = ℝ Const 0
+  %6 = tuple(1) Loop from 0 sum_j %4, %5, %2
+  %7 = ℝ Member .0 %6
+  %8 = ℝ[4] Global @1 v
+  %9 = condition Compare lt %1, %5
+  %10 = ℝ[4] Select %9, %2, %8
+  %11 = ℝ Element [0] %10
+  %12 = ℝ Element [1] %2
+  %13 = ℝ[2] Construct %1, %4
+  %14 = ℝ Element [1] %13
+  %15 = ℝ At %13, %0
+  return %3
+}
+)";
+    ir::Module m;
+    std::string error;
+    REQUIRE(ir::parse_module(text, m, error));
+    INFO(error);
+    const int f = int(m.functions.size()) - 1;
+    auto at = [&](ir::Interval k, ir::Interval c, size_t value) { return ir::interval_analysis(m, f, {{k}, {c}})[value].c[0]; };
+    // Element [2] (3) times element k: k = 0 reads 1 (3 in all), k over [1.2, 2.4] rounds to 1 or 2 (6 to 9).
+    ir::Interval r = at({0, 0}, {1, 1}, 3);
+    CHECK(r.lo == 3);
+    CHECK(r.hi == 3);
+    r = at({1.2, 2.4}, {1, 1}, 3);
+    CHECK(r.lo == 6);
+    CHECK(r.hi == 9);
+    // An index past the end is clamped (At): the last element.
+    r = at({7, 9}, {1, 1}, 3);
+    CHECK(r.lo == 12);
+    CHECK(r.hi == 12);
+    // An unbounded index: the hull, 3·[1, 4].
+    r = at({-ir::Interval{}.hi, ir::Interval{}.hi}, {1, 1}, 3);
+    CHECK(r.lo == 3);
+    CHECK(r.hi == 12);
+    // The loop's sum, run element by element: exactly 10 (the hull would say [4, 16]).
+    r = at({0, 0}, {1, 1}, 7);
+    CHECK(r.lo == 10);
+    CHECK(r.hi == 10);
+    // A choice between w and v: element 0 is 1 or 5 (the hull of both arrays' elements, not w's 1 alone).
+    r = at({0, 0}, {-1, 1}, 11);
+    CHECK(r.lo <= 1);
+    CHECK(r.hi >= 8);
+    // A decided choice takes its array's values: c > 0 picks v.
+    r = at({0, 0}, {1, 1}, 11);
+    CHECK(r.lo == 5);
+    CHECK(r.hi == 5);
+    r = at({0, 0}, {1, 1}, 12);
+    CHECK(r.lo == 2);
+    CHECK(r.hi == 2);
+    // An array built of values (c, 3) keeps each element's bounds: element 1 is 3, element k ∈ [0, 1] is c or 3.
+    r = at({0, 0}, {-1, 1}, 14);
+    CHECK(r.lo == 3);
+    CHECK(r.hi == 3);
+    r = at({0, 1}, {-1, 1}, 15);
+    CHECK(r.lo == -1);
+    CHECK(r.hi == 3);
+}
