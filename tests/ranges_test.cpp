@@ -1,6 +1,7 @@
 // Range analysis: guards where the math has a continuous limit, located warnings where a slider can push
 // an operation out of its domain, and --strict-ranges.
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include "TestUtil.h"
 
@@ -188,4 +189,45 @@ TEST_CASE("values below the smallest normal float are warned where they start, a
     // Small but normal: no word.
     Compiled ok = compile_text("small_ok.md", doc("D = (‖p‖ - 1)(1e-10 1e-10)/(1e-10 1e-10)", ""));
     CHECK(ok.diagnostics.empty());
+}
+
+TEST_CASE("a piecewise arm and a conditional sum's term are analysed under their conditions", "[ranges]") {
+    // A trial (stop 51): `∑_(i for w_i > 0.5) 1/w_i` warned of a division by 0, and so did every guarded form of
+    // the kind `1/s if s > 0.1`, `log(s) if s > 0`, `√(s − 0.2) if s ≥ 0.2` (and guarded what needs no guard).
+    const std::string s = "s ∈ [-1,1] default = 0.5\nt ∈ [-1,1] default = 0.5\n";
+    for (const char* body : {"r = { 1/s if s > 0.1\n      1 otherwise }", "r = { log(s) if s > 0\n      0.5 otherwise }",
+                             "r = { √(s - 0.2) if s ≥ 0.2\n      0.5 otherwise }", "r = { 1 if s ≤ 0.1\n      1/s otherwise }",
+                             "r = { 1/s if s > 0.1\n      1/(s - 0.5) otherwise }", "r = { 1/s if s ∈ [0.2, 0.9]\n      1 otherwise }",
+                             "r = { 1/s if s > 0.1 and t > 0\n      1 otherwise }", "r = { 1/s if 0.1 < s\n      1 otherwise }",
+                             "r = { 1 if s < 0.1\n      1/s if t > 0\n      1/(s + 2) otherwise }", "r = { 1/s if s ≠ 0\n      1 otherwise }"}) {
+        INFO(body);
+        Compiled c = compile_text("arm.md", doc("D = ‖p‖ - r\n" + std::string(body), s));
+        REQUIRE(c.result.exit_code == 0);
+        CHECK(c.diagnostics.empty());
+        CHECK_THAT(c.result.code, !Catch::Contains("max(s - 0.2"));
+    }
+    // What the condition does not exclude is still warned: s > -0.5 leaves 0 in; a value both arms read; a
+    // condition on another parameter; an `or`.
+    for (const char* body : {"r = { 1/s if s > -0.5\n      1 otherwise }", "r = { 1/s + 1 if s > 0.1\n      1/s otherwise }",
+                             "r = { 1/s if t > 0.1\n      1 otherwise }", "r = { 1/s if s > 0.1 or t > 0\n      1 otherwise }"}) {
+        INFO(body);
+        Compiled c = compile_text("arm_bad.md", doc("D = ‖p‖ - r\n" + std::string(body), s));
+        REQUIRE(c.result.exit_code == 0);
+        CHECK_THAT(c.diagnostics, Catch::Contains("warning: division by a value that can be 0"));
+    }
+    Compiled narrowed = compile_text("arm_range.md", doc("D = ‖p‖ - r\nr = { 1/s if s > -0.5\n      1 otherwise }", s));
+    CHECK_THAT(narrowed.diagnostics, Catch::Contains("arm_range.md:5:7: warning: division by a value that can be 0: with the "
+                                                     "parameters' bounds it ranges over [-0.5, 1]"));
+    // A conditional sum, unrolled (3 weights) and rolled (40).
+    for (int n : {3, 40}) {
+        std::string w;
+        for (int k = 0; k < n; ++k) w += fmt::format("{}{:.2f}", k ? ", " : "", 0.1 + 0.02 * k);
+        INFO(n);
+        Compiled c = compile_text("cond_sum.md", doc("D = ‖p‖ - 0.5 + 0.001 ∑_(i for w_i > 0.5) 1/w_i", "w_i ∈ ℝ default = {" + w + "}\n"));
+        REQUIRE(c.result.exit_code == 0);
+        CHECK(c.diagnostics.empty());
+        Compiled bad = compile_text("cond_sum_bad.md", doc("D = ‖p‖ - 0.5 + 0.001 ∑_(i for w_i > -0.5) 1/w_i", "w_i ∈ ℝ default = {" + w + "}\n"));
+        REQUIRE(bad.result.exit_code == 0);
+        CHECK_THAT(bad.diagnostics, Catch::Contains("cond_sum_bad.md:4:44: warning: division by a value that can be 0"));
+    }
 }

@@ -22,6 +22,7 @@ struct Range {
     std::vector<Interval> c;  // per component
     bool known = false;       // derived from constants and parameters only
     bool unit = false;        // a unit vector (normalize, v/‖v‖)
+    bool nonzero = false;     // never 0 where it is read (under a condition x ≠ 0: `1/x if x ≠ 0`)
 };
 
 // The textbook interval rules are ir/Intervals.h's (a sum of opposite infinities is unbounded, not NaN).
@@ -71,11 +72,102 @@ struct Analyzer {
     // forms it rewrote behind (log(e^a + e^b)'s e^a) until dead-code removal: their warnings would be false.
     std::vector<char> live = {};
     bool source_spans = false;  // the function has instructions of the source (scan): not IR text
+    // Per instruction: the conditions (a truth value and which way) under which alone it is computed — it is
+    // used only by one arm of an If or Select, or by values that are (find_guards). `1/s if s > 0.1` divides by
+    // s ∈ (0.1, 1], not by s ∈ [-1, 1]: the division warned, a trial's (stop 51) `∑_(i for w_i > 0.5) 1/w_i` too.
+    std::vector<std::vector<std::pair<ValueId, bool>>> guarded = {};
+    bool unreachable = false;  // the instruction being scanned is under conditions its operands' ranges never meet
+
+    // Fills `guarded`: for each arm of each If and Select, the values computed for that arm alone (every use is
+    // the arm or such a value; the result and named outputs are uses outside) — reading back from the arm.
+    void find_guards() {
+        const size_t n = f.body.size();
+        guarded.assign(n, {});
+        std::vector<std::vector<ValueId>> users(n);
+        std::vector<char> outside(n, 0);
+        size_t choices = 0;
+        for (size_t u = 0; u < n; ++u) {
+            for (ValueId a : f.body[u].args) users[a].push_back(ValueId(u));
+            choices += f.body[u].op == Op::If || f.body[u].op == Op::Select;
+        }
+        if (choices == 0 || double(choices) * double(n) > 2e7) return;  // (quadratic: a bound on the work)
+        if (n > 0) outside[f.result] = 1;
+        for (const auto& [name, v] : f.outputs) outside[v] = 1;
+        std::vector<size_t> mark(n, 0);  // the cone of choice `stamp`: mark[v] == stamp
+        size_t stamp = 0;
+        for (size_t s = 0; s < n; ++s) {
+            const Instr& choice = f.body[s];
+            if ((choice.op != Op::If && choice.op != Op::Select) || choice.args.size() != 3) continue;
+            for (size_t arm = 1; arm <= 2; ++arm) {
+                const ValueId a = choice.args[arm];
+                if (a == choice.args[3 - arm] || a == choice.args[0] || outside[a]) continue;
+                ++stamp;
+                bool any = false;
+                for (size_t v = a + 1; v-- > 0;) {
+                    if (outside[v] || users[v].empty()) continue;
+                    bool inside = true;
+                    for (ValueId u : users[v]) inside = inside && (v == a ? u == s : mark[u] == stamp);
+                    if (!inside) continue;
+                    mark[v] = stamp;
+                    guarded[v].push_back({choice.args[0], arm == 1});
+                    any = true;
+                }
+                (void)any;
+            }
+        }
+    }
+
+    // What `cond` being `truth` says of scalar values computed before instruction `at`: (value, interval) pairs.
+    struct Fact {
+        ValueId value;
+        Interval within;
+        bool nonzero;  // x ≠ 0 (within says nothing)
+    };
+    void facts(ValueId cond, bool truth, size_t at, std::vector<Fact>& out, int depth = 0) {
+        if (depth > 8) return;
+        const Instr& c = f.body[cond];
+        if ((c.op == Op::And && truth) || (c.op == Op::Or && !truth)) {
+            facts(c.args[0], truth, at, out, depth + 1);
+            facts(c.args[1], truth, at, out, depth + 1);
+            return;
+        }
+        if (c.op != Op::Compare || c.args.size() != 2) return;
+        CompareKind k = CompareKind(c.aux);
+        if (!truth) {
+            static constexpr CompareKind negated[] = {CompareKind::Ne, CompareKind::Eq, CompareKind::Ge,
+                                                      CompareKind::Gt, CompareKind::Le, CompareKind::Lt};
+            k = negated[int(k)];
+        }
+        static constexpr CompareKind mirrored[] = {CompareKind::Eq, CompareKind::Ne, CompareKind::Gt,
+                                                   CompareKind::Ge, CompareKind::Lt, CompareKind::Le};
+        for (int side = 0; side < 2; ++side) {
+            const ValueId t = c.args[size_t(side)], o = c.args[size_t(1 - side)];
+            const CompareKind kk = side == 0 ? k : mirrored[int(k)];
+            // (a constant may come after the instruction: `1/s if s > 0.1` computes 1/s before 0.1)
+            const Instr& other = f.body[o];
+            const bool constant = other.op == Op::Const && other.data.size() == 1;
+            if (t >= at || (o >= at && !constant) || r[t].c.size() != 1 || (!constant && r[o].c.size() != 1)) continue;
+            const bool integer = f.body[t].type.kind == Type::Integer;
+            const Interval b = constant ? Interval{other.data[0], other.data[0]} : r[o].c[0];
+            Interval x{-kInf, kInf};
+            switch (kk) {
+                case CompareKind::Lt: x.hi = integer ? std::ceil(b.hi) - 1 : std::nextafter(b.hi, -kInf); break;
+                case CompareKind::Le: x.hi = b.hi; break;
+                case CompareKind::Gt: x.lo = integer ? std::floor(b.lo) + 1 : std::nextafter(b.lo, kInf); break;
+                case CompareKind::Ge: x.lo = b.lo; break;
+                case CompareKind::Eq: x = b; break;
+                case CompareKind::Ne:
+                    if (b.lo == 0 && b.hi == 0) out.push_back({t, x, true});
+                    continue;
+            }
+            out.push_back({t, x, false});
+        }
+    }
     // A warning at an instruction that the result needs. In a function of the source, code a pass made (no span:
     // the stable pass's e^(x_i - max_j x_j), which is at most 1) is the pass's to keep in range: said at 1:1, a
     // trial's "exp of a value that can exceed 88.72" pointed at `shape`.
     void warn(const Instr& in, std::string msg) {
-        if (source_spans && !in.span.valid()) return;
+        if (unreachable || (source_spans && !in.span.valid())) return;
         const size_t i = size_t(&in - f.body.data());
         if (i < live.size() && !live[i]) return;
         issues.push_back({in.span, std::move(msg)});
@@ -214,8 +306,36 @@ struct Analyzer {
         }
         std::vector<int> needs(f.body.size(), 0);
         std::vector<bool> beyond(f.body.size(), false);  // a value past the largest float wherever it is
+        find_guards();
+        std::vector<Fact> narrowed;
+        std::vector<std::pair<ValueId, Range>> saved;
         for (size_t i = 0; i < f.body.size(); ++i) {
             const Instr& in = f.body[i];
+            // Under its conditions: their operands' ranges narrowed for this instruction (restored after it).
+            unreachable = false;
+            narrowed.clear();
+            saved.clear();
+            for (const auto& [cond, truth] : guarded[i]) facts(cond, truth, i, narrowed);
+            for (const auto& [v, x, nonzero] : narrowed) {
+                const Interval now = r[v].c[0], both{std::max(now.lo, x.lo), std::min(now.hi, x.hi)};
+                if (!(both.lo <= both.hi) || (nonzero && now.lo == 0 && now.hi == 0)) {
+                    unreachable = true;  // (never computed where the parameters are within their bounds)
+                    continue;
+                }
+                saved.push_back({v, r[v]});
+                r[v].c[0] = both;
+                r[v].nonzero = r[v].nonzero || nonzero;
+            }
+            scan_one(i, in, needs, beyond);
+            for (size_t k = saved.size(); k-- > 0;) r[saved[k].first] = std::move(saved[k].second);
+        }
+        unreachable = false;
+        if (needs_out) *needs_out = std::move(needs);
+    }
+
+    // One instruction of scan: its guard, range and warnings.
+    void scan_one(size_t i, const Instr& in, std::vector<int>& needs, std::vector<bool>& beyond) {
+        {
             if (in.op == Op::Builtin) {
                 std::string n = iqc::builtin(in.aux).name;
                 auto arg = [&](size_t k) { return r[in.args[k]]; };
@@ -267,7 +387,7 @@ struct Analyzer {
                                                ranges_over(x.c[0])));
                 } else if (n == "mod") {
                     Range y = arg(1);
-                    if (y.known && any(y, [](Interval c) { return contains_zero(c); }))
+                    if (y.known && !y.nonzero && any(y, [](Interval c) { return contains_zero(c); }))
                         warn(in, fmt::format("mod by a value that can be 0: {}", ranges_over(y.c[0])));
                 } else if (n == "atan2") {
                     Range y = arg(0), xx = arg(1);
@@ -316,7 +436,6 @@ struct Analyzer {
             if (needs[i] == kNonNegative)
                 for (auto& c : r[i].c) c.lo = std::max(c.lo, 0.0);
         }
-        if (needs_out) *needs_out = std::move(needs);
     }
 
     // The warnings of a loop's body (a rolled ∑, ir/Lower.cpp), analysed with the index over its range and the
@@ -416,7 +535,7 @@ struct Analyzer {
             case Op::Div: {
                 Interval d = comp(in.args[1], 0);
                 if (contains_zero(d)) {
-                    if (r[in.args[1]].known)
+                    if (r[in.args[1]].known && !r[in.args[1]].nonzero)
                         warn(in, fmt::format("division by a value that can be 0{}: with the parameters' bounds {}",
                                              underflows[in.args[1]] ? fmt::format(" (it can fall below the smallest normal 32-bit "
                                                                                   "float, {:.2g}, which a shader may flush to 0)",
