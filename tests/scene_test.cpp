@@ -629,7 +629,7 @@ TEST_CASE("soft shadows of a scene a thousand times smaller darken only what har
     CHECK(darker < lit / 50);
 }
 
-TEST_CASE("a sequence parameter's override takes its elements as rows, and says so where its length differs", "[scene]") {
+TEST_CASE("a sequence parameter's override takes its elements as rows, of the module's length or another", "[scene]") {
     // A new user's trial: x = [[…], […]] for x_i ∈ ℝ³ was "'x' is ℝ³[3] but the value is 3 rows of 3" (only the string
     // form was taken), and 5 points where the module's default has 3 said "has 15 components".
     auto scene = [](const std::string& value) {
@@ -644,8 +644,36 @@ TEST_CASE("a sequence parameter's override takes its elements as rows, and says 
     auto body = [](const std::string& code) { return code.substr(code.find("// ---- parameters")); };
     CHECK(body(rows.result.code) == body(text.result.code));
     CHECK_THAT(rows.result.code, Catch::Contains("vec3(-1.0, 0.0, 0.0)"));
-    Compiled longer = compile_text("seq_long.iq", scene("[[-1, 0, 0], [0, 0.5, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]"));
-    CHECK(longer.result.exit_code == 1);
-    CHECK_THAT(longer.diagnostics, Catch::Contains("seq_long.iq:11:18: error: 'x' is a sequence of 3 elements (ℝ³[3]), as the module's "
-                                                   "default has; this value has 5: an instance keeps the module's length"));
+    // Another length (stop 52; it was "an instance keeps the module's length"): the instance gets the module checked for
+    // 5 points, a function of its own (chain_x5), and every target compiles it. Instances of either length share theirs.
+    const std::string two = "\n[[shapes]]\ntype = \"chain\"\ntransform = \"T((0, 2, 0))\"\n[[shapes]]\ntype = \"chain\"\n"
+                            "transform = \"T((0, -2, 0))\"\nshape_params = { x = \"{(0, 0, 0), (0, 1, 0), (0, 2, 0), (0, 3, 0), (0, 4, 0)}\" }\n";
+    for (Target t : {Target::Shadertoy, Target::WebGL2, Target::WGSL}) {
+        CompileOptions o;
+        o.target = t;
+        Compiled longer = compile_path(write_temp("seq_long.iq", scene("[[-1, 0, 0], [0, 0.5, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]") + two), o);
+        INFO(longer.diagnostics);
+        REQUIRE(longer.result.exit_code == 0);
+        if (t == Target::WGSL) continue;
+        CHECK_THAT(longer.result.code, Catch::Contains("float chain_x5("));
+        CHECK_THAT(longer.result.code, Catch::Contains("float chain("));
+        if (t == Target::Shadertoy) CHECK_THAT(longer.result.code, Catch::Contains("vec3 x[5]"));
+    }
+    // The distances: D = ‖p - x_1‖ + ‖p - x_3‖ - 1 reads the first and third of the instance's own points: five points
+    // whose first and third are those of three give the same field (the double-precision model runs the emitted IR);
+    // five whose third differs do not.
+    Compiled five = compile_text("seq_five.iq", scene("[[-1, 0, 0], [0, 0.5, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]"));
+    Compiled other = compile_text("seq_other.iq", scene("[[-1, 0, 0], [0, 0.5, 0], [2, 0, 0], [2, 0, 0], [3, 0, 0]]"));
+    REQUIRE(five.result.exit_code == 0);
+    REQUIRE(other.result.exit_code == 0);
+    REQUIRE(rows.result.model);
+    REQUIRE(five.result.model);
+    REQUIRE(other.result.model);
+    for (std::array<double, 3> at : {std::array<double, 3>{0, 1, 0}, {0.3, -0.2, 0.5}, {2, 2, 2}}) {
+        CHECK(five.result.model->distance(at) == Approx(rows.result.model->distance(at)).epsilon(1e-12));
+        CHECK(std::fabs(other.result.model->distance(at) - rows.result.model->distance(at)) > 1e-3);
+    }
+    // A value whose components are not whole elements is still an error.
+    Compiled ragged = compile_text("seq_ragged.iq", scene("\"{(1, 0, 0), (2, 0)}\""));
+    CHECK(ragged.result.exit_code == 1);
 }

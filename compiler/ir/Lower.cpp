@@ -1040,7 +1040,8 @@ std::vector<ir::ValueBounds> parameter_bounds(const CheckedModule& m) {
 
 int lower_module_cached(const CheckedModule& m, LowerContext& ctx) {
     if (auto it = ctx.modules.find(&m); it != ctx.modules.end()) return it->second;
-    int idx = lower_module(m, m.ast.name, m.ast.name, ctx);
+    const std::string& name = m.ir_name.empty() ? m.ast.name : m.ir_name;
+    int idx = lower_module(m, name, name, ctx);
     ctx.modules[&m] = idx;
     return idx;
 }

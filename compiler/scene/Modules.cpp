@@ -109,6 +109,25 @@ std::unique_ptr<CheckedModule> ModuleLibrary::check_with(const std::string& name
     return m;
 }
 
+const CheckedModule* ModuleLibrary::variant(const std::string& name, const std::map<std::string, int>& lengths) {
+    auto key = std::make_pair(name, lengths);
+    if (auto it = variants_.find(key); it != variants_.end()) return it->second.get();
+    const CheckedModule* base = get(name, {});
+    if (!base) return nullptr;
+    std::map<std::string, Type> given;
+    std::string suffix;
+    for (const auto& [param, n] : lengths) {
+        int pi = base->find_param(param);
+        if (pi < 0 || !base->params[size_t(pi)].type.is_array()) continue;
+        given[param] = Type::array(base->params[size_t(pi)].type.element(), n);
+        suffix += fmt::format("_{}{}", param, n);
+    }
+    std::unique_ptr<CheckedModule> m = check_with(name, given);
+    if (!m) return nullptr;
+    m->ir_name = name + suffix;
+    return variants_.emplace(key, std::move(m)).first->second.get();
+}
+
 std::shared_ptr<const ast::Module> ModuleLibrary::parse_function(const ModuleSource& src) {
     ParseOptions po;
     for (const auto& n : known_names()) po.known_names.insert(n);

@@ -37,6 +37,10 @@ public:
     // Checks the named module afresh (not cached) with parameter types known from outside; null if none.
     std::unique_ptr<CheckedModule> check_with(const std::string& name, const std::map<std::string, Type>& given_types,
                                               const std::map<std::string, std::shared_ptr<const ast::Module>>& given_functions = {});
+    // The named module checked with some of its sequence parameters of other lengths (`lengths`: name ->
+    // element count), for an instance whose override has that many elements: checked once per combination
+    // and kept (null where the module is unknown). Its IR function is named apart (CheckedModule::ir_name).
+    const CheckedModule* variant(const std::string& name, const std::map<std::string, int>& lengths);
     // Parses `NAME(params) = expression` given for a function parameter (iqc eval --set 'f(x)=x²').
     std::shared_ptr<const ast::Module> parse_function(const ModuleSource& src);
     // Every module name that lookup can find, for "did you mean".
@@ -62,6 +66,7 @@ private:
     std::map<std::string, const ModuleSource*> registry_;
     std::vector<std::unique_ptr<ModuleSource>> owned_;
     std::map<std::string, std::unique_ptr<CheckedModule>> checked_;
+    std::map<std::pair<std::string, std::map<std::string, int>>, std::unique_ptr<CheckedModule>> variants_;
     std::set<std::string> in_progress_;
     bool constants_ = false;  // checking a constant expression (trigonometry is imported)
 

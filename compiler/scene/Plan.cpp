@@ -134,10 +134,8 @@ struct Planner {
                                       std::max(1, p.type.element().components()) == ov.cols;
             if (p.type.is_array() && int(ov.value.size()) != p.type.components() &&
                 int(ov.value.size()) % std::max(1, p.type.element().components()) == 0) {
-                d.error(ov.span, fmt::format("'{}' is a sequence of {} elements ({}), as the module's default has; this value has {}: "
-                                             "an instance keeps the module's length (the module's function is compiled for it)",
-                                             ov.name, p.type.count, p.type.str(),
-                                             int(ov.value.size()) / std::max(1, p.type.element().components())));
+                d.error(ov.span, fmt::format("'{}' is a sequence of {} elements ({}); this value has {}", ov.name, p.type.count,
+                                             p.type.str(), int(ov.value.size()) / std::max(1, p.type.element().components())));
                 ok = false;
                 continue;
             }
@@ -371,10 +369,28 @@ struct Planner {
         return m->ok ? m : nullptr;
     }
 
+    // The module checked for the sequence lengths an instance's overrides give (x = 3 points where the module's
+    // default has 2): a variant of its own (ModuleLibrary::variant), else the module itself.
+    const CheckedModule* sized(const CheckedModule* m, const std::string& name, const std::vector<ParamOverride>& ovs) {
+        std::map<std::string, int> lengths;
+        for (const auto& ov : ovs) {
+            const int pi = m->find_param(ov.name);
+            if (pi < 0) continue;
+            const Type& t = m->params[size_t(pi)].type;
+            const int n = std::max(1, t.is_array() ? t.element().components() : 1);
+            if (t.is_array() && !ov.value.empty() && int(ov.value.size()) != t.components() && int(ov.value.size()) % n == 0)
+                lengths[m->params[size_t(pi)].name] = int(ov.value.size()) / n;
+        }
+        if (lengths.empty()) return m;
+        const CheckedModule* v = lib.variant(name, lengths);
+        return v && v->ok ? v : m;  // (a variant that fails to check has said why; the override's error follows)
+    }
+
     bool plan(const InstanceDesc& inst, InstancePlan& plan) {
         plan.desc = &inst;
         plan.shape = module(inst.type, inst.type_span, ast::ModuleKind::Shape);
         if (!plan.shape) return false;
+        plan.shape = sized(plan.shape, inst.type, inst.shape_params);
         plan.query = plan.shape->roles.empty() ? -1 : plan.shape->roles[0];
         if (plan.query < 0) return false;  // the checker reported it
         bool ok = true;
@@ -383,6 +399,7 @@ struct Planner {
         if (!inst.material.empty()) {
             plan.material = module(inst.material, inst.material_span, ast::ModuleKind::Material);
             if (!plan.material) return false;
+            plan.material = sized(plan.material, inst.material, inst.material_params);
             for (auto& p : plan.material->params) plan.material_values.push_back(p.value);
             // The footprint w_P (ℝ³) is the renderer's, like p, N̂ and I; under another type it is an ordinary
             // parameter, which a writer of w_P most likely did not mean: a warning.

@@ -155,6 +155,9 @@ struct CheckedModule {
     // query point; a material's surface point, unit normal and eye position, in that order. -1 where missing.
     std::vector<int> roles;
     bool ok = false;
+    // The IR function's name where it is not ast.name: a variant checked for other sequence lengths (an
+    // instance's 3 points where the module's default has 2: "blob_x3", ModuleLibrary::variant).
+    std::string ir_name;
 
     int find_param(const std::string& n) const;
     int find_function(const std::string& n) const;
