@@ -23,6 +23,12 @@ struct Range {
     bool known = false;       // derived from constants and parameters only
     bool unit = false;        // a unit vector (normalize, v/‖v‖)
     bool nonzero = false;     // never 0 where it is read (under a condition x ≠ 0: `1/x if x ≠ 0`)
+    // How far the shader's 32-bit value may lie outside `c` (each end, absolute) where the intervals are exact in
+    // real arithmetic: rounding that a difference near 0 magnifies. s ≥ 0.03 ⇒ s/0.03 − 1 ≥ 0, but the shader's
+    // s·33.333332 − 1 is −6e-8 at s = 0.03: a square root of it is NaN (a trial's, stop 52). 0 where the value's
+    // sign is exact (a parameter, a constant, s − 0.03 with s ≥ 0.03: IEEE rounding is monotone, x·x, |x|).
+    double tol = 0;
+    bool rounded = false;     // computed with a rounding (not a parameter, a constant or a choice among them)
 };
 
 // The textbook interval rules are ir/Intervals.h's (a sum of opposite infinities is unbounded, not NaN).
@@ -45,6 +51,18 @@ std::string ranges_over(Interval a) {
 }
 
 Interval monotone(Interval a, double (*f)(double)) { return {f(a.lo), f(a.hi)}; }
+
+// Float's relative rounding allowance: 8 units in the last place of a float (a few roundings of the operands).
+constexpr double kFloatSlack = 0x1p-20;
+
+double magnitude_finite(const Range& x) {
+    double m = 0;
+    for (const auto& c : x.c) {
+        if (std::isfinite(c.lo)) m = std::max(m, std::fabs(c.lo));
+        if (std::isfinite(c.hi)) m = std::max(m, std::fabs(c.hi));
+    }
+    return m;
+}
 
 struct Analyzer {
     const Module& m;
@@ -333,6 +351,103 @@ struct Analyzer {
         if (needs_out) *needs_out = std::move(needs);
     }
 
+    // Range::rounded and Range::tol of instruction i (a running bound of float's rounding: Higham, "Accuracy and
+    // Stability of Numerical Algorithms", ch. 3 — each rounding relative, each difference adding its operands').
+    void rounding(size_t i, Range& x) {
+        const Instr& in = f.body[i];
+        double tol = 0;
+        bool rounded = false;
+        for (ValueId a : in.args) {
+            tol = std::max(tol, r[a].tol);
+            rounded = rounded || r[a].rounded;
+        }
+        auto mag = [&](size_t k) { return magnitude_finite(r[in.args[k]]); };
+        switch (in.op) {
+            case Op::Const:  // the shader's float: 0.3 − 0.1 folds to 0.19999999999999998, which is 0.2f
+                x.tol = 0;
+                for (double v : in.data)
+                    if (std::isfinite(v) && std::fabs(v) <= limits::kFloatMax) x.tol = std::max(x.tol, std::fabs(double(float(v)) - v));
+                x.rounded = false;
+                return;
+            case Op::Param:
+            case Op::Global:
+            case Op::Input:
+                x.tol = 0;
+                x.rounded = false;
+                return;
+            case Op::Copy:
+            case Op::Neg:
+            case Op::Select:
+            case Op::If:
+            case Op::Switch:
+            case Op::Index:
+            case Op::Element:
+            case Op::At:
+            case Op::Extract:
+            case Op::Construct:
+            case Op::Row:
+            case Op::Column:
+            case Op::Transpose:
+            case Op::Compare:
+            case Op::And:
+            case Op::Or:
+                break;  // no rounding of their own
+            case Op::Add:
+            case Op::Sub:
+                // A sum of rounded operands is off by their roundings, whatever its own size.
+                tol = r[in.args[0]].tol + r[in.args[1]].tol + (rounded ? kFloatSlack * (mag(0) + mag(1)) : 0);
+                rounded = true;
+                break;
+            case Op::Mul:
+            case Op::Hadamard:
+                tol = r[in.args[0]].tol * mag(1) + r[in.args[1]].tol * mag(0);
+                rounded = true;
+                break;
+            case Op::Div: {
+                const Interval d = comp(in.args[1], 0);
+                const double least = contains_zero(d) ? 0 : std::min(std::fabs(d.lo), std::fabs(d.hi));
+                tol = r[in.args[0]].tol == 0 ? 0 : least > 0 ? r[in.args[0]].tol / least : kInf;
+                rounded = true;
+                break;
+            }
+            case Op::Builtin: {
+                std::string_view n = iqc::builtin(in.aux).name;
+                if (n == "max" || n == "clamp") {
+                    // At least each operand's (clamp: its lower limit's) float value, exactly: max(0, R̂⋅V̂) is never
+                    // below 0, whatever the dot product's rounding.
+                    double floor_ = -kInf, lo = kInf;
+                    for (size_t k = n == "clamp" ? 1 : 0; k < (n == "clamp" ? size_t(2) : in.args.size()); ++k)
+                        for (const auto& c : r[in.args[k]].c) floor_ = std::max(floor_, c.lo - r[in.args[k]].tol);
+                    for (const auto& c : x.c) lo = std::min(lo, c.lo);
+                    if (std::isfinite(lo) && std::isfinite(floor_)) tol = std::min(tol, std::max(0.0, lo - floor_));
+                    break;
+                }
+                if (n == "abs" || n == "min" || n == "sign") break;
+                rounded = true;
+                // A smooth function of a value with an error: the error times a slope (bounded roughly by the
+                // result's size); none where the arguments are exact.
+                if (tol > 0) tol = tol + kFloatSlack * magnitude_finite(x);
+                break;
+            }
+            default:
+                rounded = true;
+                if (tol > 0) tol = tol + kFloatSlack * magnitude_finite(x);
+                break;
+        }
+        // A value whose float sign is exact (|x|, x·x, v⋅v, ‖v‖, e^x, √x) is never below 0, nor below its lower end by
+        // more than that end.
+        bool nonnegative = in.op == Op::Builtin && (std::string_view(iqc::builtin(in.aux).name) == "abs" ||
+                                                    std::string_view(iqc::builtin(in.aux).name) == "length" ||
+                                                    std::string_view(iqc::builtin(in.aux).name) == "exp" ||
+                                                    std::string_view(iqc::builtin(in.aux).name) == "sqrt");
+        nonnegative = nonnegative || ((in.op == Op::Mul || in.op == Op::Dot) && in.args.size() == 2 && in.args[0] == in.args[1] &&
+                                      !in.type.is_matrix());
+        if (nonnegative)
+            for (const auto& c : x.c) tol = std::min(tol, std::max(0.0, c.lo));
+        x.tol = std::isfinite(tol) ? tol : kInf;
+        x.rounded = rounded;
+    }
+
     // One instruction of scan: its guard, range and warnings.
     void scan_one(size_t i, const Instr& in, std::vector<int>& needs, std::vector<bool>& beyond) {
         {
@@ -345,26 +460,29 @@ struct Analyzer {
                     return false;
                 };
                 Range x = arg(0);
+                // Guards where the shader's float value may leave the domain (x.tol: its rounding), warnings where
+                // the real value does (beyond the rounding: √(s s − 0.49) if s ≥ 0.7 is −5.6e-17 at worst).
+                const double tol = x.tol;
                 if (n == "acos" || n == "asin") {
-                    if (any(x, [](Interval c) { return c.lo < -1 || c.hi > 1; })) {
+                    if (any(x, [&](Interval c) { return c.lo < -1 + tol || c.hi > 1 - tol; })) {
                         needs[i] = kClampUnit;
-                        if (x.known)
+                        if (x.known && any(x, [&](Interval c) { return c.lo < -1 - tol || c.hi > 1 + tol; }))
                             warn(in, fmt::format("{} of a value outside [-1, 1]: with the parameters' bounds {}", n,
                                                    ranges_over(x.c[0])));
                     }
                 } else if (n == "sqrt") {
-                    if (any(x, [](Interval c) { return c.lo < 0; })) {
+                    if (any(x, [&](Interval c) { return c.lo < tol; })) {
                         needs[i] = kNonNegative;
-                        if (x.known && any(x, [](Interval c) { return c.lo < 0; }))
+                        if (x.known && any(x, [&](Interval c) { return c.lo < -tol; }))
                             warn(in, fmt::format("square root of a value that can be negative: {}", ranges_over(x.c[0])));
                     }
                 } else if (n == "log" || n == "ln") {
-                    if (x.known && any(x, [](Interval c) { return c.lo <= 0; }))
+                    if (x.known && any(x, [&](Interval c) { return c.lo <= tol; }))
                         warn(in, fmt::format("logarithm of a value that can be 0 or negative: {}", ranges_over(x.c[0])));
                 } else if (n == "pow") {
-                    if (any(x, [](Interval c) { return c.lo < 0; })) {
+                    if (any(x, [&](Interval c) { return c.lo < tol; })) {
                         needs[i] = kPowBase;
-                        if (x.known)
+                        if (x.known && any(x, [&](Interval c) { return c.lo < -tol; }))
                             warn(in, fmt::format("a power of a base that can be negative: {}", ranges_over(x.c[0])));
                     }
                 } else if (n == "normalize") {
@@ -403,6 +521,7 @@ struct Analyzer {
                     needs[i] = kDivLength;
             }
             r[i] = eval(i);
+            rounding(i, r[i]);
             // In 32-bit floats a nonzero value below the smallest normal (1.2e-38) may be 0 (GPUs flush denormals):
             // e^-100, 1e-20·1e-20. Its range takes 0 in, so a division by it is a division by a value that can be 0.
             if (in.type.kind != Type::Integer && in.op != Op::Compare)
@@ -534,7 +653,8 @@ struct Analyzer {
             }
             case Op::Div: {
                 Interval d = comp(in.args[1], 0);
-                if (contains_zero(d)) {
+                const double tol = r[in.args[1]].tol;  // (a divisor whose float value may be 0 at a rounding)
+                if (contains_zero(d) || (d.lo <= tol && d.hi >= -tol)) {
                     if (r[in.args[1]].known && !r[in.args[1]].nonzero)
                         warn(in, fmt::format("division by a value that can be 0{}: with the parameters' bounds {}",
                                              underflows[in.args[1]] ? fmt::format(" (it can fall below the smallest normal 32-bit "
