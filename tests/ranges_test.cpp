@@ -248,3 +248,40 @@ TEST_CASE("a piecewise arm and a conditional sum's term are analysed under their
         CHECK_THAT(bad.diagnostics, Catch::Contains("cond_sum_bad.md:4:44: warning: division by a value that can be 0"));
     }
 }
+
+TEST_CASE("local functions and the standard library's are analysed with their arguments' ranges", "[ranges]") {
+    // A trial (stop 52): `g() = 1/s` with s ∈ [0, 1] warned of nothing, also under --strict-ranges, and NaN reached
+    // every pixel: a local function's parameters have no bounds of their own. Calls are analysed with their
+    // arguments' ranges now; the warning is at the operation, in the function's definition.
+    const std::string s = "s ∈ [0,1] default = 0.5\nw_i ∈ ℝ default = {0.6, 0.9, 0.2}\n";
+    struct Case {
+        const char* body;
+        const char* where;
+    };
+    for (const Case& c : {Case{"g() = 1/s\nD = ‖p‖ - 1 + 0.01 g()", "loc.md:4:7: warning: division by a value that can be 0"},
+                          Case{"g(q) = log(q) where q ∈ ℝ\nD = ‖p‖ - 1 + 0.01 g(s)", "loc.md:4:8: warning: logarithm of a value that can be 0"},
+                          Case{"g(q) = 1/(q - 0.5) where q ∈ ℝ\nD = ‖p‖ - 1 + 0.01 g(s)", "loc.md:4:8: warning: division by a value that can be 0"},
+                          Case{"g() = ∑_(i for w_i > 0.5) 1/(w_i - 0.9)\nD = ‖p‖ - 1 + 0.01 g()", "loc.md:4:27: warning: division by a value"},
+                          Case{"g(q) = q - 1 where q ∈ ℝ\nD = ‖p‖ - 1 + 0.01/g(2s)", "loc.md:5:15: warning: division by a value that can be 0: with the parameters' bounds it ranges over [-1, 1]"}}) {
+        INFO(c.body);
+        Compiled r = compile_text("loc.md", doc(c.body, s));
+        REQUIRE(r.result.exit_code == 0);
+        CHECK_THAT(r.diagnostics, Catch::Contains(c.where));
+    }
+    auto f = write_temp("loc_strict.md", doc("g() = 1/s\nD = ‖p‖ - 1 + 0.01 g()", s));
+    CHECK(run_iqc("--strict-ranges " + f.string()).exit_code == 1);
+    // Arguments that keep the operation in its domain: nothing (g(s + 1) divides by [1, 2]; g(2)/g(1) by 1).
+    for (const char* body : {"g(q) = 1/q where q ∈ ℝ\nD = ‖p‖ - 1 + 0.01 g(s + 1)", "g(q) = q + 1 where q ∈ ℝ\nD = ‖p‖ - 1 + 0.01 g(2)/g(1)"}) {
+        INFO(body);
+        Compiled r = compile_text("loc_ok.md", doc(body, s));
+        REQUIRE(r.result.exit_code == 0);
+        CHECK(r.diagnostics.empty());
+    }
+    // In the standard library's code: said at the call, naming the function (repeat divides by its cell size).
+    Compiled rep = compile_text("rep.md", doc("repeat from domain\nD = ‖repeat(p, (c, 2, 2))‖ - 0.3", "c ∈ [0,2] default = 1\n"));
+    REQUIRE(rep.result.exit_code == 0);
+    CHECK_THAT(rep.diagnostics, Catch::Contains("rep.md:5:6: warning: in 'domain.repeat': division by a value that can be 0"));
+    Compiled safe = compile_text("rep_ok.md", doc("repeat from domain\nD = ‖repeat(p, (c, 2, 2))‖ - 0.3", "c ∈ [0.5,2] default = 1\n"));
+    REQUIRE(safe.result.exit_code == 0);
+    CHECK(safe.diagnostics.empty());
+}

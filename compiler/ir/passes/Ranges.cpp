@@ -71,6 +71,32 @@ struct Analyzer {
     std::vector<RangeIssue> issues;
     std::vector<char> underflows = {};  // per value: it can fall below the smallest normal float (a shader's 0)
     const std::vector<Range>* params = nullptr;  // a loop body's parameters, where one is analysed (accumulated)
+    // Calls of functions whose parameters have no bounds of their own (a module's local functions, the standard
+    // library's) are analysed with their arguments' ranges (eval's Op::Call): `g() = 1/s` with s ∈ [0, 1] warned of
+    // nothing, also under --strict-ranges (a trial's, stop 52), and g(2)/g(1) was a division by anything. `depth`
+    // nests them; `work` bounds the instructions all of one function's calls analyse (a shared budget).
+    int depth = 0;
+    long* work = nullptr;
+    bool quiet = false;        // no warnings (a first pass for `plain`)
+    bool narrowing = true;     // ranges under the conditions of choices (find_guards, facts)
+    // Every value's range without conditions, where a condition compares with a value computed after the one it
+    // guards (`1/w if w ≥ max(1e-5, 3e-5|x|)`: the case's value comes first): a quiet first pass, made when needed.
+    std::vector<Range> plain = {};
+    bool plain_made = false;
+    const Range& plain_range(ValueId v) {
+        if (!plain_made) {
+            plain_made = true;
+            Analyzer pre{m, f, {}, {}};
+            pre.params = params;
+            pre.depth = depth;
+            pre.work = work;
+            pre.quiet = true;
+            pre.narrowing = false;
+            pre.scan(nullptr);
+            plain = std::move(pre.r);
+        }
+        return plain[v];
+    }
 
     Range all_unknown(const Type& t) {
         Range x;
@@ -162,11 +188,14 @@ struct Analyzer {
             const ValueId t = c.args[size_t(side)], o = c.args[size_t(1 - side)];
             const CompareKind kk = side == 0 ? k : mirrored[int(k)];
             // (a constant may come after the instruction: `1/s if s > 0.1` computes 1/s before 0.1)
+            // A value computed after the instruction has its plain range (plain_range).
             const Instr& other = f.body[o];
             const bool constant = other.op == Op::Const && other.data.size() == 1;
-            if (t >= at || (o >= at && !constant) || r[t].c.size() != 1 || (!constant && r[o].c.size() != 1)) continue;
+            if (t >= at || r[t].c.size() != 1) continue;
+            const Range& bound = o < at ? r[o] : plain_range(o);
+            if (!constant && bound.c.size() != 1) continue;
             const bool integer = f.body[t].type.kind == Type::Integer;
-            const Interval b = constant ? Interval{other.data[0], other.data[0]} : r[o].c[0];
+            const Interval b = constant ? Interval{other.data[0], other.data[0]} : bound.c[0];
             Interval x{-kInf, kInf};
             switch (kk) {
                 case CompareKind::Lt: x.hi = integer ? std::ceil(b.hi) - 1 : std::nextafter(b.hi, -kInf); break;
@@ -185,7 +214,7 @@ struct Analyzer {
     // the stable pass's e^(x_i - max_j x_j), which is at most 1) is the pass's to keep in range: said at 1:1, a
     // trial's "exp of a value that can exceed 88.72" pointed at `shape`.
     void warn(const Instr& in, std::string msg) {
-        if (unreachable || (source_spans && !in.span.valid())) return;
+        if (quiet || unreachable || (source_spans && !in.span.valid())) return;
         const size_t i = size_t(&in - f.body.data());
         if (i < live.size() && !live[i]) return;
         issues.push_back({in.span, std::move(msg)});
@@ -295,6 +324,8 @@ struct Analyzer {
         for (size_t a = 1; a < loop.args.size(); ++a) args.push_back(r[loop.args[a]]);
         Analyzer sub{m, body, {}, {}};
         sub.params = &args;
+        sub.depth = depth + 1;
+        sub.work = work;
         sub.r.resize(body.body.size());
         sub.underflows.assign(body.body.size(), 0);
         for (size_t b = 0; b <= t; ++b) sub.r[b] = sub.eval(b);
@@ -324,7 +355,8 @@ struct Analyzer {
         }
         std::vector<int> needs(f.body.size(), 0);
         std::vector<bool> beyond(f.body.size(), false);  // a value past the largest float wherever it is
-        find_guards();
+        if (narrowing) find_guards();
+        else guarded.assign(f.body.size(), {});
         std::vector<Fact> narrowed;
         std::vector<std::pair<ValueId, Range>> saved;
         for (size_t i = 0; i < f.body.size(); ++i) {
@@ -576,8 +608,42 @@ struct Analyzer {
             args.push_back(a <= states ? all_unknown(f.body[loop.args[a]].type) : r[loop.args[a]]);
         Analyzer sub{m, body, {}, {}};
         sub.params = &args;
+        sub.depth = depth + 1;
+        sub.work = work;
+        sub.quiet = quiet;
         sub.scan(nullptr);
-        for (auto& issue : sub.issues) issues.push_back(std::move(issue));
+        if (!unreachable)
+            for (auto& issue : sub.issues) issues.push_back(std::move(issue));
+    }
+
+    // A call's result with its arguments' ranges, and the callee's warnings there (Analyzer::depth). A warning in
+    // another file than the call (the standard library's code) is said at the call, naming the function.
+    Range call(size_t i) {
+        const Instr& in = f.body[i];
+        const Function& callee = m.functions[size_t(in.aux)];
+        if (!callee.param_bounds.empty() || callee.body.empty() || depth >= 8 || !work || *work < long(callee.body.size()))
+            return all_unknown(in.type);
+        *work -= long(callee.body.size());
+        std::vector<Range> args;
+        for (ValueId a : in.args) args.push_back(r[a]);
+        Analyzer sub{m, callee, {}, {}};
+        sub.params = &args;
+        sub.depth = depth + 1;
+        sub.work = work;
+        sub.quiet = quiet;
+        sub.scan(nullptr);
+        const bool said = !quiet && !unreachable && !(source_spans && !in.span.valid()) && (i >= live.size() || live[i]);
+        for (auto& issue : sub.issues) {
+            if (!said) break;
+            if (in.span.valid() && issue.span.file != in.span.file) {
+                issue.message = fmt::format("in '{}': {}", callee.name, issue.message);
+                issue.span = in.span;
+            }
+            issues.push_back(std::move(issue));
+        }
+        Range x = sub.r[callee.result];
+        if (x.c.size() != size_t(std::max(1, in.type.components()))) return all_unknown(in.type);
+        return x;
     }
 
     Range eval(size_t i) {
@@ -624,8 +690,9 @@ struct Analyzer {
                 if (i >= live.size() || live[i]) loop_warnings(in);  // (a loop the stable pass replaced: not)
                 return all_unknown(in.type);
             case Op::Input:
-            case Op::Call:
                 return all_unknown(in.type);
+            case Op::Call:
+                return call(i);
             case Op::Add:
             case Op::Sub:
                 for (size_t k = 0; k < comps; ++k)
@@ -718,6 +785,8 @@ struct Analyzer {
 std::vector<RangeIssue> analyze_ranges(Module& m, int fn, bool guard) {
     Function& f = m.functions[size_t(fn)];
     Analyzer a{m, f, {}, {}};
+    long work = 200000;  // instructions of callees analysed at their calls (Analyzer::call)
+    a.work = &work;
     std::vector<int> needs;  // per instruction: 0 none, else the guard kind
     a.scan(&needs);
     if (!guard) return a.issues;
