@@ -136,6 +136,21 @@ TEST_CASE("log, mod and normalize of slider ranges are warned", "[ranges]") {
     CHECK_THAT(l.diagnostics, Catch::Contains("warning: normalize of a vector that can be zero"));
 }
 
+TEST_CASE("a negative power of a base that can be 0 is warned", "[ranges]") {
+    // A trial (stop 52): s^(-0.5) with s ∈ [0, 1] is ∞ at s = 0 (the shape vanished), unwarned where 1/√s was warned of.
+    Compiled c = compile_text("npow.md", doc("sin from trigonometry\nD = ‖p‖ - 1 + 0.1 sin(s^(-0.5))", "s ∈ [0,1] default = 0.5\n"));
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("npow.md:5:23: warning: a power with the negative exponent -0.5 of a base that can be 0 "
+                                              "(∞ there; a negative base is taken as 0): the base ranges over [0, 1]"));
+    Compiled e = compile_text("npow_e.md", doc("sin from trigonometry\nD = ‖p‖ - 1 + 0.1 sin(s^e)", "s ∈ [0,1] default = 0.5\ne ∈ [-1,2] default = 0.5\n"));
+    CHECK_THAT(e.diagnostics, Catch::Contains("an exponent that can be negative, [-1, 2]"));
+    for (const char* ok : {"sin from trigonometry\nD = ‖p‖ - 1 + 0.1 sin((s + 1)^(-0.5))", "sin from trigonometry\nD = ‖p‖ - 1 + 0.1 sin(s^0.5)"}) {
+        Compiled c2 = compile_text("npow_ok.md", doc(ok, "s ∈ [0,1] default = 0.5\n"));
+        REQUIRE(c2.result.exit_code == 0);
+        CHECK(c2.diagnostics.empty());
+    }
+}
+
 TEST_CASE("atan2(0, 0) is 0 in the shader as in the evaluator", "[ranges]") {
     Compiled a = compile_text("atan.md", doc("atan2 from trigonometry\nD = ‖p‖ - 1 + 0.01atan2(p_2, p_1)", ""));
     REQUIRE(a.result.exit_code == 0);

@@ -517,6 +517,16 @@ struct Analyzer {
                         if (x.known && any(x, [&](Interval c) { return c.lo < -tol; }))
                             warn(in, fmt::format("a power of a base that can be negative: {}", ranges_over(x.c[0])));
                     }
+                    // 0 to a negative power is ∞ (and the guard makes a negative base 0): s^(-0.5) with s ∈ [0, 1] drew
+                    // nothing at s = 0, unwarned, where 1/√s was warned of (a trial's, stop 52).
+                    const Range y = arg(1);
+                    if (x.known && y.known && any(x, [&](Interval c) { return c.lo <= tol; }) &&
+                        any(y, [](Interval c) { return c.lo < 0; }))
+                        warn(in, fmt::format("a power with {} of a base that can be 0 (∞ there; a negative base is taken as "
+                                             "0): the base {}",
+                                             y.c[0].lo == y.c[0].hi ? fmt::format("the negative exponent {:.4g}", y.c[0].lo)
+                                                                    : "an exponent that can be negative, " + fmt_interval(y.c[0]),
+                                             ranges_over(x.c[0]).substr(3)));
                 } else if (n == "normalize") {
                     bool zero = true;
                     for (const auto& c : x.c) zero &= contains_zero(c);
