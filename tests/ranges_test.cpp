@@ -2,6 +2,7 @@
 // an operation out of its domain, and --strict-ranges.
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "TestUtil.h"
 
@@ -299,4 +300,34 @@ TEST_CASE("local functions and the standard library's are analysed with their ar
     Compiled safe = compile_text("rep_ok.md", doc("repeat from domain\nD = ‖repeat(p, (c, 2, 2))‖ - 0.3", "c ∈ [0.5,2] default = 1\n"));
     REQUIRE(safe.result.exit_code == 0);
     CHECK(safe.diagnostics.empty());
+}
+
+TEST_CASE("a sequence's bounds hold for each element", "[ranges]") {
+    // A trial (stop 52): a weighted mean over positive weights always warned of a division by a value in [-∞, ∞] (a
+    // sequence could not have bounds, and an element read by its index was unknown). Bounds on a sequence are each
+    // element's: its sliders', and what range analysis assumes.
+    const std::string mean = "D = ∑_i w_i(‖p - x_i‖ - 0.4)/N\nN = ∑_j w_j";
+    const std::string points = "x_i ∈ ℝ³ default = {(0, 0, 0), (0.5, 0, 0), (0, 0.5, 0)}\n";
+    for (Target t : {Target::Shadertoy, Target::WebGL2}) {
+        CompileOptions o;
+        o.target = t;
+        Compiled c = compile_path(write_temp("seq_bounds.md", doc(mean, points + "w_i ∈ [0.1, 1] default = {1, 0.5, 0.7}\n")), o);
+        REQUIRE(c.result.exit_code == 0);
+        CHECK_THAT(c.diagnostics, !Catch::Contains("division"));
+        Compiled z = compile_path(write_temp("seq_bounds_0.md", doc(mean, points + "w_i ∈ [0, 1] default = {1, 0.5, 0.7}\n")), o);
+        REQUIRE(z.result.exit_code == 0);
+        CHECK_THAT(z.diagnostics, Catch::Contains("division by a value that can be 0: with the parameters' bounds it ranges over [0, 3]"));
+    }
+    // The description for engines (--meta): each element's bounds.
+    auto f = write_temp("seq_bounds_meta.md", doc(mean, points + "w_i ∈ [0.1, 1] default = {1, 0.5, 0.7}\n"));
+    auto meta = f.parent_path() / "seq_bounds_meta.json";
+    REQUIRE(run_iqc("--target webgl2 --meta " + meta.string() + " -o " + (f.parent_path() / "sb.frag").string() + " " + f.string()).exit_code == 0);
+    nlohmann::json j = nlohmann::json::parse(read_text(meta));
+    int seen = 0;
+    for (const auto& p : j["parameters"])
+        if (p["name"].get<std::string>().rfind("w_", 0) == 0) {
+            ++seen;
+            CHECK(p["bounds"] == nlohmann::json::parse("[[0.1, 1.0]]"));
+        }
+    CHECK(seen == 3);
 }

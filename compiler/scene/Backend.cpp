@@ -434,7 +434,10 @@ nlohmann::ordered_json describe(const ir::Module& m, const Layout& lay, const Sh
                 j["components"] = e.components();
                 if (!g.bounds.lo.empty()) {
                     nlohmann::ordered_json b = nlohmann::ordered_json::array();
-                    for (size_t c = 0; c < g.bounds.lo.size(); ++c) b.push_back({g.bounds.lo[c], g.bounds.hi[c]});
+                    // (a bounded sequence's bounds are every element's: this element's)
+                    const bool each = sequence && g.bounds.lo.size() == size_t(g.type.components());
+                    for (size_t c = each ? elem * per : 0; c < (each ? (elem + 1) * per : g.bounds.lo.size()); ++c)
+                        b.push_back({g.bounds.lo[c], g.bounds.hi[c]});
                     j["bounds"] = b;
                 } else {
                     j["bounds"] = nullptr;

@@ -203,6 +203,8 @@ private:
 
     void collect_declarations();
     void declare_sequence(const Decl& decl, const std::string& name, Span span, const std::string& index);
+    // A declaration's intervals `∈ [a,b]x[c,d]` into lo and hi (one per interval; a bad one is reported and left out).
+    void interval_bounds(const Decl& decl, const std::string& name, std::vector<double>& lo, std::vector<double>& hi);
     void bind_function(const Decl& decl, const std::string& name, Span span);
     const Decl* param_decl(const LocalFunction& f, size_t i) const;
     std::set<std::string> unbound_functions_;  // function parameters without a definition, and sequences whose
@@ -426,20 +428,7 @@ void Checker::collect_declarations() {
             int n = p.type.components();
             if (!decl.bounds.empty()) {
                 p.bounded = true;
-                for (auto& iv : decl.bounds) {
-                    auto lo = constant(*iv.lo), hi = constant(*iv.hi);
-                    if (!lo || lo->size() != 1) { d_.error(iv.lo->span, "an interval bound must be a constant number"); continue; }
-                    if (!hi || hi->size() != 1) { d_.error(iv.hi->span, "an interval bound must be a constant number"); continue; }
-                    if (!limits::fits_float((*lo)[0]) || !limits::fits_float((*hi)[0])) {
-                        d_.error(iv.span, fmt::format("an interval bound must be a finite 32-bit float, not [{}, {}] (leave "
-                                                      "'{}' unbounded: '{} ∈ ℝ')", (*lo)[0], (*hi)[0], name, name));
-                        continue;
-                    }
-                    if ((*lo)[0] > (*hi)[0])
-                        d_.error(iv.span, fmt::format("the interval is empty: {} > {}", (*lo)[0], (*hi)[0]));
-                    p.lo.push_back((*lo)[0]);
-                    p.hi.push_back((*hi)[0]);
-                }
+                interval_bounds(decl, name, p.lo, p.hi);
                 if (int(p.lo.size()) != n) continue;
             }
             if (decl.default_value) {
@@ -473,18 +462,44 @@ void Checker::collect_declarations() {
     }
 }
 
+void Checker::interval_bounds(const Decl& decl, const std::string& name, std::vector<double>& lo_out, std::vector<double>& hi_out) {
+    for (auto& iv : decl.bounds) {
+        auto lo = constant(*iv.lo), hi = constant(*iv.hi);
+        if (!lo || lo->size() != 1) { d_.error(iv.lo->span, "an interval bound must be a constant number"); continue; }
+        if (!hi || hi->size() != 1) { d_.error(iv.hi->span, "an interval bound must be a constant number"); continue; }
+        if (!limits::fits_float((*lo)[0]) || !limits::fits_float((*hi)[0])) {
+            d_.error(iv.span, fmt::format("an interval bound must be a finite 32-bit float, not [{}, {}] (leave "
+                                          "'{}' unbounded: '{} ∈ ℝ')", (*lo)[0], (*hi)[0], name, name));
+            continue;
+        }
+        if ((*lo)[0] > (*hi)[0])
+            d_.error(iv.span, fmt::format("the interval is empty: {} > {}", (*lo)[0], (*hi)[0]));
+        lo_out.push_back((*lo)[0]);
+        hi_out.push_back((*hi)[0]);
+    }
+}
+
 // x_i ∈ ℝ³: a sequence parameter. Its length comes from its value (iqc eval --set 'x={…}') or its default
-// {…}; sequences indexed by one letter have one length (I♥LA: the index ranges over them all).
+// {…}; sequences indexed by one letter have one length (I♥LA: the index ranges over them all). Bounds
+// (`w_i ∈ [0.1, 1]`, `x_i ∈ [-1,1]x[-1,1]x[-1,1]`) hold for every element: each element's sliders, and what range
+// analysis and the Lipschitz bounds assume of the elements on targets with uniforms.
 void Checker::declare_sequence(const Decl& decl, const std::string& name, Span span, const std::string& index) {
     unbound_functions_.insert(name);  // until it is declared below
-    if (!decl.bounds.empty()) {
-        d_.error(Span::join(decl.bounds.front().span, decl.bounds.back().span),
-                 fmt::format("the sequence '{}' cannot have bounds (give its elements' type, such as ℝ³)", name));
-        return;
-    }
     Type elem = param_type(decl.type, name);
     if (!elem.valid()) return;
     if (elem.is_scalar()) elem = Type::scalar();
+    std::vector<double> elo, ehi;
+    if (!decl.bounds.empty()) {
+        const size_t errors = d_.error_count();
+        interval_bounds(decl, name, elo, ehi);
+        if (d_.error_count() != errors) return;
+        if (int(elo.size()) != elem.components()) {
+            d_.error(Span::join(decl.bounds.front().span, decl.bounds.back().span),
+                     fmt::format("the bounds of the sequence '{}' give {} interval{}, but its elements are {}", name, elo.size(),
+                                 elo.size() == 1 ? "" : "s", elem.str()));
+            return;
+        }
+    }
     ParamInfo p;
     p.name = name;
     p.span = span;
@@ -524,7 +539,23 @@ void Checker::declare_sequence(const Decl& decl, const std::string& name, Span s
         return;
     }
     p.type = Type::array(elem, count);
-    if (p.value.empty()) p.value.assign(size_t(p.type.components()), 0.0);
+    if (!elo.empty()) {
+        p.bounded = true;
+        for (int e = 0; e < count; ++e) {
+            p.lo.insert(p.lo.end(), elo.begin(), elo.end());
+            p.hi.insert(p.hi.end(), ehi.begin(), ehi.end());
+        }
+    }
+    if (p.value.empty()) {
+        p.value.assign(size_t(p.type.components()), 0.0);
+        for (size_t k = 0; k < p.value.size() && p.bounded; ++k) p.value[k] = 0.5 * (p.lo[k] + p.hi[k]);
+    } else if (int i = p.outside_bounds(p.value); i >= 0) {
+        const int nc = std::max(1, elem.components());
+        d_.error(decl.default_value ? decl.default_value->args[size_t(i / nc)]->span : span,
+                 fmt::format("element {} of the default of '{}' is outside its bounds: {} is not in [{}, {}]", i / nc + 1, name,
+                             p.value[size_t(i)], p.lo[size_t(i)], p.hi[size_t(i)]));
+        return;
+    }
     m_.params.push_back(std::move(p));
     unbound_functions_.erase(name);
 }

@@ -296,6 +296,9 @@ struct Analyzer {
         size_t n = x.c.size();
         if (!b.lo.empty() && b.lo.size() == n) {
             for (size_t k = 0; k < n; ++k) x.c[k] = {b.lo[k], b.hi[k]};
+        } else if (t.is_array() && !b.lo.empty() && b.lo.size() % n == 0 && b.hi.size() == b.lo.size()) {  // every element's
+            for (size_t k = 0; k < n; ++k) x.c[k] = {kInf, -kInf};
+            for (size_t j = 0; j < b.lo.size(); ++j) x.c[j % n] = hull(x.c[j % n], {b.lo[j], b.hi[j]});
         } else if (value && !value->empty()) {
             for (size_t k = 0; k < n; ++k) x.c[k] = {kInf, -kInf};
             for (size_t j = 0; j < value->size(); ++j) x.c[j % n] = hull(x.c[j % n], {(*value)[j], (*value)[j]});
@@ -680,6 +683,11 @@ struct Analyzer {
                 return from_bounds(in.type, b, g.kind == Global::Kind::Constant ? &g.value : nullptr);
             }
             case Op::Index: return r[in.args[0]];  // the array's range is the hull of its elements
+            case Op::Element:  // (w_i's bounds hold for each element: ∑_j w_j over w_i ∈ [0.1, 1] was unknown)
+                return r[in.args[0]].c.size() == comps ? r[in.args[0]] : x;
+            case Op::At:
+                if (f.body[in.args[0]].type.is_array() && r[in.args[0]].c.size() == comps) return r[in.args[0]];
+                return x;
             case Op::If:
                 for (size_t k = 0; k < comps; ++k) x.c[k] = hull(comp(in.args[1], k), comp(in.args[2], k));
                 x.known = r[in.args[1]].known && r[in.args[2]].known;
