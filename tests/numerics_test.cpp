@@ -561,13 +561,60 @@ TEST_CASE("a union is bounded term by term, each term through its own cut", "[nu
 
 TEST_CASE("a smooth field whose bound cannot be derived is not called non-1-Lipschitz", "[numerics]") {
     // Found by a new-user trial: ln(1 + e^(‖p‖ - 1)) - ln 2 (a softplus of a sphere) was "not 1-Lipschitz (its
-    // gradient reaches 1 …)": its samples are 1-Lipschitz; what fails is the interval bound (an exponential
-    // over the camera's reach).
-    Compiled c = compile_text("softplus.iql", "shape\nD = ln(1 + exp(‖p‖ - 1)) - ln(2)\nwhere\np ∈ ℝ³\n");
+    // gradient reaches 1 …)": its samples are 1-Lipschitz; what failed was the interval bound (an exponential
+    // over the camera's reach). Since stop 52 the softplus is bounded (a log-sum-exp: its gradient is a convex
+    // combination, ir/Intervals.cpp); a term e^(p_1)/(1 + e^(2p_1)), at most ½, is still beyond intervals.
+    Compiled c = compile_text("softplus.iql", "shape\nD = ‖p‖ - 1 + 0.0001 exp(p_1)/(1 + exp(2p_1))\nwhere\np ∈ ℝ³\n");
     REQUIRE(c.result.exit_code == 0);
     CHECK_THAT(c.diagnostics, Catch::Contains("softplus.iql:1:1: warning: shape 'softplus' has no Lipschitz bound iqc can derive"));
     CHECK_THAT(c.diagnostics, Catch::Contains("if it is 1-Lipschitz, say `# bound` in the module"));
     CHECK_THAT(c.diagnostics, !Catch::Contains("is not 1-Lipschitz"));
+    Compiled softplus = compile_text("softplus.iql", "shape\nD = ln(1 + exp(‖p‖ - 1)) - ln(2)\nwhere\np ∈ ℝ³\n");
+    REQUIRE(softplus.result.exit_code == 0);
+    CHECK(softplus.diagnostics.empty());
+    CHECK(derived_bound(softplus, "softplus") >= 1 - 1e-9);
+    CHECK(derived_bound(softplus, "softplus") <= 1 + 1e-9);
+}
+
+TEST_CASE("a log-sum-exp of distances is bounded by its distances' bounds", "[numerics]") {
+    // A trial (stop 52): the exponential smooth minimum of 3 or more points, -ln(∑_i e^(-8‖p - x_i‖))/8, had no bound
+    // (K ≤ ∞; warned on every point-cloud scene): interval arithmetic bounds each weight e^(x_i - m)/∑_j e^(x_j - m) on its
+    // own. Its gradient is a convex combination of the distances' gradients (ir/Intervals.cpp, convex_form): K ≤ 1,
+    // unrolled (3, 10 points) and as a loop (40, 100). A weighted mean over weights with bounds (w_i ∈ [0.1, 1]) is
+    // one too, on targets with sliders.
+    for (int n : {3, 10, 40, 100}) {
+        INFO(n);
+        std::string points;
+        for (int k = 0; k < n; ++k)
+            points += fmt::format("{}({:.3f}, {:.3f}, {:.3f})", k ? ", " : "", 0.6 * std::sin(1.7 * k), 0.6 * std::cos(2.3 * k),
+                                  0.6 * std::sin(0.7 * k + 1));
+        const std::string m = "shape\nD = -log(∑_i exp(-8‖p - x_i‖))/8 - 0.1\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" + points + "}\n";
+        Compiled c = compile_text("lse.iql", m);
+        REQUIRE(c.result.exit_code == 0);
+        INFO(c.diagnostics);
+        CHECK(derived_bound(c, "lse") >= 1 - 1e-9);
+        CHECK(derived_bound(c, "lse") <= 1 + 1e-6);
+        CHECK_THAT(c.diagnostics, !Catch::Contains("Lipschitz"));
+    }
+    // A sharper blend (k = 8 scaled by 2: the distances' gradients are 2 long) is bounded by 2, not by 1.
+    Compiled steep = compile_text("lse.iql", "shape\nD = -log(∑_i exp(-8(2‖p - x_i‖)))/8\nwhere\np ∈ ℝ³\n"
+                                             "x_i ∈ ℝ³ default = {(0, 0, 0), (0.5, 0, 0), (0, 0.5, 0)}\n");
+    REQUIRE(steep.result.exit_code == 0);
+    CHECK(derived_bound(steep, "lse") >= 2 - 1e-9);
+    CHECK(derived_bound(steep, "lse") <= 2 + 1e-6);
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled mean = compile_path(write_temp("wmean_bounded.iql", "shape\nD = ∑_i w_i(‖p - x_i‖ - 0.4)/N\nN = ∑_j w_j\nwhere\np ∈ ℝ³\n"
+                                                                 "x_i ∈ ℝ³ default = {(0, 0, 0), (0.5, 0, 0), (0, 0.5, 0)}\n"
+                                                                 "w_i ∈ [0.1, 1] default = {1, 0.5, 0.7}\n"), o);
+    REQUIRE(mean.result.exit_code == 0);
+    CHECK(derived_bound(mean, "wmean_bounded") <= 1 + 1e-6);
+    // Weights that may be negative make no convex combination: no bound (unbounded weights), said.
+    Compiled loose = compile_path(write_temp("wmean_free.iql", "shape\nD = ∑_i w_i(‖p - x_i‖ - 0.4)/N\nN = ∑_j w_j\nwhere\np ∈ ℝ³\n"
+                                                               "x_i ∈ ℝ³ default = {(0, 0, 0), (0.5, 0, 0), (0, 0.5, 0)}\n"
+                                                               "w_i ∈ [-1, 1] default = {1, 0.5, 0.7}\n"), o);
+    REQUIRE(loose.result.exit_code == 0);
+    CHECK(derived_bound(loose, "wmean_free") > 2);
 }
 
 TEST_CASE("a bound too small for its shape gets a located warning", "[numerics]") {

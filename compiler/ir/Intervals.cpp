@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <map>
 #include <memory>
+#include <optional>
 
 #include "sema/Builtins.h"
 
@@ -665,6 +666,159 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
 
 namespace {
 
+// Convex combinations (a rule interval arithmetic cannot see: it bounds each weight a_j/D on its own).
+// X = (Σ_j a_j w_j)/D with every a_j ≥ 0 and D ≥ Σ_j a_j (D that sum, or max(that sum, …)) is Σ_j λ_j w_j with λ_j ≥ 0,
+// Σ λ_j ≤ 1: within the hull of 0 and the w_j, its norm at most the largest ‖w_j‖. And c + X where every w_j is
+// v_j − c is (1 − Σλ) c + Σ λ_j v_j: within the hull of c and the v_j. Such are the gradients of a weighted mean
+// ∑_i w_i t_i/∑_j w_j (Σ w_i ∇t_i/Σ w_j) and of a log-sum-exp in its stable form m + log(max(Σ_i e^(x_i − m), 1))
+// (∇m + Σ e_i(∇x_i − ∇m)/max(S, 1)): a smooth minimum of 40 distances had no bound (K ≤ ∞; a trial's, stop 52),
+// it is 1. The forms are written by the differentiator: ÷D, ·(1/D), a sum of terms each ÷D, a choice of that or 0.
+struct ConvexForm {
+    std::vector<ValueId> w;  // the combined values w_j
+    ValueId shift = ValueId(-1);  // c where every w_j is v_j − c (then `v` holds the v_j)
+    std::vector<ValueId> v;
+};
+
+// The leaves of the sum tree at `x` (Add of one type; at most `limit` leaves), into out; false past the limit.
+bool sum_leaves(const Function& f, ValueId x, std::vector<ValueId>& out, size_t limit) {
+    const Instr& in = f.body[x];
+    if (in.op == Op::Add && in.args.size() == 2 && f.body[in.args[0]].type == in.type && f.body[in.args[1]].type == in.type)
+        return sum_leaves(f, in.args[0], out, limit) && sum_leaves(f, in.args[1], out, limit);
+    if (out.size() >= limit) return false;
+    out.push_back(x);
+    return true;
+}
+
+bool is_const(const Function& f, ValueId x, double v) {
+    const Instr& in = f.body[x];
+    if (in.op != Op::Const || in.data.empty()) return false;
+    for (double d : in.data)
+        if (d != v) return false;
+    return true;
+}
+
+// x as (numerator, divisor): n/d, (1/d)·n, n·(1/d).
+bool quotient(const Function& f, ValueId x, ValueId& n, ValueId& d) {
+    const Instr& in = f.body[x];
+    if (in.op == Op::Div && in.args.size() == 2 && f.body[in.args[1]].type.is_scalar()) {
+        n = in.args[0], d = in.args[1];
+        return true;
+    }
+    if (in.op == Op::Mul && in.args.size() == 2)
+        for (int k = 0; k < 2; ++k) {
+            const Instr& r = f.body[in.args[size_t(k)]];
+            if (r.op == Op::Div && r.type.is_scalar() && is_const(f, r.args[0], 1)) {
+                n = in.args[size_t(1 - k)], d = r.args[1];
+                return true;
+            }
+        }
+    return false;
+}
+
+std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bounds>& r, ValueId x) {
+    constexpr size_t kLimit = 4096;
+    std::vector<ValueId> terms;
+    ValueId n = 0, d = 0;
+    if (quotient(f, x, n, d)) {
+        // A choice of the sum or 0 (the stable log-sum-exp's derivative where its sum is below 1).
+        const Instr& ni = f.body[n];
+        if (ni.op == Op::Select && ni.args.size() == 3) {
+            if (is_const(f, ni.args[2], 0)) n = ni.args[1];
+            else if (is_const(f, ni.args[1], 0)) n = ni.args[2];
+        }
+        if (!sum_leaves(f, n, terms, kLimit)) return std::nullopt;
+    } else {
+        // Σ_j (a_j w_j)/D: each term over the same D.
+        std::vector<ValueId> quotients;
+        if (f.body[x].op != Op::Add || !sum_leaves(f, x, quotients, kLimit) || quotients.size() < 2) return std::nullopt;
+        for (ValueId q : quotients) {
+            ValueId qn = 0, qd = 0;
+            if (!quotient(f, q, qn, qd) || (!terms.empty() && qd != d)) return std::nullopt;
+            d = qd;
+            terms.push_back(qn);
+        }
+    }
+    if (terms.empty()) return std::nullopt;
+    // D ≥ Σ a_j: the sum itself or a max with it.
+    std::vector<ValueId> weights;
+    const Instr& di = f.body[d];
+    bool found = false;
+    if (di.op == Op::Builtin && std::string_view(builtin(di.aux).name) == "max" && di.args.size() == 2) {
+        for (ValueId a : di.args) {
+            weights.clear();
+            if (sum_leaves(f, a, weights, kLimit) && weights.size() >= terms.size()) {
+                found = true;
+                break;
+            }
+        }
+    } else {
+        found = sum_leaves(f, d, weights, kLimit);
+    }
+    if (!found) return std::nullopt;
+    for (ValueId a : weights)
+        if (r[a].c.size() != 1 || !(r[a].c[0].lo >= 0)) return std::nullopt;
+    std::sort(weights.begin(), weights.end());
+    ConvexForm form;
+    for (ValueId t : terms) {
+        const Instr& ti = f.body[t];
+        if (ti.op != Op::Mul || ti.args.size() != 2) return std::nullopt;
+        bool matched = false;
+        for (int k = 0; k < 2 && !matched; ++k) {
+            const ValueId a = ti.args[size_t(k)];
+            auto at = std::lower_bound(weights.begin(), weights.end(), a);
+            if (at == weights.end() || *at != a || !f.body[a].type.is_scalar()) continue;
+            weights.erase(at);  // each weight once
+            form.w.push_back(ti.args[size_t(1 - k)]);
+            matched = true;
+        }
+        if (!matched) return std::nullopt;
+    }
+    return form;
+}
+
+// Bounds of a convex combination of `parts` (with 0 where `with_zero`): their components' hull, their largest norm.
+void convex_bounds(Bounds& x, const std::vector<Bounds>& r, const std::vector<ValueId>& parts, bool with_zero) {
+    const size_t n = x.c.size();
+    IntervalVec hullv(n, Interval{with_zero ? 0.0 : kInf, with_zero ? 0.0 : -kInf});
+    double norm = 0;
+    for (ValueId p : parts) {
+        if (r[p].c.size() != n && r[p].c.size() != 1) return;
+        for (size_t k = 0; k < n; ++k) hullv[k] = hull(hullv[k], comp(r[p], k));
+        norm = std::max(norm, r[p].norm);
+    }
+    for (size_t k = 0; k < n; ++k) x.c[k] = {std::max(x.c[k].lo, hullv[k].lo), std::min(x.c[k].hi, hullv[k].hi)};
+    x.norm = std::min(x.norm, norm);
+    for (size_t k = 0; k < n; ++k)
+        if (!(x.c[k].lo <= x.c[k].hi)) x.c[k] = hullv[k];  // (rounding: never empty)
+}
+
+// Tightens r[i] where instruction i is a convex combination, or a shift plus one (ConvexForm).
+void convex_refine(const Function& f, std::vector<Bounds>& r, size_t i) {
+    const Instr& in = f.body[i];
+    if (in.op == Op::Add && in.args.size() == 2) {
+        for (int k = 0; k < 2; ++k) {
+            const ValueId c = in.args[size_t(k)], xv = in.args[size_t(1 - k)];
+            const Instr& xi = f.body[xv];
+            if (xi.op != Op::Div && xi.op != Op::Mul && xi.op != Op::Add) continue;
+            auto form = convex_form(f, r, xv);
+            if (!form) continue;
+            std::vector<ValueId> parts = {c};
+            bool shifted = true;
+            for (ValueId w : form->w) {
+                const Instr& wi = f.body[w];
+                shifted = shifted && wi.op == Op::Sub && wi.args.size() == 2 && wi.args[1] == c;
+                if (shifted) parts.push_back(wi.args[0]);
+            }
+            if (shifted) {
+                convex_bounds(r[i], r, parts, false);
+                return;
+            }
+        }
+    }
+    if (in.op != Op::Div && in.op != Op::Mul && in.op != Op::Add) return;
+    if (auto form = convex_form(f, r, ValueId(i))) convex_bounds(r[i], r, form->w, true);
+}
+
 template <class Params>
 void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, const Function& f, const Params& params,
              const IntervalHook& hook, int loop_trips, long* work) {
@@ -910,6 +1064,7 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
         a.clear();
         for (ValueId x : in.args) a.push_back(&r[x]);
         r[i] = bounds_of(m, f, in, a);
+        if ((in.op == Op::Div || in.op == Op::Mul || in.op == Op::Add) && !in.type.is_matrix()) convex_refine(f, r, i);
     }
     if (!f.body.empty() && hook) hook(f.body.size() - 1, r);
 }

@@ -180,9 +180,11 @@ struct Differentiator {
                 return no_rule("a matrix product");
             }
             case Op::Div: {
-                // (∂a·s - a ⊗ ∂s) / s²
+                // (∂a·s - a ⊗ ∂s) / s²; ∂a/s where the divisor does not change (a weighted mean's ∑_j w_j: the
+                // convex combinations of ir/Intervals.cpp read ∂a/s, and s·∂a/s² rounds twice)
                 const Type& a = PT(0);
                 ValueId s = P(1);
+                if (T(1) == kZero) return T(0) == kZero ? kZero : op2(Op::Div, T(0), s);
                 ValueId num = a.is_scalar() ? sub(mul(s, T(0)), mul(P(0), T(1))) : sub(mul(s, T(0)), outer(P(0), T(1)));
                 if (num == kZero) return kZero;
                 return op2(Op::Div, num, op2(Op::Mul, s, s));

@@ -1443,6 +1443,9 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
         e.why = why;
         return e;
     }
+    // One value for each value written twice: a weight read in ∑_i w_i t_i and again in ∑_j w_j is one weight, which
+    // the interval analysis' convex combinations need (ir/Intervals.cpp, convex_form).
+    eliminate_common_subexpressions(work.functions[size_t(grad)]);
     // The work is boxes and samples times the gradient's size: a huge shape (a min of 100,000 terms) gets
     // fewer of both, so the pass stays within about a second (its bound is then looser, never smaller).
     size_t size = 0;
