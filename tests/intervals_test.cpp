@@ -220,3 +220,41 @@ function f(k: ℝ, c: ℝ) -> ℝ {
     CHECK(r.lo == -1);
     CHECK(r.hi == 3);
 }
+
+TEST_CASE("a loop's state that keeps itself or a term ends within their hull", "[intervals]") {
+    // A rolled max_i x_i (and its derivative, the choice of one tangent) was unbounded: a loop is bounded only where
+    // each state accumulates (s + t). A state that each step keeps itself or t (max, min, a choice) ends within the
+    // hull of its first value and t's bounds (ir/IR.h, selected_term); an accumulation beside it still adds up.
+    const char* text = R"(function body(k: ℤ, hi: ℝ, sum: ℝ, x: ℝ[4]) -> ℝ {
+  %0 = ℤ Param #0 k  ; k
+  %1 = ℝ Param #1 hi  ; hi
+  %2 = ℝ Param #2 sum  ; sum
+  %3 = ℝ[4] Param #3 x  ; x
+  %4 = ℝ Index %3, %0
+  %5 = ℝ Builtin max %1, %4
+  %6 = ℝ Add %2, %4
+  return %5
+  output hi = %5
+  output sum = %6
+}
+function f(x: ℝ[4]) -> ℝ {
+  %0 = ℝ[4] Param #0 x  ; x
+  %1 = ℝ Const 3
+  %2 = ℝ Const -5
+  %3 = ℝ Const 0
+  %4 = tuple(2) Loop from 0 body %1, %2, %3, %0
+  %5 = ℝ Member .0 %4
+  %6 = ℝ Member .1 %4
+  return %5
+}
+)";
+    ir::Module m;
+    std::string error;
+    REQUIRE(ir::parse_module(text, m, error));
+    INFO(error);
+    auto r = ir::interval_analysis(m, 1, {{{1, 2}}});
+    CHECK(r[5].c[0].lo == -5);  // (the first value: the hull)
+    CHECK(r[5].c[0].hi == 2);
+    CHECK(r[6].c[0].lo == 4);
+    CHECK(r[6].c[0].hi == 8);
+}

@@ -100,6 +100,28 @@ std::optional<ValueId> accumulated_term(const Function& body, size_t j) {
     return t;
 }
 
+std::optional<ValueId> selected_term(const Function& body, size_t j) {
+    const size_t states = body.outputs.size();
+    if (j >= states) return std::nullopt;
+    const Instr& out = body.body[body.outputs[j].second];
+    auto is_state = [&](ValueId v) { return body.body[v].op == Op::Param && size_t(body.body[v].aux) == j + 1; };
+    ValueId t = ValueId(-1);
+    if ((out.op == Op::Select || out.op == Op::If) && out.args.size() == 3)
+        t = is_state(out.args[1]) ? out.args[2] : is_state(out.args[2]) ? out.args[1] : ValueId(-1);
+    else if (out.op == Op::Builtin && out.args.size() == 2 &&
+             (std::string_view(builtin(out.aux).name) == "max" || std::string_view(builtin(out.aux).name) == "min"))
+        t = is_state(out.args[0]) ? out.args[1] : is_state(out.args[1]) ? out.args[0] : ValueId(-1);
+    if (t == ValueId(-1)) return std::nullopt;
+    std::vector<char> reads(size_t(t) + 1, 0);
+    for (size_t i = 0; i <= t; ++i) {
+        const Instr& in = body.body[i];
+        reads[i] = in.op == Op::Param && in.aux >= 1 && size_t(in.aux) <= states;
+        for (ValueId a : in.args) reads[i] |= reads[a];
+    }
+    if (reads[t]) return std::nullopt;
+    return t;
+}
+
 void mark_reachable(const Module& m, int fn, std::vector<char>& seen) {
     std::vector<int> stack = {fn};
     while (!stack.empty()) {

@@ -280,6 +280,10 @@ Type result_type(Op op, const std::vector<Type>& args, int aux);
 // and t reads no state. Returns t, else none. (A rolled ∑'s body, ir/Lower.cpp; the analyses of loops in
 // Intervals and the ranges pass, and the stable pass's log-sum-exp, read it so.)
 std::optional<ValueId> accumulated_term(const Function& body, size_t j);
+// A loop body that keeps one of its state j and a value t each step: output j is a Select (or If) of the state and
+// t, whatever the condition, or max/min(state, t); t reads no state. Returns t, else none. (A rolled max_i x_i and
+// its derivative, the stable log-sum-exp's shift: the state ends within the hull of its first value and t's.)
+std::optional<ValueId> selected_term(const Function& body, size_t j);
 
 // Marks fn and every function it calls or runs as a loop body, transitively, in `seen` (one entry per function
 // of m; marked entries are not visited again).

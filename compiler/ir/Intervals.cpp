@@ -673,10 +673,21 @@ namespace {
 // ∑_i w_i t_i/∑_j w_j (Σ w_i ∇t_i/Σ w_j) and of a log-sum-exp in its stable form m + log(max(Σ_i e^(x_i − m), 1))
 // (∇m + Σ e_i(∇x_i − ∇m)/max(S, 1)): a smooth minimum of 40 distances had no bound (K ≤ ∞; a trial's, stop 52),
 // it is 1. The forms are written by the differentiator: ÷D, ·(1/D), a sum of terms each ÷D, a choice of that or 0.
+// A rolled sum's convex numerator (analyse's Loop rule records it): state j accumulates a·w where state k
+// accumulates a ≥ 0, both from 0 (j) and from at least 0 (k); `w` bounds w over every iteration, and where w is
+// v − c with c a value the loop captures, `v` bounds v and `shift` is the captured value (in the caller).
+struct LoopConvex {
+    int j = -1, k = -1;
+    Bounds w, v;
+    ValueId shift = ValueId(-1);
+};
+using LoopConvexMap = std::map<size_t, std::vector<LoopConvex>>;
+
 struct ConvexForm {
-    std::vector<ValueId> w;  // the combined values w_j
-    ValueId shift = ValueId(-1);  // c where every w_j is v_j − c (then `v` holds the v_j)
-    std::vector<ValueId> v;
+    std::vector<const Bounds*> w;   // the combined values' bounds
+    // Where every combined value is v_j − c for one c: c and the v_j's bounds.
+    ValueId shift = ValueId(-1);
+    std::vector<const Bounds*> v;
 };
 
 // The leaves of the sum tree at `x` (Add of one type; at most `limit` leaves), into out; false past the limit.
@@ -715,7 +726,7 @@ bool quotient(const Function& f, ValueId x, ValueId& n, ValueId& d) {
     return false;
 }
 
-std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bounds>& r, ValueId x) {
+std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bounds>& r, const LoopConvexMap& loops, ValueId x) {
     constexpr size_t kLimit = 4096;
     std::vector<ValueId> terms;
     ValueId n = 0, d = 0;
@@ -742,8 +753,8 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
     // D ≥ Σ a_j: the sum itself or a max with it.
     std::vector<ValueId> weights;
     const Instr& di = f.body[d];
-    bool found = false;
     if (di.op == Op::Builtin && std::string_view(builtin(di.aux).name) == "max" && di.args.size() == 2) {
+        bool found = false;
         for (ValueId a : di.args) {
             weights.clear();
             if (sum_leaves(f, a, weights, kLimit) && weights.size() >= terms.size()) {
@@ -751,14 +762,29 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
                 break;
             }
         }
-    } else {
-        found = sum_leaves(f, d, weights, kLimit);
+        if (!found) return std::nullopt;
+    } else if (!sum_leaves(f, d, weights, kLimit)) {
+        return std::nullopt;
     }
-    if (!found) return std::nullopt;
     for (ValueId a : weights)
         if (r[a].c.size() != 1 || !(r[a].c[0].lo >= 0)) return std::nullopt;
-    std::sort(weights.begin(), weights.end());
     ConvexForm form;
+    // A rolled sum: ∑_i a_i w_i / ∑_i a_i from one loop.
+    if (terms.size() == 1 && weights.size() == 1 && f.body[terms[0]].op == Op::Member && f.body[weights[0]].op == Op::Member &&
+        f.body[terms[0]].args[0] == f.body[weights[0]].args[0]) {
+        auto it = loops.find(f.body[terms[0]].args[0]);
+        if (it == loops.end()) return std::nullopt;
+        for (const LoopConvex& lc : it->second)
+            if (lc.j == f.body[terms[0]].aux && lc.k == f.body[weights[0]].aux) {
+                form.w.push_back(&lc.w);
+                form.shift = lc.shift;
+                if (lc.shift != ValueId(-1)) form.v.push_back(&lc.v);
+                return form;
+            }
+        return std::nullopt;
+    }
+    std::sort(weights.begin(), weights.end());
+    bool shifted = true;
     for (ValueId t : terms) {
         const Instr& ti = f.body[t];
         if (ti.op != Op::Mul || ti.args.size() != 2) return std::nullopt;
@@ -768,23 +794,35 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
             auto at = std::lower_bound(weights.begin(), weights.end(), a);
             if (at == weights.end() || *at != a || !f.body[a].type.is_scalar()) continue;
             weights.erase(at);  // each weight once
-            form.w.push_back(ti.args[size_t(1 - k)]);
+            const ValueId w = ti.args[size_t(1 - k)];
+            form.w.push_back(&r[w]);
+            const Instr& wi = f.body[w];
+            const bool sub = wi.op == Op::Sub && wi.args.size() == 2 && (form.v.empty() || wi.args[1] == form.shift);
+            shifted = shifted && sub;
+            if (shifted) {
+                form.shift = wi.args[1];
+                form.v.push_back(&r[wi.args[0]]);
+            }
             matched = true;
         }
         if (!matched) return std::nullopt;
+    }
+    if (!shifted) {
+        form.shift = ValueId(-1);
+        form.v.clear();
     }
     return form;
 }
 
 // Bounds of a convex combination of `parts` (with 0 where `with_zero`): their components' hull, their largest norm.
-void convex_bounds(Bounds& x, const std::vector<Bounds>& r, const std::vector<ValueId>& parts, bool with_zero) {
+void convex_bounds(Bounds& x, const std::vector<const Bounds*>& parts, bool with_zero) {
     const size_t n = x.c.size();
     IntervalVec hullv(n, Interval{with_zero ? 0.0 : kInf, with_zero ? 0.0 : -kInf});
     double norm = 0;
-    for (ValueId p : parts) {
-        if (r[p].c.size() != n && r[p].c.size() != 1) return;
-        for (size_t k = 0; k < n; ++k) hullv[k] = hull(hullv[k], comp(r[p], k));
-        norm = std::max(norm, r[p].norm);
+    for (const Bounds* p : parts) {
+        if (p->c.size() != n && p->c.size() != 1) return;
+        for (size_t k = 0; k < n; ++k) hullv[k] = hull(hullv[k], comp(*p, k));
+        norm = std::max(norm, p->norm);
     }
     for (size_t k = 0; k < n; ++k) x.c[k] = {std::max(x.c[k].lo, hullv[k].lo), std::min(x.c[k].hi, hullv[k].hi)};
     x.norm = std::min(x.norm, norm);
@@ -793,30 +831,23 @@ void convex_bounds(Bounds& x, const std::vector<Bounds>& r, const std::vector<Va
 }
 
 // Tightens r[i] where instruction i is a convex combination, or a shift plus one (ConvexForm).
-void convex_refine(const Function& f, std::vector<Bounds>& r, size_t i) {
+void convex_refine(const Function& f, std::vector<Bounds>& r, const LoopConvexMap& loops, size_t i) {
     const Instr& in = f.body[i];
     if (in.op == Op::Add && in.args.size() == 2) {
         for (int k = 0; k < 2; ++k) {
             const ValueId c = in.args[size_t(k)], xv = in.args[size_t(1 - k)];
             const Instr& xi = f.body[xv];
             if (xi.op != Op::Div && xi.op != Op::Mul && xi.op != Op::Add) continue;
-            auto form = convex_form(f, r, xv);
-            if (!form) continue;
-            std::vector<ValueId> parts = {c};
-            bool shifted = true;
-            for (ValueId w : form->w) {
-                const Instr& wi = f.body[w];
-                shifted = shifted && wi.op == Op::Sub && wi.args.size() == 2 && wi.args[1] == c;
-                if (shifted) parts.push_back(wi.args[0]);
-            }
-            if (shifted) {
-                convex_bounds(r[i], r, parts, false);
-                return;
-            }
+            auto form = convex_form(f, r, loops, xv);
+            if (!form || form->shift != c || form->v.size() != form->w.size()) continue;
+            std::vector<const Bounds*> parts = {&r[c]};
+            parts.insert(parts.end(), form->v.begin(), form->v.end());
+            convex_bounds(r[i], parts, false);
+            return;
         }
     }
     if (in.op != Op::Div && in.op != Op::Mul && in.op != Op::Add) return;
-    if (auto form = convex_form(f, r, ValueId(i))) convex_bounds(r[i], r, form->w, true);
+    if (auto form = convex_form(f, r, loops, ValueId(i))) convex_bounds(r[i], form->w, true);
 }
 
 template <class Params>
@@ -824,6 +855,7 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
              const IntervalHook& hook, int loop_trips, long* work) {
     r.resize(f.body.size());
     std::map<size_t, std::vector<Bounds>> loop_states;  // a Loop's final states (read by Member)
+    LoopConvexMap loop_convex;                            // a Loop's convex numerators (LoopConvex)
     std::vector<const Bounds*> a;                        // an instruction's operands (one buffer for all)
     // A callee's (or loop body's) values, in the buffer of the next depth.
     auto call = [&](int fn, const std::vector<IntervalVec>& args) -> std::vector<Bounds>& {
@@ -1007,10 +1039,17 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                 // An accumulation (a rolled ∑: each state s_j ← s_j + t_j, no t_j reading a state): t_j once,
                 // with k over [first, last], and s_j = s_j(0) + n·t_j for the n iterations (sound: each term
                 // lies in t_j's bounds, whatever k).
+                // A state that keeps one of itself and a term (a rolled max and its derivative: selected_term) ends
+                // within the hull of its first value and the term's bounds.
                 std::vector<ValueId> term(states, ValueId(-1));
+                std::vector<char> selected(states, 0);
                 bool accumulates = true;
                 for (size_t j = 0; j < states && accumulates; ++j) {
                     auto t = accumulated_term(body, j);
+                    if (!t) {
+                        t = selected_term(body, j);
+                        selected[j] = t.has_value();
+                    }
                     accumulates = t.has_value();
                     if (t) term[j] = *t;
                 }
@@ -1030,6 +1069,16 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                         const Bounds& init = r[in.args[j + 1]];
                         const Bounds& t = v[term[j]];
                         if (init.c.size() != t.c.size()) continue;  // (s stays unknown)
+                        if (selected[j]) {
+                            s[j] = init;
+                            s[j].elements = nullptr;
+                            s[j].unit = init.unit && t.unit;
+                            s[j].norm = std::max(init.norm, t.norm);
+                            for (size_t q = 0; q < t.c.size(); ++q) s[j].c[q] = hull(init.c[q], t.c[q]);
+                            s[j] = finish(std::move(s[j]));
+                            nan |= t.nan;
+                            continue;
+                        }
                         s[j] = init;
                         s[j].unit = false;
                         s[j].norm = init.norm + n * t.norm;  // ‖s + Σ t‖ ≤ ‖s‖ + n·max ‖t‖
@@ -1041,6 +1090,41 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                         s[j] = finish(std::move(s[j]));
                         nan |= t.nan;
                     }
+                    // Convex numerators: state j accumulates a·w where state k accumulates a ≥ 0 (LoopConvex).
+                    std::vector<LoopConvex> found;
+                    for (size_t j = 0; j < states; ++j) {
+                        if (selected[j]) continue;
+                        const Instr& tj = body.body[term[j]];
+                        const Bounds& init_j = r[in.args[j + 1]];
+                        bool zero = !init_j.c.empty();
+                        for (const Interval& c : init_j.c) zero = zero && c.lo == 0 && c.hi == 0;
+                        if (tj.op != Op::Mul || tj.args.size() != 2 || !zero) continue;
+                        for (size_t k = 0; k < states; ++k) {
+                            if (k == j || selected[k]) continue;
+                            const ValueId a = term[k];
+                            const Bounds& init_k = r[in.args[k + 1]];
+                            if (v[a].c.size() != 1 || !(v[a].c[0].lo >= 0) || init_k.c.size() != 1 || !(init_k.c[0].lo >= 0)) continue;
+                            for (int side = 0; side < 2; ++side) {
+                                if (tj.args[size_t(side)] != a) continue;
+                                LoopConvex lc;
+                                lc.j = int(j), lc.k = int(k);
+                                const ValueId w = tj.args[size_t(1 - side)];
+                                lc.w = v[w];
+                                const Instr& wi = body.body[w];
+                                if (wi.op == Op::Sub && wi.args.size() == 2) {
+                                    const Instr& c = body.body[wi.args[1]];
+                                    // (a captured value: a parameter after k and the states)
+                                    if (c.op == Op::Param && size_t(c.aux) > states && size_t(c.aux) < in.args.size()) {
+                                        lc.shift = in.args[size_t(c.aux)];
+                                        lc.v = v[wi.args[0]];
+                                    }
+                                }
+                                found.push_back(std::move(lc));
+                                break;
+                            }
+                        }
+                    }
+                    if (!found.empty()) loop_convex[i] = std::move(found);
                 }
             }
             for (Bounds& b : s) b.nan |= nan;
@@ -1064,7 +1148,7 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
         a.clear();
         for (ValueId x : in.args) a.push_back(&r[x]);
         r[i] = bounds_of(m, f, in, a);
-        if ((in.op == Op::Div || in.op == Op::Mul || in.op == Op::Add) && !in.type.is_matrix()) convex_refine(f, r, i);
+        if ((in.op == Op::Div || in.op == Op::Mul || in.op == Op::Add) && !in.type.is_matrix()) convex_refine(f, r, loop_convex, i);
     }
     if (!f.body.empty() && hook) hook(f.body.size() - 1, r);
 }

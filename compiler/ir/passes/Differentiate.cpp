@@ -490,6 +490,11 @@ int differentiate(Module& m, int fn, int wrt_param, const std::string& name, std
         const Instr& in = f.body[i];
         Instr c = in;
         for (ValueId& a : c.args) a = d.primal[a];
+        // A state of a loop that has a tangent loop: that loop's (it carries the states first), so that a value and
+        // its tangent come from one loop (∑_i e_i and ∑_i e_i ∇x_i: the convex combinations of ir/Intervals.cpp).
+        if (in.op == Op::Member && d.loop_tangents.count(in.args[0]) && d.tangent[in.args[0]] != kZero &&
+            d.tangent[in.args[0]] != kPoison && g.body[d.tangent[in.args[0]]].op == Op::Loop)
+            c.args[0] = d.tangent[in.args[0]];
         d.primal[i] = g.add(std::move(c));
         if (in.op == Op::Param && in.aux == wrt_param) {
             d.tangent[i] = g.constant(Type::matrix(3, 3), {1, 0, 0, 0, 1, 0, 0, 0, 1});
