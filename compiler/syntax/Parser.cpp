@@ -1020,12 +1020,18 @@ ExprPtr Parser::parse_comparison() {
     find(*c);
     if (pm.empty()) return c;
     if (pm.size() > 1) fail(pm[1]->span, "a comparison may hold only one ±");
+    // x ≠ a ± b is its negation: x is neither (it read as 'x ≠ a + b or x ≠ a - b', always true: a trial's, stop 52).
+    // An order (x < a ± b) or an interval has no one reading: an error.
+    const bool unequal = c->kind == ExprKind::Compare && c->op == BinOp::Neq;
+    if (!(c->kind == ExprKind::Compare && (c->op == BinOp::Eq || c->op == BinOp::Neq)))
+        diags_.error(pm[0]->span, "'±' in a condition takes = or ≠: x = a ± b is x = a + b or x = a - b, x ≠ a ± b is "
+                                  "neither; write an order with both ends (x < a - b or x > a + b)");
     pm[0]->op = BinOp::Add;
     ExprPtr plus = clone_expr(*c);
     pm[0]->op = BinOp::Sub;
     ExprPtr minus = clone_expr(*c);
     Span whole = c->span;
-    auto e = binary(BinOp::Or, std::move(plus), std::move(minus));
+    auto e = binary(unequal ? BinOp::And : BinOp::Or, std::move(plus), std::move(minus));
     e->kind = ExprKind::Logic;
     e->span = whole;
     return e;
