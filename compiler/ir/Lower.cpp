@@ -156,6 +156,12 @@ struct Env {
         walk(body);
         return n;
     }
+    // A ∑'s count: its summand's, else its condition's (∑_(i for w_i > 0.5) 1/w_(i+1), as the checker reads it).
+    int sum_count(const Expr& sum) {
+        int n = sum_range(*sum.args[0], sum.text);
+        if (n == 0 && sum.args.size() > 1) n = sum_range(*sum.args[1], sum.text);
+        return n;
+    }
 
     // x^c. A whole constant exponent up to 16 in size is multiplied out (repeated squaring: x⁵ = (x²)²·x):
     // exact for a negative base, which GLSL's pow leaves undefined (NaN on most GPUs) even for whole exponents —
@@ -418,7 +424,7 @@ struct Env {
         double t = 0;
         std::function<void(const Expr&)> walk = [&](const Expr& y) {
             if (y.kind == ExprKind::Sum) {
-                t += double(sum_range(*y.args[0], y.text)) * inner_terms(*y.args[0]);
+                t += double(sum_count(y)) * inner_terms(*y.args[0]);
                 return;
             }
             for_each_child(y, walk);
@@ -438,7 +444,7 @@ struct Env {
             if (!reads_own_rolled(e, bound)) return capture(parent->lower(e));
         }
         ValueId acc = ValueId(-1);
-        int n = sum_range(*e.args[0], e.text);
+        int n = sum_count(e);
         // The unrolled size is what counts, nested sums included (Shadertoy's ∑_i ∑_j over 200 points unrolled
         // 40,000 terms: 9 s to compile, a 1.4 MB shader). Inside a rolled sum's body, a sum that reads its index is
         // rolled only from kRolledConstantSum: llvmpipe ends a shader invocation after 65,535 loop iterations in

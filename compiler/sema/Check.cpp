@@ -1596,6 +1596,9 @@ Type Checker::check_kind(Expr& e) {
         case ExprKind::Matrix: t = check_matrix_literal(e); break;
         case ExprKind::Sum: {
             int n = sum_range(*e.args[0], e.text);
+            // ∑_(i for w_i > 0.5) 1/w_(i+1): the condition subscripts a sequence with the index itself (a trial's: the
+            // summand's i + 1 alone did not say the range, and the error said to subscript with i).
+            if (n == 0 && e.args.size() > 1) n = sum_range(*e.args[1], e.text);
             if (n <= 0) {
                 if (n == 0)
                     d_.error(e.span, fmt::format("cannot tell the range of ∑_{}: subscript a vector or matrix with {} in the summand",
