@@ -222,6 +222,15 @@ TEST_CASE("a failed sequence declaration is said once", "[diag]") {
     // (A sequence may have bounds since stop 52, each element's: tests/conformance/22_sequences.iqtest.)
 }
 
+TEST_CASE("an empty sequence's declaration is one error", "[diag]") {
+    // A trial (stop 52): `w_i ∈ ℝ default = {}` added "undefined name 'w'" at each use after the real error.
+    auto f = write_temp("empty_seq.iql", "shape\nD = ‖p‖ - 1 + ∑_i w_i\nwhere\np ∈ ℝ³\nw_i ∈ ℝ default = {}\n");
+    RunResult r = run_iqc(f.string() + " -o /dev/null");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("empty_seq.iql:5:19: error: '{}' is an empty sequence: a sequence has at least one element"));
+    CHECK_THAT(r.err, !Catch::Contains("undefined name"));
+}
+
 TEST_CASE("the same error at the same place is said once", "[diag]") {
     // A trial: `a(sin(r), 0, 0)` (a product or a call: the checker tries both readings) said "'sin' needs an
     // import" twice, "2 errors".

@@ -331,3 +331,16 @@ TEST_CASE("a sequence's bounds hold for each element", "[ranges]") {
         }
     CHECK(seen == 3);
 }
+
+TEST_CASE("an operation an unrolled sum copies is warned of once, with infinite ends as ∞", "[ranges]") {
+    // A trial (stop 52): ∑_(i for w_i > 0) ∑_(j for w_j < w_i) 1/(w_i - w_j) said the warning twice at one caret, one of
+    // them over [-1.798e+308, 1.798e+308] (a strict comparison with an unbounded value moved ∞ to the largest double).
+    Compiled c = compile_text("nest.md", doc("D = ‖p‖ - 1 + 0.01 ∑_(i for w_i > 0) ∑_(j for w_j < w_i) 1/(w_i - w_j)",
+                                             "w_i ∈ ℝ default = {1, 1, 2}\n"));
+    REQUIRE(c.result.exit_code == 0);
+    CHECK_THAT(c.diagnostics, Catch::Contains("nest.md:4:58: warning: division by a value that can be 0: with the parameters' "
+                                              "bounds it ranges over [-∞, ∞]"));
+    CHECK_THAT(c.diagnostics, !Catch::Contains("1.798e+308"));
+    const size_t first = c.diagnostics.find("warning:");
+    CHECK(c.diagnostics.find("warning:", first + 1) == std::string::npos);
+}

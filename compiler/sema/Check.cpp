@@ -510,6 +510,7 @@ void Checker::declare_sequence(const Decl& decl, const std::string& name, Span s
         count = it->second.count;
     } else if (decl.default_value && decl.default_value->kind == ExprKind::Sequence) {
         count = int(decl.default_value->args.size());
+        if (count == 0) return;  // `{}`: the parser said so (its uses stay quiet: unbound_functions_)
         for (const auto& item : decl.default_value->args) {
             auto v = const_eval(*item);
             if (!v || int(v->size()) != elem.components()) {

@@ -1833,7 +1833,14 @@ ExprPtr Parser::parse_piecewise(Span open) {
     ctx_.push_back(Ctx::Brace);
     auto p = make(ExprKind::Piecewise, open);
     // `{}`: an empty sequence (`--set 'x={}'` said "a piecewise definition needs at least one 'if' case").
-    if (at(Tok::RBrace)) fail(Span::join(open, cur().span), "'{}' is an empty sequence: a sequence has at least one element, as in {1, 2}");
+    // Said, and read as an empty sequence: the declaration stands (its uses are not 'undefined', a trial's cascade).
+    if (at(Tok::RBrace)) {
+        diags_.error(Span::join(open, cur().span), "'{}' is an empty sequence: a sequence has at least one element, as in {1, 2}");
+        ctx_.pop_back();
+        auto e = make(ExprKind::Sequence, open);
+        e->span = Span::join(open, advance().span);
+        return e;
+    }
     while (true) {
         while (at(Tok::Newline)) advance();
         if (at(Tok::RBrace)) { advance(); break; }

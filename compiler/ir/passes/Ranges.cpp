@@ -198,9 +198,10 @@ struct Analyzer {
             const Interval b = constant ? Interval{other.data[0], other.data[0]} : bound.c[0];
             Interval x{-kInf, kInf};
             switch (kk) {
-                case CompareKind::Lt: x.hi = integer ? std::ceil(b.hi) - 1 : std::nextafter(b.hi, -kInf); break;
+                // (an infinite end stays infinite: nextafter(∞) is the largest double, said as 1.798e+308)
+                case CompareKind::Lt: x.hi = integer || !std::isfinite(b.hi) ? (std::isfinite(b.hi) ? std::ceil(b.hi) - 1 : b.hi) : std::nextafter(b.hi, -kInf); break;
                 case CompareKind::Le: x.hi = b.hi; break;
-                case CompareKind::Gt: x.lo = integer ? std::floor(b.lo) + 1 : std::nextafter(b.lo, kInf); break;
+                case CompareKind::Gt: x.lo = integer || !std::isfinite(b.lo) ? (std::isfinite(b.lo) ? std::floor(b.lo) + 1 : b.lo) : std::nextafter(b.lo, kInf); break;
                 case CompareKind::Ge: x.lo = b.lo; break;
                 case CompareKind::Eq: x = b; break;
                 case CompareKind::Ne:
@@ -878,9 +879,12 @@ std::vector<RangeIssue> analyze_ranges(Module& m, bool guard) {
     std::vector<RangeIssue> all;
     for (size_t fi = 0; fi < m.functions.size(); ++fi)
         for (auto& issue : analyze_ranges(m, int(fi), guard)) {
+            // One warning of a kind at a place: an unrolled sum's copies of one operation each warned, with ranges
+            // that differ (a trial's ∑_i ∑_j 1/(w_i - w_j) said it twice at one caret).
+            auto kind = [](const std::string& s) { return s.substr(0, s.find(':')); };
             bool seen = false;
             for (const auto& o : all) seen |= o.span.file == issue.span.file && o.span.begin == issue.span.begin &&
-                                               o.span.end == issue.span.end && o.message == issue.message;
+                                               o.span.end == issue.span.end && kind(o.message) == kind(issue.message);
             if (!seen) all.push_back(std::move(issue));
         }
     std::stable_sort(all.begin(), all.end(), [](const RangeIssue& a, const RangeIssue& b) {
