@@ -677,3 +677,35 @@ TEST_CASE("a sequence parameter's override takes its elements as rows, of the mo
     Compiled ragged = compile_text("seq_ragged.iq", scene("\"{(1, 0, 0), (2, 0)}\""));
     CHECK(ragged.result.exit_code == 1);
 }
+
+TEST_CASE("a blend's shape does not depend on its members' Lipschitz factors", "[scene]") {
+    // A trial (stop 52): a blend smooth-unioned its members' distances divided by their Lipschitz factors, so a factor K
+    // made the blend radius K times larger: two balls 0.4 apart with radius 0.3 stayed apart under `# lipschitz: 1` and
+    // merged under 4 (1,236 pixels), and a point cloud's factor (1 on Shadertoy, up to 12 on webgl2) changed its blend.
+    // The blend takes the members' own distances and is divided by their largest factor.
+    auto scene = [](double k1, double k2) {
+        return fmt::format("[modules]\nball = \"\"\"\nshape\n# lipschitz: {}\nD = ‖p‖ - 0.6\nwhere\np ∈ ℝ³\n\"\"\"\n"
+                           "ball2 = \"\"\"\nshape\n# lipschitz: {}\nD = ‖p‖ - 0.6\nwhere\np ∈ ℝ³\n\"\"\"\n"
+                           "[camera]\nposition = [0, 0, -5]\ntarget = [0, 0, 0]\n"
+                           "[[shapes]]\nname = \"a\"\ntype = \"ball\"\ntransform = \"T((-0.8, 0, 0))\"\n"
+                           "[[shapes]]\nname = \"b\"\ntype = \"ball2\"\ntransform = \"T((0.8, 0, 0))\"\n"
+                           "[[blends]]\nshapes = [\"a\", \"b\"]\nradius = 0.3\n", k1, k2);
+    };
+    Compiled one = compile_text("blend_k1.iq", scene(1, 1)), four = compile_text("blend_k4.iq", scene(4, 4)),
+             mixed = compile_text("blend_k23.iq", scene(2, 3));
+    REQUIRE(one.result.exit_code == 0);
+    REQUIRE(four.result.exit_code == 0);
+    REQUIRE(mixed.result.exit_code == 0);
+    REQUIRE(one.result.model);
+    REQUIRE(four.result.model);
+    REQUIRE(mixed.result.model);
+    // The distance between the balls (the blend's gap) and beside them: the factors only scale it.
+    for (std::array<double, 3> at : {std::array<double, 3>{0, 0, 0}, {0, 0.3, 0}, {-0.8, 0.9, 0}, {1.5, 0, -1}}) {
+        const double d = one.result.model->distance(at);
+        CHECK(four.result.model->distance(at) * 4 == Approx(d).epsilon(1e-9));
+        CHECK(mixed.result.model->distance(at) * 3 == Approx(d).epsilon(1e-9));
+    }
+    CHECK(one.result.model->distance({0, 0, 0}) > 0);  // (the gap stays open: 0.4 is wider than the blend bridges)
+    CHECK_THAT(one.result.code, !Catch::Contains("_lipschitz"));  // factors of 1 fold away
+    CHECK_THAT(mixed.result.code, Catch::Contains("max(a_lipschitz, b_lipschitz)"));
+}

@@ -73,6 +73,7 @@ struct Item {
     int transform_fn = -1;
     int distance_fn = -1;
     int unbounded_fn = -1;  // the distance without the `bound` sphere (iqc_scene_unbounded), or -1
+    int lipschitz_global = -1;  // <name>_lipschitz: the factor its distance is divided by (the lipschitz pass sets it)
     // A group whose members all have `bound`, from kMinTree members: the bounding-volume hierarchy iqc_scene traverses,
     // its node tables per level (centre, radius, first child, child count) and the members in leaf order.
     BoundsTree tree;
@@ -667,13 +668,19 @@ private:
     ValueId blend_distance(Builder& b, int blend, ValueId p, bool bounded, bool counted, std::vector<ValueId>* weights) {
         const auto& members = blend_items_[size_t(blend)];
         ValueId k = b.scalar(s_.blends[size_t(blend)].radius);
-        ValueId d = ValueId(-1), count = ValueId(-1);
+        ValueId d = ValueId(-1), count = ValueId(-1), K = ValueId(-1);
         std::vector<ValueId> hs;  // member m's h at hs[m - 1]
         for (size_t m = 0; m < members.size(); ++m) {
-            const Item& it = items_[members[m]];
+            Item& it = items_[members[m]];
             ValueId call = b.call(bounded ? it.distance_fn : it.unbounded_fn, {p});
             ValueId di = counted ? b.op(Op::Extract, {call}, 0) : call;
-            di = b.named(di, it.name);
+            // The member's own distance, not its distance divided by its Lipschitz factor: the blend of d/K over a
+            // radius r is the blend of d over K·r (a trial's: two balls 0.4 apart merged under `# lipschitz: 4` and
+            // stayed apart under 1; a point cloud's K, 1 on Shadertoy and 12 on webgl2, changed its blend's shape).
+            // The blend is divided by the members' largest factor (its gradient is a convex combination of theirs).
+            const ValueId Ki = b.global(lipschitz_factor(it));
+            di = b.op(Op::Mul, {b.named(di, it.name), Ki});
+            K = K == ValueId(-1) ? Ki : b.builtin("max", {K, Ki});
             if (counted) {
                 ValueId c = b.op(Op::Extract, {call}, 1);
                 count = count == ValueId(-1) ? c : b.op(Op::Add, {count, c});
@@ -701,7 +708,7 @@ private:
             }
             (*weights)[0] = suffix;
         }
-        d = b.named(d, "blend");
+        d = b.op(Op::Div, {b.named(d, "blend"), K});
         return counted ? b.construct(Type::vector(2), {d, count}) : d;
     }
 
@@ -1353,6 +1360,22 @@ private:
     // item that the pass fills in. The march multiplies its distances back for the hit test (a distance
     // divided by K bounds the step, it does not say how near the surface is). An entry point only where
     // some factor exceeds 1 (the pass decides); else nothing calls it and it is not emitted.
+    // The global holding item it's Lipschitz factor (made once; 1 until the lipschitz pass sets it).
+    int lipschitz_factor(Item& it) {
+        if (it.lipschitz_global < 0) {
+            const std::string owner = owner_;
+            const Span span = owner_span_;
+            owner_ = owner_of(it);
+            owner_span_ = plan(it.members[0]).desc->type_span;
+            it.lipschitz_global = add_global(it.name + "_lipschitz", Type::scalar(), Global::Kind::Constant, {1},
+                                             "the Lipschitz factor dividing its distance (the hit test multiplies it back)");
+            m_.functions[size_t(it.distance_fn)].lipschitz.factor_global = it.lipschitz_global;
+            owner_ = owner;
+            owner_span_ = span;
+        }
+        return it.lipschitz_global;
+    }
+
     void lipschitz_function() {
         ir::Function f;
         f.name = ir::names::kLipschitz;
@@ -1360,13 +1383,13 @@ private:
         Builder b(m_, f);
         ValueId id = b.param("id", Type::integer());
         std::vector<std::tuple<long long, long long, ValueId>> cs;
-        for (const Item& it : items_) {
-            owner_ = owner_of(it);
-            owner_span_ = plan(it.members[0]).desc->type_span;
-            int g = add_global(it.name + "_lipschitz", Type::scalar(), Global::Kind::Constant, {1},
-                               "the Lipschitz factor dividing its distance (the hit test multiplies it back)");
-            m_.functions[size_t(it.distance_fn)].lipschitz.factor_global = g;
-            cs.push_back({it.id, it.id + (long long)it.members.size(), b.global(g)});
+        for (Item& it : items_) {
+            ValueId K = b.global(lipschitz_factor(it));
+            // A blend's distance is divided by its members' largest factor (blend_distance): its hit test multiplies that back.
+            if (it.blend >= 0 && &items_[blend_items_[size_t(it.blend)][0]] == &it)
+                for (size_t mi : blend_items_[size_t(it.blend)])
+                    if (&items_[mi] != &it) K = b.builtin("max", {K, b.global(lipschitz_factor(items_[mi]))});
+            cs.push_back({it.id, it.id + (long long)it.members.size(), K});
         }
         f.result = b.switch_(id, b.scalar(1), std::move(cs));
         m_.functions.push_back(std::move(f));

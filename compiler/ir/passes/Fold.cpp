@@ -139,6 +139,10 @@ int fold_constants(const Module& m, Function& f) {
             case Op::Sub:
                 if (all_equal(f, in.args[1], 0.0) && f.body[in.args[0]].type == in.type) redirect(in.args[0]);
                 break;
+            case Op::Div:  // x/1 (a blend divided by its members' largest Lipschitz factor, 1)
+                if (all_equal(f, in.args[1], 1.0) && f.body[in.args[1]].type.is_scalar() && f.body[in.args[0]].type == in.type)
+                    redirect(in.args[0]);
+                break;
             case Op::Transpose:
                 if (is_identity(f, in.args[0])) redirect(in.args[0]);
                 break;

@@ -1836,6 +1836,20 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
     // The runtime's hit test reads the factors back (a distance divided by K is a step, not a proximity):
     // iqc_lipschitz becomes an entry point only where some instance is divided.
     if (int f = m.find(names::kLipschitz); scaled && f >= 0) m.functions[size_t(f)].entry = true;
+    // A factor that stayed 1 is the number 1 where it is read (a blend multiplies its members' distances by their
+    // factors and divides by the largest: x·1, max(1, 1) and x/1 fold away).
+    std::set<int> ones;
+    for (const Function& f : m.functions)
+        if (int g = f.lipschitz.factor_global; g >= 0 && size_t(g) < m.globals.size() && m.globals[size_t(g)].value == std::vector<double>{1})
+            ones.insert(g);
+    if (!ones.empty())
+        for (Function& f : m.functions)
+            for (Instr& in : f.body)
+                if (in.op == Op::Global && ones.count(in.aux) && in.type.is_scalar()) {
+                    in.op = Op::Const;
+                    in.aux = 0;
+                    in.data = {1};
+                }
     return warnings;
 }
 
