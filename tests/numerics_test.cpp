@@ -603,6 +603,21 @@ TEST_CASE("a log-sum-exp of distances is bounded by its distances' bounds", "[nu
             CHECK_THAT(c.diagnostics, !Catch::Contains("Lipschitz"));
         }
     }
+    // Weighted (soft blobs, -ln(∑_i w_i e^(-8‖p - x_i‖))/8, a trial's, stop 52): not stabilised, every term was 0 in float
+    // 12 units out (∞ at every pixel), and no bound. Now m + log(∑_i w_i e^(x_i - m)) and K ≤ 1; one point: log(e^x) = x.
+    const std::string soft = "shape\nD = -log(∑_i w_i exp(-8‖p - x_i‖))/8 - 0.1\nwhere\np ∈ ℝ³\n"
+                             "x_i ∈ ℝ³ default = {(0, 0, 0), (0.5, 0, 0), (0, 0.5, 0)}\nw_i ∈ [0.1, 1] default = {1, 0.5, 0.7}\n";
+    Compiled soft_c = compile_text("soft.iql", soft);
+    REQUIRE(soft_c.result.exit_code == 0);
+    INFO(soft_c.diagnostics);
+    CHECK(derived_bound(soft_c, "soft") <= 1 + 1e-6);
+    CHECK_THAT(soft_c.result.code, Catch::Contains("max("));  // the shift by the largest exponent
+    auto far = run_iqc("eval " + write_temp("soft.iql", soft).string() + " --set 'p=(0,0,-14)'");
+    CHECK_THAT(far.out, Catch::Contains("D = 13.80"));  // 14 − ln(1 + 1.2e^(-0.071))/8 − 0.1
+    Compiled one = compile_text("one.iql", "shape\nD = -log(∑_i exp(-8(‖p - x_i‖ - 0.3)))/8\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {(0.5, 0, 0)}\n");
+    REQUIRE(one.result.exit_code == 0);
+    CHECK_THAT(one.result.code, !Catch::Contains("log(exp("));
+    CHECK(derived_bound(one, "one") <= 1 + 1e-6);
     // A sharper blend (k = 8 scaled by 2: the distances' gradients are 2 long) is bounded by 2, not by 1.
     std::string forty;
     for (int k = 0; k < 40; ++k) forty += fmt::format("{}({:.3f}, {:.3f}, 0)", k ? ", " : "", 0.6 * std::sin(1.7 * k), 0.6 * std::cos(2.3 * k));

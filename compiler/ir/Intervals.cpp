@@ -785,6 +785,16 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
     }
     std::sort(weights.begin(), weights.end());
     bool shifted = true;
+    auto add_term = [&](ValueId w) {
+        form.w.push_back(&r[w]);
+        const Instr& wi = f.body[w];
+        const bool sub = wi.op == Op::Sub && wi.args.size() == 2 && (form.v.empty() || wi.args[1] == form.shift);
+        shifted = shifted && sub;
+        if (shifted) {
+            form.shift = wi.args[1];
+            form.v.push_back(&r[wi.args[0]]);
+        }
+    };
     for (ValueId t : terms) {
         const Instr& ti = f.body[t];
         if (ti.op != Op::Mul || ti.args.size() != 2) return std::nullopt;
@@ -795,15 +805,27 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
             if (at == weights.end() || *at != a || !f.body[a].type.is_scalar()) continue;
             weights.erase(at);  // each weight once
             const ValueId w = ti.args[size_t(1 - k)];
-            form.w.push_back(&r[w]);
-            const Instr& wi = f.body[w];
-            const bool sub = wi.op == Op::Sub && wi.args.size() == 2 && (form.v.empty() || wi.args[1] == form.shift);
-            shifted = shifted && sub;
-            if (shifted) {
-                form.shift = wi.args[1];
-                form.v.push_back(&r[wi.args[0]]);
-            }
+            add_term(w);
             matched = true;
+        }
+        // w·(e·v) over a weight written w·e (a weighted log-sum-exp's ∑_i w_i e_i(∇x_i − ∇m)).
+        for (int k = 0; k < 2 && !matched; ++k) {
+            const ValueId s = ti.args[size_t(k)];
+            const Instr& inner = f.body[ti.args[size_t(1 - k)]];
+            if (!f.body[s].type.is_scalar() || inner.op != Op::Mul || inner.args.size() != 2) continue;
+            for (int q = 0; q < 2 && !matched; ++q) {
+                const ValueId e = inner.args[size_t(q)];
+                if (!f.body[e].type.is_scalar()) continue;
+                auto leaf = std::find_if(weights.begin(), weights.end(), [&](ValueId a) {
+                    const Instr& ai = f.body[a];
+                    return ai.op == Op::Mul && ai.args.size() == 2 &&
+                           ((ai.args[0] == s && ai.args[1] == e) || (ai.args[0] == e && ai.args[1] == s));
+                });
+                if (leaf == weights.end()) continue;
+                weights.erase(leaf);
+                add_term(inner.args[size_t(1 - q)]);
+                matched = true;
+            }
         }
         if (!matched) return std::nullopt;
     }

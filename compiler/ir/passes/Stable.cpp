@@ -147,7 +147,44 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
             } else if (in.type.is_scalar() && (is_builtin(in, "log") || is_builtin(in, "ln"))) {
                 // log-sum-exp: every term of the argument's sum is e^(something).
                 std::vector<ValueId> terms;
-                if (sum_terms(old, in.args[0], terms) && terms.size() >= 2) {
+                // Weighted terms w·e^x (soft blobs: -ln(∑_i w_i e^(-k d_i))/k was +∞ at every pixel 12 units out, a trial's):
+                // m + log(∑_i w_i e^(x_i − m)), exact for any weights (no floor of 1 on the sum: a weight may be below 1).
+                // One term: log(e^x) = x, log(w e^x) = x + log w (a sequence of one point, stop 52).
+                std::vector<ValueId> ws, xs_w;
+                bool weighted = sum_terms(old, in.args[0], terms) && !terms.empty();
+                for (ValueId t : terms) {
+                    if (!weighted) break;
+                    const Instr& ti = old[t];
+                    if (is_builtin(ti, "exp")) {
+                        ws.push_back(ValueId(-1));
+                        xs_w.push_back(map[ti.args[0]]);
+                    } else if (ti.op == Op::Mul && ti.type.is_scalar() && ti.args.size() == 2 &&
+                               (is_builtin(old[ti.args[0]], "exp") || is_builtin(old[ti.args[1]], "exp"))) {
+                        const int e = is_builtin(old[ti.args[0]], "exp") ? 0 : 1;
+                        ws.push_back(map[ti.args[size_t(1 - e)]]);
+                        xs_w.push_back(map[old[ti.args[size_t(e)]].args[0]]);
+                    } else {
+                        weighted = false;
+                    }
+                }
+                bool any_weight = false;
+                for (ValueId w : ws) any_weight = any_weight || w != ValueId(-1);
+                if (weighted && (any_weight || terms.size() == 1)) {
+                    ValueId hi = xs_w[0];
+                    for (size_t k = 1; k < xs_w.size(); ++k) hi = b.builtin("max", {hi, xs_w[k]});
+                    if (terms.size() == 1) {
+                        made = ws[0] == ValueId(-1) ? hi : b.op(Op::Add, {hi, b.builtin("log", {ws[0]})});
+                    } else {
+                        ValueId sum = ValueId(-1);
+                        for (size_t k = 0; k < xs_w.size(); ++k) {
+                            ValueId e = b.builtin("exp", {b.op(Op::Sub, {xs_w[k], hi})});
+                            if (ws[k] != ValueId(-1)) e = b.op(Op::Mul, {ws[k], e});
+                            sum = sum == ValueId(-1) ? e : b.op(Op::Add, {sum, e});
+                        }
+                        made = b.op(Op::Add, {hi, b.builtin("log", {sum})});
+                    }
+                    what = "log-sum-exp";
+                } else if (terms.size() >= 2 && !any_weight && weighted) {
                     bool all_exp = true;
                     for (ValueId t : terms) all_exp &= is_builtin(old[t], "exp");
                     if (all_exp) {
