@@ -141,10 +141,24 @@ TEST_CASE("a negative power of a base that can be 0 is warned", "[ranges]") {
     // A trial (stop 52): s^(-0.5) with s ∈ [0, 1] is ∞ at s = 0 (the shape vanished), unwarned where 1/√s was warned of.
     Compiled c = compile_text("npow.md", doc("sin from trigonometry\nD = ‖p‖ - 1 + 0.1 sin(s^(-0.5))", "s ∈ [0,1] default = 0.5\n"));
     REQUIRE(c.result.exit_code == 0);
-    CHECK_THAT(c.diagnostics, Catch::Contains("npow.md:5:23: warning: a power with the negative exponent -0.5 of a base that can be 0 "
-                                              "(∞ there; a negative base is taken as 0): the base ranges over [0, 1]"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("npow.md:5:23: warning: a power with the negative exponent -0.5 of a base that can be 0 or below "
+                                              "(∞ there: a negative base is taken as 0): the base ranges over [0, 1]"));
     Compiled e = compile_text("npow_e.md", doc("sin from trigonometry\nD = ‖p‖ - 1 + 0.1 sin(s^e)", "s ∈ [0,1] default = 0.5\ne ∈ [-1,2] default = 0.5\n"));
     CHECK_THAT(e.diagnostics, Catch::Contains("an exponent that can be negative, [-1, 2]"));
+    // A negative base and a negative exponent: one warning (there were two, one of a base 'that can be 0'), no "-0".
+    Compiled neg = compile_text("npow_neg.md", doc("sin from trigonometry\nD = ‖p‖ - 1 + 0.1 sin(s^(-1.5))", "s ∈ [-1,0] default = -0.5\n"));
+    REQUIRE(neg.result.exit_code == 0);
+    CHECK_THAT(neg.diagnostics, Catch::Contains("a power with the negative exponent -1.5 of a base that can be 0 or below"));
+    CHECK_THAT(neg.diagnostics, Catch::Contains("the base ranges over [-1, 0]"));
+    CHECK(neg.diagnostics.find("warning:", neg.diagnostics.find("warning:") + 1) == std::string::npos);
+    // A condition that keeps the base above 0 (exactly, not by a float's rounding): nothing (a trial's [1.388e-17, 0.9]).
+    for (const char* ok : {"r = { (s - 0.1)^(-0.5) if s > 0.1\n      1 otherwise }", "r = { 1/(s - 0.1) if s > 0.1\n      1 otherwise }",
+                           "r = { log(s - 0.1) if s > 0.1\n      1 otherwise }"}) {
+        INFO(ok);
+        Compiled c3 = compile_text("npow_cond.md", doc("D = ‖p‖ - 1 + 0.01 r\n" + std::string(ok), "s ∈ [0,1] default = 0.5\n"));
+        REQUIRE(c3.result.exit_code == 0);
+        CHECK(c3.diagnostics.empty());
+    }
     for (const char* ok : {"sin from trigonometry\nD = ‖p‖ - 1 + 0.1 sin((s + 1)^(-0.5))", "sin from trigonometry\nD = ‖p‖ - 1 + 0.1 sin(s^0.5)"}) {
         Compiled c2 = compile_text("npow_ok.md", doc(ok, "s ∈ [0,1] default = 0.5\n"));
         REQUIRE(c2.result.exit_code == 0);

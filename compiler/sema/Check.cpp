@@ -517,6 +517,12 @@ void Checker::declare_sequence(const Decl& decl, const std::string& name, Span s
                 d_.error(item->span, fmt::format("each element of '{}' must be a constant {}", name, elem.str()));
                 return;
             }
+            // (0/0 reached the shader as 0.0/0.0: NaN at every pixel, a trial's; a scalar default said so already)
+            if (std::string why = unrepresentable(*v, elem.kind == Type::Integer); !why.empty()) {
+                d_.error(item->span, fmt::format("element {} of the default of '{}' {}", p.value.size() / size_t(std::max(1, elem.components())) + 1,
+                                                 name, why));
+                return;
+            }
             p.value.insert(p.value.end(), v->begin(), v->end());
         }
         p.has_default = true;

@@ -40,7 +40,7 @@ using iv::neg;
 Interval unknown() { return {}; }
 
 std::string fmt_interval(Interval a) {
-    auto n = [](double x) { return std::isinf(x) ? std::string(x > 0 ? "∞" : "-∞") : fmt::format("{:.4g}", x); };
+    auto n = [](double x) { return std::isinf(x) ? std::string(x > 0 ? "∞" : "-∞") : fmt::format("{:.4g}", x == 0 ? 0.0 : x); };
     return fmt::format("[{}, {}]", n(a.lo), n(a.hi));
 }
 
@@ -399,10 +399,11 @@ struct Analyzer {
         }
         auto mag = [&](size_t k) { return magnitude_finite(r[in.args[k]]); };
         switch (in.op) {
-            case Op::Const:  // the shader's float: 0.3 − 0.1 folds to 0.19999999999999998, which is 0.2f
+            case Op::Const:  // a fold's rounding in double: 0.3 − 0.1 folds to 0.19999999999999998 (not so 1, ½: a float's)
                 x.tol = 0;
                 for (double v : in.data)
-                    if (std::isfinite(v) && std::fabs(v) <= limits::kFloatMax) x.tol = std::max(x.tol, std::fabs(double(float(v)) - v));
+                    if (std::isfinite(v) && std::fabs(v) <= limits::kFloatMax && double(float(v)) != v)
+                        x.tol = std::max(x.tol, std::fabs(v) * 0x1p-50);
                 x.rounded = false;
                 return;
             case Op::Param:
@@ -513,21 +514,22 @@ struct Analyzer {
                             warn(in, fmt::format("square root of a value that can be negative: {}", ranges_over(x.c[0])));
                     }
                 } else if (n == "log" || n == "ln") {
-                    if (x.known && any(x, [&](Interval c) { return c.lo <= tol; }))
+                    if (x.known && any(x, [&](Interval c) { return c.lo <= 0; }))
                         warn(in, fmt::format("logarithm of a value that can be 0 or negative: {}", ranges_over(x.c[0])));
                 } else if (n == "pow") {
+                    // 0 to a negative power is ∞ (and the guard makes a negative base 0): s^(-0.5) with s ∈ [0, 1] drew
+                    // nothing at s = 0, unwarned, where 1/√s was warned of (a trial's, stop 52). One warning of the two.
+                    const Range y = arg(1);
+                    const bool negative_power = x.known && y.known && any(x, [&](Interval c) { return c.lo <= 0; }) &&
+                                                any(y, [](Interval c) { return c.lo < 0; });
                     if (any(x, [&](Interval c) { return c.lo < tol; })) {
                         needs[i] = kPowBase;
-                        if (x.known && any(x, [&](Interval c) { return c.lo < -tol; }))
+                        if (x.known && !negative_power && any(x, [&](Interval c) { return c.lo < -tol; }))
                             warn(in, fmt::format("a power of a base that can be negative: {}", ranges_over(x.c[0])));
                     }
-                    // 0 to a negative power is ∞ (and the guard makes a negative base 0): s^(-0.5) with s ∈ [0, 1] drew
-                    // nothing at s = 0, unwarned, where 1/√s was warned of (a trial's, stop 52).
-                    const Range y = arg(1);
-                    if (x.known && y.known && any(x, [&](Interval c) { return c.lo <= tol; }) &&
-                        any(y, [](Interval c) { return c.lo < 0; }))
-                        warn(in, fmt::format("a power with {} of a base that can be 0 (∞ there; a negative base is taken as "
-                                             "0): the base {}",
+                    if (negative_power)
+                        warn(in, fmt::format("a power with {} of a base that can be 0 or below (∞ there: a negative base is taken "
+                                             "as 0): the base {}",
                                              y.c[0].lo == y.c[0].hi ? fmt::format("the negative exponent {:.4g}", y.c[0].lo)
                                                                     : "an exponent that can be negative, " + fmt_interval(y.c[0]),
                                              ranges_over(x.c[0]).substr(3)));
@@ -739,8 +741,7 @@ struct Analyzer {
             }
             case Op::Div: {
                 Interval d = comp(in.args[1], 0);
-                const double tol = r[in.args[1]].tol;  // (a divisor whose float value may be 0 at a rounding)
-                if (contains_zero(d) || (d.lo <= tol && d.hi >= -tol)) {
+                if (contains_zero(d)) {  // (exact: 1/(s − 0.1) if s > 0.1 divides by [1.4e-17, 0.9], not by 0)
                     if (r[in.args[1]].known && !r[in.args[1]].nonzero)
                         warn(in, fmt::format("division by a value that can be 0{}: with the parameters' bounds {}",
                                              underflows[in.args[1]] ? fmt::format(" (it can fall below the smallest normal 32-bit "
