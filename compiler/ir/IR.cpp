@@ -82,6 +82,20 @@ std::unordered_map<std::string_view, int> Module::global_index() const {
     return index;
 }
 
+namespace {
+// Whether value t of a loop body reads a state (a parameter 1 … states), directly or through other values.
+bool reads_state(const Function& body, ValueId t) {
+    const size_t states = body.outputs.size();
+    std::vector<char> reads(size_t(t) + 1, 0);
+    for (size_t i = 0; i <= t; ++i) {
+        const Instr& in = body.body[i];
+        reads[i] = in.op == Op::Param && in.aux >= 1 && size_t(in.aux) <= states;
+        for (ValueId a : in.args) reads[i] |= reads[a];
+    }
+    return reads[t] != 0;
+}
+}  // namespace
+
 std::optional<ValueId> accumulated_term(const Function& body, size_t j) {
     const size_t states = body.outputs.size();
     if (j >= states) return std::nullopt;
@@ -89,14 +103,7 @@ std::optional<ValueId> accumulated_term(const Function& body, size_t j) {
     if (out.op != Op::Add || out.args.size() != 2) return std::nullopt;
     auto is_state = [&](ValueId v) { return body.body[v].op == Op::Param && size_t(body.body[v].aux) == j + 1; };
     const ValueId t = is_state(out.args[0]) ? out.args[1] : is_state(out.args[1]) ? out.args[0] : ValueId(-1);
-    if (t == ValueId(-1)) return std::nullopt;
-    std::vector<char> reads(size_t(t) + 1, 0);
-    for (size_t i = 0; i <= t; ++i) {
-        const Instr& in = body.body[i];
-        reads[i] = in.op == Op::Param && in.aux >= 1 && size_t(in.aux) <= states;
-        for (ValueId a : in.args) reads[i] |= reads[a];
-    }
-    if (reads[t]) return std::nullopt;
+    if (t == ValueId(-1) || reads_state(body, t)) return std::nullopt;
     return t;
 }
 
@@ -111,14 +118,7 @@ std::optional<ValueId> selected_term(const Function& body, size_t j) {
     else if (out.op == Op::Builtin && out.args.size() == 2 &&
              (std::string_view(builtin(out.aux).name) == "max" || std::string_view(builtin(out.aux).name) == "min"))
         t = is_state(out.args[0]) ? out.args[1] : is_state(out.args[1]) ? out.args[0] : ValueId(-1);
-    if (t == ValueId(-1)) return std::nullopt;
-    std::vector<char> reads(size_t(t) + 1, 0);
-    for (size_t i = 0; i <= t; ++i) {
-        const Instr& in = body.body[i];
-        reads[i] = in.op == Op::Param && in.aux >= 1 && size_t(in.aux) <= states;
-        for (ValueId a : in.args) reads[i] |= reads[a];
-    }
-    if (reads[t]) return std::nullopt;
+    if (t == ValueId(-1) || reads_state(body, t)) return std::nullopt;
     return t;
 }
 
