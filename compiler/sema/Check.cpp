@@ -512,7 +512,7 @@ void Checker::declare_sequence(const Decl& decl, const std::string& name, Span s
         count = int(decl.default_value->args.size());
         if (count == 0) return;  // `{}`: the parser said so (its uses stay quiet: unbound_functions_)
         for (const auto& item : decl.default_value->args) {
-            auto v = const_eval(*item);
+            auto v = constant(*item);  // (√2/2 too, as a scalar default: a trial's)
             if (!v || int(v->size()) != elem.components()) {
                 d_.error(item->span, fmt::format("each element of '{}' must be a constant {}", name, elem.str()));
                 return;
