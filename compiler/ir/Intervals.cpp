@@ -739,9 +739,16 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
         }
         if (!sum_leaves(f, n, terms, kLimit)) return std::nullopt;
     } else {
-        // Σ_j (a_j w_j)/D: each term over the same D.
+        // Σ_j (a_j w_j)/D: each term over the same D. A summand at hand that is no quotient ends it before the whole
+        // tree is walked: every Add of an unrolled sum of 4,096 terms asks (it walked its whole subtree, quadratic).
+        const Instr& xi = f.body[x];
+        if (xi.op != Op::Add) return std::nullopt;
+        for (ValueId a : xi.args) {
+            ValueId qn = 0, qd = 0;
+            if (f.body[a].op != Op::Add && !quotient(f, a, qn, qd)) return std::nullopt;
+        }
         std::vector<ValueId> quotients;
-        if (f.body[x].op != Op::Add || !sum_leaves(f, x, quotients, kLimit) || quotients.size() < 2) return std::nullopt;
+        if (!sum_leaves(f, x, quotients, kLimit) || quotients.size() < 2) return std::nullopt;
         for (ValueId q : quotients) {
             ValueId qn = 0, qd = 0;
             if (!quotient(f, q, qn, qd) || (!terms.empty() && qd != d)) return std::nullopt;
@@ -1170,7 +1177,17 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
         a.clear();
         for (ValueId x : in.args) a.push_back(&r[x]);
         r[i] = bounds_of(m, f, in, a);
-        if ((in.op == Op::Div || in.op == Op::Mul || in.op == Op::Add) && !in.type.is_matrix()) convex_refine(f, r, loop_convex, i);
+        if ((in.op == Op::Div || in.op == Op::Mul || in.op == Op::Add) && !in.type.is_matrix()) {
+            auto [at, fresh] = scratch.summed.try_emplace({&f, f.body.size()});
+            if (fresh) {
+                at->second.assign(f.body.size(), 0);
+                for (const Instr& u : f.body)
+                    if (u.op == Op::Add)
+                        for (ValueId a : u.args)
+                            if (f.body[a].type == u.type) at->second[a] = 1;
+            }
+            if (!at->second[i]) convex_refine(f, r, loop_convex, i);
+        }
     }
     if (!f.body.empty() && hook) hook(f.body.size() - 1, r);
 }
