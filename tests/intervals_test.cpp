@@ -258,3 +258,83 @@ function f(x: ℝ[4]) -> ℝ {
     CHECK(r[6].c[0].lo == 4);
     CHECK(r[6].c[0].hi == 8);
 }
+
+TEST_CASE("a scalar parameter that a value is divided by cancels as a symbolic factor", "[intervals]") {
+    // A trial (stop 52, F2): the exponential smooth minimum -log(∑_i e^(-k d_i))/k with k on a slider (k ∈ [1, 32]) got
+    // K ≤ 32 on every target with uniforms, where it is 1: its gradient is (∑_i e_i·(-k ∇d_i)/S)/k, and intervals take k
+    // and 1/k each on its own. A parameter some value is divided by is a symbol (ir/Intervals.h, Factored): k·x keeps
+    // k as a factor through sums, choices, negations and products, and a division by k cancels it. Two different
+    // parameters do not cancel, nor does one whose interval holds 0. A rolled sum of k·u (a loop capturing k) ends with
+    // the factor too.
+    const char* text = R"(function body(i: ℤ, sum: ℝ³, k: ℝ, u: ℝ³) -> ℝ³ {
+  %0 = ℤ Param #0 i  ; i
+  %1 = ℝ³ Param #1 sum  ; sum
+  %2 = ℝ Param #2 k  ; k
+  %3 = ℝ³ Param #3 u  ; u
+  %4 = ℝ³ Mul %2, %3
+  %5 = ℝ³ Add %1, %4
+  return %5
+  output sum = %5
+}
+function f(k: ℝ, x: ℝ, c: ℝ, m: ℝ, u: ℝ³) -> ℝ {
+  %0 = ℝ Param #0 k  ; k
+  %1 = ℝ Param #1 x  ; x
+  %2 = ℝ Param #2 c  ; c
+  %3 = ℝ Param #3 m  ; m
+  %4 = ℝ³ Param #4 u  ; u
+  %5 = ℝ Mul %0, %1
+  %6 = ℝ Div %5, %0
+  %7 = ℝ Const 2
+  %8 = ℝ Mul %0, %7
+  %9 = ℝ Add %5, %8
+  %10 = ℝ Div %9, %0
+  %11 = ℝ Const 0
+  %12 = condition Compare lt %2, %11
+  %13 = ℝ Select %12, %5, %8
+  %14 = ℝ Neg %13
+  %15 = ℝ Div %14, %0
+  %16 = ℝ Const 1
+  %17 = ℝ Div %16, %0
+  %18 = ℝ Mul %17, %5
+  %19 = ℝ Div %5, %3
+  %20 = ℝ Add %5, %1
+  %21 = ℝ Div %20, %0
+  %22 = ℝ Const 3
+  %23 = ℝ³ Const 0, 0, 0
+  %24 = tuple(1) Loop from 0 body %22, %23, %0, %4
+  %25 = ℝ³ Member .0 %24
+  %26 = ℝ³ Div %25, %0
+  %27 = ℝ Mul %19, %3
+  %28 = ℝ Div %27, %0
+  return %6
+}
+)";
+    ir::Module m;
+    std::string error;
+    REQUIRE(ir::parse_module(text, m, error));
+    INFO(error);
+    const int f = int(m.functions.size()) - 1;
+    const ir::Interval k{1, 32}, x{-1, 1}, c{-1, 1};
+    auto r = ir::interval_analysis(m, f, {{k}, {x}, {c}, {k}, {x, x, x}});
+    auto check = [&](size_t v, double lo, double hi) {
+        INFO("%" << v << ": [" << r[v].c[0].lo << ", " << r[v].c[0].hi << "]");
+        CHECK(r[v].c[0].lo == Approx(lo));
+        CHECK(r[v].c[0].hi == Approx(hi));
+    };
+    check(6, -1, 1);    // k·x/k (intervals alone: [-32, 32])
+    check(10, 1, 3);    // (k·x + k·2)/k
+    check(15, -2, 1);   // -(c < 0 ? k·x : k·2)/k
+    check(18, -1, 1);   // (1/k)·(k·x)
+    check(19, -32, 32); // k·x/m: another parameter
+    check(28, -1, 1);   // ((k·x/m)·m)/k: two symbols, each cancelled
+    CHECK(r[21].c[0].hi >= 32);  // (k·x + x)/k: no common factor
+    // The rolled sum of k·u over 4 iterations, divided by k: 4u.
+    for (size_t q = 0; q < 3; ++q) {
+        CHECK(r[26].c[q].lo == Approx(-4));
+        CHECK(r[26].c[q].hi == Approx(4));
+    }
+    CHECK(r[26].norm <= 4 * std::sqrt(3.0) + 1e-9);
+    // k ∈ [-1, 1] holds 0: k·x/k is no symbol's (there x/0 is NaN).
+    auto z = ir::interval_analysis(m, f, {{c}, {x}, {c}, {k}, {x, x, x}});
+    CHECK(!(z[6].c[0].hi <= 1));
+}

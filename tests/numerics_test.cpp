@@ -631,6 +631,25 @@ TEST_CASE("a log-sum-exp of distances is bounded by its distances' bounds", "[nu
             CHECK(derived_bound(steep, "lse") >= 2 - 1e-9);
             CHECK(derived_bound(steep, "lse") <= 2 + 1e-6);
         }
+    // k on a slider (a trial's, stop 52: k ∈ [1, 32] derived K ≤ 32 on targets with uniforms, 27× the steps): the
+    // gradient (∑_i e_i·(-k ∇d_i)/S)/k, k cancelled as a symbolic factor (ir/Intervals.h, Factored). 4 points are
+    // unrolled, 40 a loop capturing k. Divided by another slider m, k/m reaches 32: that bound stays.
+    for (const std::string& pts : {std::string("(0.6, 0, 0), (-0.6, 0, 0), (0, 0.6, 0), (0, -0.4, 0.3)"), forty})
+        for (Target t : {Target::Shadertoy, Target::WebGL2}) {
+            CompileOptions so;
+            so.target = t;
+            const std::string body = "\nwhere\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" + pts + "}\nk ∈ [1, 32] default = 8\n";
+            Compiled slider = compile_path(write_temp("lse.iql", "shape\nD = -log(∑_i exp(-k‖p - x_i‖))/k - 0.3" + body), so);
+            REQUIRE(slider.result.exit_code == 0);
+            INFO(slider.diagnostics);
+            CHECK(derived_bound(slider, "lse") >= 1 - 1e-9);
+            CHECK(derived_bound(slider, "lse") <= 1 + 1e-6);
+            Compiled ratio = compile_path(write_temp("lse.iql", "shape\nD = -log(∑_i exp(-k‖p - x_i‖))/m - 0.3" + body +
+                                                                 "m ∈ [1, 32] default = 8\n"), so);
+            REQUIRE(ratio.result.exit_code == 0);
+            if (t == Target::WebGL2) CHECK(derived_bound(ratio, "lse") >= 32 - 1e-6);
+            else CHECK(derived_bound(ratio, "lse") <= 1 + 1e-6);  // (k = m = 8 where parameters are constants)
+        }
     CompileOptions o;
     o.target = Target::WebGL2;
     Compiled mean = compile_path(write_temp("wmean_bounded.iql", "shape\nD = ∑_i w_i(‖p - x_i‖ - 0.4)/N\nN = ∑_j w_j\nwhere\np ∈ ℝ³\n"

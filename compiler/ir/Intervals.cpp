@@ -113,7 +113,7 @@ Bounds unknown(const Type& t) {
 }
 
 // Finishes a value: its norm is at most what its components allow.
-Bounds finish(Bounds b) {
+[[gnu::always_inline]] inline Bounds finish(Bounds b) {
     b.norm = std::min(b.norm, b.norm_from_components());
     if (b.unit) b.norm = std::min(b.norm, 1.0);
     return b;
@@ -164,72 +164,87 @@ bool element_of(Bounds& x, const Bounds& array, const Type& t, Interval k, bool 
     return false;
 }
 
+// The builtins builtin_bounds has a rule for, by id (one table: a chain of name comparisons per instruction was a
+// tenth of an interval analysis' time).
+enum class B : uint8_t { other, sin, cos, tan, tanh, sinh, cosh, smoothstep, exp, log, ln, abs, sqrt, floor, ceil, round, fract, sign, step, min, max, clamp, mix, mod, pow, length, normalize, atan, atan2, asin, acos };
+B builtin_kind(int id) {
+    static const std::vector<B> kinds = [] {
+        constexpr std::pair<std::string_view, B> named[] = {{"sin", B::sin}, {"cos", B::cos}, {"tan", B::tan}, {"tanh", B::tanh}, {"sinh", B::sinh}, {"cosh", B::cosh}, {"smoothstep", B::smoothstep}, {"exp", B::exp}, {"log", B::log}, {"ln", B::ln}, {"abs", B::abs}, {"sqrt", B::sqrt}, {"floor", B::floor}, {"ceil", B::ceil}, {"round", B::round}, {"fract", B::fract}, {"sign", B::sign}, {"step", B::step}, {"min", B::min}, {"max", B::max}, {"clamp", B::clamp}, {"mix", B::mix}, {"mod", B::mod}, {"pow", B::pow}, {"length", B::length}, {"normalize", B::normalize}, {"atan", B::atan}, {"atan2", B::atan2}, {"asin", B::asin}, {"acos", B::acos}};
+        std::vector<B> k(builtins().size(), B::other);
+        for (size_t i = 0; i < k.size(); ++i)
+            for (const auto& [name, kind] : named)
+                if (name == builtins()[i].name) k[i] = kind;
+        return k;
+    }();
+    return size_t(id) < kinds.size() ? kinds[size_t(id)] : B::other;
+}
+
 Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
-    std::string_view n = builtin(in.aux).name;
+    const B n = builtin_kind(in.aux);
     Bounds x = unknown(in.type);
     size_t comps = x.c.size();
     auto each = [&](auto fn) {
         for (size_t k = 0; k < comps; ++k) x.c[k] = fn(k);
     };
     auto arg = [&](size_t i, size_t k) { return comp(*a[i], k); };
-    if (n == "sin" || n == "cos") each([&](size_t k) { return iv::periodic(arg(0, k), n == "sin"); });
-    else if (n == "tan")
+    if (n == B::sin || n == B::cos) each([&](size_t k) { return iv::periodic(arg(0, k), n == B::sin); });
+    else if (n == B::tan)
         each([&](size_t k) {
             Interval v = arg(0, k);
             return v.lo > -M_PI / 2 && v.hi < M_PI / 2 ? Interval{std::tan(v.lo), std::tan(v.hi)} : Interval{};
         });
-    else if (n == "tanh") each([&](size_t k) { return monotone(arg(0, k), [](double v) { return std::tanh(v); }); });
-    else if (n == "sinh") each([&](size_t k) { return monotone(arg(0, k), [](double v) { return std::sinh(v); }); });
-    else if (n == "cosh")
+    else if (n == B::tanh) each([&](size_t k) { return monotone(arg(0, k), [](double v) { return std::tanh(v); }); });
+    else if (n == B::sinh) each([&](size_t k) { return monotone(arg(0, k), [](double v) { return std::sinh(v); }); });
+    else if (n == B::cosh)
         each([&](size_t k) {
             Interval v = arg(0, k);
             double hi = std::max(std::cosh(v.lo), std::cosh(v.hi));
             return Interval{contains_zero(v) ? 1.0 : std::min(std::cosh(v.lo), std::cosh(v.hi)), hi};
         });
-    else if (n == "smoothstep") each([&](size_t) { return Interval{0, 1}; });
-    else if (n == "exp") each([&](size_t k) { return monotone(arg(0, k), [](double v) { return std::exp(v); }); });
-    else if (n == "log" || n == "ln")
+    else if (n == B::smoothstep) each([&](size_t) { return Interval{0, 1}; });
+    else if (n == B::exp) each([&](size_t k) { return monotone(arg(0, k), [](double v) { return std::exp(v); }); });
+    else if (n == B::log || n == B::ln)
         each([&](size_t k) {
             Interval v = arg(0, k);
             if (v.lo <= 0) return Interval{-kInf, v.hi > 0 ? std::log(v.hi) : kInf};
             return monotone(v, [](double t) { return std::log(t); });
         });
-    else if (n == "abs")
+    else if (n == B::abs)
         each([&](size_t k) {
             Interval v = arg(0, k);
             if (v.lo >= 0) return v;
             if (v.hi <= 0) return neg(v);
             return Interval{0, std::max(-v.lo, v.hi)};
         });
-    else if (n == "sqrt")
+    else if (n == B::sqrt)
         each([&](size_t k) {
             Interval v = arg(0, k);
             return Interval{std::sqrt(std::max(v.lo, 0.0)), std::sqrt(std::max(v.hi, 0.0))};
         });
-    else if (n == "floor" || n == "ceil" || n == "round")
+    else if (n == B::floor || n == B::ceil || n == B::round)
         each([&](size_t k) { return Interval{std::floor(arg(0, k).lo), std::ceil(arg(0, k).hi)}; });
-    else if (n == "fract") each([&](size_t) { return Interval{0, 1}; });
-    else if (n == "sign")
+    else if (n == B::fract) each([&](size_t) { return Interval{0, 1}; });
+    else if (n == B::sign)
         each([&](size_t k) {
             Interval v = arg(0, k);
             return Interval{v.lo > 0 ? 1.0 : v.lo >= 0 ? 0.0 : -1.0, v.hi < 0 ? -1.0 : v.hi <= 0 ? 0.0 : 1.0};
         });
-    else if (n == "step")  // step(edge, x): 0 below the edge, 1 from it on
+    else if (n == B::step)  // step(edge, x): 0 below the edge, 1 from it on
         each([&](size_t k) {
             Interval e = arg(0, k), v = arg(1, k);
             return Interval{v.lo >= e.hi ? 1.0 : 0.0, v.hi < e.lo ? 0.0 : 1.0};
         });
-    else if (n == "min" || n == "max")
+    else if (n == B::min || n == B::max)
         each([&](size_t k) {
             Interval u = arg(0, k), v = arg(1, k);
-            return n == "min" ? Interval{std::min(u.lo, v.lo), std::min(u.hi, v.hi)} : Interval{std::max(u.lo, v.lo), std::max(u.hi, v.hi)};
+            return n == B::min ? Interval{std::min(u.lo, v.lo), std::min(u.hi, v.hi)} : Interval{std::max(u.lo, v.lo), std::max(u.hi, v.hi)};
         });
-    else if (n == "clamp")
+    else if (n == B::clamp)
         each([&](size_t k) {
             Interval v = arg(0, k), lo = arg(1, k), hi = arg(2, k);  // min(max(v, lo), hi), also where lo > hi
             return Interval{std::min(std::max(v.lo, lo.lo), hi.lo), std::min(std::max(v.hi, lo.hi), hi.hi)};
         });
-    else if (n == "mix")
+    else if (n == B::mix)
         each([&](size_t k) {
             Interval u = arg(0, k), v = arg(1, k), t = arg(2, k);  // u + t(v - u)
             // A weight within [0, 1] makes a convex combination, between u and v (u + t(v - u) taken apart
@@ -237,12 +252,12 @@ Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
             if (t.lo >= 0 && t.hi <= 1) return hull(u, v);
             return add(u, mul(t, add(v, neg(u))));
         });
-    else if (n == "mod")
+    else if (n == B::mod)
         each([&](size_t k) {
             Interval m = arg(1, k);
             return m.lo > 0 ? Interval{0, m.hi} : m.hi < 0 ? Interval{m.lo, 0} : Interval{};
         });
-    else if (n == "pow")
+    else if (n == B::pow)
         each([&](size_t k) {
             Interval b = arg(0, k), e = arg(1, k);
             if (b.lo < 0) return Interval{};
@@ -256,7 +271,7 @@ Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
             if (contains_zero(b) && e.lo < 0) r.hi = kInf;
             return r;
         });
-    else if (n == "length") {
+    else if (n == B::length) {
         double lo2 = 0, hi2 = 0;
         for (size_t k = 0; k < a[0]->c.size(); ++k) {
             Interval v = arg(0, k);
@@ -265,12 +280,12 @@ Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
             hi2 += s.hi;
         }
         x.c = {{std::sqrt(lo2), std::min(std::sqrt(hi2), a[0]->norm)}};
-    } else if (n == "normalize") {
+    } else if (n == B::normalize) {
         each([&](size_t) { return Interval{-1, 1}; });
         x.unit = true;
-    } else if (n == "atan" || n == "atan2") each([&](size_t) { return Interval{-M_PI, M_PI}; });
-    else if (n == "asin") each([&](size_t) { return Interval{-M_PI / 2, M_PI / 2}; });
-    else if (n == "acos") each([&](size_t) { return Interval{0, M_PI}; });
+    } else if (n == B::atan || n == B::atan2) each([&](size_t) { return Interval{-M_PI, M_PI}; });
+    else if (n == B::asin) each([&](size_t) { return Interval{-M_PI / 2, M_PI / 2}; });
+    else if (n == B::acos) each([&](size_t) { return Interval{0, M_PI}; });
     return x;
 }
 
@@ -661,10 +676,198 @@ Bounds bounds_of(const Module& m, const Function& f, const Instr& in, const std:
         }
     }
     x.elements = nullptr;  // (a choice between arrays, say: only copies keep an array's known values)
+    x.factor = nullptr;      // (a rule's copy of an operand's: factor_refine decides)
     return x;
 }
 
 namespace {
+
+// Monomial factors (Factored) ------------------------------------------------------------------------------------
+constexpr char kSummed = 1, kSymbol = 2;  // IntervalScratch::marks
+constexpr size_t kMaxSymbols = 4;
+using Powers = std::vector<std::pair<ValueId, int>>;
+
+// The bounds of 1: a symbol s is s¹ · 1.
+const Bounds& one_bounds() {
+    static const Bounds one = [] {
+        Bounds b;
+        b.c = {Interval{1, 1}};
+        b.norm = 1;
+        return b;
+    }();
+    return one;
+}
+
+// The marks of `f`'s values (IntervalScratch::marks): bit kSummed, an operand of an Add of its type; bit kSymbol, a
+// scalar Param or Global that a Div divides by, itself or through products and negations (2k, -k). One more entry
+// past the values: whether any is a symbol.
+std::vector<char> value_marks(const Function& f) {
+    std::vector<char> marks(f.body.size(), 0), divided(f.body.size(), 0);
+    for (const Instr& u : f.body) {
+        if (u.op == Op::Add)
+            for (ValueId a : u.args)
+                if (f.body[a].type == u.type) marks[a] |= kSummed;
+        if (u.op == Op::Div && u.args.size() == 2 && f.body[u.args[1]].type.is_scalar()) divided[u.args[1]] = 1;
+    }
+    for (size_t i = f.body.size(); i-- > 0;) {
+        if (!divided[i]) continue;
+        const Instr& u = f.body[i];
+        if (u.op == Op::Mul || u.op == Op::Neg || u.op == Op::Copy)
+            for (ValueId a : u.args)
+                if (f.body[a].type.is_scalar()) divided[a] = 1;
+        if ((u.op == Op::Param || u.op == Op::Global) && u.type.is_scalar()) marks[i] |= kSymbol;
+    }
+    marks.push_back(char(std::any_of(marks.begin(), marks.end(), [](char c) { return c & kSymbol; })));  // (one past: any)
+    return marks;
+}
+
+// What an operand brings to a product or a sum: its factor's powers and cofactor; or, a symbol, s¹ · 1; or itself
+// (no powers). `zero`: a constant 0, which is any monomial times 0.
+struct FactorView {
+    const Powers* powers = nullptr;  // null: none
+    Powers own;                      // a symbol's s¹
+    const Bounds* co = nullptr;
+    bool zero = false;
+    const Powers& get() const {
+        static const Powers none;
+        return powers ? *powers : none;
+    }
+};
+
+FactorView factor_view(const Function& f, const std::vector<Bounds>& r, const std::vector<char>& marks, ValueId v) {
+    FactorView view;
+    const Bounds& b = r[v];
+    if (b.factor) {
+        view.powers = &b.factor->powers;
+        view.co = &b.factor->co;
+        return view;
+    }
+    view.co = &b;
+    if ((marks[v] & kSymbol) && b.c.size() == 1 && !b.nan && b.c[0].lo < b.c[0].hi && (b.c[0].lo > 0 || b.c[0].hi < 0) &&
+        std::isfinite(b.c[0].lo) && std::isfinite(b.c[0].hi)) {
+        view.own = {{v, 1}};
+        view.powers = &view.own;
+        view.co = &one_bounds();
+        return view;
+    }
+    const Instr& in = f.body[v];
+    if (in.op == Op::Const && !in.data.empty())
+        view.zero = std::all_of(in.data.begin(), in.data.end(), [](double d) { return d == 0; });
+    return view;
+}
+
+// a·b (sign 1) or a/b (sign -1) of two monomials, into out; false past kMaxSymbols symbols.
+bool combine(const Powers& a, const Powers& b, int sign, Powers& out) {
+    out.clear();
+    size_t i = 0, j = 0;
+    while (i < a.size() || j < b.size()) {
+        if (j == b.size() || (i < a.size() && a[i].first < b[j].first)) out.push_back(a[i++]);
+        else if (i == a.size() || b[j].first < a[i].first) out.push_back({b[j].first, sign * b[j].second}), ++j;
+        else {
+            const int p = a[i].second + sign * b[j].second;
+            if (p != 0) out.push_back({a[i].first, p});
+            ++i, ++j;
+        }
+    }
+    return out.size() <= kMaxSymbols;
+}
+
+// A factor owned by the scratch (IntervalScratch::factors).
+const Factored* new_factor(IntervalScratch& scratch, Powers powers, Bounds co) {
+    if (scratch.factors_used == scratch.factors.size()) scratch.factors.push_back(std::make_unique<Factored>());
+    Factored& f = *scratch.factors[scratch.factors_used++];
+    f.powers = std::move(powers);
+    f.co = std::move(co);
+    return &f;
+}
+
+// Records that x is Π s^p · (a value within co): a factor, or, where every symbol cancelled, x within co.
+void settle(IntervalScratch& scratch, Bounds& x, Powers powers, Bounds co) {
+    co.factor = nullptr;
+    co.elements = nullptr;
+    co = finish(std::move(co));
+    if (!powers.empty()) {
+        x.factor = new_factor(scratch, std::move(powers), std::move(co));
+        return;
+    }
+    if (co.c.size() != x.c.size()) return;
+    for (size_t k = 0; k < x.c.size(); ++k) {
+        const Interval t{std::max(x.c[k].lo, co.c[k].lo), std::min(x.c[k].hi, co.c[k].hi)};
+        if (t.lo <= t.hi) x.c[k] = t;  // (rounding: never empty)
+    }
+    x.norm = std::min(x.norm, co.norm);
+}
+
+// The monomial factor of instruction i from its operands' (Factored): a product's powers add, a quotient's
+// subtract, and a sum, a choice, a negation or a part keep what all their operands share. The cofactor's bounds are
+// the instruction's rule on the operands' cofactors; where the powers cancel, they bound the value itself.
+void factor_refine(IntervalScratch& scratch, const Module& m, const Function& f, std::vector<Bounds>& r,
+                   const std::vector<char>& marks, size_t i, std::vector<const Bounds*>& cos) {
+    const Instr& in = f.body[i];
+    Bounds& x = r[i];
+    if (in.type.is_array() || in.op == Op::Copy) return;  // (a copy: its operand's, bounds_of kept it)
+    switch (in.op) {
+        case Op::Mul:
+        case Op::Hadamard:
+        case Op::Dot:
+        case Op::Cross:
+        case Op::Div: {
+            if (in.args.size() != 2) return;
+            const FactorView a = factor_view(f, r, marks, in.args[0]), b = factor_view(f, r, marks, in.args[1]);
+            if (a.get().empty() && b.get().empty()) return;
+            Powers p;
+            if (!combine(a.get(), b.get(), in.op == Op::Div ? -1 : 1, p)) return;
+            Bounds co;
+            if (in.op == Op::Div) {  // (the rule's own: its unit vectors v/‖v‖ are read from the code, not the cofactor)
+                co = unknown(in.type);
+                const Interval d = comp(*b.co, 0);
+                for (size_t k = 0; k < co.c.size(); ++k) co.c[k] = div(comp(*a.co, k), d);
+                if (!contains_zero(d)) co.norm = a.co->norm / std::min(std::fabs(d.lo), std::fabs(d.hi));
+            } else {
+                cos.assign({a.co, b.co});
+                co = bounds_rule(m, f, in, cos);
+            }
+            settle(scratch, x, std::move(p), std::move(co));
+            return;
+        }
+        case Op::Add:
+        case Op::Sub:
+        case Op::Neg:
+        case Op::Construct:
+        case Op::Extract:
+        case Op::Row:
+        case Op::Column:
+        case Op::Transpose:
+        case Op::Select:
+        case Op::If:
+        case Op::Switch: {
+            const size_t first = in.op == Op::Select || in.op == Op::If || in.op == Op::Switch ? 1 : 0;
+            if (first == 1 && in.op != Op::Switch && r[in.args[0]].c.size() == 1 &&
+                (r[in.args[0]].c[0].lo >= 1 || r[in.args[0]].c[0].hi <= 0))
+                return;  // (a decided choice: the operand's, bounds_of kept it)
+            Powers p;
+            cos.clear();
+            std::vector<FactorView> views;
+            views.reserve(in.args.size());
+            for (size_t k = 0; k < in.args.size(); ++k) {
+                if (k < first) {
+                    cos.push_back(&r[in.args[k]]);
+                    continue;
+                }
+                views.push_back(factor_view(f, r, marks, in.args[k]));
+                const FactorView& v = views.back();
+                if (v.zero) continue;
+                if (v.get().empty() || (!p.empty() && p != v.get())) return;
+                p = v.get();
+            }
+            if (p.empty()) return;
+            for (const FactorView& v : views) cos.push_back(v.co);
+            settle(scratch, x, std::move(p), bounds_rule(m, f, in, cos));
+            return;
+        }
+        default: return;
+    }
+}
 
 // Convex combinations (a rule interval arithmetic cannot see: it bounds each weight a_j/D on its own).
 // X = (Σ_j a_j w_j)/D with every a_j ≥ 0 and D ≥ Σ_j a_j (D that sum, or max(that sum, …)) is Σ_j λ_j w_j with λ_j ≥ 0,
@@ -859,8 +1062,23 @@ void convex_bounds(Bounds& x, const std::vector<const Bounds*>& parts, bool with
         if (!(x.c[k].lo <= x.c[k].hi)) x.c[k] = hullv[k];  // (rounding: never empty)
 }
 
+// convex_bounds on the parts' cofactors, where every part but zeros has a factor with the same powers: x's factor.
+void convex_factor(IntervalScratch& scratch, Bounds& x, const Type& t, const std::vector<const Bounds*>& parts, bool with_zero) {
+    const Powers* p = nullptr;
+    std::vector<const Bounds*> cos;
+    for (const Bounds* b : parts) {
+        if (!b->factor || (p && *p != b->factor->powers)) return;
+        p = &b->factor->powers;
+        cos.push_back(&b->factor->co);
+    }
+    if (!p) return;
+    Bounds co = unknown(t);
+    convex_bounds(co, cos, with_zero);
+    settle(scratch, x, *p, std::move(co));
+}
+
 // Tightens r[i] where instruction i is a convex combination, or a shift plus one (ConvexForm).
-void convex_refine(const Function& f, std::vector<Bounds>& r, const LoopConvexMap& loops, size_t i) {
+void convex_refine(IntervalScratch& scratch, const Function& f, std::vector<Bounds>& r, const LoopConvexMap& loops, size_t i) {
     const Instr& in = f.body[i];
     if (in.op == Op::Add && in.args.size() == 2) {
         for (int k = 0; k < 2; ++k) {
@@ -872,19 +1090,31 @@ void convex_refine(const Function& f, std::vector<Bounds>& r, const LoopConvexMa
             std::vector<const Bounds*> parts = {&r[c]};
             parts.insert(parts.end(), form->v.begin(), form->v.end());
             convex_bounds(r[i], parts, false);
+            convex_factor(scratch, r[i], in.type, parts, false);
             return;
         }
     }
     if (in.op != Op::Div && in.op != Op::Mul && in.op != Op::Add) return;
-    if (auto form = convex_form(f, r, loops, ValueId(i))) convex_bounds(r[i], form->w, true);
+    if (auto form = convex_form(f, r, loops, ValueId(i))) {
+        convex_bounds(r[i], form->w, true);
+        convex_factor(scratch, r[i], in.type, form->w, true);
+    }
 }
 
 template <class Params>
 void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, const Function& f, const Params& params,
              const IntervalHook& hook, int loop_trips, long* work) {
     r.resize(f.body.size());
+    if (scratch.depth == 0) scratch.factors_used = 0;  // (a new analysis: the last one's factors are not read again)
     std::map<size_t, std::vector<Bounds>> loop_states;  // a Loop's final states (read by Member)
     LoopConvexMap loop_convex;                            // a Loop's convex numerators (LoopConvex)
+    auto [marked, fresh] = scratch.marks.try_emplace({&f, f.body.size()});
+    if (fresh) marked->second = value_marks(f);
+    const std::vector<char>& marks = marked->second;
+    // Whether a value may have a factor: a symbol here, or one the caller passes (a loop body's Param).
+    bool factors = marks.back() != 0;
+    if (scratch.depth > 0 && static_cast<const void*>(&params) == scratch.args[scratch.depth - 1].get())
+        for (char c : *scratch.symbols[scratch.depth - 1]) factors = factors || c;
     std::vector<const Bounds*> a;                        // an instruction's operands (one buffer for all)
     // A callee's (or loop body's) values, in the buffer of the next depth.
     auto call = [&](int fn, const std::vector<IntervalVec>& args) -> std::vector<Bounds>& {
@@ -904,16 +1134,23 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
             scratch.values.push_back(std::make_unique<std::vector<Bounds>>());
             scratch.args.push_back(std::make_unique<std::vector<IntervalVec>>());
             scratch.elements.push_back(std::make_unique<std::vector<const std::vector<double>*>>());
+            scratch.symbols.push_back(std::make_unique<std::vector<char>>());
         }
         scratch.args[d]->clear();
         scratch.elements[d]->clear();
+        scratch.symbols[d]->clear();
         return *scratch.args[d];
     };
-    // An argument's known array elements (Bounds::elements), at the position of its intervals in args_buffer().
-    auto pass_elements = [&](const Bounds& b) {
+    // An argument's known array elements (Bounds::elements), and whether it is a symbol of Bounds::factor (a loop
+    // body's Param then is one, its factors mapped back by the Loop rule), at the position of its intervals in
+    // args_buffer().
+    auto pass_elements = [&](const Bounds& b, bool symbol = false) {
         std::vector<const std::vector<double>*>& e = *scratch.elements[scratch.depth];
+        std::vector<char>& sy = *scratch.symbols[scratch.depth];
         e.resize(scratch.args[scratch.depth]->size(), nullptr);
+        sy.resize(scratch.args[scratch.depth]->size(), 0);
         if (!e.empty()) e.back() = b.elements;
+        if (!sy.empty()) sy.back() = symbol ? 1 : 0;
     };
     for (size_t i = 0; i < f.body.size(); ++i) {
         if (i > 0 && hook && !hook(i - 1, r)) {
@@ -941,9 +1178,12 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
             }
             r[i] = finish(std::move(r[i]));
             // A callee's (or loop body's) argument: an array's known values come with it.
-            if (in.type.is_array() && scratch.depth > 0 && static_cast<const void*>(&params) == scratch.args[scratch.depth - 1].get()) {
+            if (scratch.depth > 0 && static_cast<const void*>(&params) == scratch.args[scratch.depth - 1].get()) {
                 const auto& known = *scratch.elements[scratch.depth - 1];
-                if (size_t(in.aux) < known.size()) r[i].elements = known[size_t(in.aux)];
+                if (in.type.is_array() && size_t(in.aux) < known.size()) r[i].elements = known[size_t(in.aux)];
+                const auto& symbol = *scratch.symbols[scratch.depth - 1];
+                if (size_t(in.aux) < symbol.size() && symbol[size_t(in.aux)] && r[i].c.size() == 1)
+                    r[i].factor = new_factor(scratch, {{ValueId(i), 1}}, one_bounds());
             }
             continue;
         }
@@ -1004,6 +1244,7 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
             }
             r[i] = call(in.aux, args)[m.functions[size_t(in.aux)].result];
             r[i].nan |= nan;
+            r[i].factor = nullptr;  // (the callee's symbols)
             continue;
         }
         if (in.op == Op::Loop) {
@@ -1088,10 +1329,50 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                     for (size_t j = 0; j < states; ++j) args.push_back(r[in.args[j + 1]].c);
                     for (size_t c = states + 1; c < in.args.size(); ++c) {
                         args.push_back(r[in.args[c]].c);
-                        pass_elements(r[in.args[c]]);
+                        const FactorView view = factor_view(f, r, marks, in.args[c]);
+                        pass_elements(r[in.args[c]], view.powers == &view.own);
                     }
                     const std::vector<Bounds>& v = call(in.aux, args);
                     const double n = last - first + 1;
+                    // A body value's factor in this function's symbols (the values the loop captures), into out.
+                    auto caller_powers = [&](const Bounds& b, Powers& out) {
+                        out.clear();
+                        if (!b.factor) return false;
+                        for (const auto& [id, power] : b.factor->powers) {
+                            const Instr& pi = body.body[id];
+                            if (pi.op != Op::Param || size_t(pi.aux) <= states || size_t(pi.aux) >= in.args.size()) return false;
+                            out.push_back({in.args[size_t(pi.aux)], power});
+                        }
+                        std::sort(out.begin(), out.end());
+                        for (size_t q = 1; q < out.size(); ++q)
+                            if (out[q].first == out[q - 1].first) return false;  // (one value captured twice: rare)
+                        return !out.empty();
+                    };
+                    // A state's factor: its first value's (or 0) and the term's, with the term's powers; the cofactor
+                    // init + n·t (an accumulation) or the hull of both (a choice).
+                    auto state_factor = [&](Bounds& sj, const Bounds& init, const Bounds& t, bool chosen) {
+                        Powers p;
+                        if (!caller_powers(t, p)) return;
+                        const Bounds* init_co = init.factor && init.factor->powers == p ? &init.factor->co : nullptr;
+                        bool zero = !init.c.empty();
+                        for (const Interval& c : init.c) zero = zero && c.lo == 0 && c.hi == 0;
+                        if (!init_co && !zero) return;
+                        Bounds co = t.factor->co;
+                        for (size_t q = 0; q < co.c.size(); ++q) {
+                            const Interval i0 = init_co ? comp(*init_co, q) : Interval{0, 0};
+                            co.c[q] = chosen ? hull(i0, co.c[q]) : Interval{i0.lo + n * co.c[q].lo, i0.hi + n * co.c[q].hi};
+                            if (std::isnan(co.c[q].lo) || std::isnan(co.c[q].hi)) return;
+                        }
+                        const double n0 = init_co ? init_co->norm : 0.0;
+                        co.norm = chosen ? std::max(n0, co.norm) : n0 + n * co.norm;
+                        co.unit = false;
+                        settle(scratch, sj, std::move(p), std::move(co));
+                    };
+                    // A LoopConvex part's factor, in this function's symbols.
+                    auto part_factor = [&](Bounds& b) {
+                        Powers p;
+                        b.factor = caller_powers(b, p) ? new_factor(scratch, std::move(p), b.factor->co) : nullptr;
+                    };
                     nan = false;
                     for (size_t c = 1; c < in.args.size(); ++c) nan |= r[in.args[c]].nan;
                     for (size_t j = 0; j < states; ++j) {
@@ -1105,6 +1386,8 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                             s[j].norm = std::max(init.norm, t.norm);
                             for (size_t q = 0; q < t.c.size(); ++q) s[j].c[q] = hull(init.c[q], t.c[q]);
                             s[j] = finish(std::move(s[j]));
+                            s[j].factor = nullptr;
+                            state_factor(s[j], init, t, true);
                             nan |= t.nan;
                             continue;
                         }
@@ -1117,6 +1400,8 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                             if (std::isnan(s[j].c[q].lo) || std::isnan(s[j].c[q].hi)) s[j].c[q] = Interval{};
                         }
                         s[j] = finish(std::move(s[j]));
+                        s[j].factor = nullptr;
+                        state_factor(s[j], init, t, false);
                         nan |= t.nan;
                     }
                     // Convex numerators: state j accumulates a·w where state k accumulates a ≥ 0 (LoopConvex).
@@ -1139,6 +1424,7 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                                 lc.j = int(j), lc.k = int(k);
                                 const ValueId w = tj.args[size_t(1 - side)];
                                 lc.w = v[w];
+                                part_factor(lc.w);
                                 const Instr& wi = body.body[w];
                                 if (wi.op == Op::Sub && wi.args.size() == 2) {
                                     const Instr& c = body.body[wi.args[1]];
@@ -1146,6 +1432,7 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                                     if (c.op == Op::Param && size_t(c.aux) > states && size_t(c.aux) < in.args.size()) {
                                         lc.shift = in.args[size_t(c.aux)];
                                         lc.v = v[wi.args[0]];
+                                        part_factor(lc.v);
                                     }
                                 }
                                 found.push_back(std::move(lc));
@@ -1156,7 +1443,10 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                     if (!found.empty()) loop_convex[i] = std::move(found);
                 }
             }
-            for (Bounds& b : s) b.nan |= nan;
+            for (Bounds& b : s) {
+                b.nan |= nan;
+                if (run) b.factor = nullptr;  // (the body's symbols; the accumulation's are this function's)
+            }
             if (!key.empty()) {
                 if (scratch.known_loops.size() >= 256) scratch.known_loops.clear();
                 scratch.known_loops.emplace(std::move(key), s);
@@ -1167,8 +1457,9 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
         }
         if (in.op == Op::Member) {
             auto it = loop_states.find(in.args[0]);
-            if (it != loop_states.end() && size_t(in.aux) < it->second.size()) r[i] = it->second[size_t(in.aux)];
-            else {
+            if (it != loop_states.end() && size_t(in.aux) < it->second.size()) {
+                r[i] = it->second[size_t(in.aux)];  // (a factor there is in this function's symbols)
+            } else {
                 r[i] = unknown(in.type);
                 r[i].nan = true;
             }
@@ -1177,17 +1468,13 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
         a.clear();
         for (ValueId x : in.args) a.push_back(&r[x]);
         r[i] = bounds_of(m, f, in, a);
-        if ((in.op == Op::Div || in.op == Op::Mul || in.op == Op::Add) && !in.type.is_matrix()) {
-            auto [at, fresh] = scratch.summed.try_emplace({&f, f.body.size()});
-            if (fresh) {
-                at->second.assign(f.body.size(), 0);
-                for (const Instr& u : f.body)
-                    if (u.op == Op::Add)
-                        for (ValueId a : u.args)
-                            if (f.body[a].type == u.type) at->second[a] = 1;
-            }
-            if (!at->second[i]) convex_refine(f, r, loop_convex, i);
-        }
+        bool factored = false;  // (most values: no operand is a symbol or has a factor, and this is all they cost)
+        if (factors)
+            for (ValueId x : in.args)
+                factored = factored || r[x].factor || ((marks[x] & kSymbol) && r[x].c.size() == 1 && r[x].c[0].lo < r[x].c[0].hi);
+        if (factored) factor_refine(scratch, m, f, r, marks, i, a);
+        if ((in.op == Op::Div || in.op == Op::Mul || in.op == Op::Add) && !in.type.is_matrix() && !(marks[i] & kSummed))
+            convex_refine(scratch, f, r, loop_convex, i);
     }
     if (!f.body.empty() && hook) hook(f.body.size() - 1, r);
 }

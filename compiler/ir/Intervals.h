@@ -125,7 +125,23 @@ struct Bounds {
     // over constant weights keeps ∑_j w_j exact, and its gradient's bound is 1, not 11 (a trial's, stop 51).
     // Carried by copies and calls' arguments only (the module outlives every analysis).
     const std::vector<double>* elements = nullptr;
+    // A symbolic factor of this value, where it has one (Factored, below): the value is Π_j s_j^(p_j) · y. Owned by
+    // the analysis' IntervalScratch, and read only while it runs (a plain pointer: Bounds are moved by the million).
+    const struct Factored* factor = nullptr;
     double norm_from_components() const;
+};
+
+// Monomial factors (Bounds::factor). Interval arithmetic bounds k·u/k over a slider k ∈ [1, 32] by 32·‖u‖: it
+// takes k and 1/k each on its own. Carried as a factor, k cancels: the gradient of an exponential smooth minimum
+// -log(Σ_i e^(-k d_i))/k whose k is a uniform, (Σ_i e_i·(-k ∇d_i)/S)/k, is a convex combination of the ∇d_i (a
+// new user's trial derived K = 32 where it is 1: marching 27× slower). The value is Π_j s_j^(p_j) · y, with y
+// within `co` (bounds without a factor of their own) and s_j the value of instruction `powers[j].first` of the
+// function analysed — a scalar parameter (Param or Global) some value is divided by (itself, or times constants),
+// whose interval is not a point and leaves out 0; at most 4 of them, sorted. Only the analysed function's values
+// carry one (a callee's result and a loop's states drop it: their symbols are another function's).
+struct Factored {
+    std::vector<std::pair<ValueId, int>> powers;
+    Bounds co;
 };
 
 // The bounds of every value of function `fn` when its parameters lie in `params` (one entry per
@@ -157,13 +173,18 @@ struct IntervalScratch {
     std::vector<std::unique_ptr<std::vector<Bounds>>> values;
     std::vector<std::unique_ptr<std::vector<IntervalVec>>> args;
     std::vector<std::unique_ptr<std::vector<const std::vector<double>*>>> elements;  // the args' Bounds::elements
+    std::vector<std::unique_ptr<std::vector<char>>> symbols;  // which args are a symbol of Bounds::factor in the caller
+    // Bounds::factor's, of the analysis running (reused from one to the next: `factors_used` of them are live).
+    std::vector<std::unique_ptr<Factored>> factors;
+    size_t factors_used = 0;
     // The final states of loops run iteration by iteration over known arrays, by the loop and its arguments'
     // bounds: one that reads nothing of the box (∑_j w_j) is run once per search, not once per box.
     std::map<std::vector<uint64_t>, std::vector<Bounds>> known_loops;
-    // Per function analysed (and its size): which values are an operand of a sum of their own type — the inner
+    // Per function analysed (and its size), per value: bit 1, an operand of a sum of its own type — the inner
     // partial sums of a chain, whose convex combinations are not looked for (only the whole sum's: every partial
-    // sum of an unrolled ∑ of 100 quotients walking its subtree was 60% of a compile).
-    std::map<std::pair<const Function*, size_t>, std::vector<char>> summed;
+    // sum of an unrolled ∑ of 100 quotients walking its subtree was 60% of a compile); bit 2, a scalar Param or
+    // Global some value is divided by (directly, or through products and negations): a symbol of Bounds::factor.
+    std::map<std::pair<const Function*, size_t>, std::vector<char>> marks;
     size_t depth = 0;
 };
 // The same into `r` (resized; every value written), with `scratch` reused from call to call.
