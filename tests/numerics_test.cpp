@@ -650,6 +650,20 @@ TEST_CASE("a log-sum-exp of distances is bounded by its distances' bounds", "[nu
             if (t == Target::WebGL2) CHECK(derived_bound(ratio, "lse") >= 32 - 1e-6);
             else CHECK(derived_bound(ratio, "lse") <= 1 + 1e-6);  // (k = m = 8 where parameters are constants)
         }
+    // One steeper term (weight 16 where the others are 8: slope 2 within ~0.27 of its centre) in a region of ±105: the
+    // derived 2 is right, but every uniform sample and every walk from afar (they end on the flatter blobs) saw 1, and
+    // "within 2, samples within 1" marched it at 1 (8 pixels stepped through; a trial's, stop 52). Samples near the
+    // shape (the hull of the walks' ends) find the slope: K 2 is applied.
+    for (double r : {0.5, 0.3}) {
+        Compiled steep1 = compile_text("steep1.iql", fmt::format("shape\nD = -log(∑_i exp(-c_i‖p - x_i‖))/8 - {}\nwhere\np ∈ ℝ³\n"
+                                                                 "x_i ∈ ℝ³ default = {{(0.8, 0, 0), (-0.8, 0, 0), (0, 0.8, 0), (0, -0.8, 0)}}\n"
+                                                                 "c_i ∈ ℝ default = {{8, 16, 8, 8}}\n", r));
+        REQUIRE(steep1.result.exit_code == 0);
+        REQUIRE(steep1.result.lipschitz.size() == 1);
+        INFO(steep1.result.lipschitz[0]);
+        CHECK(derived_bound(steep1, "steep1") >= 2 - 1e-9);
+        CHECK_THAT(steep1.result.lipschitz[0], Catch::Contains(", 2 applied (derived)"));
+    }
     CompileOptions o;
     o.target = Target::WebGL2;
     Compiled mean = compile_path(write_temp("wmean_bounded.iql", "shape\nD = ∑_i w_i(‖p - x_i‖ - 0.4)/N\nN = ∑_j w_j\nwhere\np ∈ ℝ³\n"
