@@ -671,6 +671,17 @@ TEST_CASE("a log-sum-exp of distances is bounded by its distances' bounds", "[nu
                                                                  "w_i ∈ [0.1, 1] default = {1, 0.5, 0.7}\n"), o);
     REQUIRE(mean.result.exit_code == 0);
     CHECK(derived_bound(mean, "wmean_bounded") <= 1 + 1e-6);
+    // Over half the weights' sum, and two sums over the same weights (a trial's, stop 52: 20 on webgl2, where the sum
+    // of weights with sliders is no constant): within twice the largest term's gradient, 2 (the truth).
+    for (const char* d : {"(∑_i w_i ‖p - x_i‖)/(½∑_j w_j) - 1.6", "(∑_i w_i ‖p - x_i‖ + ∑_i w_i ‖p + x_i‖)/(∑_j w_j) - 1.5"}) {
+        INFO(d);
+        Compiled twice = compile_path(write_temp("wmean_twice.iql", std::string("shape\nD = ") + d + "\nwhere\np ∈ ℝ³\n"
+                                                 "x_i ∈ ℝ³ default = {(0.6, 0, 0), (-0.6, 0, 0), (0, 0.6, 0)}\n"
+                                                 "w_i ∈ [0.1, 1] default = {1, 0.5, 0.7}\n"), o);
+        REQUIRE(twice.result.exit_code == 0);
+        CHECK(derived_bound(twice, "wmean_twice") >= 2 - 1e-9);
+        CHECK(derived_bound(twice, "wmean_twice") <= 2 + 1e-6);
+    }
     // Weights that may be negative make no convex combination: no bound (unbounded weights), said.
     Compiled loose = compile_path(write_temp("wmean_free.iql", "shape\nD = ∑_i w_i(‖p - x_i‖ - 0.4)/N\nN = ∑_j w_j\nwhere\np ∈ ℝ³\n"
                                                                "x_i ∈ ℝ³ default = {(0, 0, 0), (0.5, 0, 0), (0, 0.5, 0)}\n"

@@ -891,6 +891,11 @@ struct ConvexForm {
     // Where every combined value is v_j − c for one c: c and the v_j's bounds.
     ValueId shift = ValueId(-1);
     std::vector<const Bounds*> v;
+    // Σ_j a_j w_j/(c·Σ_j a_j) with c > 0 (a weighted mean over half the weights' sum: c = ½), and sums that read each
+    // weight up to m times ((∑_i w_i t_i + ∑_i w_i s_i)/∑_j w_j: two combinations): within m·hull(0, w_j)/c. (A trial,
+    // stop 52: both derived 10× the truth on targets with sliders, where the weights' sum is no constant.)
+    Interval scale{1, 1};
+    int multiplicity = 1;
 };
 
 // The leaves of the sum tree at `x` (Add of one type; at most `limit` leaves), into out; false past the limit.
@@ -960,8 +965,21 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
         }
     }
     if (terms.empty()) return std::nullopt;
-    // D ≥ Σ a_j: the sum itself or a max with it.
+    // D ≥ Σ a_j: the sum itself or a max with it; or c times that, c > 0.
     std::vector<ValueId> weights;
+    ConvexForm form;
+    {
+        const Instr& mi = f.body[d];
+        if (mi.op == Op::Mul && mi.args.size() == 2 && mi.type.is_scalar())
+            for (int k = 0; k < 2; ++k) {
+                const Bounds& c = r[mi.args[size_t(k)]];
+                if (c.c.size() == 1 && c.c[0].lo > 0 && std::isfinite(c.c[0].hi) && !c.nan && f.body[mi.args[size_t(1 - k)]].op == Op::Add) {
+                    form.scale = c.c[0];
+                    d = mi.args[size_t(1 - k)];
+                    break;
+                }
+            }
+    }
     const Instr& di = f.body[d];
     if (di.op == Op::Builtin && std::string_view(builtin(di.aux).name) == "max" && di.args.size() == 2) {
         bool found = false;
@@ -978,7 +996,6 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
     }
     for (ValueId a : weights)
         if (r[a].c.size() != 1 || !(r[a].c[0].lo >= 0)) return std::nullopt;
-    ConvexForm form;
     // A rolled sum: ∑_i a_i w_i / ∑_i a_i from one loop.
     if (terms.size() == 1 && weights.size() == 1 && f.body[terms[0]].op == Op::Member && f.body[weights[0]].op == Op::Member &&
         f.body[terms[0]].args[0] == f.body[weights[0]].args[0]) {
@@ -987,13 +1004,16 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
         for (const LoopConvex& lc : it->second)
             if (lc.j == f.body[terms[0]].aux && lc.k == f.body[weights[0]].aux) {
                 form.w.push_back(&lc.w);
-                form.shift = lc.shift;
-                if (lc.shift != ValueId(-1)) form.v.push_back(&lc.v);
+                if (form.scale.lo == 1 && form.scale.hi == 1) {  // (c + X needs Σ λ ≤ 1)
+                    form.shift = lc.shift;
+                    if (lc.shift != ValueId(-1)) form.v.push_back(&lc.v);
+                }
                 return form;
             }
         return std::nullopt;
     }
     std::sort(weights.begin(), weights.end());
+    std::vector<int> uses(weights.size(), 0);  // (how many terms read each weight)
     bool shifted = true;
     auto add_term = [&](ValueId w) {
         form.w.push_back(&r[w]);
@@ -1013,7 +1033,7 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
             const ValueId a = ti.args[size_t(k)];
             auto at = std::lower_bound(weights.begin(), weights.end(), a);
             if (at == weights.end() || *at != a || !f.body[a].type.is_scalar()) continue;
-            weights.erase(at);  // each weight once
+            ++uses[size_t(at - weights.begin())];
             const ValueId w = ti.args[size_t(1 - k)];
             add_term(w);
             matched = true;
@@ -1032,14 +1052,15 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
                            ((ai.args[0] == s && ai.args[1] == e) || (ai.args[0] == e && ai.args[1] == s));
                 });
                 if (leaf == weights.end()) continue;
-                weights.erase(leaf);
+                ++uses[size_t(leaf - weights.begin())];
                 add_term(inner.args[size_t(1 - q)]);
                 matched = true;
             }
         }
         if (!matched) return std::nullopt;
     }
-    if (!shifted) {
+    form.multiplicity = uses.empty() ? 1 : std::max(1, *std::max_element(uses.begin(), uses.end()));
+    if (!shifted || form.multiplicity > 1 || form.scale.lo != 1 || form.scale.hi != 1) {  // (c + X needs Σ λ ≤ 1)
         form.shift = ValueId(-1);
         form.v.clear();
     }
@@ -1047,7 +1068,8 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
 }
 
 // Bounds of a convex combination of `parts` (with 0 where `with_zero`): their components' hull, their largest norm.
-void convex_bounds(Bounds& x, const std::vector<const Bounds*>& parts, bool with_zero) {
+void convex_bounds(Bounds& x, const std::vector<const Bounds*>& parts, bool with_zero, int multiplicity = 1,
+                   Interval scale = {1, 1}) {
     const size_t n = x.c.size();
     IntervalVec hullv(n, Interval{with_zero ? 0.0 : kInf, with_zero ? 0.0 : -kInf});
     double norm = 0;
@@ -1055,6 +1077,10 @@ void convex_bounds(Bounds& x, const std::vector<const Bounds*>& parts, bool with
         if (p->c.size() != n && p->c.size() != 1) return;
         for (size_t k = 0; k < n; ++k) hullv[k] = hull(hullv[k], comp(*p, k));
         norm = std::max(norm, p->norm);
+    }
+    if (multiplicity != 1 || scale.lo != 1 || scale.hi != 1) {  // m·hull/c (with_zero: the hull holds 0)
+        for (size_t k = 0; k < n; ++k) hullv[k] = div(mul(Interval{double(multiplicity), double(multiplicity)}, hullv[k]), scale);
+        norm = multiplicity * norm / scale.lo;
     }
     for (size_t k = 0; k < n; ++k) x.c[k] = {std::max(x.c[k].lo, hullv[k].lo), std::min(x.c[k].hi, hullv[k].hi)};
     x.norm = std::min(x.norm, norm);
@@ -1096,8 +1122,8 @@ void convex_refine(IntervalScratch& scratch, const Function& f, std::vector<Boun
     }
     if (in.op != Op::Div && in.op != Op::Mul && in.op != Op::Add) return;
     if (auto form = convex_form(f, r, loops, ValueId(i))) {
-        convex_bounds(r[i], form->w, true);
-        convex_factor(scratch, r[i], in.type, form->w, true);
+        convex_bounds(r[i], form->w, true, form->multiplicity, form->scale);
+        if (form->multiplicity == 1 && form->scale.lo == 1 && form->scale.hi == 1) convex_factor(scratch, r[i], in.type, form->w, true);
     }
 }
 
