@@ -95,6 +95,13 @@ inline Compiled compile_path(const std::filesystem::path& p, const CompileOption
 }
 inline Compiled compile_text(const std::string& name, const std::string& text) { return compile_path(write_temp(name, text)); }
 
+// How many times `what` occurs in `text` (non-overlapping): "error:" in a compile's diagnostics.
+inline size_t count_of(const std::string& text, const std::string& what) {
+    size_t n = 0;
+    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
+    return n;
+}
+
 // Renders a compiled shader of any target on the headless renderer with what its host sets (uniform
 // defaults, uniform blocks, the data texture).
 inline render::RenderResult render_compiled(const CompileResult& c, int w, int h, float time = 0) {

@@ -676,6 +676,51 @@ TEST_CASE("a sequence parameter's override takes its elements as rows, of the mo
     // A value whose components are not whole elements is still an error.
     Compiled ragged = compile_text("seq_ragged.iq", scene("\"{(1, 0, 0), (2, 0)}\""));
     CHECK(ragged.result.exit_code == 1);
+    // Two sequences of one index given different lengths: one error, at the override (a trial's were two or three,
+    // located in the module, and said the default's length was the only one allowed). Past the size limit: one too.
+    auto pair = [](const std::string& values) {
+        return "[modules]\nblob = \"\"\"\nshape\nD = -log(∑_i exp(-8(‖p - x_i‖ - r_i)))/8\nwhere\np ∈ ℝ³\n"
+               "x_i ∈ ℝ³ default = {(0, 0, 0), (1, 0, 0), (2, 0, 0)}\nr_i ∈ [0.05, 1] default = {0.3, 0.2, 0.25}\n\"\"\"\n"
+               "[[shapes]]\ntype = \"blob\"\nshape_params = { " + values + " }\n";
+    };
+    Compiled five_three = compile_text("seq_pair.iq", pair("x = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0]]"));
+    CHECK(five_three.result.exit_code == 1);
+    CHECK_THAT(five_three.diagnostics, Catch::EndsWith("seq_pair.iq:12:18: error: 'x' has 5 elements here, but 'r' has 3 (its "
+                                                       "default): sequences indexed by i have one length; give 'r' 5 elements too\n"
+                                                       "  shape_params = { x = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0]] }\n"
+                                                       "                   ^\n"));
+    Compiled both = compile_text("seq_pair.iq", pair("x = [[0, 0, 0], [1, 0, 0]], r = [0.3]"));
+    CHECK(both.result.exit_code == 1);
+    CHECK_THAT(both.diagnostics, Catch::Contains("seq_pair.iq:12:46: error: 'r' has 1 element here, but 'x' has 2 here: "
+                                                 "sequences indexed by i have one length; give both one length"));
+    CHECK(count_of(both.diagnostics, "error:") == 1);
+    Compiled fine = compile_text("seq_pair.iq", pair("x = [[0, 0, 0], [1, 0, 0]], r = [0.3, 0.4]"));
+    CHECK(fine.result.exit_code == 0);
+    // (its bounds in the shader's comment: one element's, not 2 × 1 intervals in a row)
+    CHECK_THAT(fine.result.code, Catch::Contains("// r_i ∈ [0.05, 1]\n"));
+    // An element outside the module's bounds (warned) widens its slider's: --meta and the HTML page's slider hold the
+    // instance's value, and the analyses cover it (a trial's r = 1.5 over [0.05, 1] was a slider that stopped at 1).
+    CompileOptions web;
+    web.target = Target::WebGL2;
+    Compiled wide = compile_path(write_temp("seq_wide.iq", pair("x = [[0, 0, 0], [1, 0, 0]], r = [0.3, 1.5]")), web);
+    REQUIRE(wide.result.exit_code == 0);
+    CHECK_THAT(wide.diagnostics, Catch::Contains("warning: the value 1.5 of 'r' is outside its slider bounds [0.05, 1]"));
+    const auto meta = nlohmann::json::parse(wide.result.meta);
+    int seen = 0;
+    for (const auto& q : meta["parameters"]) {
+        if (q["name"] != "r_1" && q["name"] != "r_2") continue;
+        ++seen;
+        CHECK(q["bounds"][0][0].get<double>() == 0.05);
+        CHECK(q["bounds"][0][1].get<double>() == (q["name"] == "r_1" ? 1.0 : 1.5));
+    }
+    CHECK(seen == 2);
+    std::string many;
+    for (int k = 0; k < 1400; ++k) many += fmt::format("{}[{}, 0, 0]", k ? ", " : "", k);
+    Compiled huge = compile_text("seq_huge.iq", pair("x = [" + many + "]"));
+    CHECK(huge.result.exit_code == 1);
+    CHECK_THAT(huge.diagnostics, Catch::Contains("seq_huge.iq:12:18: error: 'x' would have 1400 elements (4200 components): "
+                                                   "iqc allows at most 4096 components in a sequence"));
+    CHECK(count_of(huge.diagnostics, "error:") == 1);
 }
 
 TEST_CASE("a blend's shape does not depend on its members' Lipschitz factors", "[scene]") {

@@ -371,17 +371,44 @@ struct Planner {
 
     // The module checked for the sequence lengths an instance's overrides give (x = 3 points where the module's
     // default has 2): a variant of its own (ModuleLibrary::variant), else the module itself.
+    // Null where the lengths cannot be: two sequences of one index given different lengths, or one past iqc's size
+    // limit (an error at the override: a trial's were located in the module and said the default's length was the
+    // only one allowed).
     const CheckedModule* sized(const CheckedModule* m, const std::string& name, const std::vector<ParamOverride>& ovs) {
         std::map<std::string, int> lengths;
+        std::map<std::string, const ParamOverride*> given;
         for (const auto& ov : ovs) {
             const int pi = m->find_param(ov.name);
             if (pi < 0) continue;
             const Type& t = m->params[size_t(pi)].type;
             const int n = std::max(1, t.is_array() ? t.element().components() : 1);
-            if (t.is_array() && !ov.value.empty() && int(ov.value.size()) != t.components() && int(ov.value.size()) % n == 0)
+            if (t.is_array() && !ov.value.empty() && int(ov.value.size()) != t.components() && int(ov.value.size()) % n == 0) {
+                if (ov.value.size() > size_t(limits::kMaxComponents)) {
+                    d.error(ov.span, fmt::format("'{}' would have {} elements ({} components): iqc allows at most {} components in "
+                                                 "a sequence", ov.name, ov.value.size() / size_t(n), ov.value.size(), limits::kMaxComponents));
+                    return nullptr;
+                }
                 lengths[m->params[size_t(pi)].name] = int(ov.value.size()) / n;
+                given[m->params[size_t(pi)].name] = &ov;
+            }
         }
         if (lengths.empty()) return m;
+        // Sequences indexed by one letter have one length: each overridden one against the others (given or default).
+        for (const auto& [seq, n] : lengths) {
+            const ParamInfo& p = m->params[size_t(m->find_param(seq))];
+            for (const ParamInfo& q : m->params) {
+                if (q.name == seq || q.seq_index.empty() || q.seq_index != p.seq_index || !q.type.is_array()) continue;
+                auto other = lengths.find(q.name);
+                const int nq = other != lengths.end() ? other->second : q.type.count;
+                if (nq == n) continue;
+                const std::string fix = other != lengths.end() ? "give both one length"
+                                                               : fmt::format("give '{}' {} element{} too", q.name, n, n == 1 ? "" : "s");
+                d.error(given[seq]->span, fmt::format("'{}' has {} element{} here, but '{}' has {}{}: sequences indexed by {} have one "
+                                                      "length; {}", seq, n, n == 1 ? "" : "s", q.name, nq,
+                                                      other != lengths.end() ? " here" : " (its default)", p.seq_index, fix));
+                return nullptr;
+            }
+        }
         const CheckedModule* v = lib.variant(name, lengths);
         return v && v->ok ? v : m;  // (a variant that fails to check has said why; the override's error follows)
     }
@@ -391,6 +418,7 @@ struct Planner {
         plan.shape = module(inst.type, inst.type_span, ast::ModuleKind::Shape);
         if (!plan.shape) return false;
         plan.shape = sized(plan.shape, inst.type, inst.shape_params);
+        if (!plan.shape) return false;
         plan.query = plan.shape->roles.empty() ? -1 : plan.shape->roles[0];
         if (plan.query < 0) return false;  // the checker reported it
         bool ok = true;
@@ -400,6 +428,7 @@ struct Planner {
             plan.material = module(inst.material, inst.material_span, ast::ModuleKind::Material);
             if (!plan.material) return false;
             plan.material = sized(plan.material, inst.material, inst.material_params);
+            if (!plan.material) return false;
             for (auto& p : plan.material->params) plan.material_values.push_back(p.value);
             // The footprint w_P (ℝ³) is the renderer's, like p, N̂ and I; under another type it is an ordinary
             // parameter, which a writer of w_P most likely did not mean: a warning.

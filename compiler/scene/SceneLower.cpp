@@ -30,11 +30,27 @@ using ir::ValueId;
 namespace {
 
 std::string param_comment(const ParamInfo& p) {
-    std::string s = fmt::format("{} ∈ ", p.name);
+    // A sequence's bounds are per element (x_i ∈ [-1, 1]×[-1, 1]×[-1, 1], not its 3·n intervals in a row): one
+    // element's where all are alike, else each component's hull over the elements.
+    const size_t n = p.type.is_array() ? size_t(std::max(1, p.type.element().components())) : p.lo.size();
+    const bool sequence = p.type.is_array() && !p.seq_index.empty() && n > 0 && p.lo.size() % n == 0 && p.hi.size() == p.lo.size();
+    std::string s = fmt::format("{}{} ∈ ", p.name, sequence ? "_" + p.seq_index : "");
     if (p.bounded) {
+        std::vector<double> lo = p.lo, hi = p.hi;
+        bool alike = true;
+        if (sequence) {
+            lo.assign(p.lo.begin(), p.lo.begin() + long(n));
+            hi.assign(p.hi.begin(), p.hi.begin() + long(n));
+            for (size_t i = n; i < p.lo.size(); ++i) {
+                alike = alike && p.lo[i] == lo[i % n] && p.hi[i] == hi[i % n];
+                lo[i % n] = std::min(lo[i % n], p.lo[i]);
+                hi[i % n] = std::max(hi[i % n], p.hi[i]);
+            }
+        }
         std::vector<std::string> iv;
-        for (size_t i = 0; i < p.lo.size(); ++i) iv.push_back(fmt::format("[{}, {}]", p.lo[i], p.hi[i]));
+        for (size_t i = 0; i < lo.size(); ++i) iv.push_back(fmt::format("[{}, {}]", lo[i], hi[i]));
         s += fmt::format("{}", fmt::join(iv, "×"));
+        if (!alike) s += " (the elements' hull)";
     } else {
         s += p.type.str();
     }
@@ -924,8 +940,18 @@ private:
             g.value.insert(g.value.end(), v.begin(), v.end());
         g.bounds.input = false;
         if (pi.bounded) {
+            // Widened to hold each member's value: an override outside the module's bounds (warned) is the slider's
+            // start, which the analyses (ranges, Lipschitz bounds) must cover and an HTML slider must be able to show
+            // (a trial's r = 0.9 over [0.05, 0.5]: the page's slider stopped at 0.5, --meta said bounds [0.05, 0.5]).
             g.bounds.lo = pi.lo;
             g.bounds.hi = pi.hi;
+            const size_t n = g.bounds.lo.size();
+            for (const auto& v : values)
+                for (size_t c = 0; c < v.size() && n > 0 && g.bounds.hi.size() == n; ++c) {
+                    if (!std::isfinite(v[c])) continue;
+                    g.bounds.lo[c % n] = std::min(g.bounds.lo[c % n], v[c]);
+                    g.bounds.hi[c % n] = std::max(g.bounds.hi[c % n], v[c]);
+                }
         }
         g.comment = param_comment(pi);
         g.owner = owner_;
