@@ -650,6 +650,23 @@ TEST_CASE("a log-sum-exp of distances is bounded by its distances' bounds", "[nu
             if (t == Target::WebGL2) CHECK(derived_bound(ratio, "lse") >= 32 - 1e-6);
             else CHECK(derived_bound(ratio, "lse") <= 1 + 1e-6);  // (k = m = 8 where parameters are constants)
         }
+    // Two terms (the stable form max(x, y) + log(1 + e^(-|x - y|))): a convex combination of the two gradients too; two
+    // nested smooth minima derived K ≤ 3 and one steeper term 3 where they are 1 and 2 (a trial's, stop 52).
+    const std::string nested = "shape\nD = -log(exp(-k a) + exp(-k b))/k\na = -log(∑_i exp(-k‖p - x_i‖))/k - 0.3\n"
+                               "b = -log(∑_i exp(-k‖p - x_i - (0, 1, 0)‖))/k - 0.2\nwhere\np ∈ ℝ³\n"
+                               "x_i ∈ ℝ³ default = {(0.6, 0, 0), (-0.6, 0, 0), (0, 0.6, 0), (0, -0.4, 0.3)}\nk ∈ [1, 32] default = 8\n";
+    for (Target t : {Target::Shadertoy, Target::WebGL2}) {
+        CompileOptions so;
+        so.target = t;
+        Compiled two = compile_path(write_temp("lse.iql", nested), so);
+        REQUIRE(two.result.exit_code == 0);
+        CHECK(derived_bound(two, "lse") <= 1 + 1e-6);
+        Compiled uneven = compile_path(write_temp("lse.iql", "shape\nD = -log(exp(-8‖p - (-1, 0, 0)‖) + exp(-16‖p - (1, 0, 0)‖))/8 - 0.4\n"
+                                                             "where\np ∈ ℝ³\n"), so);
+        REQUIRE(uneven.result.exit_code == 0);
+        CHECK(derived_bound(uneven, "lse") >= 2 - 1e-9);
+        CHECK(derived_bound(uneven, "lse") <= 2 + 1e-6);
+    }
     // One steeper term (weight 16 where the others are 8: slope 2 within ~0.27 of its centre) in a region of ±105: the
     // derived 2 is right, but every uniform sample and every walk from afar (they end on the flatter blobs) saw 1, and
     // "within 2, samples within 1" marched it at 1 (8 pixels stepped through; a trial's, stop 52). Samples near the
