@@ -707,6 +707,31 @@ TEST_CASE("a log-sum-exp of distances is bounded by its distances' bounds", "[nu
     CHECK(derived_bound(loose, "wmean_free") > 2);
 }
 
+TEST_CASE("samples reach a steep part the far field hides, and a slider's ends", "[numerics]") {
+    // "Within 2, every sample within 1" marches a shape at 1 (an exact shape whose interval bound is loose: the bench's
+    // boxes and tori). A trial (stop 52) found shapes whose slope 2 every sample missed, so that 1 was applied and the
+    // picture had holes: a ball twice as steep beside a unit ball (walks from afar all end on the unit ball: it is
+    // nearer in distance there), a sharper point 4 units from a cluster, and a slope 1/(2k) that is 2 only at a
+    // slider's low end (webgl2: the sliders are uniforms; random settings never met it). Samples near the shape at two
+    // scales and at the sliders' ends find 2: the derived 2 is applied.
+    auto applied_two = [](const std::string& name, const std::string& module, Target t) {
+        CompileOptions o;
+        o.target = t;
+        Compiled c = compile_path(write_temp(name + ".iql", module), o);
+        REQUIRE(c.result.exit_code == 0);
+        REQUIRE(c.result.lipschitz.size() == 1);
+        INFO(c.result.lipschitz[0]);
+        CHECK_THAT(c.result.lipschitz[0], Catch::Contains(", 2 applied (derived)"));
+    };
+    for (Target t : {Target::Shadertoy, Target::WebGL2}) {
+        applied_two("minscaled", "shape\nD = min(‖p‖ - 1, 2‖p - (3, 0, 0)‖ - 1.6)\nwhere\np ∈ ℝ³\n", t);
+        applied_two("farsteep", "shape\nD = -ln(∑_i exp(-c_i‖p - x_i‖))/8 - 0.3\nwhere\np ∈ ℝ³\n"
+                                "x_i ∈ ℝ³ default = {(0.5, 0, 0), (-0.5, 0, 0), (0, 0.5, 0), (0, -0.5, 0), (4, 0, 0)}\n"
+                                "c_i ∈ [8, 16] default = {8, 8, 8, 8, 16}\n", t);
+    }
+    applied_two("lowend", "shape\nD = ‖p‖/(2k) - 0.5\nwhere\np ∈ ℝ³\nk ∈ [0.25, 2] default = 1\n", Target::WebGL2);
+}
+
 TEST_CASE("a bound too small for its shape gets a located warning", "[numerics]") {
     // Found by a new-user trial: `bound = 0.6` on tori of outer radius 1.2 was accepted silently and clipped
     // them (999 of 14,400 pixels). The sphere itself may miss the shape (it sits in the torus's hole), so the

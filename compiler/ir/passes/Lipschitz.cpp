@@ -140,9 +140,11 @@ bool meets_ball(const std::vector<Interval>& box, double ball) {
 // point of the worst box, off its centre: a point's bound is no more than any box's around it, so once the
 // worst box is down to the largest point bound seen, no split can lower the result and the search stops (a
 // warp's rotation, whose Jacobian bound is 1 at every point, took 2,048 boxes to confirm it).
+// `witness`, when given, receives the largest gradient norm known exactly at one of those points (every value there a
+// point, as where the other parameters are constants): a true gradient, as a sample's, but where the bound is largest.
 double derive(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
               double ball, int budget, bool jacobian = false, SplitBudget* split = nullptr,
-              std::vector<std::vector<Interval>>* worst_boxes = nullptr) {
+              std::vector<std::vector<Interval>>* worst_boxes = nullptr, double* witness = nullptr) {
     std::priority_queue<Box> q;
     BoxScratch scratch;
     q.push({region, box_bound(scratch, m, grad, region, others, jacobian, split)});
@@ -157,6 +159,12 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
             for (Interval& c : mid) c.lo = c.hi = c.lo + 0.4617 * (c.hi - c.lo);
             double here = box_bound(scratch, m, grad, mid, others, jacobian);
             if (std::isfinite(here)) seen = std::max(seen, here);  // (not counted: the budget's boxes stay)
+            if (witness && !jacobian && std::isfinite(here)) {
+                const Bounds& g = scratch.values[m.functions[size_t(grad)].result];
+                bool exact = !g.nan && !g.c.empty();
+                for (const Interval& c : g.c) exact = exact && c.hi - c.lo <= 1e-9 * (1 + std::fabs(c.lo));
+                if (exact) *witness = std::max(*witness, g.norm_from_components());
+            }
             if (worst.bound <= seen) break;
         }
         q.pop();
@@ -1457,9 +1465,11 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     boxes = std::max(4, int(boxes * scale));
     samples = std::max(16, int(samples * scale));
     std::vector<std::vector<Interval>> worst;
-    e.derived = derive(work, grad, box, others, ball, boxes, false, nullptr, &worst);
+    double witness = 0;  // (exact gradients at the search's points: where the bound is largest)
+    e.derived = derive(work, grad, box, others, ball, boxes, false, nullptr, &worst, &witness);
     int evaluated = 0;
     e.sampled = sample(work, grad, box, others, ball, samples, &evaluated);
+    e.sampled = std::max(e.sampled, witness);
     if (evaluated == 0) {
         // The gradient's IR is beyond the evaluator's step limit at every point (a 15,000-step recurrence): its
         // samples said 0 and the shape was marched with K = 1 where its slope is 3 (a new user's trial). Central
@@ -1503,27 +1513,36 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
         for (const auto& b : worst) e.sampled = std::max(e.sampled, sample(work, grad, b, others, ball, 32));
         std::vector<std::array<double, 3>> ends;
         e.sampled = std::max(e.sampled, sample_towards_surface(work, fn, grad, box, others, ball, 64, &ends));
-        // Uniform samples, and walks, near the shape: over the hull of the walks' ends, a quarter wider each way. A
-        // region of ±105 around four blobs a unit across, one of them twice as steep (an exponential smooth minimum
-        // with one weight 16 where the others are 8: slope 2 within 0.27 of its centre), had every sample within 1:
-        // uniform ones missed it, and every walk from afar ends on the flatter blobs, which are nearer in distance
-        // there; the derived 2 was right and 1 was applied (8 pixels stepped through: a trial's, stop 52).
-        if (ends.size() >= 4) {
-            std::vector<Interval> near(3, Interval{kInf, -kInf});
-            for (const auto& q : ends)
-                for (size_t c = 0; c < 3; ++c) near[c] = iv::hull(near[c], {q[c], q[c]});
-            double volume = 1, whole = 1;
+        // Uniform samples, and walks, near the shape: over the hull of the walks' ends at two scales, a quarter wider
+        // and three times its size each way. A region of ±105 around four blobs a unit across, one of them twice as
+        // steep (an exponential smooth minimum with one weight 16 where the others are 8: slope 2 within 0.27 of its
+        // centre), had every sample within 1: uniform ones missed it, and every walk from afar ends on the flatter
+        // blobs, nearer in distance there (a trial's, stop 52); so did a ball twice as steep 2 units beside a unit
+        // ball, min(‖p‖ − 1, 2‖p − (3, 0, 0)‖ − 1.6), and a sharper point 4 units from a cluster (another's: holes).
+        auto near_samples = [&](const std::vector<std::array<double, 3>>& from, int uniform, int walks) {
+            if (from.size() < 4) return;
+            std::vector<Interval> hull(3, Interval{kInf, -kInf});
+            for (const auto& q : from)
+                for (size_t c = 0; c < 3; ++c) hull[c] = iv::hull(hull[c], {q[c], q[c]});
+            double extent = 0, whole = 1;
             for (size_t c = 0; c < 3; ++c) {
-                const double margin = std::max(0.25 * (near[c].hi - near[c].lo), 0.05);
-                near[c] = {std::max(near[c].lo - margin, box[c].lo), std::min(near[c].hi + margin, box[c].hi)};
-                volume *= near[c].hi - near[c].lo;
+                extent = std::max(extent, hull[c].hi - hull[c].lo);
                 whole *= box[c].hi - box[c].lo;
             }
-            if (volume > 0 && !(volume * 8 > whole)) {
-                e.sampled = std::max(e.sampled, sample(work, grad, near, others, ball, 2 * samples));
-                e.sampled = std::max(e.sampled, sample_towards_surface(work, fn, grad, near, others, ball, 64));
+            for (double scale : {0.25, 3.0}) {
+                std::vector<Interval> near = hull;
+                double volume = 1;
+                for (size_t c = 0; c < 3; ++c) {
+                    const double margin = std::max(scale * extent, 0.05);
+                    near[c] = {std::max(near[c].lo - margin, box[c].lo), std::min(near[c].hi + margin, box[c].hi)};
+                    volume *= near[c].hi - near[c].lo;
+                }
+                if (!(volume > 0) || volume * 8 > whole) break;
+                e.sampled = std::max(e.sampled, sample(work, grad, near, others, ball, uniform));
+                e.sampled = std::max(e.sampled, sample_towards_surface(work, fn, grad, near, others, ball, walks));
             }
-        }
+        };
+        near_samples(ends, samples, 64);
         // Where the sliders are uniforms (WebGL2, GLSL, …) the bound holds over their ranges and so must the
         // samples: at 8 random settings of the sliders the shape reads, besides their defaults (a slope of 1.9
         // at a slider's end, 1 at its default: marched as 1-Lipschitz; a trial's, stop 40).
@@ -1552,17 +1571,26 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
             // every function for a few values)
             std::vector<std::vector<double>> defaults;
             for (size_t gi : sliders) defaults.push_back(work.globals[gi].value);
-            for (int v = 0; v < 8 && !sliders.empty() && size < 200000; ++v) {
-                for (size_t gi : sliders) {
-                    Global& gl = work.globals[gi];
+            // The settings: every slider at its low end, at its high end, each of the first 6 at either end with the
+            // others at their defaults (with samples near the shape, as at the defaults), then 4 at random (a slope
+            // 1/(2k) over k ∈ [0.25, 2] is 2 only at k's low end, which random settings of 23–93% of the range never
+            // met: a trial's, stop 52).
+            const int ends_settings = 2 + 2 * int(std::min<size_t>(sliders.size(), 6));
+            for (int v = 0; v < ends_settings + 4 && !sliders.empty() && size < 200000; ++v) {
+                for (size_t k = 0; k < sliders.size(); ++k) {
+                    Global& gl = work.globals[sliders[k]];
                     const size_t n = gl.bounds.lo.size();
+                    const int end = v == 0 ? 0 : v == 1 ? 1 : v < ends_settings ? ((v - 2) / 2 == int(k) ? (v - 2) % 2 : -1) : 2;
                     for (size_t c = 0; c < gl.value.size() && n > 0 && gl.bounds.hi.size() == n; ++c) {
                         double lo = gl.bounds.lo[c % n], hi = gl.bounds.hi[c % n];
-                        if (std::isfinite(lo) && std::isfinite(hi) && lo <= hi) gl.value[c] = lo + (hi - lo) * settings();
+                        if (!(std::isfinite(lo) && std::isfinite(hi) && lo <= hi)) continue;
+                        gl.value[c] = end == 0 ? lo : end == 1 ? hi : end == 2 ? lo + (hi - lo) * settings() : defaults[k][c];
                     }
                 }
+                std::vector<std::array<double, 3>> moved;
                 e.sampled = std::max(e.sampled, sample(work, grad, box, others, ball, 64));
-                e.sampled = std::max(e.sampled, sample_towards_surface(work, fn, grad, box, others, ball, 16));
+                e.sampled = std::max(e.sampled, sample_towards_surface(work, fn, grad, box, others, ball, 16, &moved));
+                if (v < ends_settings) near_samples(moved, 32, 16);
             }
             for (size_t k = 0; k < sliders.size(); ++k) work.globals[sliders[k]].value = std::move(defaults[k]);
         }
