@@ -245,8 +245,9 @@ struct RandomArguments {
     }
 };
 
+// `steps`, when given, receives the evaluator steps the samples took (EvalInputs::max_steps' unit: their cost).
 double sample(const Module& m, int grad, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
-              double ball, int samples, int* evaluated = nullptr, bool differences = false) {
+              double ball, int samples, int* evaluated = nullptr, bool differences = false, uint64_t* steps = nullptr) {
     // A field that moves (time, the mouse) is sampled at 16 moments over two minutes and mouse positions
     // over the view: its gradient at time 0 alone says nothing of time 40 (sin(time·p) steepens).
     std::vector<std::unique_ptr<Evaluator>> evs;
@@ -301,6 +302,8 @@ double sample(const Module& m, int grad, const std::vector<Interval>& region, co
         n = std::sqrt(n);
         if (std::isfinite(n)) worst = std::max(worst, n);
     }
+    if (steps)
+        for (const auto& ev : evs) *steps += ev->work();
     return worst;
 }
 
@@ -1468,8 +1471,13 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     double witness = 0;  // (exact gradients at the search's points: where the bound is largest)
     e.derived = derive(work, grad, box, others, ball, boxes, false, nullptr, &worst, &witness);
     int evaluated = 0;
-    e.sampled = sample(work, grad, box, others, ball, samples, &evaluated);
+    uint64_t steps = 0;
+    e.sampled = sample(work, grad, box, others, ball, samples, &evaluated, false, &steps);
     e.sampled = std::max(e.sampled, witness);
+    // The samples near the shape and at the sliders' ends take ~2,000 evaluations: fewer where one costs more than
+    // 2·10⁴ evaluator steps (a sum of 3,600 terms costs 10⁵: those samples were 60% of its compile, 4 s).
+    const double per_eval = evaluated > 0 ? double(steps) / evaluated : 1;
+    auto scaled = [&](int n) { return std::max(4, int(n * std::min(1.0, 2e4 / std::max(per_eval, 1.0)))); };
     if (evaluated == 0) {
         // The gradient's IR is beyond the evaluator's step limit at every point (a 15,000-step recurrence): its
         // samples said 0 and the shape was marched with K = 1 where its slope is 3 (a new user's trial). Central
@@ -1542,7 +1550,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
                 e.sampled = std::max(e.sampled, sample_towards_surface(work, fn, grad, near, others, ball, walks));
             }
         };
-        near_samples(ends, samples, 64);
+        near_samples(ends, scaled(samples), scaled(64));
         // Where the sliders are uniforms (WebGL2, GLSL, …) the bound holds over their ranges and so must the
         // samples: at 8 random settings of the sliders the shape reads, besides their defaults (a slope of 1.9
         // at a slider's end, 1 at its default: marched as 1-Lipschitz; a trial's, stop 40).
@@ -1588,9 +1596,9 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
                     }
                 }
                 std::vector<std::array<double, 3>> moved;
-                e.sampled = std::max(e.sampled, sample(work, grad, box, others, ball, 64));
-                e.sampled = std::max(e.sampled, sample_towards_surface(work, fn, grad, box, others, ball, 16, &moved));
-                if (v < ends_settings) near_samples(moved, 32, 16);
+                e.sampled = std::max(e.sampled, sample(work, grad, box, others, ball, v < 2 ? 64 : scaled(64)));
+                e.sampled = std::max(e.sampled, sample_towards_surface(work, fn, grad, box, others, ball, v < 2 ? 16 : scaled(16), &moved));
+                if (v < ends_settings) near_samples(moved, scaled(32), scaled(16));
             }
             for (size_t k = 0; k < sliders.size(); ++k) work.globals[sliders[k]].value = std::move(defaults[k]);
         }
