@@ -650,6 +650,21 @@ TEST_CASE("a log-sum-exp of distances is bounded by its distances' bounds", "[nu
             if (t == Target::WebGL2) CHECK(derived_bound(ratio, "lse") >= 32 - 1e-6);
             else CHECK(derived_bound(ratio, "lse") <= 1 + 1e-6);  // (k = m = 8 where parameters are constants)
         }
+    // The slider through a loop (40 points: a rolled sum on webgl2, a trial's, stop 52): a captured k is a symbol in the
+    // body, mapped back to what it is here (m², 2k, or k itself where only the body divides by it).
+    for (const auto& [form, truth] : std::vector<std::pair<std::string, double>>{
+             {"-log(∑_i exp(-k‖p - x_i‖))/k - 0.1\nk = m²\nwhere\nm ∈ [0.5, 4] default = 2", 1},
+             {"-c log(∑_i exp(-‖p - x_i‖/c)) - 0.1\nwhere\nc ∈ [0.03, 1] default = 0.125", 1},
+             {"-log(∑_i exp(-j‖p - x_i‖))/k - 0.1\nj = 2k\nwhere\nk ∈ [1, 8] default = 2", 2}}) {
+        INFO(form);
+        CompileOptions so;
+        so.target = Target::WebGL2;
+        Compiled looped = compile_path(write_temp("lse.iql", "shape\nD = " + form + "\np ∈ ℝ³\nx_i ∈ ℝ³ default = {" + forty + "}\n"), so);
+        REQUIRE(looped.result.exit_code == 0);
+        INFO(looped.diagnostics);
+        CHECK(derived_bound(looped, "lse") >= truth - 1e-9);
+        CHECK(derived_bound(looped, "lse") <= truth + 1e-6);
+    }
     // Two terms (the stable form max(x, y) + log(1 + e^(-|x - y|))): a convex combination of the two gradients too; two
     // nested smooth minima derived K ≤ 3 and one steeper term 3 where they are 1 and 2 (a trial's, stop 52).
     const std::string nested = "shape\nD = -log(exp(-k a) + exp(-k b))/k\na = -log(∑_i exp(-k‖p - x_i‖))/k - 0.3\n"

@@ -699,8 +699,8 @@ const Bounds& one_bounds() {
 }
 
 // The marks of `f`'s values (IntervalScratch::marks): bit kSummed, an operand of an Add of its type; bit kSymbol, a
-// scalar Param or Global that a Div divides by, itself or through products and negations (2k, -k). One more entry
-// past the values: whether any is a symbol.
+// scalar Param or Global that a Div divides by, itself or through products and negations (2k, -k), or that a loop
+// captures. One more entry past the values: whether any is a symbol.
 std::vector<char> value_marks(const Function& f) {
     std::vector<char> marks(f.body.size(), 0), divided(f.body.size(), 0);
     for (const Instr& u : f.body) {
@@ -708,6 +708,10 @@ std::vector<char> value_marks(const Function& f) {
             for (ValueId a : u.args)
                 if (f.body[a].type == u.type) marks[a] |= kSummed;
         if (u.op == Op::Div && u.args.size() == 2 && f.body[u.args[1]].type.is_scalar()) divided[u.args[1]] = 1;
+        // (a loop's captured scalars: its body may divide by them, and its states' factors name them)
+        if (u.op == Op::Loop)
+            for (size_t a = 1; a < u.args.size(); ++a)
+                if (f.body[u.args[a]].type.is_scalar()) divided[u.args[a]] = 1;
     }
     for (size_t i = f.body.size(); i-- > 0;) {
         if (!divided[i]) continue;
@@ -1405,35 +1409,51 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                     for (size_t j = 0; j < states; ++j) args.push_back(r[in.args[j + 1]].c);
                     for (size_t c = states + 1; c < in.args.size(); ++c) {
                         args.push_back(r[in.args[c]].c);
-                        const FactorView view = factor_view(f, r, marks, in.args[c]);
-                        pass_elements(r[in.args[c]], view.powers == &view.own);
+                        // (a scalar that is no point and leaves out 0: a symbol in the body, whatever it is here — k,
+                        // m² or 2k — and mapped back to this function's factors by caller_factor)
+                        const Bounds& x = r[in.args[c]];
+                        const bool symbol = x.c.size() == 1 && !x.nan && x.c[0].lo < x.c[0].hi && (x.c[0].lo > 0 || x.c[0].hi < 0) &&
+                                            std::isfinite(x.c[0].lo) && std::isfinite(x.c[0].hi) && f.body[in.args[c]].type.is_scalar();
+                        pass_elements(x, symbol);
                     }
                     const std::vector<Bounds>& v = call(in.aux, args);
                     const double n = last - first + 1;
                     // A body value's factor in this function's symbols (the values the loop captures), into out.
-                    auto caller_powers = [&](const Bounds& b, Powers& out) {
+                    // A body value's factor in this function's symbols, into (out, co): each captured symbol is the
+                    // value captured, which may have a factor of its own here (m² for k: m's square times its cofactor).
+                    auto caller_factor = [&](const Bounds& b, Powers& out, Bounds& co) {
                         out.clear();
                         if (!b.factor) return false;
+                        co = b.factor->co;
                         for (const auto& [id, power] : b.factor->powers) {
                             const Instr& pi = body.body[id];
                             if (pi.op != Op::Param || size_t(pi.aux) <= states || size_t(pi.aux) >= in.args.size()) return false;
-                            out.push_back({in.args[size_t(pi.aux)], power});
+                            const ValueId x = in.args[size_t(pi.aux)];
+                            const FactorView view = factor_view(f, r, marks, x);
+                            Powers own = {{x, 1}};
+                            const Powers& px = view.get().empty() || view.powers == &view.own ? own : view.get();
+                            const Interval cx = view.get().empty() || view.powers == &view.own ? Interval{1, 1} : comp(*view.co, 0);
+                            for (int q = 0; q < std::abs(power); ++q) {
+                                Powers next;
+                                if (!combine(out, px, power > 0 ? 1 : -1, next)) return false;
+                                out = std::move(next);
+                                for (Interval& c : co.c) c = power > 0 ? mul(c, cx) : div(c, cx);
+                                co.norm = power > 0 ? co.norm * magnitude(cx)
+                                                    : (contains_zero(cx) ? kInf : co.norm / std::min(std::fabs(cx.lo), std::fabs(cx.hi)));
+                            }
                         }
-                        std::sort(out.begin(), out.end());
-                        for (size_t q = 1; q < out.size(); ++q)
-                            if (out[q].first == out[q - 1].first) return false;  // (one value captured twice: rare)
-                        return !out.empty();
+                        return true;
                     };
                     // A state's factor: its first value's (or 0) and the term's, with the term's powers; the cofactor
                     // init + n·t (an accumulation) or the hull of both (a choice).
                     auto state_factor = [&](Bounds& sj, const Bounds& init, const Bounds& t, bool chosen) {
                         Powers p;
-                        if (!caller_powers(t, p)) return;
+                        Bounds co;
+                        if (!caller_factor(t, p, co)) return;
                         const Bounds* init_co = init.factor && init.factor->powers == p ? &init.factor->co : nullptr;
                         bool zero = !init.c.empty();
                         for (const Interval& c : init.c) zero = zero && c.lo == 0 && c.hi == 0;
                         if (!init_co && !zero) return;
-                        Bounds co = t.factor->co;
                         for (size_t q = 0; q < co.c.size(); ++q) {
                             const Interval i0 = init_co ? comp(*init_co, q) : Interval{0, 0};
                             co.c[q] = chosen ? hull(i0, co.c[q]) : Interval{i0.lo + n * co.c[q].lo, i0.hi + n * co.c[q].hi};
@@ -1447,7 +1467,10 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                     // A LoopConvex part's factor, in this function's symbols.
                     auto part_factor = [&](Bounds& b) {
                         Powers p;
-                        b.factor = caller_powers(b, p) ? new_factor(scratch, std::move(p), b.factor->co) : nullptr;
+                        Bounds co;
+                        if (!caller_factor(b, p, co)) b.factor = nullptr;
+                        else if (p.empty()) b.factor = nullptr;  // (cancelled: the intervals stand)
+                        else b.factor = new_factor(scratch, std::move(p), std::move(co));
                     };
                     nan = false;
                     for (size_t c = 1; c < in.args.size(); ++c) nan |= r[in.args[c]].nan;
