@@ -687,6 +687,11 @@ constexpr char kSummed = 1, kSymbol = 2;  // IntervalScratch::marks
 constexpr size_t kMaxSymbols = 4;
 using Powers = std::vector<std::pair<ValueId, int>>;
 
+// Whether bounds are exactly 0 (every component: a loop state's first value, say).
+bool is_zero(const Bounds& b) {
+    return !b.c.empty() && std::all_of(b.c.begin(), b.c.end(), [](Interval c) { return c.lo == 0 && c.hi == 0; });
+}
+
 // The bounds of 1: a symbol s is s¹ · 1.
 const Bounds& one_bounds() {
     static const Bounds one = [] {
@@ -1451,9 +1456,7 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                         Bounds co;
                         if (!caller_factor(t, p, co)) return;
                         const Bounds* init_co = init.factor && init.factor->powers == p ? &init.factor->co : nullptr;
-                        bool zero = !init.c.empty();
-                        for (const Interval& c : init.c) zero = zero && c.lo == 0 && c.hi == 0;
-                        if (!init_co && !zero) return;
+                        if (!init_co && !is_zero(init)) return;
                         for (size_t q = 0; q < co.c.size(); ++q) {
                             const Interval i0 = init_co ? comp(*init_co, q) : Interval{0, 0};
                             co.c[q] = chosen ? hull(i0, co.c[q]) : Interval{i0.lo + n * co.c[q].lo, i0.hi + n * co.c[q].hi};
@@ -1509,9 +1512,7 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                         if (selected[j]) continue;
                         const Instr& tj = body.body[term[j]];
                         const Bounds& init_j = r[in.args[j + 1]];
-                        bool zero = !init_j.c.empty();
-                        for (const Interval& c : init_j.c) zero = zero && c.lo == 0 && c.hi == 0;
-                        if (tj.op != Op::Mul || tj.args.size() != 2 || !zero) continue;
+                        if (tj.op != Op::Mul || tj.args.size() != 2 || !is_zero(init_j)) continue;
                         for (size_t k = 0; k < states; ++k) {
                             if (k == j || selected[k]) continue;
                             const ValueId a = term[k];
