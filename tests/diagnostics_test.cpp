@@ -58,6 +58,10 @@ TEST_CASE("did-you-mean and missing imports", "[diag]") {
     CHECK_THAT(errors_of("y = sin(1)\n"), Catch::Contains("test.iql:1:5: error: 'sin' needs an import: add 'sin from trigonometry'"));
     CHECK_THAT(errors_of("sinus from trigonometry\ny = 1\n"),
                Catch::Contains("test.iql:1:1: error: module 'trigonometry' has no function 'sinus'"));
+    // A built-in name imported: said so (a trial wrote `e, ln from trigonometry`).
+    const std::string ln = errors_of("e, ln from trigonometry\ny = ln(e)\n");
+    CHECK_THAT(ln, Catch::Contains("test.iql:1:4: error: module 'trigonometry' has no function 'ln'"));
+    CHECK_THAT(ln, Catch::Contains("test.iql:1:4: note: 'ln' is built in: use it without an import"));
 }
 
 TEST_CASE("syntax errors are located and recovery reports several per run", "[diag]") {

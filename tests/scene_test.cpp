@@ -694,6 +694,11 @@ TEST_CASE("a sequence parameter's override takes its elements as rows, of the mo
     CHECK_THAT(both.diagnostics, Catch::Contains("seq_pair.iq:12:46: error: 'r' has 1 element here, but 'x' has 2 here: "
                                                  "sequences indexed by i have one length; give both one length"));
     CHECK(count_of(both.diagnostics, "error:") == 1);
+    // (r set to its default's length: set here all the same)
+    Compiled kept = compile_text("seq_pair.iq", pair("x = [[0, 0, 0], [1, 0, 0]], r = [0.3, 0.2, 0.25]"));
+    CHECK(kept.result.exit_code == 1);
+    CHECK_THAT(kept.diagnostics, Catch::Contains("'x' has 2 elements here, but 'r' has 3 here: sequences indexed by i have one "
+                                                 "length; give both one length"));
     Compiled fine = compile_text("seq_pair.iq", pair("x = [[0, 0, 0], [1, 0, 0]], r = [0.3, 0.4]"));
     CHECK(fine.result.exit_code == 0);
     // (its bounds in the shader's comment: one element's, not 2 × 1 intervals in a row)

@@ -377,10 +377,12 @@ struct Planner {
     const CheckedModule* sized(const CheckedModule* m, const std::string& name, const std::vector<ParamOverride>& ovs) {
         std::map<std::string, int> lengths;
         std::map<std::string, const ParamOverride*> given;
+        std::set<std::string> overridden;  // (every sequence the instance sets, of the module's length or another)
         for (const auto& ov : ovs) {
             const int pi = m->find_param(ov.name);
             if (pi < 0) continue;
             const Type& t = m->params[size_t(pi)].type;
+            if (t.is_array()) overridden.insert(m->params[size_t(pi)].name);
             const int n = std::max(1, t.is_array() ? t.element().components() : 1);
             if (t.is_array() && !ov.value.empty() && int(ov.value.size()) != t.components() && int(ov.value.size()) % n == 0) {
                 if (ov.value.size() > size_t(limits::kMaxComponents)) {
@@ -401,11 +403,12 @@ struct Planner {
                 auto other = lengths.find(q.name);
                 const int nq = other != lengths.end() ? other->second : q.type.count;
                 if (nq == n) continue;
-                const std::string fix = other != lengths.end() ? "give both one length"
-                                                               : fmt::format("give '{}' {} element{} too", q.name, n, n == 1 ? "" : "s");
+                const bool set_here = overridden.count(q.name) > 0;
+                const std::string fix = set_here ? "give both one length"
+                                                 : fmt::format("give '{}' {} element{} too", q.name, n, n == 1 ? "" : "s");
                 d.error(given[seq]->span, fmt::format("'{}' has {} element{} here, but '{}' has {}{}: sequences indexed by {} have one "
                                                       "length; {}", seq, n, n == 1 ? "" : "s", q.name, nq,
-                                                      other != lengths.end() ? " here" : " (its default)", p.seq_index, fix));
+                                                      set_here ? " here" : " (its default)", p.seq_index, fix));
                 return nullptr;
             }
         }

@@ -613,7 +613,10 @@ void Checker::collect_imports() {
             if (!b || module != builtin(*b).module) {
                 std::vector<std::string> cands = builtin_module_names(module);
                 auto& e = d_.error(span, fmt::format("module '{}' has no function '{}'", module, name));
-                if (auto s = did_you_mean(name, cands)) Diagnostics::note(e, span, fmt::format("did you mean '{}'?", *s));
+                // (a name every module has without an import: `e, ln from trigonometry` after e's own error, a trial's)
+                if (b && std::string_view(builtin(*b).module).empty())
+                    Diagnostics::note(e, span, fmt::format("'{}' is built in: use it without an import", name));
+                else if (auto s = did_you_mean(name, cands)) Diagnostics::note(e, span, fmt::format("did you mean '{}'?", *s));
                 return;
             }
             im.builtin = *b;
