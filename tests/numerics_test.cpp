@@ -665,6 +665,28 @@ TEST_CASE("a log-sum-exp of distances is bounded by its distances' bounds", "[nu
         CHECK(derived_bound(looped, "lse") >= truth - 1e-9);
         CHECK(derived_bound(looped, "lse") <= truth + 1e-6);
     }
+    // Quilez's exact form in base 2, -k log₂(2^(-a/k) + 2^(-b/k)) (a trial's, stop 52: not stabilised, nothing drawn from
+    // 14 units, and log₂ had no derivative, so no bound): in base e and stabilised, K ≤ 1; log₂ of a sum of e^x is
+    // 1/ln 2 times the log-sum-exp (its gradient 1.443, the truth).
+    for (Target t : {Target::Shadertoy, Target::WebGL2}) {
+        CompileOptions so;
+        so.target = t;
+        Compiled two = compile_path(write_temp("lse.iql", "shape\nD = -k log_2(2^(-a/k) + 2^(-b/k))\na = ‖p - (0.5, 0, 0)‖ - 0.4\n"
+                                                          "b = ‖p + (0.5, 0, 0)‖ - 0.4\nwhere\np ∈ ℝ³\nk ∈ [0.01, 1] default = 0.05\n"), so);
+        REQUIRE(two.result.exit_code == 0);
+        INFO(two.diagnostics);
+        CHECK(derived_bound(two, "lse") <= 1 + 1e-6);
+        CHECK_THAT(two.result.code, Catch::Contains("max(") && !Catch::Contains("log2("));
+        Compiled base2 = compile_path(write_temp("lse.iql", "shape\nD = -log_2(∑_i exp(-8‖p - x_i‖))/8 - 0.3\nwhere\np ∈ ℝ³\n"
+                                                            "x_i ∈ ℝ³ default = {(0.5, 0, 0), (-0.5, 0, 0), (0, 0.5, 0)}\n"), so);
+        REQUIRE(base2.result.exit_code == 0);
+        CHECK(derived_bound(base2, "lse") >= 1 / std::log(2.0) - 1e-3);  // (printed to 4 digits)
+        CHECK(derived_bound(base2, "lse") <= 1 / std::log(2.0) + 1e-3);
+    }
+    auto far2 = run_iqc("eval " + write_temp("far2.iql", "shape\nD = -k log_2(2^(-a/k) + 2^(-b/k))\na = ‖p - (0.5, 0, 0)‖ - 0.4\n"
+                                                          "b = ‖p + (0.5, 0, 0)‖ - 0.4\nwhere\np ∈ ℝ³\nk ∈ [0.01, 1] default = 0.05\n")
+                                       .string() + " --set 'p=(0,0,-14)'");
+    CHECK_THAT(far2.out, Catch::Contains("D = 13.5"));  // √(14² + 0.5²) − 0.4 − 0.05
     // Two terms (the stable form max(x, y) + log(1 + e^(-|x - y|))): a convex combination of the two gradients too; two
     // nested smooth minima derived K ≤ 3 and one steeper term 3 where they are 1 and 2 (a trial's, stop 52).
     const std::string nested = "shape\nD = -log(exp(-k a) + exp(-k b))/k\na = -log(∑_i exp(-k‖p - x_i‖))/k - 0.3\n"

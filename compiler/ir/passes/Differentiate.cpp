@@ -266,6 +266,9 @@ struct Differentiator {
                 if (n == "tanh") return chain(op2(Op::Sub, one(), sq(r)), x, T(0));
                 if (n == "exp") return chain(r, x, T(0));
                 if (n == "log" || n == "ln") return chain(recip(x), x, T(0));
+                // log₂ x = ln x / ln 2, log₁₀ x = ln x / ln 10
+                if (n == "log_2" || n == "log_10")
+                    return chain(op2(Op::Mul, scalar(1 / std::log(n == "log_2" ? 2.0 : 10.0)), recip(x)), x, T(0));
                 if (n == "sqrt") {
                     // 1 / (2√x), guarded at 0 (the derivative's limit is infinite; a huge finite slope keeps
                     // the normal's direction)

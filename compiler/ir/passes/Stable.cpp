@@ -23,6 +23,24 @@ bool is_scalar_const(const Instr& in, double v) {
     return in.op == Op::Const && in.type.is_scalar() && in.data.size() == 1 && in.data[0] == v;
 }
 
+// A logarithm's factor against the natural one: log, ln 1; log_2 1/ln 2; log_10 1/ln 10 (0: no logarithm).
+// Quilez's exact exponential smooth minimum is written -k log₂(2^(-a/k) + 2^(-b/k)) (a trial's: not stabilised,
+// nothing drawn from 14 units out).
+double log_factor(const Instr& in) {
+    if (!in.type.is_scalar()) return 0;
+    if (is_builtin(in, "log") || is_builtin(in, "ln")) return 1;
+    if (is_builtin(in, "log_2")) return 1 / std::log(2.0);
+    if (is_builtin(in, "log_10")) return 1 / std::log(10.0);
+    return 0;
+}
+
+// Whether `t` is an exponential: e^x, or c^x for a constant c > 0 (e^(x ln c)).
+bool exponential(const std::vector<Instr>& body, const Instr& t) {
+    if (is_builtin(t, "exp")) return true;
+    return is_builtin(t, "pow") && t.type.is_scalar() && t.args.size() == 2 && body[t.args[0]].op == Op::Const &&
+           body[t.args[0]].data.size() == 1 && body[t.args[0]].data[0] > 0 && body[t.args[0]].data[0] != 1;
+}
+
 // The leaves of the tree of scalar Adds under `v` (v itself when it is no Add); false past kMaxTerms. A tree
 // of at most kMaxTerms leaves is at most kMaxTerms deep, so a longer chain (an unrolled ∑ of a million terms)
 // stops there instead of recursing a million levels.
@@ -144,36 +162,50 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
                 ValueId sum = b.builtin("max", {f.add(ms), b.scalar(1)});
                 made = b.op(Op::Add, {hi, b.builtin("log", {sum})});
                 what = "log-sum-exp";
-            } else if (in.type.is_scalar() && (is_builtin(in, "log") || is_builtin(in, "ln"))) {
-                // log-sum-exp: every term of the argument's sum is e^(something).
+            } else if (log_factor(in) != 0) {
+                // log-sum-exp: every term of the argument's sum is e^(something) (or c^(something): in base e, and the
+                // result times log_factor for log₂ and log₁₀).
+                const double base = log_factor(in);
+                // The exponent of an exponential term in base e (built where it is c^y: y ln c).
+                auto exponent = [&](const Instr& t) {
+                    if (is_builtin(t, "exp")) return map[t.args[0]];
+                    return b.op(Op::Mul, {map[t.args[1]], b.scalar(std::log(old[t.args[0]].data[0]))});
+                };
+                auto in_base = [&](ValueId v) { return base == 1 ? v : b.op(Op::Mul, {v, b.scalar(base)}); };
                 std::vector<ValueId> terms;
                 // Weighted terms w·e^x (soft blobs: -ln(∑_i w_i e^(-k d_i))/k was +∞ at every pixel 12 units out, a trial's):
                 // m + log(∑_i w_i e^(x_i − m)), exact for any weights (no floor of 1 on the sum: a weight may be below 1).
                 // One term: log(e^x) = x, log(w e^x) = x + log w (a sequence of one point, stop 52).
                 std::vector<ValueId> ws, xs_w;
                 bool weighted = sum_terms(old, in.args[0], terms) && !terms.empty();
+                for (ValueId t : terms) {  // (the form first: nothing is built where it is not one)
+                    const Instr& ti = old[t];
+                    weighted = weighted && (exponential(old, ti) || (ti.op == Op::Mul && ti.type.is_scalar() && ti.args.size() == 2 &&
+                                                                     (exponential(old, old[ti.args[0]]) || exponential(old, old[ti.args[1]]))));
+                }
                 for (ValueId t : terms) {
                     if (!weighted) break;
                     const Instr& ti = old[t];
-                    if (is_builtin(ti, "exp")) {
+                    if (exponential(old, ti)) {
                         ws.push_back(ValueId(-1));
-                        xs_w.push_back(map[ti.args[0]]);
-                    } else if (ti.op == Op::Mul && ti.type.is_scalar() && ti.args.size() == 2 &&
-                               (is_builtin(old[ti.args[0]], "exp") || is_builtin(old[ti.args[1]], "exp"))) {
-                        const int e = is_builtin(old[ti.args[0]], "exp") ? 0 : 1;
-                        ws.push_back(map[ti.args[size_t(1 - e)]]);
-                        xs_w.push_back(map[old[ti.args[size_t(e)]].args[0]]);
+                        xs_w.push_back(ValueId(-1));
                     } else {
-                        weighted = false;
+                        const int e = exponential(old, old[ti.args[0]]) ? 0 : 1;
+                        ws.push_back(map[ti.args[size_t(1 - e)]]);
+                        xs_w.push_back(ValueId(-1));
                     }
                 }
                 bool any_weight = false;
                 for (ValueId w : ws) any_weight = any_weight || w != ValueId(-1);
                 if (weighted && (any_weight || terms.size() == 1)) {
+                    for (size_t k = 0; k < terms.size(); ++k) {
+                        const Instr& ti = old[terms[k]];
+                        xs_w[k] = exponent(exponential(old, ti) ? ti : old[ti.args[exponential(old, old[ti.args[0]]) ? 0 : 1]]);
+                    }
                     ValueId hi = xs_w[0];
                     for (size_t k = 1; k < xs_w.size(); ++k) hi = b.builtin("max", {hi, xs_w[k]});
                     if (terms.size() == 1) {
-                        made = ws[0] == ValueId(-1) ? hi : b.op(Op::Add, {hi, b.builtin("log", {ws[0]})});
+                        made = in_base(ws[0] == ValueId(-1) ? hi : b.op(Op::Add, {hi, b.builtin("log", {ws[0]})}));
                     } else {
                         ValueId sum = ValueId(-1);
                         for (size_t k = 0; k < xs_w.size(); ++k) {
@@ -181,15 +213,15 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
                             if (ws[k] != ValueId(-1)) e = b.op(Op::Mul, {ws[k], e});
                             sum = sum == ValueId(-1) ? e : b.op(Op::Add, {sum, e});
                         }
-                        made = b.op(Op::Add, {hi, b.builtin("log", {sum})});
+                        made = in_base(b.op(Op::Add, {hi, b.builtin("log", {sum})}));
                     }
                     what = "log-sum-exp";
                 } else if (terms.size() >= 2 && !any_weight && weighted) {
                     bool all_exp = true;
-                    for (ValueId t : terms) all_exp &= is_builtin(old[t], "exp");
+                    for (ValueId t : terms) all_exp &= exponential(old, old[t]);
                     if (all_exp) {
                         std::vector<ValueId> xs;
-                        for (ValueId t : terms) xs.push_back(map[old[t].args[0]]);
+                        for (ValueId t : terms) xs.push_back(exponent(old[t]));
                         ValueId hi = xs[0];
                         for (size_t k = 1; k < xs.size(); ++k) hi = b.builtin("max", {hi, xs[k]});
                         ValueId sum = 0;
@@ -206,7 +238,7 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
                             // One term is e^0 = 1: the sum is at least 1, which intervals learn from the max.
                             sum = b.builtin("max", {sum, b.scalar(1)});
                         }
-                        made = b.op(Op::Add, {hi, b.builtin("log", {sum})});
+                        made = in_base(b.op(Op::Add, {hi, b.builtin("log", {sum})}));
                         what = "log-sum-exp";
                     }
                 }
