@@ -733,13 +733,14 @@ std::vector<char> value_marks(const Function& f) {
 // What an operand brings to a product or a sum: its factor's powers and cofactor; or, a symbol, s¹ · 1; or itself
 // (no powers). `zero`: a constant 0, which is any monomial times 0.
 struct FactorView {
-    const Powers* powers = nullptr;  // null: none
-    Powers own;                      // a symbol's s¹
+    const Powers* powers = nullptr;  // a factor's (null: none, or a symbol's own)
+    Powers own;                      // a symbol's s¹ (where `symbol`: no pointer to it, the view is copied)
+    bool symbol = false;
     const Bounds* co = nullptr;
     bool zero = false;
     const Powers& get() const {
         static const Powers none;
-        return powers ? *powers : none;
+        return symbol ? own : powers ? *powers : none;
     }
 };
 
@@ -755,7 +756,7 @@ FactorView factor_view(const Function& f, const std::vector<Bounds>& r, const st
     if ((marks[v] & kSymbol) && b.c.size() == 1 && !b.nan && b.c[0].lo < b.c[0].hi && (b.c[0].lo > 0 || b.c[0].hi < 0) &&
         std::isfinite(b.c[0].lo) && std::isfinite(b.c[0].hi)) {
         view.own = {{v, 1}};
-        view.powers = &view.own;
+        view.symbol = true;
         view.co = &one_bounds();
         return view;
     }
@@ -1436,8 +1437,8 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                             const ValueId x = in.args[size_t(pi.aux)];
                             const FactorView view = factor_view(f, r, marks, x);
                             Powers own = {{x, 1}};
-                            const Powers& px = view.get().empty() || view.powers == &view.own ? own : view.get();
-                            const Interval cx = view.get().empty() || view.powers == &view.own ? Interval{1, 1} : comp(*view.co, 0);
+                            const Powers& px = view.get().empty() || view.symbol ? own : view.get();
+                            const Interval cx = view.get().empty() || view.symbol ? Interval{1, 1} : comp(*view.co, 0);
                             for (int q = 0; q < std::abs(power); ++q) {
                                 Powers next;
                                 if (!combine(out, px, power > 0 ? 1 : -1, next)) return false;
