@@ -9,6 +9,18 @@
 
 using namespace iqc;
 
+namespace {
+// The module in `text` (the IR's text form); the test stops with the parser's message where it is none.
+ir::Module parsed(const char* text) {
+    ir::Module m;
+    std::string error;
+    const bool ok = ir::parse_module(text, m, error);
+    INFO(error);
+    REQUIRE(ok);
+    return m;
+}
+}  // namespace
+
 TEST_CASE("mix with a weight in [0, 1] stays between its ends, outside it the affine formula", "[intervals]") {
     const char* text = R"(function f(u: ℝ, v: ℝ, t: ℝ) -> ℝ {
   %0 = ℝ Param #0 u  ; u
@@ -18,10 +30,7 @@ TEST_CASE("mix with a weight in [0, 1] stays between its ends, outside it the af
   return %3
 }
 )";
-    ir::Module m;
-    std::string error;
-    REQUIRE(ir::parse_module(text, m, error));
-    INFO(error);
+    const ir::Module m = parsed(text);
     auto at = [&](ir::Interval u, ir::Interval v, ir::Interval t) { return ir::interval_analysis(m, 0, {{u}, {v}, {t}})[3].c[0]; };
     // Value noise mixes lattice values in [0, 1] by weights in [0, 1]: the result is in [0, 1], not [-1, 2].
     ir::Interval r = at({0, 1}, {0, 1}, {0, 1});
@@ -54,10 +63,7 @@ TEST_CASE("a value that may be NaN is marked, and a comparison of it is never de
   return %10
 }
 )";
-    ir::Module m;
-    std::string error;
-    INFO(error);
-    REQUIRE(ir::parse_module(text, m, error));
+    const ir::Module m = parsed(text);
     auto r = ir::interval_analysis(m, 0, {{{-1, 0.5}}, {{0, 1}}});
     CHECK(r[2].nan);       // log of a negative
     CHECK(r[8].nan);       // carried by what is computed from it
@@ -103,10 +109,7 @@ TEST_CASE("NaN and infinity from domains, divisions, float's range and growth ar
   return %17
 }
 )";
-    ir::Module m;
-    std::string error;
-    INFO(error);
-    REQUIRE(ir::parse_module(text, m, error));
+    const ir::Module m = parsed(text);
     auto r = ir::interval_analysis(m, 0, {{{-2, 2}}, {{0, INFINITY}}});
     CHECK(r[2].nan);   // acosh below 1
     CHECK(r[3].nan);   // atanh at ±1 and beyond
@@ -176,10 +179,7 @@ function f(k: ℝ, c: ℝ) -> ℝ {
   return %3
 }
 )";
-    ir::Module m;
-    std::string error;
-    REQUIRE(ir::parse_module(text, m, error));
-    INFO(error);
+    const ir::Module m = parsed(text);
     const int f = int(m.functions.size()) - 1;
     auto at = [&](ir::Interval k, ir::Interval c, size_t value) { return ir::interval_analysis(m, f, {{k}, {c}})[value].c[0]; };
     // Element [2] (3) times element k: k = 0 reads 1 (3 in all), k over [1.2, 2.4] rounds to 1 or 2 (6 to 9).
@@ -248,10 +248,7 @@ function f(x: ℝ[4]) -> ℝ {
   return %5
 }
 )";
-    ir::Module m;
-    std::string error;
-    REQUIRE(ir::parse_module(text, m, error));
-    INFO(error);
+    const ir::Module m = parsed(text);
     auto r = ir::interval_analysis(m, 1, {{{1, 2}}});
     CHECK(r[5].c[0].lo == -5);  // (the first value: the hull)
     CHECK(r[5].c[0].hi == 2);
@@ -309,10 +306,7 @@ function f(k: ℝ, x: ℝ, c: ℝ, m: ℝ, u: ℝ³) -> ℝ {
   return %6
 }
 )";
-    ir::Module m;
-    std::string error;
-    REQUIRE(ir::parse_module(text, m, error));
-    INFO(error);
+    const ir::Module m = parsed(text);
     const int f = int(m.functions.size()) - 1;
     const ir::Interval k{1, 32}, x{-1, 1}, c{-1, 1};
     auto r = ir::interval_analysis(m, f, {{k}, {x}, {c}, {k}, {x, x, x}});

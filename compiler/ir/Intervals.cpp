@@ -730,6 +730,15 @@ std::vector<char> value_marks(const Function& f) {
     return marks;
 }
 
+// Whether value x is a constant whose every component is v.
+bool is_const(const Function& f, ValueId x, double v) {
+    const Instr& in = f.body[x];
+    if (in.op != Op::Const || in.data.empty()) return false;
+    for (double d : in.data)
+        if (d != v) return false;
+    return true;
+}
+
 // What an operand brings to a product or a sum: its factor's powers and cofactor; or, a symbol, s¹ · 1; or itself
 // (no powers). `zero`: a constant 0, which is any monomial times 0.
 struct FactorView {
@@ -760,9 +769,7 @@ FactorView factor_view(const Function& f, const std::vector<Bounds>& r, const st
         view.co = &one_bounds();
         return view;
     }
-    const Instr& in = f.body[v];
-    if (in.op == Op::Const && !in.data.empty())
-        view.zero = std::all_of(in.data.begin(), in.data.end(), [](double d) { return d == 0; });
+    view.zero = is_const(f, v, 0);
     return view;
 }
 
@@ -915,14 +922,6 @@ bool sum_leaves(const Function& f, ValueId x, std::vector<ValueId>& out, size_t 
         return sum_leaves(f, in.args[0], out, limit) && sum_leaves(f, in.args[1], out, limit);
     if (out.size() >= limit) return false;
     out.push_back(x);
-    return true;
-}
-
-bool is_const(const Function& f, ValueId x, double v) {
-    const Instr& in = f.body[x];
-    if (in.op != Op::Const || in.data.empty()) return false;
-    for (double d : in.data)
-        if (d != v) return false;
     return true;
 }
 

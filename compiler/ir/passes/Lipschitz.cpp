@@ -1555,8 +1555,8 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
         };
         near_samples(ends, scaled(samples), scaled(64));
         // Where the sliders are uniforms (WebGL2, GLSL, …) the bound holds over their ranges and so must the
-        // samples: at 8 random settings of the sliders the shape reads, besides their defaults (a slope of 1.9
-        // at a slider's end, 1 at its default: marched as 1-Lipschitz; a trial's, stop 40).
+        // samples: at settings of the sliders the shape reads besides their defaults (below), since a slope of 1.9
+        // at a slider's end, 1 at its default, was marched as 1-Lipschitz (a trial's, stop 40).
         if (!work.constant_parameters) {
             std::vector<char> reached(work.functions.size(), 0);
             std::vector<int> todo = {fn};
