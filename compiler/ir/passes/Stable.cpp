@@ -1,6 +1,7 @@
 #include "ir/passes/Stable.h"
 
 #include "ir/Builder.h"
+#include "ir/passes/Inline.h"
 
 #include <map>
 #include <optional>
@@ -93,9 +94,88 @@ std::pair<Function, Function> split_exp_sum(const Module& m, const Function& bod
     return {std::move(hi), std::move(shifted)};
 }
 
+using Splits = std::map<int, std::pair<int, int>>;
+
+// Rewrites f's unstable forms (the rolled sums of `split` by their replacement loops); returns how many fired, and
+// appends them to `fired` (when given). Reads no other function: a copy of f may be tried.
+size_t rewrite_function(const Module& m, Function& f, const Splits& split, std::vector<StableRewrite>* fired);
+
+// Which functions compute a logarithm or an exponential, themselves or in what they call or loop over.
+std::vector<char> log_or_exp_functions(const Module& m) {
+    std::vector<char> marked(m.functions.size(), 0);
+    for (size_t i = 0; i < m.functions.size(); ++i)
+        for (const Instr& in : m.functions[i].body)
+            if (log_factor(in) != 0 || exponential(m.functions[i].body, in)) marked[i] = 1;
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (size_t i = 0; i < m.functions.size(); ++i)
+            for (const Instr& in : m.functions[i].body)
+                if (!marked[i] && (in.op == Op::Call || in.op == Op::Loop) && marked[size_t(in.aux)]) marked[i] = changed = true;
+    }
+    return marked;
+}
+
+// A module's own name: "blob" of "blob", "blob.s" and "blob.sum_i" (its local functions and loop bodies).
+std::string_view module_of(const std::string& name) { return std::string_view(name).substr(0, name.find('.')); }
+
+// A logarithm of a rolled ∑ (a Loop starting at 0) whose term is a call of `local` (the loop body's term, not yet
+// inlined): where a log-sum-exp spans a module's local functions.
+bool log_of_rolled_call(const Module& m, const Function& f, const std::vector<char>& local) {
+    for (const Instr& in : f.body) {
+        if (log_factor(in) == 0 || f.body[in.args[0]].op != Op::Member) continue;
+        const Instr& loop = f.body[f.body[in.args[0]].args[0]];
+        if (loop.op != Op::Loop || loop.args.size() < 2 || !is_scalar_const(f.body[loop.args[1]], 0)) continue;
+        const Function& body = m.functions[size_t(loop.aux)];
+        auto t = accumulated_term(body, 0);
+        if (t && body.body[*t].op == Op::Call && local[size_t(body.body[*t].aux)]) return true;
+    }
+    return false;
+}
+
+// A log-sum-exp written through a module's local functions, -ln(t)/k of ∑ e^(-k d_i) as s(∑_i g(d_i)) (a trial's:
+// nothing drawn from 14 units, 14,400 NaN-distance pixels at 160x90): the calls of the module's own functions that
+// compute a logarithm or an exponential are inlined where that shows a form the rewrites take (in a rolled ∑'s body
+// too), and nowhere else (the emitted code keeps its functions). Functions of other modules are not inlined: each
+// stabilises its own forms.
+void inline_split_forms(Module& m) {
+    const std::vector<char> bearing = log_or_exp_functions(m);
+    std::vector<int> rolled_bodies;
+    for (size_t i = 0; i < m.functions.size(); ++i) {
+        const Function& f = m.functions[i];
+        const std::string_view own = module_of(f.name);
+        std::vector<char> local(m.functions.size(), 0);
+        bool calls = false;
+        for (size_t j = 0; j < m.functions.size(); ++j) {
+            local[j] = bearing[j] && j != i && module_of(m.functions[j].name) == own && m.functions[j].name != own;
+        }
+        for (const Instr& in : f.body) calls = calls || (in.op == Op::Call && local[size_t(in.aux)]);
+        if (!calls) continue;
+        Function g = inline_calls_except(m, f, [&](const Function& c) { return !local[size_t(&c - m.functions.data())]; });
+        Function tried = g, before = f;
+        const bool rolled = log_of_rolled_call(m, g, local) && !log_of_rolled_call(m, f, local);
+        if (rolled || rewrite_function(m, tried, {}, nullptr) > rewrite_function(m, before, {}, nullptr)) {
+            for (const Instr& in : g.body)
+                if (in.op == Op::Loop) rolled_bodies.push_back(in.aux);
+            m.functions[i] = std::move(g);
+        }
+    }
+    // The rolled sums' bodies whose term is a local call: that call inlined (the body's own exponential shows).
+    for (int bi : rolled_bodies) {
+        const Function& body = m.functions[size_t(bi)];
+        auto t = accumulated_term(body, 0);
+        if (!t || body.body[*t].op != Op::Call) continue;
+        const std::string_view own = module_of(body.name);
+        m.functions[size_t(bi)] = inline_calls_except(m, body, [&](const Function& c) {
+            const size_t j = size_t(&c - m.functions.data());
+            return !(bearing[j] && module_of(c.name) == own && c.name != own);
+        });
+    }
+}
+
 }  // namespace
 
 std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
+    inline_split_forms(m);
     std::vector<StableRewrite> fired;
     // Rolled sums of exponentials under a log: their two replacement bodies, made first (functions are added
     // to the module here, not while a function is being rebuilt), by the original body's index.
@@ -123,7 +203,16 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
             split[body] = {int(m.functions.size()) - 2, int(m.functions.size()) - 1};
         }
     }
-    for (Function& f : m.functions) {
+    for (Function& f : m.functions) rewrite_function(m, f, split, &fired);
+    return fired;
+}
+
+namespace {
+
+size_t rewrite_function(const Module& m, Function& f, const std::map<int, std::pair<int, int>>& split,
+                        std::vector<StableRewrite>* fired) {
+    size_t count = 0;
+    {
         std::vector<Instr> old = std::move(f.body);
         f.body.clear();
         f.body.reserve(old.size());
@@ -270,7 +359,8 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
                 r.source = in.source;
                 r.span = in.span;
                 map[i] = made;
-                fired.push_back({in.span, what, f.name});
+                ++count;
+                if (fired) fired->push_back({in.span, what, f.name});
                 continue;
             }
             Instr copy = in;
@@ -280,7 +370,9 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
         f.result = map[f.result];
         for (auto& [name, v] : f.outputs) v = map[v];
     }
-    return fired;
+    return count;
 }
+
+}  // namespace
 
 }  // namespace iqc::ir
