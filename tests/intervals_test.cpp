@@ -332,3 +332,35 @@ function f(k: ℝ, x: ℝ, c: ℝ, m: ℝ, u: ℝ³) -> ℝ {
     auto z = ir::interval_analysis(m, f, {{c}, {x}, {c}, {k}, {x, x, x}});
     CHECK(!(z[6].c[0].hi <= 1));
 }
+
+TEST_CASE("a factor that does not cancel bounds its value by the monomial's range", "[intervals]") {
+    // A trial (stop 53, F9): k²‖p‖/k with k ∈ [0.25, 3] got K ≤ 36 (k² within 9, 1/k within 4, each on its own) where it
+    // is 3. The factor k¹ · ‖∇‖p‖‖ is within 3 · 1. Likewise k²x/(k m) is (k/m)·x, within 6 for m ∈ [0.5, 2] (intervals
+    // alone: 72), and a quotient by k/2 (a local function's argument: -ln(t)/q called with q = k/2) makes k a symbol.
+    const char* text = R"(function f(k: ℝ, x: ℝ, m: ℝ) -> ℝ {
+  %0 = ℝ Param #0 k  ; k
+  %1 = ℝ Param #1 x  ; x
+  %2 = ℝ Param #2 m  ; m
+  %3 = ℝ Mul %0, %0
+  %4 = ℝ Mul %3, %1
+  %5 = ℝ Div %4, %0
+  %6 = ℝ Mul %0, %2
+  %7 = ℝ Div %4, %6
+  %8 = ℝ Mul %0, %1
+  %9 = ℝ Const 2
+  %10 = ℝ Div %0, %9
+  %11 = ℝ Div %8, %10
+  return %5
+}
+)";
+    const ir::Module m = parsed(text);
+    auto r = ir::interval_analysis(m, 0, {{ir::Interval{0.25, 3}}, {ir::Interval{-1, 1}}, {ir::Interval{0.5, 2}}});
+    auto check = [&](size_t v, double lo, double hi) {
+        INFO("%" << v << ": [" << r[v].c[0].lo << ", " << r[v].c[0].hi << "]");
+        CHECK(r[v].c[0].lo == Approx(lo));
+        CHECK(r[v].c[0].hi == Approx(hi));
+    };
+    check(5, -3, 3);    // k²x/k = k·x (intervals alone: [-36, 36])
+    check(7, -6, 6);    // k²x/(k m) = (k/m)·x (alone: [-72, 72])
+    check(11, -2, 2);   // k·x/(k/2) = 2x
+}

@@ -704,7 +704,7 @@ const Bounds& one_bounds() {
 }
 
 // The marks of `f`'s values (IntervalScratch::marks): bit kSummed, an operand of an Add of its type; bit kSymbol, a
-// scalar Param or Global that a Div divides by, itself or through products and negations (2k, -k), or that a loop
+// scalar Param or Global that a Div divides by, itself or through products, quotients and negations (2k, k/2, -k), or that a loop
 // captures. One more entry past the values: whether any is a symbol.
 std::vector<char> value_marks(const Function& f) {
     std::vector<char> marks(f.body.size(), 0), divided(f.body.size(), 0);
@@ -724,6 +724,7 @@ std::vector<char> value_marks(const Function& f) {
         if (u.op == Op::Mul || u.op == Op::Neg || u.op == Op::Copy)
             for (ValueId a : u.args)
                 if (f.body[a].type.is_scalar()) divided[a] = 1;
+        if (u.op == Op::Div && f.body[u.args[0]].type.is_scalar()) divided[u.args[0]] = 1;  // (k/2)
         if ((u.op == Op::Param || u.op == Op::Global) && u.type.is_scalar()) marks[i] |= kSymbol;
     }
     marks.push_back(char(std::any_of(marks.begin(), marks.end(), [](char c) { return c & kSymbol; })));  // (one past: any)
@@ -798,21 +799,47 @@ const Factored* new_factor(IntervalScratch& scratch, Powers powers, Bounds co) {
     return &f;
 }
 
-// Records that x is Π s^p · (a value within co): a factor, or, where every symbol cancelled, x within co.
-void settle(IntervalScratch& scratch, Bounds& x, Powers powers, Bounds co) {
+// The range of the monomial Π s^p over the symbols' bounds in r (each a scalar interval without 0: factor_view's
+// symbols); unbounded where a symbol's bounds are not one such interval. Each symbol appears once: interval
+// products are tight per symbol and sound across them.
+Interval monomial_range(const Powers& powers, const std::vector<Bounds>& r) {
+    Interval m{1, 1};
+    for (const auto& [id, power] : powers) {
+        const Bounds& b = r[id];
+        if (b.c.size() != 1 || b.nan || contains_zero(b.c[0])) return Interval{-kInf, kInf};
+        Interval sp{1, 1};
+        for (int k = 0; k < std::abs(power); ++k) sp = mul(sp, b.c[0]);
+        m = mul(m, power < 0 ? div(Interval{1, 1}, sp) : sp);
+    }
+    return m;
+}
+
+// Records that x is Π s^p · (a value within co): a factor, and x within the monomial's range times co (k²‖p‖/k with
+// k ∈ [0.25, 3]: k · ‖p‖, within 3, where x's own intervals give 9/0.25 = 36); where every symbol cancelled, x within co.
+void settle(IntervalScratch& scratch, Bounds& x, Powers powers, Bounds co, const std::vector<Bounds>& r) {
     co.factor = nullptr;
     co.elements = nullptr;
     co = finish(std::move(co));
+    Bounds within;
+    const Bounds* clip = &co;
     if (!powers.empty()) {
+        const Interval mono = monomial_range(powers, r);
+        if (std::isfinite(mono.lo) && std::isfinite(mono.hi) && co.c.size() == x.c.size()) {
+            within.c = co.c;
+            for (size_t k = 0; k < co.c.size(); ++k) within.c[k] = mul(mono, co.c[k]);
+            within.norm = std::max(std::fabs(mono.lo), std::fabs(mono.hi)) * co.norm;
+            clip = &within;
+        } else {
+            clip = nullptr;
+        }
         x.factor = new_factor(scratch, std::move(powers), std::move(co));
-        return;
     }
-    if (co.c.size() != x.c.size()) return;
+    if (!clip || clip->c.size() != x.c.size()) return;
     for (size_t k = 0; k < x.c.size(); ++k) {
-        const Interval t{std::max(x.c[k].lo, co.c[k].lo), std::min(x.c[k].hi, co.c[k].hi)};
+        const Interval t{std::max(x.c[k].lo, clip->c[k].lo), std::min(x.c[k].hi, clip->c[k].hi)};
         if (t.lo <= t.hi) x.c[k] = t;  // (rounding: never empty)
     }
-    x.norm = std::min(x.norm, co.norm);
+    if (!std::isnan(clip->norm)) x.norm = std::min(x.norm, clip->norm);
 }
 
 // The monomial factor of instruction i from its operands' (Factored): a product's powers add, a quotient's
@@ -844,7 +871,7 @@ void factor_refine(IntervalScratch& scratch, const Module& m, const Function& f,
                 cos.assign({a.co, b.co});
                 co = bounds_rule(m, f, in, cos);
             }
-            settle(scratch, x, std::move(p), std::move(co));
+            settle(scratch, x, std::move(p), std::move(co), r);
             return;
         }
         case Op::Add:
@@ -879,7 +906,7 @@ void factor_refine(IntervalScratch& scratch, const Module& m, const Function& f,
             }
             if (p.empty()) return;
             for (const FactorView& v : views) cos.push_back(v.co);
-            settle(scratch, x, std::move(p), bounds_rule(m, f, in, cos));
+            settle(scratch, x, std::move(p), bounds_rule(m, f, in, cos), r);
             return;
         }
         default: return;
@@ -1098,7 +1125,8 @@ void convex_bounds(Bounds& x, const std::vector<const Bounds*>& parts, bool with
 }
 
 // convex_bounds on the parts' cofactors, where every part but zeros has a factor with the same powers: x's factor.
-void convex_factor(IntervalScratch& scratch, Bounds& x, const Type& t, const std::vector<const Bounds*>& parts, bool with_zero) {
+void convex_factor(IntervalScratch& scratch, Bounds& x, const Type& t, const std::vector<const Bounds*>& parts, bool with_zero,
+                   const std::vector<Bounds>& r) {
     const Powers* p = nullptr;
     std::vector<const Bounds*> cos;
     for (const Bounds* b : parts) {
@@ -1109,7 +1137,7 @@ void convex_factor(IntervalScratch& scratch, Bounds& x, const Type& t, const std
     if (!p) return;
     Bounds co = unknown(t);
     convex_bounds(co, cos, with_zero);
-    settle(scratch, x, *p, std::move(co));
+    settle(scratch, x, *p, std::move(co), r);
 }
 
 // Tightens r[i] where instruction i is a convex combination, or a shift plus one (ConvexForm).
@@ -1163,7 +1191,7 @@ void convex_refine(IntervalScratch& scratch, const Function& f, std::vector<Boun
             if (auto arms = two_term_lse(f, r, in.args[size_t(k)], in.args[size_t(1 - k)])) {
                 const std::vector<const Bounds*> parts = {&r[arms->first], &r[arms->second]};
                 convex_bounds(r[i], parts, false);
-                convex_factor(scratch, r[i], in.type, parts, false);
+                convex_factor(scratch, r[i], in.type, parts, false, r);
                 return;
             }
         for (int k = 0; k < 2; ++k) {
@@ -1175,14 +1203,14 @@ void convex_refine(IntervalScratch& scratch, const Function& f, std::vector<Boun
             std::vector<const Bounds*> parts = {&r[c]};
             parts.insert(parts.end(), form->v.begin(), form->v.end());
             convex_bounds(r[i], parts, false);
-            convex_factor(scratch, r[i], in.type, parts, false);
+            convex_factor(scratch, r[i], in.type, parts, false, r);
             return;
         }
     }
     if (in.op != Op::Div && in.op != Op::Mul && in.op != Op::Add) return;
     if (auto form = convex_form(f, r, loops, ValueId(i))) {
         convex_bounds(r[i], form->w, true, form->multiplicity, form->scale);
-        if (form->multiplicity == 1 && form->scale.lo == 1 && form->scale.hi == 1) convex_factor(scratch, r[i], in.type, form->w, true);
+        if (form->multiplicity == 1 && form->scale.lo == 1 && form->scale.hi == 1) convex_factor(scratch, r[i], in.type, form->w, true, r);
     }
 }
 
@@ -1465,7 +1493,7 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                         const double n0 = init_co ? init_co->norm : 0.0;
                         co.norm = chosen ? std::max(n0, co.norm) : n0 + n * co.norm;
                         co.unit = false;
-                        settle(scratch, sj, std::move(p), std::move(co));
+                        settle(scratch, sj, std::move(p), std::move(co), r);
                     };
                     // A LoopConvex part's factor, in this function's symbols.
                     auto part_factor = [&](Bounds& b) {

@@ -1582,16 +1582,35 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
             // every function for a few values)
             std::vector<std::vector<double>> defaults;
             for (size_t gi : sliders) defaults.push_back(work.globals[gi].value);
-            // The settings: every slider at its low end, at its high end, each of the first 6 at either end with the
-            // others at their defaults (with samples near the shape, as at the defaults), then 4 at random (a slope
-            // 1/(2k) over k ∈ [0.25, 2] is 2 only at k's low end, which random settings of 23–93% of the range never
-            // met: a trial's, stop 52).
-            const int ends_settings = 2 + 2 * int(std::min<size_t>(sliders.size(), 6));
-            for (int v = 0; v < ends_settings + 4 && !sliders.empty() && size < 200000; ++v) {
+            // The settings, each slider at its low end (0), its high end (1), its default (-1) or at random (2):
+            // every slider low, every slider high, the other corners of the sliders' box where they are at most 4
+            // (0.5k/m is steepest at k high and m low: a trial's, which no setting below met), each of the first 6 at
+            // either end with the others at their defaults (with samples near the shape, as at the defaults), then 4
+            // at random (a slope 1/(2k) over k ∈ [0.25, 2] is 2 only at k's low end, which random settings of 23–93%
+            // of the range never met: a trial's, stop 52).
+            std::vector<std::vector<int>> ends;
+            const size_t n_sliders = sliders.size();
+            ends.push_back(std::vector<int>(n_sliders, 0));
+            ends.push_back(std::vector<int>(n_sliders, 1));
+            if (n_sliders >= 2 && n_sliders <= 4)
+                for (size_t corner = 1; corner + 1 < (size_t(1) << n_sliders); ++corner) {
+                    std::vector<int> e_k(n_sliders);
+                    for (size_t k = 0; k < n_sliders; ++k) e_k[k] = int((corner >> k) & 1);
+                    ends.push_back(std::move(e_k));
+                }
+            for (size_t k = 0; k < std::min<size_t>(n_sliders, 6); ++k)
+                for (int end = 0; end < 2; ++end) {
+                    std::vector<int> e_k(n_sliders, -1);
+                    e_k[k] = end;
+                    ends.push_back(std::move(e_k));
+                }
+            const size_t ends_settings = ends.size();
+            for (int r = 0; r < 4; ++r) ends.push_back(std::vector<int>(n_sliders, 2));
+            for (size_t v = 0; v < ends.size() && !sliders.empty() && size < 200000; ++v) {
                 for (size_t k = 0; k < sliders.size(); ++k) {
                     Global& gl = work.globals[sliders[k]];
                     const size_t n = gl.bounds.lo.size();
-                    const int end = v == 0 ? 0 : v == 1 ? 1 : v < ends_settings ? ((v - 2) / 2 == int(k) ? (v - 2) % 2 : -1) : 2;
+                    const int end = ends[v][k];
                     for (size_t c = 0; c < gl.value.size() && n > 0 && gl.bounds.hi.size() == n; ++c) {
                         double lo = gl.bounds.lo[c % n], hi = gl.bounds.hi[c % n];
                         if (!(std::isfinite(lo) && std::isfinite(hi) && lo <= hi)) continue;
@@ -1605,6 +1624,12 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
             }
             for (size_t k = 0; k < sliders.size(); ++k) work.globals[sliders[k]].value = std::move(defaults[k]);
         }
+    }
+    if (!work.constant_parameters && evaluated > 0 && e.derived > 1 + 1e-9 && e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3 &&
+        refine_bound) {
+        work.constant_parameters = true;
+        e.at_defaults = derive(work, grad, box, others, ball, boxes, false, nullptr, nullptr, nullptr);
+        work.constant_parameters = false;
     }
     *split_work = t_split_work;
     t_split_work = 0;
@@ -1808,7 +1833,8 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                                 "surface; remove the pragma and iqc derives its own bound",
                                                                 spec.shape, steepest)});
             }
-        } else if (e.sampled <= 1 + 1e-3 && e.derived <= 2 * (1 + 1e-9) && e.blend_steepest <= 1 + 1e-3) {
+        } else if (e.sampled <= 1 + 1e-3 && e.derived <= 2 * (1 + 1e-9) && e.blend_steepest <= 1 + 1e-3 &&
+                   !(e.at_defaults > 0 && e.at_defaults <= 1 + 1e-9)) {
             how = "1-Lipschitz at every sample";
         } else if (!std::isfinite(e.derived) || e.derived > kUnbounded) {
             how = "no useful bound";
@@ -1842,7 +1868,8 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                         reason, marched, fix)});
         } else {
             applied = e.derived;
-            how = "derived";
+            how = e.at_defaults > 0 && e.sampled <= 1 + 1e-3 ? fmt::format("derived: within {:.4g} at the sliders' defaults", e.at_defaults)
+                                                                : "derived";
             // Interval bounds can be loose (a twist's rotation is bounded component by component): say what
             // it costs, since steps shrink by the factor. 3×: beyond the slack of an honest bound.
             if (e.derived > 3 * std::max(e.sampled, 1.0))

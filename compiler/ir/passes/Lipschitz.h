@@ -58,6 +58,11 @@ struct LipschitzEstimate {
     // met at a point of its arguments: above 1, f is no convex combination of its distances' gradients, and a
     // slope above 1 may hide in a band the samples miss (0: no blend analysed).
     double blend_steepest = 0;
+    // Where the sliders are uniforms and the bound is within 2 with every sample within 1: the bound derived with
+    // each slider at its default (0: not derived). Within 1 there, the rest comes from the sliders' ranges, and the
+    // derived bound is applied, not 1 (k‖p − b‖ beside a flatter ball, k ∈ [0.85, 1.98]: steeper only near b at
+    // k's high end, where no sample fell).
+    double at_defaults = 0;
 };
 
 // Bounds ‖∇f‖ with respect to parameter 0 (ℝ³) of function `fn` over `box` (its three components); other
