@@ -63,6 +63,9 @@ struct LipschitzEstimate {
     // derived bound is applied, not 1 (k‖p − b‖ beside a flatter ball, k ∈ [0.85, 1.98]: steeper only near b at
     // k's high end, where no sample fell).
     double at_defaults = 0;
+    // Without a useful bound: the steepest sample where the distance is ≥ 0 (outside the shape, where sphere tracing
+    // steps from; 0: none taken). The K marched by then comes from it.
+    double outside = 0;
 };
 
 // Bounds ‖∇f‖ with respect to parameter 0 (ℝ³) of function `fn` over `box` (its three components); other
