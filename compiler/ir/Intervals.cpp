@@ -1536,21 +1536,53 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                     }
                     // Convex numerators: state j accumulates a·w where state k accumulates a ≥ 0 (LoopConvex).
                     std::vector<LoopConvex> found;
+                    // (the factors of a product taken apart, scalars commuting: a weighted term's derivative is
+                    // w·(e·g) where its term is e·w, a·g once reassociated; a trial's weighted log-sum-exp of 32
+                    // points had no bound, K ≤ ∞, where 31 unrolled got 1)
+                    auto factors = [&](ValueId x, std::vector<ValueId>& out) {
+                        std::vector<ValueId> todo = {x};
+                        while (!todo.empty() && out.size() < 8) {
+                            const ValueId y = todo.back();
+                            todo.pop_back();
+                            const Instr& yi = body.body[y];
+                            if (yi.op == Op::Mul && yi.args.size() == 2 &&
+                                (body.body[yi.args[0]].type.is_scalar() || body.body[yi.args[1]].type.is_scalar())) {
+                                todo.push_back(yi.args[0]);
+                                todo.push_back(yi.args[1]);
+                            } else {
+                                out.push_back(y);
+                            }
+                        }
+                        std::sort(out.begin(), out.end());
+                        return todo.empty();
+                    };
                     for (size_t j = 0; j < states; ++j) {
                         if (selected[j]) continue;
                         const Instr& tj = body.body[term[j]];
                         const Bounds& init_j = r[in.args[j + 1]];
                         if (tj.op != Op::Mul || tj.args.size() != 2 || !is_zero(init_j)) continue;
+                        std::vector<ValueId> fj;
+                        if (!factors(term[j], fj)) continue;
                         for (size_t k = 0; k < states; ++k) {
                             if (k == j || selected[k]) continue;
                             const ValueId a = term[k];
                             const Bounds& init_k = r[in.args[k + 1]];
                             if (v[a].c.size() != 1 || !(v[a].c[0].lo >= 0) || init_k.c.size() != 1 || !(init_k.c[0].lo >= 0)) continue;
-                            for (int side = 0; side < 2; ++side) {
-                                if (tj.args[size_t(side)] != a) continue;
+                            // term j = a·w: a one of its operands, or a's factors and one more among its factors
+                            ValueId rest = ValueId(-1);
+                            for (int side = 0; side < 2 && rest == ValueId(-1); ++side)
+                                if (tj.args[size_t(side)] == a) rest = tj.args[size_t(1 - side)];
+                            if (rest == ValueId(-1)) {
+                                std::vector<ValueId> fk, left;
+                                if (!factors(a, fk) || fk.size() + 1 != fj.size()) continue;
+                                std::set_difference(fj.begin(), fj.end(), fk.begin(), fk.end(), std::back_inserter(left));
+                                if (left.size() != 1) continue;
+                                rest = left[0];
+                            }
+                            {
                                 LoopConvex lc;
                                 lc.j = int(j), lc.k = int(k);
-                                const ValueId w = tj.args[size_t(1 - side)];
+                                const ValueId w = rest;
                                 lc.w = v[w];
                                 part_factor(lc.w);
                                 const Instr& wi = body.body[w];
@@ -1564,7 +1596,6 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
                                     }
                                 }
                                 found.push_back(std::move(lc));
-                                break;
                             }
                         }
                     }

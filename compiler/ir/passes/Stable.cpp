@@ -3,6 +3,7 @@
 #include "ir/Builder.h"
 #include "ir/passes/Inline.h"
 
+#include <algorithm>
 #include <map>
 #include <optional>
 #include "sema/Builtins.h"
@@ -35,13 +36,6 @@ double log_factor(const Instr& in) {
     return 0;
 }
 
-// Whether `t` is an exponential: e^x, or c^x for a constant c > 0 (e^(x ln c)).
-bool exponential(const std::vector<Instr>& body, const Instr& t) {
-    if (is_builtin(t, "exp")) return true;
-    return is_builtin(t, "pow") && t.type.is_scalar() && t.args.size() == 2 && body[t.args[0]].op == Op::Const &&
-           body[t.args[0]].data.size() == 1 && body[t.args[0]].data[0] > 0 && body[t.args[0]].data[0] != 1;
-}
-
 // The leaves of the tree of scalar Adds under `v` (v itself when it is no Add); false past kMaxTerms. A tree
 // of at most kMaxTerms leaves is at most kMaxTerms deep, so a longer chain (an unrolled ∑ of a million terms)
 // stops there instead of recursing a million levels.
@@ -53,13 +47,124 @@ bool sum_terms(const std::vector<Instr>& body, ValueId v, std::vector<ValueId>& 
     return out.size() <= kMaxTerms;
 }
 
-// A rolled ∑ of exponentials (a Loop whose body adds e^x to its one state, x not reading the state): x's value in
-// the body, else none.
-std::optional<ValueId> rolled_exp_sum(const Function& body) {
+// Whether scalar value v of f is known positive: a constant > 0, or a parameter whose bounds are all > 0 (a slider
+// β ∈ [1.5, 10]).
+bool positive(const Function& f, const std::vector<Instr>& body, ValueId v) {
+    const Instr& in = body[v];
+    if (!in.type.is_scalar()) return false;
+    if (in.op == Op::Const) return in.data.size() == 1 && in.data[0] > 0;
+    if (in.op == Op::Param && size_t(in.aux) < f.param_bounds.size()) {
+        const ValueBounds& pb = f.param_bounds[size_t(in.aux)];
+        return !pb.input && pb.lo.size() == 1 && pb.lo[0] > 0;
+    }
+    return false;
+}
+
+// Whether `t` is an exponential: e^x, or c^x for a base c > 0 other than 1 (e^(x ln c)): a constant, or a slider whose
+// bounds are > 0 (a trial's β^(-k d), β ∈ [1.5, 10]: not stabilised, nothing drawn from 14 units).
+bool exponential(const Function& f, const std::vector<Instr>& body, const Instr& t) {
+    if (is_builtin(t, "exp")) return t.type.is_scalar();
+    if (!is_builtin(t, "pow") || !t.type.is_scalar() || t.args.size() != 2) return false;
+    const Instr& base = body[t.args[0]];
+    if (base.op == Op::Const) return base.data.size() == 1 && base.data[0] > 0 && base.data[0] != 1;
+    return positive(f, body, t.args[0]);
+}
+
+// A term of a sum of exponentials: (∏ weights) · e^(∑_j c_j x_j + shift), the exponentials' products, quotients and
+// powers taken together (e^a e^b, 1/e^x, (e^x)², √(e^x)) and constant positive factors taken into the shift (e^x/2:
+// e^(x − ln 2)); other factors are weights, each multiplying or dividing (w_i e^x).
+struct ExpTerm {
+    std::vector<std::pair<ValueId, double>> parts;  // (an exponential instruction, its power c_j)
+    double shift = 0;
+    std::vector<std::pair<ValueId, bool>> weights;  // (value, divides)
+    bool plain() const { return parts.size() == 1 && parts[0].second == 1 && shift == 0 && weights.empty(); }
+};
+
+bool exp_term(const Function& f, const std::vector<Instr>& body, ValueId t, ExpTerm& out, int depth = 0) {
+    const Instr& in = body[t];
+    if (exponential(f, body, in)) {
+        out = ExpTerm{};
+        out.parts = {{t, 1.0}};
+        return true;
+    }
+    if (depth > 6 || !in.type.is_scalar() || in.args.empty()) return false;
+    for (ValueId a : in.args)
+        if (!body[a].type.is_scalar()) return false;
+    auto const_positive = [&](ValueId v) { return body[v].op == Op::Const && body[v].data.size() == 1 && body[v].data[0] > 0; };
+    if ((in.op == Op::Mul || in.op == Op::Div) && in.args.size() == 2) {
+        const double sign = in.op == Op::Div ? -1 : 1;
+        ExpTerm a, b;
+        const bool ea = exp_term(f, body, in.args[0], a, depth + 1), eb = exp_term(f, body, in.args[1], b, depth + 1);
+        if (!ea && !eb) return false;
+        out = ExpTerm{};
+        if (ea) {
+            out = std::move(a);
+        } else if (const_positive(in.args[0])) {
+            out.shift += std::log(body[in.args[0]].data[0]);
+        } else {
+            out.weights.push_back({in.args[0], false});
+        }
+        if (eb) {
+            for (auto [e, c] : b.parts) out.parts.push_back({e, sign * c});
+            out.shift += sign * b.shift;
+            for (auto [w, divides] : b.weights) out.weights.push_back({w, sign < 0 ? !divides : divides});
+        } else if (const_positive(in.args[1])) {
+            out.shift += sign * std::log(body[in.args[1]].data[0]);
+        } else {
+            out.weights.push_back({in.args[1], sign < 0});
+        }
+        return true;
+    }
+    // (e^x)^q = e^(q x), √(e^x) = e^(x/2): of a term without weights
+    const bool power = is_builtin(in, "pow") && in.args.size() == 2 && body[in.args[1]].op == Op::Const && body[in.args[1]].data.size() == 1;
+    if (power || (is_builtin(in, "sqrt") && in.args.size() == 1)) {
+        const double q = power ? body[in.args[1]].data[0] : 0.5;
+        ExpTerm a;
+        if (!exp_term(f, body, in.args[0], a, depth + 1) || !a.weights.empty()) return false;
+        out = std::move(a);
+        for (auto& part : out.parts) part.second *= q;
+        out.shift *= q;
+        return true;
+    }
+    return false;
+}
+
+// Builds, with b, the exponent of term t in base e (x of e^x; y ln c of c^y; times each part's power, plus the
+// shift), `at` mapping the term's values to the function being built.
+template <class At>
+ValueId exponent_of(Builder& b, const std::vector<Instr>& body, const ExpTerm& t, At at) {
+    ValueId sum = ValueId(-1);
+    for (auto [part, c] : t.parts) {
+        const Instr& e = body[part];
+        ValueId x;
+        if (is_builtin(e, "exp")) {
+            x = at(e.args[0]);
+        } else if (body[e.args[0]].op == Op::Const) {
+            x = b.op(Op::Mul, {at(e.args[1]), b.scalar(std::log(body[e.args[0]].data[0]))});
+        } else {
+            x = b.op(Op::Mul, {at(e.args[1]), b.builtin("log", {at(e.args[0])})});
+        }
+        if (c == -1) x = b.op(Op::Neg, {x});
+        else if (c != 1) x = b.op(Op::Mul, {x, b.scalar(c)});
+        sum = sum == ValueId(-1) ? x : b.op(Op::Add, {sum, x});
+    }
+    return t.shift == 0 ? sum : b.op(Op::Add, {sum, b.scalar(t.shift)});
+}
+
+// e^(x − hi) times t's weights.
+template <class At>
+ValueId weighted(Builder& b, const ExpTerm& t, ValueId e, At at) {
+    for (const auto& [w, divides] : t.weights) e = b.op(divides ? Op::Div : Op::Mul, {e, at(w)});
+    return e;
+}
+
+// A rolled ∑ of exponential terms (a Loop whose body adds a term to its one state, the term not reading the state).
+std::optional<ExpTerm> rolled_exp_sum(const Function& body) {
     if (body.outputs.size() != 1 || !body.body[body.outputs[0].second].type.is_scalar()) return std::nullopt;
     auto e = accumulated_term(body, 0);
-    if (!e || !is_builtin(body.body[*e], "exp")) return std::nullopt;
-    return body.body[*e].args[0];
+    ExpTerm t;
+    if (!e || !exp_term(body, body.body, *e, t)) return std::nullopt;
+    return t;
 }
 
 // The state parameter (the running sum, parameter 1) of a loop body.
@@ -69,15 +174,16 @@ ValueId state_param(const Function& body) {
     return ValueId(-1);
 }
 
-// The bodies of the two loops that replace a rolled log-sum-exp: the running maximum of x, and the sum of
-// e^(x − hi) with hi a capture (the last parameter).
-std::pair<Function, Function> split_exp_sum(const Module& m, const Function& body, ValueId x) {
+// The bodies of the two loops that replace a rolled log-sum-exp: the running maximum of the exponents x, and the sum of
+// (weights) e^(x − hi) with hi a capture (the last parameter).
+std::pair<Function, Function> split_exp_sum(const Module& m, const Function& body, const ExpTerm& t) {
+    auto same = [](ValueId v) { return v; };
     Function hi = body, shifted = body;
     hi.name += ".max";
     hi.glsl_name = hi.name;
     {
         Builder b(m, hi);
-        ValueId v = b.builtin("max", {state_param(hi), x});
+        ValueId v = b.builtin("max", {state_param(hi), exponent_of(b, body.body, t, same)});
         hi.outputs = {{"hi", v}};
         hi.result = v;
     }
@@ -87,11 +193,83 @@ std::pair<Function, Function> split_exp_sum(const Module& m, const Function& bod
         Builder b(m, shifted);
         const ValueId state = state_param(shifted);
         ValueId h = b.param("hi", Type::scalar());
-        ValueId v = b.op(Op::Add, {state, b.builtin("exp", {b.op(Op::Sub, {x, h})})});
+        ValueId x = exponent_of(b, body.body, t, same);
+        ValueId v = b.op(Op::Add, {state, weighted(b, t, b.builtin("exp", {b.op(Op::Sub, {x, h})}), same)});
         shifted.outputs = {{"sum", v}};
         shifted.result = v;
     }
     return {std::move(hi), std::move(shifted)};
+}
+
+// The rolled ∑ that a value is, where it is one of exponential terms: a Member of a Loop starting at 0.
+const Instr* rolled_loop(const std::vector<Instr>& body, ValueId v) {
+    const Instr& a = body[v];
+    if (a.op != Op::Member || a.aux != 0 || body[a.args[0]].op != Op::Loop) return nullptr;
+    const Instr& loop = body[a.args[0]];
+    if (loop.args.size() < 2 || !is_scalar_const(body[loop.args[1]], 0)) return nullptr;
+    return &loop;
+}
+
+// log(v) as ∑_j c_j log(v_j): the argument of a logarithm taken apart at products, quotients, powers and square roots
+// (log(S/4) = log S − log 4, log(1/S) = −log S, log(√S) = ½ log S, log(S²) = 2 log S), where each part is a sum of
+// exponential terms (`lse` accepts it: a log-sum-exp) or known positive (a constant, a positive slider, an
+// exponential), so that the identity holds wherever the original is defined. False where any part is neither, or where
+// no part is a sum. A trial's (stop 54) -ln(∑_i e^(-k d_i)/4)/k, 0.5(e^a + e^b), -ln(t/48)/k through a local
+// function, 1/e^(k t), ln(1/∑): none stabilised, nothing drawn from 14 units.
+struct LogPiece {
+    ValueId v;
+    double c;
+    bool sum;  // a sum of exponential terms (else a positive value)
+};
+
+template <class Lse>
+bool log_pieces(const Function& f, const std::vector<Instr>& body, ValueId v, double c, std::vector<LogPiece>& out, const Lse& lse,
+                int depth = 0) {
+    const Instr& in = body[v];
+    if (lse(v)) {
+        out.push_back({v, c, true});
+        return true;
+    }
+    if (is_scalar_const(in, 1)) return true;  // (log 1 = 0: 1/S)
+    if (positive(f, body, v) || exponential(f, body, in)) {
+        out.push_back({v, c, false});
+        return true;
+    }
+    if (depth > 6 || !in.type.is_scalar() || in.args.empty()) return false;
+    for (ValueId a : in.args)
+        if (!body[a].type.is_scalar()) return false;
+    if ((in.op == Op::Mul || in.op == Op::Div) && in.args.size() == 2)
+        return log_pieces(f, body, in.args[0], c, out, lse, depth + 1) &&
+               log_pieces(f, body, in.args[1], in.op == Op::Div ? -c : c, out, lse, depth + 1);
+    // (a power of a sum: the sum is > 0, so log(S^q) = q log S for any q)
+    if (is_builtin(in, "pow") && body[in.args[1]].op == Op::Const && body[in.args[1]].data.size() == 1 && lse(in.args[0])) {
+        out.push_back({in.args[0], c * body[in.args[1]].data[0], true});
+        return true;
+    }
+    if (is_builtin(in, "sqrt") && lse(in.args[0])) {
+        out.push_back({in.args[0], 0.5 * c, true});
+        return true;
+    }
+    return false;
+}
+
+// Whether value v of f is a sum (of up to kMaxTerms leaves) whose every term is an exponential term, or a rolled ∑
+// that `rolled` accepts.
+template <class Rolled>
+bool exp_sum(const Function& f, const std::vector<Instr>& body, ValueId v, const Rolled& rolled) {
+    if (const Instr* loop = rolled_loop(body, v)) return rolled(*loop);
+    std::vector<ValueId> terms;
+    if (!sum_terms(body, v, terms) || terms.empty()) return false;
+    if (terms.size() == 1 && body[v].op != Op::Add) {
+        // (one term alone is a sum only with a weight: w e^x; a bare e^x is a positive part, log(e^x) = x)
+        ExpTerm t;
+        return exp_term(f, body, v, t) && !t.plain();
+    }
+    for (ValueId t : terms) {
+        ExpTerm e;
+        if (!exp_term(f, body, t, e)) return false;
+    }
+    return true;
 }
 
 using Splits = std::map<int, std::pair<int, int>>;
@@ -105,7 +283,7 @@ std::vector<char> log_or_exp_functions(const Module& m) {
     std::vector<char> marked(m.functions.size(), 0);
     for (size_t i = 0; i < m.functions.size(); ++i)
         for (const Instr& in : m.functions[i].body)
-            if (log_factor(in) != 0 || exponential(m.functions[i].body, in)) marked[i] = 1;
+            if (log_factor(in) != 0 || exponential(m.functions[i], m.functions[i].body, in)) marked[i] = 1;
     for (bool changed = true; changed;) {
         changed = false;
         for (size_t i = 0; i < m.functions.size(); ++i)
@@ -118,16 +296,23 @@ std::vector<char> log_or_exp_functions(const Module& m) {
 // A module's own name: "blob" of "blob", "blob.s" and "blob.sum_i" (its local functions and loop bodies).
 std::string_view module_of(const std::string& name) { return std::string_view(name).substr(0, name.find('.')); }
 
-// A logarithm of a rolled ∑ (a Loop starting at 0) whose term is a call of `local` (the loop body's term, not yet
-// inlined): where a log-sum-exp spans a module's local functions.
+// A logarithm of a rolled ∑ (a Loop starting at 0) whose body calls `local` (the loop body's term, or part of it, not
+// yet inlined): where a log-sum-exp spans a module's local functions.
 bool log_of_rolled_call(const Module& m, const Function& f, const std::vector<char>& local) {
+    auto local_term = [&](ValueId v) {
+        const Instr* loop = rolled_loop(f.body, v);
+        if (!loop) return false;
+        const Function& body = m.functions[size_t(loop->aux)];
+        if (!accumulated_term(body, 0)) return false;
+        for (const Instr& in : body.body)
+            if (in.op == Op::Call && local[size_t(in.aux)]) return true;
+        return false;
+    };
     for (const Instr& in : f.body) {
-        if (log_factor(in) == 0 || f.body[in.args[0]].op != Op::Member) continue;
-        const Instr& loop = f.body[f.body[in.args[0]].args[0]];
-        if (loop.op != Op::Loop || loop.args.size() < 2 || !is_scalar_const(f.body[loop.args[1]], 0)) continue;
-        const Function& body = m.functions[size_t(loop.aux)];
-        auto t = accumulated_term(body, 0);
-        if (t && body.body[*t].op == Op::Call && local[size_t(body.body[*t].aux)]) return true;
+        std::vector<LogPiece> pieces;
+        if (log_factor(in) == 0 || !log_pieces(f, f.body, in.args[0], 1, pieces, local_term)) continue;
+        for (const LogPiece& piece : pieces)
+            if (piece.sum) return true;
     }
     return false;
 }
@@ -159,11 +344,11 @@ void inline_split_forms(Module& m) {
             m.functions[i] = std::move(g);
         }
     }
-    // The rolled sums' bodies whose term is a local call: that call inlined (the body's own exponential shows).
+    // The rolled sums' bodies that call the module's functions: those calls inlined (the body's own exponential
+    // shows, w_i g(d_i) with g(t) = e^(-k t) too).
     for (int bi : rolled_bodies) {
         const Function& body = m.functions[size_t(bi)];
-        auto t = accumulated_term(body, 0);
-        if (!t || body.body[*t].op != Op::Call) continue;
+        if (!accumulated_term(body, 0)) continue;
         const std::string_view own = module_of(body.name);
         m.functions[size_t(bi)] = inline_calls_except(m, body, [&](const Function& c) {
             const size_t j = size_t(&c - m.functions.data());
@@ -181,19 +366,18 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
     // to the module here, not while a function is being rebuilt), by the original body's index.
     std::map<int, std::pair<int, int>> split;
     {
-        std::vector<std::pair<int, ValueId>> found;
+        std::vector<std::pair<int, ExpTerm>> found;
         for (const Function& f : m.functions)
             for (const Instr& in : f.body) {
-                if (!in.type.is_scalar() || !(is_builtin(in, "log") || is_builtin(in, "ln"))) continue;
-                const Instr& a = f.body[in.args[0]];
-                if (a.op != Op::Member || a.aux != 0 || f.body[a.args[0]].op != Op::Loop) continue;
-                const Instr& loop = f.body[a.args[0]];
-                if (split.count(loop.aux) || loop.args.size() < 2) continue;
-                const Instr& init = f.body[loop.args[1]];
-                if (init.op != Op::Const || init.data.size() != 1 || init.data[0] != 0) continue;
-                if (auto x = rolled_exp_sum(m.functions[size_t(loop.aux)])) {
-                    split[loop.aux] = {-1, -1};
-                    found.push_back({loop.aux, *x});
+                std::vector<LogPiece> pieces;
+                auto rolled_term = [&](const Instr& loop) { return rolled_exp_sum(m.functions[size_t(loop.aux)]).has_value(); };
+                auto lse = [&](ValueId v) { return exp_sum(f, f.body, v, rolled_term); };
+                if (log_factor(in) == 0 || !log_pieces(f, f.body, in.args[0], 1, pieces, lse)) continue;
+                for (const LogPiece& piece : pieces) {
+                    const Instr* loop = piece.sum ? rolled_loop(f.body, piece.v) : nullptr;
+                    if (!loop || split.count(loop->aux)) continue;
+                    split[loop->aux] = {-1, -1};
+                    found.push_back({loop->aux, *rolled_exp_sum(m.functions[size_t(loop->aux)])});
                 }
             }
         for (auto [body, x] : found) {
@@ -222,115 +406,125 @@ size_t rewrite_function(const Module& m, Function& f, const std::map<int, std::p
             const Instr& in = old[i];
             ValueId made = ValueId(-1);
             std::string what;
-            const Instr* member = in.args.empty() ? nullptr : &old[in.args[0]];
-            const bool rolled = in.type.is_scalar() && (is_builtin(in, "log") || is_builtin(in, "ln")) && member->op == Op::Member &&
-                                member->aux == 0 && old[member->args[0]].op == Op::Loop && split.count(old[member->args[0]].aux) &&
-                                split.at(old[member->args[0]].aux).first >= 0 && old[old[member->args[0]].args[1]].op == Op::Const;
-            if (rolled) {
-                // log ∑_i e^(x_i), a loop: hi = max_i x_i in one loop, then hi + log ∑_i e^(x_i − hi) in another (one
-                // term is e^0 = 1: the sum is at least 1).
-                const Instr loop = f.body[map[member->args[0]]];  // (a copy: already rebuilt, its arguments are new values)
-                auto [max_fn, sum_fn] = split.at(old[member->args[0]].aux);
-                Instr l1 = loop;
-                l1.aux = max_fn;
-                l1.args[1] = b.scalar(-3.4028234663852886e38);
-                l1.name.clear();
-                ValueId hi_loop = f.add(std::move(l1));
-                Instr mh;
-                mh.op = Op::Member;
-                mh.type = Type::scalar();
-                mh.args = {hi_loop};
-                ValueId hi = f.add(mh);
-                Instr l2 = loop;
-                l2.aux = sum_fn;
-                l2.args.push_back(hi);
-                l2.name.clear();
-                ValueId sum_loop = f.add(std::move(l2));
-                Instr ms = mh;
-                ms.args = {sum_loop};
-                ValueId sum = b.builtin("max", {f.add(ms), b.scalar(1)});
-                made = b.op(Op::Add, {hi, b.builtin("log", {sum})});
-                what = "log-sum-exp";
-            } else if (log_factor(in) != 0) {
-                // log-sum-exp: every term of the argument's sum is e^(something) (or c^(something): in base e, and the
-                // result times log_factor for log₂ and log₁₀).
+            auto at = [&](ValueId v) { return map[v]; };
+            auto rolled_ok = [&](const Instr& loop) {
+                auto it = split.find(loop.aux);
+                return it != split.end() && it->second.first >= 0;
+            };
+            auto lse = [&](ValueId v) { return exp_sum(f, old, v, rolled_ok); };
+            std::vector<LogPiece> pieces;
+            bool stabilises = false;
+            if (log_factor(in) != 0 && log_pieces(f, old, in.args[0], 1, pieces, lse)) {
+                // (a value taken twice is one piece: log(S·S) = 2 log S)
+                std::vector<LogPiece> merged;
+                for (const LogPiece& piece : pieces) {
+                    auto same = std::find_if(merged.begin(), merged.end(), [&](const LogPiece& o) { return o.v == piece.v; });
+                    if (same != merged.end()) same->c += piece.c;
+                    else merged.push_back(piece);
+                }
+                pieces.clear();
+                for (const LogPiece& piece : merged)
+                    if (piece.c != 0) pieces.push_back(piece);
+                for (const LogPiece& piece : pieces) stabilises = stabilises || piece.sum || exponential(f, old, old[piece.v]);
+            }
+            if (stabilises) {
+                // log-sum-exp: log of sums of exponential terms (times or over positive values), each sum in the shifted
+                // form, in base e (times log_factor for log₂ and log₁₀).
                 const double base = log_factor(in);
-                // The exponent of an exponential term in base e (built where it is c^y: y ln c).
-                auto exponent = [&](const Instr& t) {
-                    if (is_builtin(t, "exp")) return map[t.args[0]];
-                    return b.op(Op::Mul, {map[t.args[1]], b.scalar(std::log(old[t.args[0]].data[0]))});
-                };
                 auto in_base = [&](ValueId v) { return base == 1 ? v : b.op(Op::Mul, {v, b.scalar(base)}); };
-                std::vector<ValueId> terms;
-                // Weighted terms w·e^x (soft blobs: -ln(∑_i w_i e^(-k d_i))/k was +∞ at every pixel 12 units out, a trial's):
-                // m + log(∑_i w_i e^(x_i − m)), exact for any weights (no floor of 1 on the sum: a weight may be below 1).
-                // One term: log(e^x) = x, log(w e^x) = x + log w (a sequence of one point, stop 52).
-                std::vector<ValueId> ws, xs_w;
-                bool weighted = sum_terms(old, in.args[0], terms) && !terms.empty();
-                for (ValueId t : terms) {  // (the form first: nothing is built where it is not one)
-                    const Instr& ti = old[t];
-                    weighted = weighted && (exponential(old, ti) || (ti.op == Op::Mul && ti.type.is_scalar() && ti.args.size() == 2 &&
-                                                                     (exponential(old, old[ti.args[0]]) || exponential(old, old[ti.args[1]]))));
-                }
-                for (ValueId t : terms) {
-                    if (!weighted) break;
-                    const Instr& ti = old[t];
-                    if (exponential(old, ti)) {
-                        ws.push_back(ValueId(-1));
-                        xs_w.push_back(ValueId(-1));
-                    } else {
-                        const int e = exponential(old, old[ti.args[0]]) ? 0 : 1;
-                        ws.push_back(map[ti.args[size_t(1 - e)]]);
-                        xs_w.push_back(ValueId(-1));
+                // log of one sum of exponential terms (a rolled one: two loops).
+                auto sum_log = [&](ValueId v) -> ValueId {
+                    if (const Instr* loop_in = rolled_loop(old, v)) {
+                        // log ∑_i w_i e^(x_i), a loop: hi = max_i x_i in one loop, then hi + log ∑_i w_i e^(x_i − hi) in
+                        // another (unweighted, one term is e^0 = 1: the sum is at least 1).
+                        const Instr loop = f.body[map[old[v].args[0]]];  // (a copy: already rebuilt, its arguments are new values)
+                        auto [max_fn, sum_fn] = split.at(loop_in->aux);
+                        const auto term = rolled_exp_sum(m.functions[size_t(loop_in->aux)]);
+                        const bool unweighted = term && term->weights.empty();
+                        Instr l1 = loop;
+                        l1.aux = max_fn;
+                        l1.args[1] = b.scalar(-3.4028234663852886e38);
+                        l1.name.clear();
+                        ValueId hi_loop = f.add(std::move(l1));
+                        Instr mh;
+                        mh.op = Op::Member;
+                        mh.type = Type::scalar();
+                        mh.args = {hi_loop};
+                        ValueId hi = f.add(mh);
+                        Instr l2 = loop;
+                        l2.aux = sum_fn;
+                        l2.args.push_back(hi);
+                        l2.name.clear();
+                        ValueId sum_loop = f.add(std::move(l2));
+                        Instr ms = mh;
+                        ms.args = {sum_loop};
+                        ValueId sum = f.add(ms);
+                        if (unweighted) sum = b.builtin("max", {sum, b.scalar(1)});
+                        return b.op(Op::Add, {hi, b.builtin("log", {sum})});
                     }
-                }
-                bool any_weight = false;
-                for (ValueId w : ws) any_weight = any_weight || w != ValueId(-1);
-                if (weighted && (any_weight || terms.size() == 1)) {
-                    for (size_t k = 0; k < terms.size(); ++k) {
-                        const Instr& ti = old[terms[k]];
-                        xs_w[k] = exponent(exponential(old, ti) ? ti : old[ti.args[exponential(old, old[ti.args[0]]) ? 0 : 1]]);
+                    std::vector<ValueId> ids;
+                    sum_terms(old, v, ids);
+                    std::vector<ExpTerm> terms(ids.size());
+                    bool any_weight = false;
+                    for (size_t k = 0; k < ids.size(); ++k) {
+                        exp_term(f, old, ids[k], terms[k]);
+                        any_weight = any_weight || !terms[k].weights.empty();
                     }
-                    ValueId hi = xs_w[0];
-                    for (size_t k = 1; k < xs_w.size(); ++k) hi = b.builtin("max", {hi, xs_w[k]});
-                    if (terms.size() == 1) {
-                        made = in_base(ws[0] == ValueId(-1) ? hi : b.op(Op::Add, {hi, b.builtin("log", {ws[0]})}));
-                    } else {
+                    std::vector<ValueId> xs;
+                    for (const ExpTerm& t : terms) xs.push_back(exponent_of(b, old, t, at));
+                    ValueId hi = xs[0];
+                    for (size_t k = 1; k < xs.size(); ++k) hi = b.builtin("max", {hi, xs[k]});
+                    if (any_weight || terms.size() == 1) {
+                        // Weighted terms w·e^x (soft blobs: -ln(∑_i w_i e^(-k d_i))/k was +∞ at every pixel 12 units out, a
+                        // trial's): m + log(∑_i w_i e^(x_i − m)), exact for any weights (no floor of 1 on the sum: a weight
+                        // may be below 1). One term: log(w e^x) = x + log w.
+                        if (terms.size() == 1) {
+                            const ExpTerm& t = terms[0];
+                            if (t.weights.empty()) return hi;
+                            ValueId w = t.weights.size() == 1 && !t.weights[0].second ? at(t.weights[0].first) : weighted(b, t, b.scalar(1), at);
+                            return b.op(Op::Add, {hi, b.builtin("log", {w})});
+                        }
                         ValueId sum = ValueId(-1);
-                        for (size_t k = 0; k < xs_w.size(); ++k) {
-                            ValueId e = b.builtin("exp", {b.op(Op::Sub, {xs_w[k], hi})});
-                            if (ws[k] != ValueId(-1)) e = b.op(Op::Mul, {ws[k], e});
+                        for (size_t k = 0; k < xs.size(); ++k) {
+                            ValueId e = weighted(b, terms[k], b.builtin("exp", {b.op(Op::Sub, {xs[k], hi})}), at);
                             sum = sum == ValueId(-1) ? e : b.op(Op::Add, {sum, e});
                         }
-                        made = in_base(b.op(Op::Add, {hi, b.builtin("log", {sum})}));
+                        return b.op(Op::Add, {hi, b.builtin("log", {sum})});
                     }
-                    what = "log-sum-exp";
-                } else if (terms.size() >= 2 && !any_weight && weighted) {
-                    bool all_exp = true;
-                    for (ValueId t : terms) all_exp &= exponential(old, old[t]);
-                    if (all_exp) {
-                        std::vector<ValueId> xs;
-                        for (ValueId t : terms) xs.push_back(exponent(old[t]));
-                        ValueId hi = xs[0];
-                        for (size_t k = 1; k < xs.size(); ++k) hi = b.builtin("max", {hi, xs[k]});
-                        ValueId sum = 0;
-                        if (xs.size() == 2) {
-                            // max(a, b) + log(1 + e^(-|a - b|)): the sum is in [1, 2] for interval
-                            // arithmetic too, so the Lipschitz pass can bound the gradient.
-                            ValueId gap = b.builtin("abs", {b.op(Op::Sub, {xs[0], xs[1]})});
-                            sum = b.op(Op::Add, {b.scalar(1), b.builtin("exp", {b.op(Op::Neg, {gap})})});
-                        } else {
-                            for (size_t k = 0; k < xs.size(); ++k) {
-                                ValueId e = b.builtin("exp", {b.op(Op::Sub, {xs[k], hi})});
-                                sum = k == 0 ? e : b.op(Op::Add, {sum, e});
-                            }
-                            // One term is e^0 = 1: the sum is at least 1, which intervals learn from the max.
-                            sum = b.builtin("max", {sum, b.scalar(1)});
+                    ValueId sum = 0;
+                    if (xs.size() == 2) {
+                        // max(a, b) + log(1 + e^(-|a - b|)): the sum is in [1, 2] for interval arithmetic too, so the
+                        // Lipschitz pass can bound the gradient.
+                        ValueId gap = b.builtin("abs", {b.op(Op::Sub, {xs[0], xs[1]})});
+                        sum = b.op(Op::Add, {b.scalar(1), b.builtin("exp", {b.op(Op::Neg, {gap})})});
+                    } else {
+                        for (size_t k = 0; k < xs.size(); ++k) {
+                            ValueId e = b.builtin("exp", {b.op(Op::Sub, {xs[k], hi})});
+                            sum = k == 0 ? e : b.op(Op::Add, {sum, e});
                         }
-                        made = in_base(b.op(Op::Add, {hi, b.builtin("log", {sum})}));
-                        what = "log-sum-exp";
+                        // One term is e^0 = 1: the sum is at least 1, which intervals learn from the max.
+                        sum = b.builtin("max", {sum, b.scalar(1)});
                     }
+                    return b.op(Op::Add, {hi, b.builtin("log", {sum})});
+                };
+                ValueId total = ValueId(-1);
+                for (const LogPiece& piece : pieces) {
+                    ValueId l;
+                    if (piece.sum) {
+                        l = sum_log(piece.v);
+                    } else if (exponential(f, old, old[piece.v])) {
+                        ExpTerm t;
+                        t.parts = {{piece.v, 1.0}};
+                        l = exponent_of(b, old, t, at);
+                    } else {
+                        l = b.builtin("log", {map[piece.v]});
+                    }
+                    if (piece.c == -1) l = b.op(Op::Neg, {l});
+                    else if (piece.c != 1) l = b.op(Op::Mul, {l, b.scalar(piece.c)});
+                    total = total == ValueId(-1) ? l : b.op(Op::Add, {total, l});
                 }
+                made = in_base(total);
+                what = "log-sum-exp";
             } else if (in.type.is_scalar() && is_builtin(in, "sqrt")) {
                 // hypot: a sum of 2 to 4 squares.
                 std::vector<ValueId> terms;

@@ -1,7 +1,10 @@
 // Stable rewrites: the classic forms that lose everything in 32-bit floats, rewritten to equivalents that do
 // not. Each rewrite is exact in real arithmetic (the double evaluator gives the same values to rounding).
 //
-//   log-sum-exp   log(e^a₁ + … + e^aₙ)  ->  m + log(e^(a₁−m) + … + e^(aₙ−m)),  m = max(aᵢ)
+//   log-sum-exp   log(e^a₁ + … + e^aₙ)  ->  m + log(e^(a₁−m) + … + e^(aₙ−m)),  m = max(aᵢ); terms may carry
+//                 weights (w e^a), constant factors (e^a/2 = e^(a − ln 2)), products and powers of exponentials and
+//                 a base c > 0 (c^a = e^(a ln c), c a constant or a positive slider); the log's argument may be a
+//                 product, quotient, power or root of such sums and positive values (log(S/4) = log S − log 4)
 //                 (the exponential smooth minimum -k ln(e^(-a/k) + e^(-b/k)): e^(-a/k) underflows to 0 in
 //                 float once a/k > 103, and ln 0 = -∞; shifted, one term is e^0 = 1 and none overflows)
 //   hypot         sqrt(x₁² + … + xₙ²), 2 ≤ n ≤ 4  ->  length((x₁, …, xₙ))  (one norm: its derivative and
