@@ -793,6 +793,20 @@ TEST_CASE("samples reach a steep part the far field hides, and a slider's ends",
         INFO(slope << ": " << c.result.lipschitz[0]);
         CHECK_THAT(c.result.lipschitz[0], Catch::Contains("1.98 applied (derived: within 0.85 at the sliders' defaults)"));
     }
+    // A bound over 3× the samples warns that marching may be slower than it need be, and invites a declaration: where
+    // the sliders make it exact (‖p‖/(k m), 8 at k's and m's low ends; |k|‖p‖, 4 at k = -4), the samples are taken at
+    // the sliders' ends too, reach it, and nothing is warned (a trial's, stop 54: both warned, 8× and 4×).
+    for (const char* form : {"‖p‖/(k m) - 1\nwhere\np ∈ ℝ³\nk ∈ [0.25, 3] default = 1\nm ∈ [0.5, 2] default = 1\n",
+                             "|k| ‖p‖ - 1\nwhere\np ∈ ℝ³\nk ∈ [-4, 3] default = 1\n"}) {
+        CompileOptions o;
+        o.target = Target::WebGL2;
+        Compiled c = compile_path(write_temp("exact_slider.iql", std::string("shape\nD = ") + form), o);
+        REQUIRE(c.result.exit_code == 0);
+        REQUIRE(c.result.lipschitz.size() == 1);
+        INFO(c.result.lipschitz[0] << "\n" << c.diagnostics);
+        CHECK_THAT(c.result.lipschitz[0], Catch::Contains(" applied (derived)"));
+        CHECK_THAT(c.diagnostics, !Catch::Contains("slower than it may need to be"));
+    }
     // A declaration is checked by the same samples: a ramp of slope up to 7 in a band 0.05 wide passed `# lipschitz: 1`
     // unwarned (another trial's, stop 52: the check's samples found it, and a second estimate's replaced them).
     Compiled ramp = compile_text("ramp.iql", "shape\n# lipschitz: 1\nD = max(|p_2| - 0.5, ‖(p_1, p_3)‖ - 1) + "

@@ -29,6 +29,24 @@ TEST_CASE("a division by a slider range containing 0 is warned, located", "[rang
     CHECK_THAT(r.err, Catch::Contains("error: division by a value that can be 0"));
 }
 
+TEST_CASE("logarithms and powers of a positive slider have their ranges: no division warning", "[ranges]") {
+    // A trial (stop 54, F8): ln β, log₂ k, log₁₀ k, k^0.5, 2^k with β, k ∈ [1.5, 10] ranged over [-∞, ∞] (the ranges
+    // pass had no rule for them), so dividing by them was "a value that can be 0", and --strict-ranges rejected the
+    // module. Each is bounded now; a logarithm of a slider whose range reaches 1 (ln k = 0 at k = 1) is still warned.
+    for (const char* divisor : {"ln(k)", "log₂(k)", "log₁₀(k)", "k^0.5", "2^k", "k^k"}) {
+        INFO(divisor);
+        const std::string text = doc(std::string("D = (‖p‖ - 1)/") + divisor, "k ∈ [1.5, 10] default = 2\n");
+        Compiled c = compile_text("logdiv.md", text);
+        REQUIRE(c.result.exit_code == 0);
+        CHECK_THAT(c.diagnostics, !Catch::Contains("division by a value that can be 0"));
+        RunResult r = run_iqc("--strict-ranges " + write_temp("logdiv_strict.md", text).string() + " -o /dev/null");
+        CHECK(r.exit_code == 0);
+    }
+    Compiled one = compile_text("logdiv_one.md", doc("D = (‖p‖ - 1)/ln(k)", "k ∈ [0.5, 10] default = 2\n"));
+    REQUIRE(one.result.exit_code == 0);
+    CHECK_THAT(one.diagnostics, Catch::Contains("warning: division by a value that can be 0: with the parameters' bounds it ranges over [-0.6931, 2.303]"));
+}
+
 TEST_CASE("a sum that is a loop is bounded as the unrolled sum: the same warnings", "[ranges]") {
     // A new user's trial: 1/∑_i w_i warned with 31 weights (an unrolled sum of unbounded parameters) and not with
     // 32 (a loop, which the analysis did not look into). A sum of squares plus 0.5 over 40 weights is at least 20:

@@ -166,10 +166,10 @@ bool element_of(Bounds& x, const Bounds& array, const Type& t, Interval k, bool 
 
 // The builtins builtin_bounds has a rule for, by id (one table: a chain of name comparisons per instruction was a
 // tenth of an interval analysis' time).
-enum class B : uint8_t { other, sin, cos, tan, tanh, sinh, cosh, smoothstep, exp, log, ln, abs, sqrt, floor, ceil, round, fract, sign, step, min, max, clamp, mix, mod, pow, length, normalize, atan, atan2, asin, acos };
+enum class B : uint8_t { other, sin, cos, tan, tanh, sinh, cosh, smoothstep, exp, log, ln, log_2, log_10, abs, sqrt, floor, ceil, round, fract, sign, step, min, max, clamp, mix, mod, pow, length, normalize, atan, atan2, asin, acos };
 B builtin_kind(int id) {
     static const std::vector<B> kinds = [] {
-        constexpr std::pair<std::string_view, B> named[] = {{"sin", B::sin}, {"cos", B::cos}, {"tan", B::tan}, {"tanh", B::tanh}, {"sinh", B::sinh}, {"cosh", B::cosh}, {"smoothstep", B::smoothstep}, {"exp", B::exp}, {"log", B::log}, {"ln", B::ln}, {"abs", B::abs}, {"sqrt", B::sqrt}, {"floor", B::floor}, {"ceil", B::ceil}, {"round", B::round}, {"fract", B::fract}, {"sign", B::sign}, {"step", B::step}, {"min", B::min}, {"max", B::max}, {"clamp", B::clamp}, {"mix", B::mix}, {"mod", B::mod}, {"pow", B::pow}, {"length", B::length}, {"normalize", B::normalize}, {"atan", B::atan}, {"atan2", B::atan2}, {"asin", B::asin}, {"acos", B::acos}};
+        constexpr std::pair<std::string_view, B> named[] = {{"sin", B::sin}, {"cos", B::cos}, {"tan", B::tan}, {"tanh", B::tanh}, {"sinh", B::sinh}, {"cosh", B::cosh}, {"smoothstep", B::smoothstep}, {"exp", B::exp}, {"log", B::log}, {"ln", B::ln}, {"log_2", B::log_2}, {"log2", B::log_2}, {"log_10", B::log_10}, {"log10", B::log_10}, {"abs", B::abs}, {"sqrt", B::sqrt}, {"floor", B::floor}, {"ceil", B::ceil}, {"round", B::round}, {"fract", B::fract}, {"sign", B::sign}, {"step", B::step}, {"min", B::min}, {"max", B::max}, {"clamp", B::clamp}, {"mix", B::mix}, {"mod", B::mod}, {"pow", B::pow}, {"length", B::length}, {"normalize", B::normalize}, {"atan", B::atan}, {"atan2", B::atan2}, {"asin", B::asin}, {"acos", B::acos}};
         std::vector<B> k(builtins().size(), B::other);
         for (size_t i = 0; i < k.size(); ++i)
             for (const auto& [name, kind] : named)
@@ -203,11 +203,14 @@ Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
         });
     else if (n == B::smoothstep) each([&](size_t) { return Interval{0, 1}; });
     else if (n == B::exp) each([&](size_t k) { return monotone(arg(0, k), [](double v) { return std::exp(v); }); });
-    else if (n == B::log || n == B::ln)
+    else if (n == B::log || n == B::ln || n == B::log_2 || n == B::log_10)
         each([&](size_t k) {
+            // (log₂ and log₁₀ as ln times a constant: a divisor log₂ k with k ∈ [2, 3] had no bound, K ≤ ∞, a trial's)
+            const double unit = n == B::log_2 ? 1 / std::log(2.0) : n == B::log_10 ? 1 / std::log(10.0) : 1;
             Interval v = arg(0, k);
-            if (v.lo <= 0) return Interval{-kInf, v.hi > 0 ? std::log(v.hi) : kInf};
-            return monotone(v, [](double t) { return std::log(t); });
+            if (v.lo <= 0) return Interval{-kInf, v.hi > 0 ? unit * std::log(v.hi) : kInf};
+            const Interval l = monotone(v, [](double t) { return std::log(t); });
+            return unit == 1 ? l : Interval{std::nextafter(unit * l.lo, -kInf), std::nextafter(unit * l.hi, kInf)};
         });
     else if (n == B::abs)
         each([&](size_t k) {

@@ -1650,8 +1650,11 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     // evaluations of a large gradient cost the Christmas tree 20-35 ms.)
     // A declaration (`# lipschitz: K`, refine_bound off) is checked by these samples too: a ramp of slope 7 in a band
     // 0.05 wide passed `# lipschitz: 1` unwarned, holes in its picture (a trial's, stop 52).
+    // Where sliders are uniforms and the bound is over 3× the samples (the "up to N× slower" warning), the samples
+    // at the sliders' ends too: ‖p‖/(k m) over k ∈ [0.25, 3], m ∈ [0.5, 2] is 8, exactly the bound, where samples at
+    // the defaults reached 1 and the warning invited a declaration that would have made holes (a trial's, stop 54).
     const bool decides = !std::isfinite(e.derived) || e.derived > kUnbounded || (e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3) ||
-                         !refine_bound;
+                         !refine_bound || (!work.constant_parameters && e.derived > 3 * std::max(e.sampled, 1.0));
     if (evaluated > 0 && e.derived > 1 + 1e-9 && decides) {
         for (const auto& b : worst) e.sampled = std::max(e.sampled, sample(work, grad, b, others, ball, 32));
         std::vector<std::array<double, 3>> ends;

@@ -244,6 +244,33 @@ struct Analyzer {
         else if (n == "tanh") each([&](size_t) { return Interval{-1, 1}; });
         else if (n == "smoothstep") each([&](size_t) { return Interval{0, 1}; });
         else if (n == "exp") each([&](size_t k) { return monotone(comp(in.args[0], k), [](double v) { return std::exp(v); }); });
+        else if (n == "log" || n == "ln" || n == "log_2" || n == "log2" || n == "log_10" || n == "log10")
+            // (a trial's, stop 54: ln β with β ∈ [1.5, 10] was [-∞, ∞], a divisor "that can be 0", and --strict-ranges
+            // rejected the module)
+            each([&](size_t k) {
+                const double unit = n == "log_2" || n == "log2" ? 1 / std::log(2.0) : n == "log_10" || n == "log10" ? 1 / std::log(10.0) : 1;
+                Interval a = comp(in.args[0], k);
+                if (!(a.hi > 0)) return unknown();
+                return Interval{a.lo > 0 ? unit * std::log(a.lo) : -kInf, unit * std::log(a.hi)};
+            });
+        else if (n == "pow")
+            each([&](size_t k) {
+                Interval b = comp(in.args[0], k), e = comp(in.args[1], k);
+                if (!(b.lo >= 0)) return unknown();
+                double c[4] = {std::pow(b.lo, e.lo), std::pow(b.lo, e.hi), std::pow(b.hi, e.lo), std::pow(b.hi, e.hi)};
+                Interval r{kInf, -kInf};
+                for (double v : c) {
+                    if (std::isnan(v)) return unknown();
+                    r.lo = std::min(r.lo, v);
+                    r.hi = std::max(r.hi, v);
+                }
+                if (b.lo == 0 && e.lo < 0) r.hi = kInf;
+                // (b^e is monotone in e for b on one side of 1 and in b for e of one sign: the corners bound it; else
+                // b^e over b < 1 < b' or e < 0 < e' still lies between the corners' least and greatest and 1)
+                if (b.lo < 1 && b.hi > 1) r = Interval{std::min(r.lo, 1.0), std::max(r.hi, 1.0)};
+                if (e.lo < 0 && e.hi > 0) r = Interval{std::min(r.lo, 1.0), std::max(r.hi, 1.0)};
+                return r;
+            });
         else if (n == "abs")
             each([&](size_t k) {
                 Interval a = comp(in.args[0], k);
