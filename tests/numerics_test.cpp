@@ -1381,7 +1381,7 @@ TEST_CASE("a shape too steep to march by its samples says it is marched as if 1-
     // Two new users' trials (stop 40): 70(‖p‖ - 1), slope 70, derived 70 (above 64, too many steps to march by), was
     // marched with K = 1, where the warning named no K at all; it said so then. Since stop 54 the samples' K is marched
     // by up to 256 (metaballs, slope 47 at their surface, drew nothing at 1): 70 is marched with K = 70 (the derived
-    // bound, below 1.25 × 70), 300(‖p‖ - 1) as if it were 1-Lipschitz, and the warnings say which.
+    // bound, below 1.25 × 70: proven, only slow), 300(‖p‖ - 1) as if it were 1-Lipschitz, and the warnings say which.
     auto steep = [](int slope) {
         std::string text = fmt::format("[modules]\nsteep = \"\"\"\nshape\nD = {}(‖p‖ - 1)\nwhere\np ∈ ℝ³\n\"\"\"\n[camera]\n"
                                        "position = [0, 1, -4]\ntarget = [0, 0, 0]\n[[shapes]]\ntype = \"steep\"\n", slope);
@@ -1390,9 +1390,11 @@ TEST_CASE("a shape too steep to march by its samples says it is marched as if 1-
     Compiled c = steep(70);
     REQUIRE(c.result.exit_code == 0);
     INFO(c.diagnostics);
-    CHECK_THAT(c.diagnostics, Catch::Contains("steep70.iq:12:8: warning: shape 'steep' is not 1-Lipschitz (its gradient reaches 70"));
-    CHECK_THAT(c.diagnostics, Catch::Contains("iqc marches it with K = 70, 1.25 times the steepest gradient its samples reach, which is "
-                                              "not a proven bound: marching may step through its surface"));
+    CHECK_THAT(c.diagnostics, Catch::Contains("steep70.iq:12:8: warning: shape 'steep' is marched with K = 70, the bound iqc derives for "
+                                              "its gradient (its samples reach 70): each step is 1/70 of its distance"));
+    CHECK_THAT(c.diagnostics, !Catch::Contains("step through its surface"));
+    REQUIRE(c.result.lipschitz.size() == 1);
+    CHECK_THAT(c.result.lipschitz[0], Catch::EndsWith("70 applied (derived, above 64: slow to march)"));
     Compiled d = steep(300);
     REQUIRE(d.result.exit_code == 0);
     INFO(d.diagnostics);

@@ -2036,28 +2036,39 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                 applied = std::min(kSampledMargin * steep, std::isfinite(e.derived) ? e.derived : kInf);
                 how = fmt::format("no useful bound: {:g} times the steepest sample{}, not proven", kSampledMargin, apart ? " outside the shape" : "");
             }
-            bool bounded = !spec.bounds.empty() || spec.ball > 0;
-            std::string reason = !e.why.empty() ? (e.unevaluable ? e.why : "iqc cannot differentiate it (" + e.why + ")")
-                                 : e.sampled <= 1 + 1e-3
-                                     ? fmt::format("samples of its gradient reach only {:.3g}, but iqc cannot bound it where the instance "
-                                                   "is marched; if it is 1-Lipschitz, say `# bound` in the module", e.sampled)
-                                 : std::isfinite(e.derived)
-                                     ? fmt::format("its gradient reaches {:.4g}{}, and the bound iqc derives where the instance is marched, "
-                                                   "{:.3g}, would take too many steps", steep, apart ? fmt::format(" outside it ({:.4g} inside)", e.sampled) : "", e.derived)
-                                     : fmt::format("its gradient reaches {:.4g}{} and iqc cannot bound it where the instance is marched",
-                                                   steep, apart ? fmt::format(" outside it ({:.4g} inside)", e.sampled) : "");
-            // (and where even the samples' K is too large to march by, it says that it marches with K = 1: two
-            // new users' trials, stop 40, read the warning as if some K were applied)
-            std::string marched = applied > 1 ? fmt::format("iqc marches it with K = {:.3g}, {:g} times the steepest gradient its samples "
-                                                            "reach{}, which is not a proven bound: ", applied, kSampledMargin, apart ? " outside it" : "")
-                                  : e.sampled > 1 + 1e-3 ? "iqc marches it as if it were 1-Lipschitz: "
-                                                         : "";
-            std::string fix = bounded ? "declare `# lipschitz: K` in the module (the instance's `bound` does not make its gradient boundable)"
-                                      : "give the instance `bound = R` (a sphere around the shape) so iqc can bound its gradient there, "
-                                        "or declare `# lipschitz: K`";
-            warnings.push_back({spec.where, fmt::format("shape '{}' {} ({}): {}marching may step through its surface; {}", spec.shape,
-                                                        e.why.empty() && e.sampled <= 1 + 1e-3 ? "has no Lipschitz bound iqc can derive" : "is not 1-Lipschitz",
-                                                        reason, marched, fix)});
+            // The derived bound itself, where the samples' margin would exceed it: proven, only slow (‖p‖/k² over
+            // k ∈ [0.1, 3]: 100; 70(‖p‖ − 1): 70). Said so, not "may step through its surface" (a trial's, stop 54).
+            if (applied > 1 && std::isfinite(e.derived) && applied == e.derived) {
+                how = fmt::format("derived, above {:g}: slow to march", kUnbounded);
+                warnings.push_back({spec.where, fmt::format("shape '{}' is marched with K = {:.3g}, the bound iqc derives for its gradient (its "
+                                                            "samples reach {:.3g}): each step is 1/{:.3g} of its distance, so marching "
+                                                            "takes many steps; if it need not be this steep, scale its distance down or "
+                                                            "narrow the range of a slider it is steep at the end of",
+                                                            spec.shape, applied, e.sampled, applied)});
+            } else {
+                bool bounded = !spec.bounds.empty() || spec.ball > 0;
+                std::string reason = !e.why.empty() ? (e.unevaluable ? e.why : "iqc cannot differentiate it (" + e.why + ")")
+                                     : e.sampled <= 1 + 1e-3
+                                         ? fmt::format("samples of its gradient reach only {:.3g}, but iqc cannot bound it where the instance "
+                                                       "is marched; if it is 1-Lipschitz, say `# bound` in the module", e.sampled)
+                                     : std::isfinite(e.derived)
+                                         ? fmt::format("its gradient reaches {:.4g}{}, and the bound iqc derives where the instance is marched, "
+                                                       "{:.3g}, would take too many steps", steep, apart ? fmt::format(" outside it ({:.4g} inside)", e.sampled) : "", e.derived)
+                                         : fmt::format("its gradient reaches {:.4g}{} and iqc cannot bound it where the instance is marched",
+                                                       steep, apart ? fmt::format(" outside it ({:.4g} inside)", e.sampled) : "");
+                // (and where even the samples' K is too large to march by, it says that it marches with K = 1: two
+                // new users' trials, stop 40, read the warning as if some K were applied)
+                std::string marched = applied > 1 ? fmt::format("iqc marches it with K = {:.3g}, {:g} times the steepest gradient its samples "
+                                                                "reach{}, which is not a proven bound: ", applied, kSampledMargin, apart ? " outside it" : "")
+                                      : e.sampled > 1 + 1e-3 ? "iqc marches it as if it were 1-Lipschitz: "
+                                                             : "";
+                std::string fix = bounded ? "declare `# lipschitz: K` in the module (the instance's `bound` does not make its gradient boundable)"
+                                          : "give the instance `bound = R` (a sphere around the shape) so iqc can bound its gradient there, "
+                                            "or declare `# lipschitz: K`";
+                warnings.push_back({spec.where, fmt::format("shape '{}' {} ({}): {}marching may step through its surface; {}", spec.shape,
+                                                            e.why.empty() && e.sampled <= 1 + 1e-3 ? "has no Lipschitz bound iqc can derive" : "is not 1-Lipschitz",
+                                                            reason, marched, fix)});
+            }
         } else {
             applied = e.derived;
             how = e.at_defaults > 0 && e.at_defaults <= 1 + 1e-9 && e.sampled <= 1 + 1e-3
