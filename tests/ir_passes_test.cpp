@@ -185,7 +185,7 @@ TEST_CASE("stable rewrites give the double evaluator's values of the forms they 
             else CHECK(std::abs(va - vb) <= 1e-9 * std::max(1.0, std::abs(vb)));
         });
     }
-    CHECK(compared == 8 * 200);
+    CHECK(compared == 10 * 200);
 }
 
 // If-conversion changes no value: tests/passes/select's entry functions, before and after, evaluated in double

@@ -158,6 +158,21 @@ ValueId weighted(Builder& b, const ExpTerm& t, ValueId e, At at) {
     return e;
 }
 
+// The exponent that competes for the shift m (the largest): x, or, where a weight is not known positive (a slider's,
+// which may be 0), x only where the weights' product is > 0, else the float minimum: a weight of 0 on the largest
+// term made the shifted sum 0, ln 0 = -∞, a hole through the wall behind a blob turned off (a trial's, stop 54).
+// `kind` Ne: the exponent a term is shifted by in the sum, the float minimum where its weight is 0 (0·e^(x − m) of an
+// x above m overflowed to 0·∞ = NaN).
+template <class At>
+ValueId competing(Builder& b, const Function& f, const std::vector<Instr>& body, const ExpTerm& t, ValueId x, At at,
+                  CompareKind kind = CompareKind::Gt) {
+    bool known = true;
+    for (const auto& [w, divides] : t.weights) known = known && positive(f, body, w);
+    if (known) return x;
+    const ValueId w = t.weights.size() == 1 ? at(t.weights[0].first) : weighted(b, t, b.scalar(1), at);  // (1/w: w's sign)
+    return b.op(Op::Select, {b.compare(kind, w, b.scalar(0)), x, b.scalar(-3.4028234663852886e38)});
+}
+
 // A rolled ∑ of exponential terms (a Loop whose body adds a term to its one state, the term not reading the state).
 std::optional<ExpTerm> rolled_exp_sum(const Function& body) {
     if (body.outputs.size() != 1 || !body.body[body.outputs[0].second].type.is_scalar()) return std::nullopt;
@@ -183,7 +198,7 @@ std::pair<Function, Function> split_exp_sum(const Module& m, const Function& bod
     hi.glsl_name = hi.name;
     {
         Builder b(m, hi);
-        ValueId v = b.builtin("max", {state_param(hi), exponent_of(b, body.body, t, same)});
+        ValueId v = b.builtin("max", {state_param(hi), competing(b, body, body.body, t, exponent_of(b, body.body, t, same), same)});
         hi.outputs = {{"hi", v}};
         hi.result = v;
     }
@@ -193,7 +208,7 @@ std::pair<Function, Function> split_exp_sum(const Module& m, const Function& bod
         Builder b(m, shifted);
         const ValueId state = state_param(shifted);
         ValueId h = b.param("hi", Type::scalar());
-        ValueId x = exponent_of(b, body.body, t, same);
+        ValueId x = competing(b, body, body.body, t, exponent_of(b, body.body, t, same), same, CompareKind::Ne);
         ValueId v = b.op(Op::Add, {state, weighted(b, t, b.builtin("exp", {b.op(Op::Sub, {x, h})}), same)});
         shifted.outputs = {{"sum", v}};
         shifted.result = v;
@@ -267,7 +282,8 @@ bool exp_sum(const Function& f, const std::vector<Instr>& body, ValueId v, const
     }
     for (ValueId t : terms) {
         ExpTerm e;
-        if (!exp_term(f, body, t, e)) return false;
+        const Instr* loop = rolled_loop(body, t);
+        if (loop ? !rolled(*loop) : !exp_term(f, body, t, e)) return false;
     }
     return true;
 }
@@ -374,10 +390,16 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
                 auto lse = [&](ValueId v) { return exp_sum(f, f.body, v, rolled_term); };
                 if (log_factor(in) == 0 || !log_pieces(f, f.body, in.args[0], 1, pieces, lse)) continue;
                 for (const LogPiece& piece : pieces) {
-                    const Instr* loop = piece.sum ? rolled_loop(f.body, piece.v) : nullptr;
-                    if (!loop || split.count(loop->aux)) continue;
-                    split[loop->aux] = {-1, -1};
-                    found.push_back({loop->aux, *rolled_exp_sum(m.functions[size_t(loop->aux)])});
+                    if (!piece.sum) continue;
+                    std::vector<ValueId> ids;
+                    if (rolled_loop(f.body, piece.v)) ids = {piece.v};
+                    else sum_terms(f.body, piece.v, ids);
+                    for (ValueId t : ids) {
+                        const Instr* loop = rolled_loop(f.body, t);
+                        if (!loop || split.count(loop->aux)) continue;
+                        split[loop->aux] = {-1, -1};
+                        found.push_back({loop->aux, *rolled_exp_sum(m.functions[size_t(loop->aux)])});
+                    }
                 }
             }
         for (auto [body, x] : found) {
@@ -427,53 +449,128 @@ size_t rewrite_function(const Module& m, Function& f, const std::map<int, std::p
                     if (piece.c != 0) pieces.push_back(piece);
                 for (const LogPiece& piece : pieces) stabilises = stabilises || piece.sum || exponential(f, old, old[piece.v]);
             }
-            if (stabilises) {
+            // A ratio of sums of exponential terms, the softmax-weighted mean ∑_i d_i e^(x_i)/∑_j e^(x_j): both sums
+            // times e^(-m), m the denominator's largest exponent (0/0 from 11 units, nothing drawn: a trial's, stop 54).
+            std::vector<ValueId> num_ids, den_ids;
+            std::vector<ExpTerm> num, den;
+            auto exp_terms = [&](ValueId v, std::vector<ValueId>& ids, std::vector<ExpTerm>& out) {
+                if (rolled_loop(old, v) || !sum_terms(old, v, ids) || ids.empty()) return false;
+                out.resize(ids.size());
+                for (size_t k = 0; k < ids.size(); ++k)
+                    if (!exp_term(f, old, ids[k], out[k])) return false;
+                return true;
+            };
+            const bool ratio = in.op == Op::Div && in.type.is_scalar() && old[in.args[1]].type.is_scalar() &&
+                               exp_terms(in.args[1], den_ids, den) && den.size() >= 2 && exp_terms(in.args[0], num_ids, num);
+            if (ratio) {
+                ValueId hi = ValueId(-1);
+                for (const ExpTerm& t : den) {
+                    const ValueId c = competing(b, f, old, t, exponent_of(b, old, t, at), at);
+                    hi = hi == ValueId(-1) ? c : b.builtin("max", {hi, c});
+                }
+                // (the denominator's terms of weight 0 shifted by the float minimum; the numerator's weights are the
+                // values averaged, d_i, whose exponents are the denominator's)
+                auto shifted = [&](const std::vector<ExpTerm>& terms, bool guard) {
+                    ValueId sum = ValueId(-1);
+                    for (const ExpTerm& t : terms) {
+                        const ValueId x0 = exponent_of(b, old, t, at);
+                        const ValueId x = guard ? competing(b, f, old, t, x0, at, CompareKind::Ne) : x0;
+                        const ValueId e = weighted(b, t, b.builtin("exp", {b.op(Op::Sub, {x, hi})}), at);
+                        sum = sum == ValueId(-1) ? e : b.op(Op::Add, {sum, e});
+                    }
+                    return sum;
+                };
+                const ValueId n = shifted(num, false), d = shifted(den, true);
+                made = b.op(Op::Div, {n, d});
+                what = "ratio of exponential sums";
+            } else if (log_factor(in) != 0 && is_builtin(old[in.args[0]], "cosh") && old[in.args[0]].type.is_scalar()) {
+                // log cosh x = |x| + log(1 + e^(-2|x|)) − ln 2 (the smooth |x|, log(cosh(k y))/k: cosh overflowed from
+                // 14 units, a trial's, stop 54)
+                const ValueId ax = b.builtin("abs", {map[old[in.args[0]].args[0]]});
+                ValueId l = b.op(Op::Add, {ax, b.builtin("log", {b.op(Op::Add, {b.scalar(1), b.builtin("exp", {b.op(Op::Mul, {ax, b.scalar(-2)})})})})});
+                l = b.op(Op::Sub, {l, b.scalar(std::log(2.0))});
+                made = log_factor(in) == 1 ? l : b.op(Op::Mul, {l, b.scalar(log_factor(in))});
+                what = "log cosh";
+            } else if (stabilises) {
                 // log-sum-exp: log of sums of exponential terms (times or over positive values), each sum in the shifted
                 // form, in base e (times log_factor for log₂ and log₁₀).
                 const double base = log_factor(in);
                 auto in_base = [&](ValueId v) { return base == 1 ? v : b.op(Op::Mul, {v, b.scalar(base)}); };
                 // log of one sum of exponential terms (a rolled one: two loops).
+                // log of one sum of exponential terms, some of them rolled sums (loops: each two loops, the largest
+                // exponent's and the shifted sum's, with one shift for the whole sum).
                 auto sum_log = [&](ValueId v) -> ValueId {
-                    if (const Instr* loop_in = rolled_loop(old, v)) {
+                    std::vector<ValueId> ids;
+                    if (rolled_loop(old, v)) ids = {v};
+                    else sum_terms(old, v, ids);
+                    std::vector<ExpTerm> terms(ids.size());
+                    std::vector<const Instr*> loops(ids.size(), nullptr);
+                    bool any_weight = false, any_loop = false;
+                    for (size_t k = 0; k < ids.size(); ++k) {
+                        if ((loops[k] = rolled_loop(old, ids[k]))) {
+                            any_loop = true;
+                            const auto term = rolled_exp_sum(m.functions[size_t(loops[k]->aux)]);
+                            any_weight = any_weight || !term || !term->weights.empty();
+                        } else {
+                            exp_term(f, old, ids[k], terms[k]);
+                            any_weight = any_weight || !terms[k].weights.empty();
+                        }
+                    }
+                    if (any_loop) {
                         // log ∑_i w_i e^(x_i), a loop: hi = max_i x_i in one loop, then hi + log ∑_i w_i e^(x_i − hi) in
-                        // another (unweighted, one term is e^0 = 1: the sum is at least 1).
-                        const Instr loop = f.body[map[old[v].args[0]]];  // (a copy: already rebuilt, its arguments are new values)
-                        auto [max_fn, sum_fn] = split.at(loop_in->aux);
-                        const auto term = rolled_exp_sum(m.functions[size_t(loop_in->aux)]);
-                        const bool unweighted = term && term->weights.empty();
-                        Instr l1 = loop;
-                        l1.aux = max_fn;
-                        l1.args[1] = b.scalar(-3.4028234663852886e38);
-                        l1.name.clear();
-                        ValueId hi_loop = f.add(std::move(l1));
-                        Instr mh;
-                        mh.op = Op::Member;
-                        mh.type = Type::scalar();
-                        mh.args = {hi_loop};
-                        ValueId hi = f.add(mh);
-                        Instr l2 = loop;
-                        l2.aux = sum_fn;
-                        l2.args.push_back(hi);
-                        l2.name.clear();
-                        ValueId sum_loop = f.add(std::move(l2));
-                        Instr ms = mh;
-                        ms.args = {sum_loop};
-                        ValueId sum = f.add(ms);
-                        if (unweighted) sum = b.builtin("max", {sum, b.scalar(1)});
+                        // another (unweighted, one term is e^0 = 1: the sum is at least 1). Other terms beside the loop
+                        // (a ring of 32 blobs and a core: a trial's, stop 54) share the shift.
+                        std::vector<ValueId> xs(ids.size(), ValueId(-1));
+                        ValueId hi = ValueId(-1);
+                        for (size_t k = 0; k < ids.size(); ++k) {
+                            ValueId c;
+                            if (loops[k]) {
+                                Instr l1 = f.body[map[old[ids[k]].args[0]]];  // (a copy: already rebuilt, its arguments are new values)
+                                l1.aux = split.at(loops[k]->aux).first;
+                                l1.args[1] = b.scalar(-3.4028234663852886e38);
+                                l1.name.clear();
+                                const ValueId hi_loop = f.add(std::move(l1));
+                                Instr mh;
+                                mh.op = Op::Member;
+                                mh.type = Type::scalar();
+                                mh.args = {hi_loop};
+                                c = f.add(mh);
+                            } else {
+                                xs[k] = exponent_of(b, old, terms[k], at);
+                                c = competing(b, f, old, terms[k], xs[k], at);
+                            }
+                            hi = hi == ValueId(-1) ? c : b.builtin("max", {hi, c});
+                        }
+                        ValueId sum = ValueId(-1);
+                        for (size_t k = 0; k < ids.size(); ++k) {
+                            ValueId e;
+                            if (loops[k]) {
+                                Instr l2 = f.body[map[old[ids[k]].args[0]]];
+                                l2.aux = split.at(loops[k]->aux).second;
+                                l2.args.push_back(hi);
+                                l2.name.clear();
+                                const ValueId sum_loop = f.add(std::move(l2));
+                                Instr ms;
+                                ms.op = Op::Member;
+                                ms.type = Type::scalar();
+                                ms.args = {sum_loop};
+                                e = f.add(ms);
+                            } else {
+                                const ValueId x = competing(b, f, old, terms[k], xs[k], at, CompareKind::Ne);
+                                e = weighted(b, terms[k], b.builtin("exp", {b.op(Op::Sub, {x, hi})}), at);
+                            }
+                            sum = sum == ValueId(-1) ? e : b.op(Op::Add, {sum, e});
+                        }
+                        if (!any_weight) sum = b.builtin("max", {sum, b.scalar(1)});
                         return b.op(Op::Add, {hi, b.builtin("log", {sum})});
                     }
-                    std::vector<ValueId> ids;
-                    sum_terms(old, v, ids);
-                    std::vector<ExpTerm> terms(ids.size());
-                    bool any_weight = false;
-                    for (size_t k = 0; k < ids.size(); ++k) {
-                        exp_term(f, old, ids[k], terms[k]);
-                        any_weight = any_weight || !terms[k].weights.empty();
+                    std::vector<ValueId> xs, cs;
+                    for (const ExpTerm& t : terms) {
+                        xs.push_back(exponent_of(b, old, t, at));
+                        cs.push_back(terms.size() > 1 ? competing(b, f, old, t, xs.back(), at) : xs.back());
                     }
-                    std::vector<ValueId> xs;
-                    for (const ExpTerm& t : terms) xs.push_back(exponent_of(b, old, t, at));
-                    ValueId hi = xs[0];
-                    for (size_t k = 1; k < xs.size(); ++k) hi = b.builtin("max", {hi, xs[k]});
+                    ValueId hi = cs[0];
+                    for (size_t k = 1; k < cs.size(); ++k) hi = b.builtin("max", {hi, cs[k]});
                     if (any_weight || terms.size() == 1) {
                         // Weighted terms w·e^x (soft blobs: -ln(∑_i w_i e^(-k d_i))/k was +∞ at every pixel 12 units out, a
                         // trial's): m + log(∑_i w_i e^(x_i − m)), exact for any weights (no floor of 1 on the sum: a weight
@@ -486,7 +583,8 @@ size_t rewrite_function(const Module& m, Function& f, const std::map<int, std::p
                         }
                         ValueId sum = ValueId(-1);
                         for (size_t k = 0; k < xs.size(); ++k) {
-                            ValueId e = weighted(b, terms[k], b.builtin("exp", {b.op(Op::Sub, {xs[k], hi})}), at);
+                            const ValueId x = competing(b, f, old, terms[k], xs[k], at, CompareKind::Ne);
+                            ValueId e = weighted(b, terms[k], b.builtin("exp", {b.op(Op::Sub, {x, hi})}), at);
                             sum = sum == ValueId(-1) ? e : b.op(Op::Add, {sum, e});
                         }
                         return b.op(Op::Add, {hi, b.builtin("log", {sum})});

@@ -7,6 +7,7 @@
 //                 product, quotient, power or root of such sums and positive values (log(S/4) = log S − log 4)
 //                 (the exponential smooth minimum -k ln(e^(-a/k) + e^(-b/k)): e^(-a/k) underflows to 0 in
 //                 float once a/k > 103, and ln 0 = -∞; shifted, one term is e^0 = 1 and none overflows)
+//   log cosh      log(cosh x)  ->  |x| + log(1 + e^(−2|x|)) − ln 2  (cosh overflows in float once |x| > 89)
 //   hypot         sqrt(x₁² + … + xₙ²), 2 ≤ n ≤ 4  ->  length((x₁, …, xₙ))  (one norm: its derivative and
 //                 its Lipschitz bound are the norm's, 1, not a quotient that intervals cannot bound)
 //   1 − cos       1 − cos x  ->  2 sin²(x/2)  (cos x rounds to 1 for |x| < 2.4e-4 in float: the
@@ -26,7 +27,7 @@ namespace iqc::ir {
 
 struct StableRewrite {
     Span where;        // the rewritten expression (its instruction's span: may be empty for generated code)
-    std::string what;  // "log-sum-exp", "hypot", "1 - cos"
+    std::string what;  // "log-sum-exp", "log cosh", "hypot", "1 - cos"
     std::string function;
 };
 
