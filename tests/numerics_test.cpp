@@ -1484,6 +1484,11 @@ TEST_CASE("metaballs, flat far out and steep at their surface, are marched by th
         }
     CHECK(lit > W * H / 20);   // the blobs fill part of the view
     CHECK(differ <= W * H / 200);
+    // A declaration is checked by the samples outside the shape too (47 at the surface; a trial's, stop 54: `# lipschitz:
+    // 64` was warned of the 8·10⁴ near a centre): 64 holds, 20 does not.
+    Compiled d64 = compile_text("metaballs_64.iq", blobs("# lipschitz: 64\n")), d20 = compile_text("metaballs_20.iq", blobs("# lipschitz: 20\n"));
+    CHECK_THAT(d64.diagnostics, !Catch::Contains("declares"));
+    CHECK_THAT(d20.diagnostics, Catch::Contains("declares '# lipschitz: 20', but its gradient reaches") && Catch::Contains("here outside the shape"));
 }
 
 TEST_CASE("smooth unions a trial wrote draw from afar: a weight of 0, a loop and a core, a softmax mean, log cosh", "[numerics][render][stats]") {
