@@ -51,14 +51,15 @@ bool sum_terms(const std::vector<Instr>& body, ValueId v, std::vector<ValueId>& 
 // β ∈ [1.5, 10]).
 bool positive(const Function& f, const std::vector<Instr>& body, ValueId v) {
     const Instr& in = body[v];
+    if (in.op == Op::Param && size_t(in.aux) < f.param_bounds.size()) {  // (a sequence's too: every element > 0)
+        const ValueBounds& pb = f.param_bounds[size_t(in.aux)];
+        return !pb.input && !pb.lo.empty() && std::all_of(pb.lo.begin(), pb.lo.end(), [](double lo) { return lo > 0; });
+    }
     if (!in.type.is_scalar()) return false;
     if (in.op == Op::Const) return in.data.size() == 1 && in.data[0] > 0;
-    if (in.op == Op::Param && size_t(in.aux) < f.param_bounds.size()) {
-        const ValueBounds& pb = f.param_bounds[size_t(in.aux)];
-        return !pb.input && pb.lo.size() == 1 && pb.lo[0] > 0;
-    }
     return false;
 }
+
 
 // Whether `t` is an exponential: e^x, or c^x for a base c > 0 other than 1 (e^(x ln c)): a constant, or a slider whose
 // bounds are > 0 (a trial's β^(-k d), β ∈ [1.5, 10]: not stabilised, nothing drawn from 14 units).
@@ -182,6 +183,22 @@ std::optional<ExpTerm> rolled_exp_sum(const Function& body) {
     return t;
 }
 
+// Whether the weights of a rolled ∑'s term are known positive: each unweighted, or an element of a sequence the loop
+// captures from f whose bounds are > 0 (w_i ∈ [0.1, 2]).
+bool rolled_weights_positive(const Module& m, const Function& f, const std::vector<Instr>& body, const Instr& loop) {
+    const Function& lb = m.functions[size_t(loop.aux)];
+    auto t = accumulated_term(lb, 0);
+    ExpTerm e;
+    if (!t || !exp_term(lb, lb.body, *t, e)) return false;
+    for (const auto& [w, divides] : e.weights) {
+        const Instr& wi = lb.body[w];
+        if (wi.op != Op::Index || lb.body[wi.args[0]].op != Op::Param) return false;
+        const size_t j = size_t(lb.body[wi.args[0]].aux);  // (body parameter j is the loop's operand j)
+        if (j >= loop.args.size() || !positive(f, body, loop.args[j])) return false;
+    }
+    return true;
+}
+
 // The state parameter (the running sum, parameter 1) of a loop body.
 ValueId state_param(const Function& body) {
     for (size_t i = 0; i < body.body.size(); ++i)
@@ -241,7 +258,9 @@ template <class Lse>
 bool log_pieces(const Function& f, const std::vector<Instr>& body, ValueId v, double c, std::vector<LogPiece>& out, const Lse& lse,
                 int depth = 0) {
     const Instr& in = body[v];
-    if (lse(v)) {
+    // (a part of a product, quotient, power or root must be > 0 for log(S·T) = log S + log T: a sum with a weight that
+    // may be negative may be too; the whole argument may be any sum)
+    if (lse(v, depth > 0)) {
         out.push_back({v, c, true});
         return true;
     }
@@ -257,15 +276,23 @@ bool log_pieces(const Function& f, const std::vector<Instr>& body, ValueId v, do
         return log_pieces(f, body, in.args[0], c, out, lse, depth + 1) &&
                log_pieces(f, body, in.args[1], in.op == Op::Div ? -c : c, out, lse, depth + 1);
     // (a power of a sum: the sum is > 0, so log(S^q) = q log S for any q)
-    if (is_builtin(in, "pow") && body[in.args[1]].op == Op::Const && body[in.args[1]].data.size() == 1 && lse(in.args[0])) {
+    if (is_builtin(in, "pow") && body[in.args[1]].op == Op::Const && body[in.args[1]].data.size() == 1 && lse(in.args[0], true)) {
         out.push_back({in.args[0], c * body[in.args[1]].data[0], true});
         return true;
     }
-    if (is_builtin(in, "sqrt") && lse(in.args[0])) {
+    if (is_builtin(in, "sqrt") && lse(in.args[0], true)) {
         out.push_back({in.args[0], 0.5 * c, true});
         return true;
     }
     return false;
+}
+
+// The terms of a sum piece: the rolled ∑ itself, or the leaves of its tree of Adds (each a term or a rolled ∑).
+std::vector<ValueId> piece_terms(const std::vector<Instr>& body, ValueId v) {
+    std::vector<ValueId> ids;
+    if (rolled_loop(body, v)) ids = {v};
+    else sum_terms(body, v, ids);
+    return ids;
 }
 
 // Whether value v of f is a sum (of up to kMaxTerms leaves) whose every term is an exponential term, or a rolled ∑
@@ -289,6 +316,23 @@ bool exp_sum(const Function& f, const std::vector<Instr>& body, ValueId v, const
 }
 
 using Splits = std::map<int, std::pair<int, int>>;
+
+// Whether every weight of the sum at v (its exponential terms') is known positive: the sum is then > 0. Rolled ∑s are
+// `rolled_positive`'s to judge.
+template <class Rolled>
+bool positive_sum(const Function& f, const std::vector<Instr>& body, ValueId v, const Rolled& rolled_positive) {
+    for (ValueId t : piece_terms(body, v)) {
+        if (const Instr* loop = rolled_loop(body, t)) {
+            if (!rolled_positive(*loop)) return false;
+            continue;
+        }
+        ExpTerm e;
+        if (!exp_term(f, body, t, e)) return false;
+        for (const auto& [w, divides] : e.weights)
+            if (!positive(f, body, w)) return false;
+    }
+    return true;
+}
 
 // Rewrites f's unstable forms (the rolled sums of `split` by their replacement loops); returns how many fired, and
 // appends them to `fired` (when given). Reads no other function: a copy of f may be tried.
@@ -315,7 +359,7 @@ std::string_view module_of(const std::string& name) { return std::string_view(na
 // A logarithm of a rolled ∑ (a Loop starting at 0) whose body calls `local` (the loop body's term, or part of it, not
 // yet inlined): where a log-sum-exp spans a module's local functions.
 bool log_of_rolled_call(const Module& m, const Function& f, const std::vector<char>& local) {
-    auto local_term = [&](ValueId v) {
+    auto local_term = [&](ValueId v, bool) {
         const Instr* loop = rolled_loop(f.body, v);
         if (!loop) return false;
         const Function& body = m.functions[size_t(loop->aux)];
@@ -346,9 +390,8 @@ void inline_split_forms(Module& m) {
         const std::string_view own = module_of(f.name);
         std::vector<char> local(m.functions.size(), 0);
         bool calls = false;
-        for (size_t j = 0; j < m.functions.size(); ++j) {
+        for (size_t j = 0; j < m.functions.size(); ++j)
             local[j] = bearing[j] && j != i && module_of(m.functions[j].name) == own && m.functions[j].name != own;
-        }
         for (const Instr& in : f.body) calls = calls || (in.op == Op::Call && local[size_t(in.aux)]);
         if (!calls) continue;
         Function g = inline_calls_except(m, f, [&](const Function& c) { return !local[size_t(&c - m.functions.data())]; });
@@ -387,14 +430,14 @@ std::vector<StableRewrite> rewrite_unstable_forms(Module& m) {
             for (const Instr& in : f.body) {
                 std::vector<LogPiece> pieces;
                 auto rolled_term = [&](const Instr& loop) { return rolled_exp_sum(m.functions[size_t(loop.aux)]).has_value(); };
-                auto lse = [&](ValueId v) { return exp_sum(f, f.body, v, rolled_term); };
+                auto weights_positive = [&](const Instr& loop) { return rolled_weights_positive(m, f, f.body, loop); };
+                auto lse = [&](ValueId v, bool need_positive) {
+                    return exp_sum(f, f.body, v, rolled_term) && (!need_positive || positive_sum(f, f.body, v, weights_positive));
+                };
                 if (log_factor(in) == 0 || !log_pieces(f, f.body, in.args[0], 1, pieces, lse)) continue;
                 for (const LogPiece& piece : pieces) {
                     if (!piece.sum) continue;
-                    std::vector<ValueId> ids;
-                    if (rolled_loop(f.body, piece.v)) ids = {piece.v};
-                    else sum_terms(f.body, piece.v, ids);
-                    for (ValueId t : ids) {
+                    for (ValueId t : piece_terms(f.body, piece.v)) {
                         const Instr* loop = rolled_loop(f.body, t);
                         if (!loop || split.count(loop->aux)) continue;
                         split[loop->aux] = {-1, -1};
@@ -433,7 +476,10 @@ size_t rewrite_function(const Module& m, Function& f, const std::map<int, std::p
                 auto it = split.find(loop.aux);
                 return it != split.end() && it->second.first >= 0;
             };
-            auto lse = [&](ValueId v) { return exp_sum(f, old, v, rolled_ok); };
+            auto weights_positive = [&](const Instr& loop) { return rolled_weights_positive(m, f, old, loop); };
+            auto lse = [&](ValueId v, bool need_positive) {
+                return exp_sum(f, old, v, rolled_ok) && (!need_positive || positive_sum(f, old, v, weights_positive));
+            };
             std::vector<LogPiece> pieces;
             bool stabilises = false;
             if (log_factor(in) != 0 && log_pieces(f, old, in.args[0], 1, pieces, lse)) {
@@ -500,9 +546,7 @@ size_t rewrite_function(const Module& m, Function& f, const std::map<int, std::p
                 // log of one sum of exponential terms, some of them rolled sums (loops: each two loops, the largest
                 // exponent's and the shifted sum's, with one shift for the whole sum).
                 auto sum_log = [&](ValueId v) -> ValueId {
-                    std::vector<ValueId> ids;
-                    if (rolled_loop(old, v)) ids = {v};
-                    else sum_terms(old, v, ids);
+                    const std::vector<ValueId> ids = piece_terms(old, v);
                     std::vector<ExpTerm> terms(ids.size());
                     std::vector<const Instr*> loops(ids.size(), nullptr);
                     bool any_weight = false, any_loop = false;
