@@ -70,6 +70,13 @@ Coverage coverage(const std::filesystem::path& path, int W = 96, int H = 54) {
 }  // namespace
 
 namespace {
+// The value of `key` in `iqc render --stats` output ("nan_pixels: 0").
+double stat(const std::string& out, const std::string& key) {
+    size_t at = out.find(key + ": ");
+    REQUIRE(at != std::string::npos);
+    return std::stod(out.substr(at + key.size() + 2));
+}
+
 // The Lipschitz bound the compiler derived for `shape` (its line in the result: "shape (fn): K ≤ 1.5 derived, …"),
 // -1 where there is none.
 double derived_bound(const Compiled& c, const std::string& shape) {
@@ -179,11 +186,6 @@ TEST_CASE("the exponential smooth minimum as papers print it draws its surface (
 }
 
 TEST_CASE("render --stats counts the rays that met a NaN or infinite distance", "[numerics][render][stats]") {
-    auto stat = [](const std::string& out, const std::string& key) {
-        size_t at = out.find(key + ": ");
-        REQUIRE(at != std::string::npos);
-        return std::stod(out.substr(at + key.size() + 2));
-    };
     // Every ray of the underflowing ball meets +∞ at its first step; its colour is the background, not NaN.
     RunResult bad = run_iqc("render " + scene("underflowing_ball.iq").string() + " -o " + (temp_dir() / "u.png").string() +
                             " --size 32x18 --stats");
@@ -205,11 +207,6 @@ TEST_CASE("a smooth union of many points, -k log of a sum of exponentials, meets
     // both are m + log ∑ e^(x_i - m), the loop as two loops. The same written through local functions, s(∑_i g(d_i))
     // with s(t) = -k ln t and g(t) = e^(-(t - r)/k) (another trial's: nothing drawn from 14 units, the stable pass
     // saw neither form whole), likewise: the module's functions are inlined where the form shows.
-    auto stat = [](const std::string& out, const std::string& key) {
-        size_t at = out.find(key + ": ");
-        REQUIRE(at != std::string::npos);
-        return std::stod(out.substr(at + key.size() + 2));
-    };
     for (int n : {2, 17, 40, 300})
     for (int form : {0, 1, 2}) {
         const bool local = form == 1;
@@ -1496,11 +1493,6 @@ TEST_CASE("smooth unions a trial wrote draw from afar: a weight of 0, a loop and
     // nearest blob (the shift took it, the shifted sum was 0: ln 0 = -∞ through the wall behind it), a ring of 32
     // blobs (a loop on webgl2) and a core under one log, the softmax-weighted mean ∑ d_i e^(-k d_i)/∑ e^(-k d_i)
     // (0/0), and the smooth |y| written ln(cosh(k y))/k (cosh overflows).
-    auto stat = [](const std::string& out, const std::string& key) {
-        size_t at = out.find(key + ": ");
-        REQUIRE(at != std::string::npos);
-        return std::stod(out.substr(at + key.size() + 2));
-    };
     std::string ring;
     for (int k = 0; k < 32; ++k)
         ring += fmt::format("{}({:.4f}, {:.4f}, 0)", k ? ", " : "", 0.8 * std::cos(2 * M_PI * k / 32), 0.8 * std::sin(2 * M_PI * k / 32));

@@ -560,6 +560,20 @@ size_t rewrite_function(const Module& m, Function& f, const std::map<int, std::p
                             any_weight = any_weight || !terms[k].weights.empty();
                         }
                     }
+                    // The rolled ∑ at v run again with body `fn`, its first state replaced (`first`: the maximum's start)
+                    // or a capture appended (the shift); its state's final value.
+                    auto rerun = [&](ValueId v, int fn, ValueId first, ValueId capture) {
+                        Instr l = f.body[map[old[v].args[0]]];  // (a copy: already rebuilt, its arguments are new values)
+                        l.aux = fn;
+                        if (first != ValueId(-1)) l.args[1] = first;
+                        if (capture != ValueId(-1)) l.args.push_back(capture);
+                        l.name.clear();
+                        Instr member;
+                        member.op = Op::Member;
+                        member.type = Type::scalar();
+                        member.args = {f.add(std::move(l))};
+                        return f.add(member);
+                    };
                     if (any_loop) {
                         // log ∑_i w_i e^(x_i), a loop: hi = max_i x_i in one loop, then hi + log ∑_i w_i e^(x_i − hi) in
                         // another (unweighted, one term is e^0 = 1: the sum is at least 1). Other terms beside the loop
@@ -569,16 +583,7 @@ size_t rewrite_function(const Module& m, Function& f, const std::map<int, std::p
                         for (size_t k = 0; k < ids.size(); ++k) {
                             ValueId c;
                             if (loops[k]) {
-                                Instr l1 = f.body[map[old[ids[k]].args[0]]];  // (a copy: already rebuilt, its arguments are new values)
-                                l1.aux = split.at(loops[k]->aux).first;
-                                l1.args[1] = b.scalar(-3.4028234663852886e38);
-                                l1.name.clear();
-                                const ValueId hi_loop = f.add(std::move(l1));
-                                Instr mh;
-                                mh.op = Op::Member;
-                                mh.type = Type::scalar();
-                                mh.args = {hi_loop};
-                                c = f.add(mh);
+                                c = rerun(ids[k], split.at(loops[k]->aux).first, b.scalar(-3.4028234663852886e38), ValueId(-1));
                             } else {
                                 xs[k] = exponent_of(b, old, terms[k], at);
                                 c = competing(b, f, old, terms[k], xs[k], at);
@@ -589,16 +594,7 @@ size_t rewrite_function(const Module& m, Function& f, const std::map<int, std::p
                         for (size_t k = 0; k < ids.size(); ++k) {
                             ValueId e;
                             if (loops[k]) {
-                                Instr l2 = f.body[map[old[ids[k]].args[0]]];
-                                l2.aux = split.at(loops[k]->aux).second;
-                                l2.args.push_back(hi);
-                                l2.name.clear();
-                                const ValueId sum_loop = f.add(std::move(l2));
-                                Instr ms;
-                                ms.op = Op::Member;
-                                ms.type = Type::scalar();
-                                ms.args = {sum_loop};
-                                e = f.add(ms);
+                                e = rerun(ids[k], split.at(loops[k]->aux).second, ValueId(-1), hi);
                             } else {
                                 const ValueId x = competing(b, f, old, terms[k], xs[k], at, CompareKind::Ne);
                                 e = weighted(b, terms[k], b.builtin("exp", {b.op(Op::Sub, {x, hi})}), at);
