@@ -1517,6 +1517,16 @@ TEST_CASE("smooth unions a trial wrote draw from afar: a weight of 0, a loop and
             CHECK(stat(r.out, "nan_distance_pixels") == 0);
             CHECK(stat(r.out, "nan_pixels") == 0);
         }
+        // The ring and core's bound: the loop's convex combination beside the core's term (K ≤ ∞ before, and a warning)
+        if (name == "ringcore") {
+            CompileOptions o;
+            o.target = Target::WebGL2;
+            Compiled c = compile_path(path, o);
+            REQUIRE(c.result.lipschitz.size() == 1);
+            INFO(c.result.lipschitz[0]);
+            CHECK_THAT(c.result.lipschitz[0], Catch::Contains("K ≤ 1 derived"));
+            CHECK_THAT(c.diagnostics, !Catch::Contains("no Lipschitz bound"));
+        }
     }
 }
 

@@ -1066,6 +1066,31 @@ std::optional<ConvexForm> convex_form(const Function& f, const std::vector<Bound
     };
     for (ValueId t : terms) {
         const Instr& ti = f.body[t];
+        if (ti.op == Op::Member) {
+            // A rolled sum's convex numerator beside other terms (its state j), over its denominator's state k among the
+            // weights (a ring of 32 blobs and a core under one log-sum-exp: K ≤ ∞ on webgl2, a trial's, stop 54).
+            auto it = loops.find(ti.args[0]);
+            bool matched = false;
+            for (size_t q = 0; it != loops.end() && q < it->second.size() && !matched; ++q) {
+                const LoopConvex& lc = it->second[q];
+                if (lc.j != int(ti.aux)) continue;
+                auto at = std::find_if(weights.begin(), weights.end(), [&](ValueId a) {
+                    return f.body[a].op == Op::Member && f.body[a].args[0] == ti.args[0] && int(f.body[a].aux) == lc.k;
+                });
+                if (at == weights.end()) continue;
+                ++uses[size_t(at - weights.begin())];
+                form.w.push_back(&lc.w);
+                const bool same = lc.shift != ValueId(-1) && (form.v.empty() || lc.shift == form.shift);
+                shifted = shifted && same;
+                if (shifted) {
+                    form.shift = lc.shift;
+                    form.v.push_back(&lc.v);
+                }
+                matched = true;
+            }
+            if (!matched) return std::nullopt;
+            continue;
+        }
         if (ti.op != Op::Mul || ti.args.size() != 2) return std::nullopt;
         bool matched = false;
         for (int k = 0; k < 2 && !matched; ++k) {
