@@ -4,10 +4,13 @@
 // with a quarter of each distance so that it does not depend on the bounds the compiler derived.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
+#include <random>
 #include <fmt/format.h>
 
 #include "TestUtil.h"
+#include "ir/Parse.h"
 
 using namespace iqc;
 using namespace iqc::test;
@@ -1588,5 +1591,123 @@ TEST_CASE("narrow Gaussian blobs, flat a few units out, are sampled within the b
             }
         CHECK(lit > 100);
         CHECK(differ <= 10);
+    }
+}
+
+TEST_CASE("where sliders are uniforms, K follows their values: each cell's K bounds the gradient there", "[numerics][cells]") {
+    // A bound over a slider's whole range holds at every value, but marched the displaced torus with K = 32.6 where its
+    // default needs 8.7, and the terrain with 28.3 where 2.7 (WebGL2 against Shadertoy; stop 55). Now iqc_prepare picks
+    // the K of the cell of the sliders' values. At random settings (and at the cells' edges, read from iqc_prepare's
+    // comparisons) the K the shader would divide by is at least the steepest gradient central differences meet there,
+    // and at the defaults close to the K of the sliders as constants (Shadertoy's).
+    struct Case {
+        const char* name;
+        const char* module;
+        double lo[3], hi[3];  // where the gradient is sampled (around the shape)
+        bool outside;         // only where D ≥ 0 (a K from samples outside the shape: metaballs)
+        double at_defaults;   // K at the defaults at most this many times Shadertoy's
+    };
+    const Case cases[] = {
+        {"dtorus", "shape\nsin from trigonometry\nD = ‖q‖ - 0.35 + a sin(f p_1) sin(f p_2) sin(f p_3)\nq = (‖(p_1, p_3)‖ - 1, p_2)\n"
+                   "where\np ∈ ℝ³\na ∈ [0, 0.3] default = 0.12\nf ∈ [1, 60] default = 35\n",
+         {-1.6, -0.6, -1.6}, {1.6, 0.6, 1.6}, false, 1.2},
+        {"terrain", "shape\nsin from trigonometry\nD = p_2 - a sin(f p_1) sin(f p_3)\nwhere\np ∈ ℝ³\na ∈ [0, 2] default = 0.6\n"
+                    "f ∈ [0, 10] default = 3\n",
+         {-3, -2.5, -3}, {3, 2.5, 3}, false, 1.25},
+        {"steep", "shape\nD = ‖p‖/k² - 1\nwhere\np ∈ ℝ³\nk ∈ [0.1, 2] default = 1\n", {-2, -2, -2}, {2, 2, 2}, false, 1.1},
+        {"meta", "shape\nD = r - ∑_i 1/‖p - x_i‖²\nwhere\np ∈ ℝ³\nr ∈ [0.5, 20] default = 8\n"
+                 "x_i ∈ ℝ³ default = {(0, 0, 0), (0.8, 0, 0), (0, 0.7, 0.2)}\n",
+         {-1.5, -1.5, -1.5}, {2, 2, 2}, true, 1.3},
+    };
+    for (const Case& cs : cases) {
+        INFO(cs.name);
+        const auto path = write_temp(std::string(cs.name) + "_cells.iql", cs.module);
+        RunResult r = run_iqc(path.string() + " --target webgl2 --dump-ir=after-lipschitz -o /dev/null");
+        REQUIRE(r.exit_code == 0);
+        std::string text;  // the IR (stderr also holds the warnings)
+        {
+            std::istringstream in(r.err);
+            bool ir = false;
+            for (std::string line; std::getline(in, line);) {
+                ir = ir || line.rfind("global ", 0) == 0 || line.rfind("function ", 0) == 0;
+                if (ir && line.rfind("iqc:", 0) != 0) text += line + "\n";
+            }
+        }
+        ir::Module m;
+        std::string error;
+        REQUIRE(ir::parse_module(text, m, error));
+        const int prep = m.find(ir::names::kPrepare), lipschitz = m.find(ir::names::kLipschitz);
+        REQUIRE(prep >= 0);
+        REQUIRE(lipschitz >= 0);
+        int object = -1;
+        for (size_t f = 0; f < m.functions.size(); ++f)
+            if (m.functions[f].name.rfind("iqc_object.", 0) == 0) object = int(f);
+        REQUIRE(object >= 0);
+        std::vector<int> sliders;
+        for (size_t g = 0; g < m.globals.size(); ++g)
+            if (m.globals[g].kind == ir::Global::Kind::Parameter && m.globals[g].bounds.lo.size() == 1 && m.globals[g].type.is_scalar())
+                sliders.push_back(int(g));
+        REQUIRE(!sliders.empty());
+        // The settings: the defaults, random ones, and each cell edge (the upper cell starts there) with the others at random.
+        std::vector<std::vector<double>> settings;
+        std::vector<double> defaults;
+        for (int g : sliders) defaults.push_back(m.globals[size_t(g)].value[0]);
+        settings.push_back(defaults);
+        std::mt19937 rng(55);
+        auto random_setting = [&] {
+            std::vector<double> u;
+            for (int g : sliders)
+                u.push_back(std::uniform_real_distribution<double>(m.globals[size_t(g)].bounds.lo[0], m.globals[size_t(g)].bounds.hi[0])(rng));
+            return u;
+        };
+        for (int k = 0; k < 12; ++k) settings.push_back(random_setting());
+        const ir::Function& pf = m.functions[size_t(prep)];
+        int edges = 0;
+        for (const ir::Instr& in : pf.body) {
+            if (in.op != ir::Op::Compare || in.aux != int(ir::CompareKind::Lt)) continue;
+            const ir::Instr &a = pf.body[in.args[0]], &b = pf.body[in.args[1]];
+            if (a.op != ir::Op::Global || b.op != ir::Op::Const) continue;
+            const size_t k = size_t(std::find(sliders.begin(), sliders.end(), a.aux) - sliders.begin());
+            REQUIRE(k < sliders.size());
+            std::vector<double> u = random_setting();
+            u[k] = b.data[0];
+            settings.push_back(u);
+            ++edges;
+        }
+        CHECK(edges >= 2);
+        ir::Evaluator ev(m);
+        double K_defaults = 0;
+        for (const auto& u : settings) {
+            for (size_t k = 0; k < sliders.size(); ++k) ev.set_global(sliders[k], {u[k]});
+            const double K = ev.call(lipschitz, {{Type::integer(), {0}}}).v[0];
+            if (&u == &settings[0]) K_defaults = K;
+            double steepest = 0;
+            std::mt19937 points(7);
+            for (int i = 0; i < 600; ++i) {
+                std::array<double, 3> p;
+                for (int c = 0; c < 3; ++c) p[c] = std::uniform_real_distribution<double>(cs.lo[c], cs.hi[c])(points);
+                auto D = [&](std::array<double, 3> q) { return ev.call(object, {{Type::vector(3), {q[0], q[1], q[2]}}}).v[0]; };
+                if (cs.outside && !(D(p) >= 0)) continue;
+                const double h = 1e-5;
+                double g2 = 0;
+                for (int c = 0; c < 3; ++c) {
+                    auto a = p, b = p;
+                    a[c] += h;
+                    b[c] -= h;
+                    const double d = (D(a) - D(b)) / (2 * h);
+                    g2 += d * d;
+                }
+                if (std::isfinite(g2)) steepest = std::max(steepest, std::sqrt(g2));
+            }
+            INFO("setting " << fmt::format("{}", fmt::join(u, ", ")) << ": K " << K << ", steepest sample " << steepest);
+            CHECK(K >= steepest * (1 - 1e-4));
+        }
+        // At the defaults, near the K of the sliders as constants.
+        Compiled st = compile_path(path);
+        REQUIRE(st.result.exit_code == 0);
+        const double constant = applied_bound(st, std::string(cs.name) + "_cells");
+        INFO("K at the defaults " << K_defaults << ", Shadertoy's " << constant);
+        CHECK(K_defaults <= cs.at_defaults * constant);
+        CHECK(K_defaults >= constant * (1 - 1e-6));
     }
 }

@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <queue>
 #include <set>
 #include <unordered_map>
@@ -42,6 +43,13 @@ constexpr size_t kMaxRefined = 16;  // items whose bounds the refinements may ti
 // a module (~150 ns each in a release build, ~12× that under the sanitizers: a compile spends at most ~0.1 s
 // on it, 1 s under ASan, whose fuzzing allows 10 s per input; the twisted bar's 5.7 needs less).
 constexpr double kSplitWorkPerEstimate = 8e6, kSplitWorkPerModule = 5e5;
+// Estimates of slider cells (K as a function of the sliders, where they are uniforms) per module: up to 27 per item
+// (~5 ms each for the displaced torus), items past this keep the one K of their whole ranges.
+constexpr long kMaxCellEstimates = 96;
+// Items whose K follows their sliders, per module: each is a value iqc_prepare computes per pixel and every step reads,
+// and llvmpipe compiles a march with many such values live much more slowly (ir/passes/Hoist.cpp's cap); the others
+// keep the K of their sliders' whole ranges.
+constexpr size_t kMaxCellItems = 8;
 constexpr size_t kSplitMaxInstructions = 2000;  // a function larger than this is not split
 // The work of one sampled evaluation (a gradient through a recurrence of 10⁸ steps is not sampled: its
 // samples stop at the first evaluation past this, with what was seen so far).
@@ -1564,10 +1572,34 @@ std::vector<double> outside_bound(const Module& m, const LipschitzSpec& spec, do
     return {};
 }
 
-// v / K for a distance, or (v₀ / K, v₁) for an instrumented (distance, count) of type t.
-ValueId divided(Builder& b, ValueId v, const Type& t, double K) {
-    if (t.is_scalar()) return b.op(Op::Div, {v, b.scalar(K)});
-    ValueId d = b.op(Op::Div, {b.op(Op::Extract, {v}, 0), b.scalar(K)});
+// The sliders function `fn` reads, through its calls and loops: the indices of the parameter globals with bounds,
+// in increasing order.
+std::vector<size_t> sliders_read(const Module& m, int fn) {
+    std::vector<char> reached(m.functions.size(), 0);
+    std::vector<int> todo = {fn};
+    std::vector<size_t> sliders;
+    while (!todo.empty()) {
+        int f = todo.back();
+        todo.pop_back();
+        if (reached[size_t(f)]) continue;
+        reached[size_t(f)] = 1;
+        for (const Instr& in : m.functions[size_t(f)].body) {
+            if (in.op == Op::Call || in.op == Op::Loop) todo.push_back(in.aux);
+            if (in.op == Op::Global && m.globals[size_t(in.aux)].kind == Global::Kind::Parameter && !m.globals[size_t(in.aux)].bounds.lo.empty())
+                sliders.push_back(size_t(in.aux));
+        }
+    }
+    std::sort(sliders.begin(), sliders.end());
+    sliders.erase(std::unique(sliders.begin(), sliders.end()), sliders.end());
+    return sliders;
+}
+
+// v / K for a distance, or (v₀ / K, v₁) for an instrumented (distance, count) of type t; K the constant, or where
+// `global` ≥ 0 the (prepared) global holding it.
+ValueId divided(Builder& b, ValueId v, const Type& t, double K, int global) {
+    auto divisor = [&] { return global >= 0 ? b.global(global) : b.scalar(K); };
+    if (t.is_scalar()) return b.op(Op::Div, {v, divisor()});
+    ValueId d = b.op(Op::Div, {b.op(Op::Extract, {v}, 0), divisor()});
     return b.construct(t, {d, b.op(Op::Extract, {v}, 1)});
 }
 
@@ -1575,7 +1607,7 @@ ValueId divided(Builder& b, ValueId v, const Type& t, double K) {
 // (distance, count)) by K, leaving what `fn` computes around the calls as it is: a `bound` sphere's stand-in
 // length(p) - R is a true distance, and divided by K it made rays crawl toward the sphere (a shape with K = 30
 // was never reached within 128 steps). Returns whether `fn` calls `object`.
-bool divide_object_calls(Module& m, int fn, int object, double K) {
+bool divide_object_calls(Module& m, int fn, int object, double K, int global) {
     // The item's distance calls the object function, or the shape's module function the object function calls.
     const Function& o = m.functions[size_t(object)];
     int shape = o.body.empty() || o.body[o.result].op != Op::Call ? -1 : o.body[o.result].aux;
@@ -1596,7 +1628,7 @@ bool divide_object_calls(Module& m, int fn, int object, double K) {
         Instr copy = old[i];
         for (ValueId& a : copy.args) a = map[a];
         ValueId v = f.add(std::move(copy));
-        if (old[i].op == Op::Call && old[i].aux == object) v = divided(b, v, old[i].type, K);
+        if (old[i].op == Op::Call && old[i].aux == object) v = divided(b, v, old[i].type, K, global);
         map[i] = v;
     }
     f.result = map[f.result];
@@ -1604,11 +1636,11 @@ bool divide_object_calls(Module& m, int fn, int object, double K) {
     return true;
 }
 
-// Divides function `fn`'s result (its first component, for an instrumented (distance, count)) by K.
-void divide_result(Module& m, int fn, double K) {
+// Divides function `fn`'s result (its first component, for an instrumented (distance, count)) by K (or `global`).
+void divide_result(Module& m, int fn, double K, int global) {
     Function& f = m.functions[size_t(fn)];
     Builder b(m, f);
-    f.result = divided(b, f.result, f.body[f.result].type, K);
+    f.result = divided(b, f.result, f.body[f.result].type, K, global);
 }
 
 // The steepest gradient `samples` uniform samples of fn reach over the region (0 where it has no derivative):
@@ -1789,23 +1821,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
         // samples: at settings of the sliders the shape reads besides their defaults (below), since a slope of 1.9
         // at a slider's end, 1 at its default, was marched as 1-Lipschitz (a trial's, stop 40).
         if (!work.constant_parameters) {
-            std::vector<char> reached(work.functions.size(), 0);
-            std::vector<int> todo = {fn};
-            std::vector<size_t> sliders;
-            while (!todo.empty()) {
-                int f = todo.back();
-                todo.pop_back();
-                if (reached[size_t(f)]) continue;
-                reached[size_t(f)] = 1;
-                for (const Instr& in : work.functions[size_t(f)].body) {
-                    if (in.op == Op::Call || in.op == Op::Loop) todo.push_back(in.aux);
-                    if (in.op == Op::Global && work.globals[size_t(in.aux)].kind == Global::Kind::Parameter &&
-                        !work.globals[size_t(in.aux)].bounds.lo.empty())
-                        sliders.push_back(size_t(in.aux));
-                }
-            }
-            std::sort(sliders.begin(), sliders.end());
-            sliders.erase(std::unique(sliders.begin(), sliders.end()), sliders.end());
+            const std::vector<size_t> sliders = sliders_read(work, fn);
             size_t size = 0;
             for (const auto& f : work.functions) size += f.body.size();
             SplitMix64 settings{0x94D049BB133111EBull};
@@ -1979,6 +1995,196 @@ Clusters analysis_clusters(const Module& m) {
     return c;
 }
 
+// ---- K as a function of the sliders (targets where sliders are uniforms) ----
+//
+// A bound over the sliders' whole ranges holds at every setting, but a field whose slope grows with a slider is
+// marched at every setting as at the slider's steepest end: the displaced torus (a ∈ [0, 0.3], f ∈ [1, 60]) with
+// K = 32.6 where its default setting needs 8.7, the sine terrain 28.3 where 2.7 (10× the steps, WebGL2 against
+// Shadertoy). The sliders' box is cut into cells (per slider a narrow one around its default, wider ones further
+// out), the bound estimated over each cell as over the whole (the sliders' bounds narrowed to the cell), and iqc_prepare
+// picks the cell of the sliders' values once per pixel: the distance is divided by that cell's K, and the hit test
+// multiplies it back. Each cell's K is a bound over the cell (or, where the whole has no useful bound, the cell's
+// samples with the same margin), never above the whole's.
+
+// The factor an estimate of a shape with no declaration or pragma gives, as apply_lipschitz_bounds decides it (its
+// branches word the same rules): 1 where every sample is within 1 and the bound within 2; the derived bound where
+// useful; else the samples' steepest (outside the shape where the inside is over 4× steeper) times the margin, or 1
+// where even that is too steep to march by (`too_steep` is then set).
+double decided_factor(const LipschitzEstimate& e, bool* too_steep = nullptr) {
+    if (too_steep) *too_steep = false;
+    if (e.sampled <= 1 + 1e-3 && e.derived <= 2 * (1 + 1e-9) && e.blend_steepest <= 1 + 1e-3 &&
+        !(e.at_defaults > 0 && e.at_defaults <= 1 + 1e-9))
+        return 1;
+    if (std::isfinite(e.derived) && e.derived <= kUnbounded) return e.derived;
+    const bool apart = e.outside > 0 && e.sampled > 4 * e.outside;
+    const double steep = apart ? e.outside : e.sampled;
+    if (steep > 1 + 1e-3 && kSampledMargin * steep <= kSampledCap)
+        return std::min(kSampledMargin * steep, std::isfinite(e.derived) ? e.derived : kInf);
+    if (too_steep) *too_steep = steep > 1 + 1e-3;
+    return 1;
+}
+
+// A cell's factor: as decided for the whole (`whole`, an upper limit), or the whole's where the cell is too steep
+// to march by its samples.
+double cell_factor(const LipschitzEstimate& e, double whole) {
+    bool too_steep = false;
+    const double K = decided_factor(e, &too_steep);
+    return too_steep ? whole : std::clamp(K, 1.0, whole);
+}
+
+// The cells of one analysis (shared by the items of a cluster: their sliders in the same order).
+struct SliderCells {
+    std::vector<size_t> which;               // positions, in sliders_read's order, of the sliders cut
+    std::vector<std::vector<double>> edges;  // per slider cut: its low end = e₀ < e₁ < … < e_n = its high end
+    std::vector<double> K;                   // per cell, the first slider's cell index varying slowest
+    double at_defaults = 0;                  // the cell holding the defaults' K
+    double sampled_at_defaults = 0;          // and the steepest gradient its samples met
+    long estimates = 0;                      // the estimates they took
+};
+
+// The edges of a slider's cells: a cell around the default d, `fractions` of the range r wide on each side, and
+// cells bounded by d ± f·r for each larger fraction f, up to the ends.
+std::vector<double> cell_edges(double lo, double hi, double d, const std::vector<double>& fractions) {
+    const double r = hi - lo;
+    std::vector<double> e = {lo, hi};
+    for (double f : fractions)
+        for (double x : {d - f * r, d + f * r})
+            if (x > lo + 1e-3 * r && x < hi - 1e-3 * r) e.push_back(x);
+    std::sort(e.begin(), e.end());
+    std::vector<double> out;
+    for (double x : e)
+        if (out.empty() || x > out.back() + 1e-3 * r) out.push_back(x);
+    if (out.back() < hi) out.back() = hi;
+    return out;
+}
+
+// Estimates the cells of an item whose whole bound `whole` (applied) comes from its estimate, where its sliders are
+// uniforms: nothing (nullopt) where no slider is a scalar with finite bounds, where the cell of the defaults gains
+// less than a fifth, or past `budget` estimates (decremented by those taken).
+std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& spec, const std::vector<Interval>& region,
+                                        const std::vector<std::vector<Interval>>& others, double whole, long& budget) {
+    const std::vector<size_t> all = sliders_read(m, spec.object_fn);
+    std::vector<size_t> candidates;  // positions in `all`
+    for (size_t k = 0; k < all.size(); ++k) {
+        const Global& g = m.globals[all[k]];
+        if (g.type.is_scalar() && g.value.size() == 1 && g.bounds.lo.size() == 1 && g.bounds.hi.size() == 1 &&
+            std::isfinite(g.bounds.lo[0]) && std::isfinite(g.bounds.hi[0]) && g.bounds.lo[0] < g.bounds.hi[0])
+            candidates.push_back(k);
+    }
+    if (candidates.empty() || candidates.size() > 8 || budget <= 0) return std::nullopt;
+    Module work = m;
+    auto set = [&](size_t k, double lo, double hi) {
+        Global& g = work.globals[all[k]];
+        g.bounds.lo[0] = lo;
+        g.bounds.hi[0] = hi;
+        g.value[0] = std::clamp(m.globals[all[k]].value[0], lo, hi);
+    };
+    auto reset = [&](size_t k) { work.globals[all[k]] = m.globals[all[k]]; };
+    // Which sliders the bound depends on: intervals alone (no samples, no refinements) with every slider at its
+    // default, then each in turn over its range.
+    std::string why;
+    const int grad = differentiate(work, spec.object_fn, 0, "lipschitz_cells_gradient", &why);
+    if (grad < 0) return std::nullopt;
+    for (size_t k : candidates) set(k, m.globals[all[k]].value[0], m.globals[all[k]].value[0]);
+    const double pinned = derive(work, grad, region, others, spec.ball, 48);
+    std::vector<std::pair<double, size_t>> influence;
+    for (size_t k : candidates) {
+        reset(k);
+        const double ranged = derive(work, grad, region, others, spec.ball, 48);
+        if (!std::isfinite(pinned) || !(ranged <= 1.1 * pinned)) influence.push_back({std::isfinite(pinned) ? ranged / pinned : kInf, k});
+        set(k, m.globals[all[k]].value[0], m.globals[all[k]].value[0]);
+    }
+    for (size_t k : candidates) reset(k);
+    work.functions.resize(m.functions.size());  // (the gradient: each estimate differentiates its own)
+    if (influence.empty()) return std::nullopt;
+    std::stable_sort(influence.begin(), influence.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (influence.size() > 3) influence.resize(3);
+    SliderCells c;
+    // Fewer cells each where more sliders are cut: 7, 5×5 or 3×3×3 at most.
+    static const std::vector<double> kFractions[] = {{1.0 / 64, 1.0 / 16, 1.0 / 4}, {1.0 / 32, 1.0 / 6}, {1.0 / 16}};
+    size_t cells = 1;
+    for (const auto& [ratio, k] : influence) {
+        const Global& g = m.globals[all[k]];
+        c.which.push_back(k);
+        c.edges.push_back(cell_edges(g.bounds.lo[0], g.bounds.hi[0], g.value[0], kFractions[influence.size() - 1]));
+        cells *= c.edges.back().size() - 1;
+    }
+    if (long(cells) > budget) return std::nullopt;
+    budget -= long(cells);
+    c.estimates = long(cells);
+    c.K.assign(cells, whole);
+    size_t at_defaults = 0;
+    for (size_t cell = 0; cell < cells; ++cell) {
+        size_t rest = cell;
+        bool holds_defaults = true;
+        for (size_t s = c.which.size(); s-- > 0;) {
+            const std::vector<double>& e = c.edges[s];
+            const size_t i = rest % (e.size() - 1);
+            rest /= e.size() - 1;
+            set(c.which[s], e[i], e[i + 1]);
+            const double d = m.globals[all[c.which[s]]].value[0];
+            holds_defaults = holds_defaults && d >= e[i] && (d < e[i + 1] || i + 2 == e.size());
+        }
+        if (holds_defaults) at_defaults = cell;
+        // (the cell of the defaults, where the picture starts, with the case splitting a whole's estimate may spend;
+        // elsewhere less: the twisted bar's 7 cells took 480 ms with it everywhere)
+        double allowance = kSplitWorkPerEstimate / (holds_defaults ? 16 : 128);
+        LipschitzEstimate e = estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, 250, holds_defaults ? 64 : 32, true, &allowance, false);
+        c.K[cell] = cell_factor(e, whole);
+        if (holds_defaults) c.sampled_at_defaults = e.sampled;
+    }
+    c.at_defaults = c.K[at_defaults];
+    if (c.at_defaults > whole / 1.2) return std::nullopt;
+    return c;
+}
+
+// Makes `factor` (the item's factor global) a prepared global that iqc_prepare sets to its cell's K from the sliders
+// `all` (sliders_read's) as `cells` cut them: outside a slider's range, the whole's K (`whole`).
+void prepare_cell_factor(Module& m, int factor, const std::vector<size_t>& all, const SliderCells& cells, double whole) {
+    int prep = m.find(names::kPrepare);
+    if (prep < 0) {
+        Function f;
+        f.name = names::kPrepare;
+        f.glsl_name = names::kPrepare;
+        m.functions.push_back(std::move(f));
+        prep = int(m.functions.size() - 1);
+    }
+    Function& f = m.functions[size_t(prep)];
+    Builder b(m, f);
+    // The cell index along each slider cut, then the table as selects over the first slider's index (rows), each row
+    // over the next slider's, …: a few comparisons once per pixel.
+    std::vector<ValueId> value, inside;
+    for (size_t k : cells.which) {
+        value.push_back(b.global(int(all[k])));
+        const Global& g = m.globals[all[k]];
+        inside.push_back(b.op(Op::And, {b.compare(CompareKind::Ge, value.back(), b.scalar(g.bounds.lo[0])),
+                                        b.compare(CompareKind::Le, value.back(), b.scalar(g.bounds.hi[0]))}));
+    }
+    std::function<ValueId(size_t, size_t)> table = [&](size_t s, size_t base) -> ValueId {
+        const std::vector<double>& e = cells.edges[s];
+        const size_t n = e.size() - 1;
+        size_t stride = 1;
+        for (size_t t = s + 1; t < cells.edges.size(); ++t) stride *= cells.edges[t].size() - 1;
+        auto cell = [&](size_t i) { return s + 1 == cells.edges.size() ? b.scalar(cells.K[base + i]) : table(s + 1, base + i * stride); };
+        ValueId v = cell(n - 1);
+        for (size_t i = n - 1; i-- > 0;) v = b.op(Op::Select, {b.compare(CompareKind::Lt, value[s], b.scalar(e[i + 1])), cell(i), v});
+        return v;
+    };
+    ValueId K = table(0, 0);
+    ValueId in = inside[0];
+    for (size_t s = 1; s < inside.size(); ++s) in = b.op(Op::And, {in, inside[s]});
+    K = b.op(Op::Select, {in, K, b.scalar(whole)});
+    Global& g = m.globals[size_t(factor)];
+    g.kind = Global::Kind::Prepared;
+    g.comment = fmt::format("the Lipschitz factor dividing its distance (the hit test multiplies it back): per cell of its sliders' "
+                            "values, {} cells ({:.4g} at their defaults)", cells.K.size(), cells.at_defaults);
+    g.value.clear();
+    g.bounds = ValueBounds{};
+    g.bounds.input = true;
+    f.outputs.push_back({g.name, K});
+    f.result = f.outputs[0].second;
+}
+
 std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::string>* report, double* largest) {
     std::vector<RangeIssue> warnings;
     if (largest) *largest = 1;
@@ -1997,6 +2203,10 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
     // Case splitting for the items whose derived bound is applied (a declared one only words a warning).
     double split_work = kSplitWorkPerModule;
     std::set<std::string> trusted_checked;  // the shapes saying `# exact` or `# bound` whose samples were checked
+    std::map<int, std::optional<SliderCells>> cut;  // by cluster: the cells of the sliders (uniform targets)
+    long cell_budget = kMaxCellEstimates;
+    size_t cell_items = 0;
+    std::set<int> factor_done;  // the factor globals set (a constant) or prepared (per cell of the sliders)
     for (size_t fi = 0; fi < m.functions.size(); ++fi) {
         LipschitzSpec spec = m.functions[fi].lipschitz;
         if (spec.object_fn < 0 || fi >= clusters.of.size()) continue;
@@ -2040,6 +2250,23 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             }
             e = known->second;
         }
+        // Where the sliders are uniforms and the K comes from the estimate: K per cell of the sliders' box (the warnings
+        // below say what it is at the sliders' defaults and as they move).
+        const SliderCells* cells = nullptr;
+        const double decided = spec.declared > 0 || spec.trusted ? 1 : decided_factor(e);
+        if (decided > 1 + 1e-9 && !m.constant_parameters && spec.declared <= 0 && !spec.trusted && spec.factor_global >= 0 &&
+            size_t(spec.factor_global) < m.globals.size()) {
+            auto known = cut.find(cluster);
+            if (known == cut.end()) known = cut.emplace(cluster, slider_cells(m, spec, region, others, decided, cell_budget)).first;
+            if (known->second && cell_items < kMaxCellItems) cells = &*known->second;
+        }
+        // "K = 194", or with cells "K = 46.5 at its sliders' defaults (10.2–194 as they move)".
+        auto k_words = [&](double K) {
+            if (!cells) return fmt::format("K = {:.3g}", K);
+            return fmt::format("K = {:.3g} at its sliders' defaults ({:.3g}–{:.3g} as they move: the shader picks it from their values)",
+                               cells->at_defaults, *std::min_element(cells->K.begin(), cells->K.end()),
+                               *std::max_element(cells->K.begin(), cells->K.end()));
+        };
         double applied = 1;
         std::string how;
         if (spec.declared > 0) {
@@ -2092,11 +2319,13 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             // k ∈ [0.1, 3]: 100; 70(‖p‖ − 1): 70). Said so, not "may step through its surface" (a trial's, stop 54).
             if (applied > 1 && std::isfinite(e.derived) && applied == e.derived) {
                 how = fmt::format("derived, above {:g}: slow to march", kUnbounded);
-                warnings.push_back({spec.where, fmt::format("shape '{}' is marched with K = {:.3g}, the bound iqc derives for its gradient (its "
-                                                            "samples reach {:.3g}): each step is 1/{:.3g} of its distance, so marching "
+                warnings.push_back({spec.where, fmt::format("shape '{}' is marched with K = {:.3g}{}, the bound iqc derives for its gradient (its "
+                                                            "samples reach {:.3g}): each step is 1/{:.3g} of its distance{}, so marching "
                                                             "takes many steps; if it need not be this steep, scale its distance down or "
                                                             "narrow the range of a slider it is steep at the end of",
-                                                            spec.shape, applied, e.sampled, applied)});
+                                                            spec.shape, applied,
+                                                            cells ? fmt::format(" where its sliders make it steepest ({:.3g} at their defaults)", cells->at_defaults) : "",
+                                                            e.sampled, applied, cells ? " there" : "")});
             } else {
                 bool bounded = !spec.bounds.empty() || spec.ball > 0;
                 std::string reason = !e.why.empty() ? (e.unevaluable ? e.why : "iqc cannot differentiate it (" + e.why + ")")
@@ -2110,8 +2339,8 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                        steep, apart ? fmt::format(" outside it ({:.4g} inside)", e.sampled) : "");
                 // (and where even the samples' K is too large to march by, it says that it marches with K = 1: two
                 // new users' trials, stop 40, read the warning as if some K were applied)
-                std::string marched = applied > 1 ? fmt::format("iqc marches it with K = {:.3g}, {:g} times the steepest gradient its samples "
-                                                                "reach{}, which is not a proven bound: ", applied, kSampledMargin, apart ? " outside it" : "")
+                std::string marched = applied > 1 ? fmt::format("iqc marches it with {}, {:g} times the steepest gradient its samples "
+                                                                "reach{}, which is not a proven bound: ", k_words(applied), kSampledMargin, apart ? " outside it" : "")
                                       : e.sampled > 1 + 1e-3 ? "iqc marches it as if it were 1-Lipschitz: "
                                                              : "";
                 std::string fix = bounded ? "declare `# lipschitz: K` in the module (the instance's `bound` does not make its gradient boundable)"
@@ -2128,13 +2357,15 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                       : "derived";
             // Interval bounds can be loose (a twist's rotation is bounded component by component): say what
             // it costs, since steps shrink by the factor. 3×: beyond the slack of an honest bound.
-            if (e.derived > 3 * std::max(e.sampled, 1.0))
-                warnings.push_back({spec.where, fmt::format("shape '{}' is marched with steps divided by K = {:.3g}, the bound iqc "
+            // (with cells, as at the sliders' defaults: the K and the samples of the cell that holds them)
+            const double K = cells ? cells->at_defaults : e.derived, seen = cells ? cells->sampled_at_defaults : e.sampled;
+            if (K > 3 * std::max(seen, 1.0))
+                warnings.push_back({spec.where, fmt::format("shape '{}' is marched with steps divided by {}, the bound iqc "
                                                             "derives for its gradient, but samples of the gradient reach only "
-                                                            "{:.3g}: marching is up to {:.0f}× slower than it may need to be; "
+                                                            "{:.3g}{}: marching is up to {:.0f}× slower than it may need to be; "
                                                             "declare `# lipschitz: K` only for a K you know (samples can miss a "
                                                             "thin steep part, and iqc warns only where its samples exceed K)",
-                                                            spec.shape, e.derived, e.sampled, e.derived / std::max(e.sampled, 1.0))});
+                                                            spec.shape, k_words(e.derived), seen, cells ? " there" : "", K / std::max(seen, 1.0))});
         }
         if (e.jump > 0)
             warnings.push_back({spec.where, fmt::format("shape '{}' has a discontinuous distance: it jumps by {:.3g} between two points "
@@ -2169,19 +2400,35 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         }
         if (repeat) warnings.resize(warned);
         if (largest && applied > *largest) *largest = applied;
+        if (cells && !(applied == decided)) cells = nullptr;  // (the branches above decide as decided_factor does)
         if (applied > 1 + 1e-9) {
-            if (!divide_object_calls(m, int(fi), spec.object_fn, applied)) divide_result(m, int(fi), applied);
-            if (spec.factor_global >= 0 && size_t(spec.factor_global) < m.globals.size()) {
-                m.globals[size_t(spec.factor_global)].value = {applied};
-                scaled = true;
+            const int g = spec.factor_global >= 0 && size_t(spec.factor_global) < m.globals.size() ? spec.factor_global : -1;
+            // (an item's variants share its factor: the first to reach here decides whether it follows the sliders)
+            if (g >= 0 && factor_done.insert(g).second) {
+                if (cells) {
+                    prepare_cell_factor(m, g, sliders_read(m, spec.object_fn), *cells, applied);
+                    ++cell_items;
+                } else {
+                    m.globals[size_t(g)].value = {applied};
+                }
             }
+            if (g >= 0) scaled = true;
+            const int by = g >= 0 && m.globals[size_t(g)].kind == Global::Kind::Prepared ? g : -1;
+            if (!divide_object_calls(m, int(fi), spec.object_fn, applied, by)) divide_result(m, int(fi), applied, by);
+            if (by < 0) cells = nullptr;  // (for the report)
+        } else {
+            cells = nullptr;
         }
         if (report && spec.trusted && spec.declared <= 0)
             report->push_back(fmt::format("{} ({}): not derived, {:.4g} applied ({})", spec.shape, m.functions[fi].glsl_name, applied, how));
         else if (report)
             report->push_back(fmt::format("{} ({}): K ≤ {:.4g} derived, {:.4g} sampled, {:.4g} applied ({}){}", spec.shape,
                                           m.functions[fi].glsl_name, e.derived, e.sampled, applied, how,
-                                          e.jump > 0 ? fmt::format("; jumps by {:.3g} (discontinuous)", e.jump) : ""));
+                                          e.jump > 0 ? fmt::format("; jumps by {:.3g} (discontinuous)", e.jump) : "") +
+                              (cells ? fmt::format("; by the sliders' values {:.4g} at their defaults, {:.4g}–{:.4g} over {} cells", cells->at_defaults,
+                                                   *std::min_element(cells->K.begin(), cells->K.end()),
+                                                   *std::max_element(cells->K.begin(), cells->K.end()), cells->K.size())
+                                     : ""));
         m.functions[fi].lipschitz.object_fn = -1;  // done
     }
     // The runtime's hit test reads the factors back (a distance divided by K is a step, not a proximity):
