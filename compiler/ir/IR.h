@@ -218,6 +218,8 @@ inline constexpr const char* kSegmentGain = "iqc_segment_gain";  // (lo, hi, rd:
 inline constexpr const char* kSegmentClear = "iqc_segment_clear";  // (lo, hi: ℝ³) -> a lower bound of the scene distance over the box [lo, hi]
 inline constexpr const char* kLipschitz = "iqc_lipschitz";  // (id: ℤ) -> the factor dividing that instance's distance
 inline constexpr const char* kPrepare = "iqc_prepare";         // () -> outputs named like Prepared globals
+inline constexpr const char* kBoxLo = "iqc_box_lo";  // () -> the scene box's low corner where it follows the sliders
+inline constexpr const char* kBoxHi = "iqc_box_hi";  // () -> its high corner
 inline constexpr const char* kInstanceInverse = "iqc_instance_inverse";    // (i: ℤ) -> world→object ℝ^(4×4)
 inline constexpr const char* kInstanceDistance = "iqc_instance_distance";  // (i: ℤ, q: ℝ³) -> object-space distance
 }  // namespace names

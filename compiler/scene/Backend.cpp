@@ -86,6 +86,8 @@ const char* entry_comment(const std::string& name) {
         {ir::names::kSegmentClear, "Segment tracing: a lower bound of every instance's distance over the box [lo, hi] (interval arithmetic on each instance's distance): above the hit tolerance, nothing in the box can be hit."},
         {ir::names::kLipschitz, "The Lipschitz factor instance `id`'s distance was divided by (the hit test multiplies it back)."},
         {ir::names::kPrepare, "Transforms that change with sliders or time: inverted once per pixel, before any marching."},
+        {ir::names::kBoxLo, "The scene's box, low corner: the box at the sliders' defaults while every slider is within 1/64 of its range of its default, else the box over their ranges."},
+        {ir::names::kBoxHi, "The scene's box, high corner (as iqc_box_lo)."},
         {ir::names::kInstanceInverse, "I♥IQ's architecture (benchmark baseline): instance i's world → object transform, inverted here."},
         {ir::names::kInstanceDistance, "Instance i's object-space distance."},
     };

@@ -479,8 +479,12 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
             slabs = "    float t_in = 0.0, t_out = IQC_MAX_DIST;";
         } else {
             const std::string type = n == 1 ? "float" : "vec" + std::to_string(n), sw = n == 3 ? "" : "." + axes;
-            slabs = "    " + type + " m = 1.0 / rd" + sw + ";\n    " + type + " a = (IQC_BOX_LO" + sw + " - ro" + sw +
-                    ") * m, b = (IQC_BOX_HI" + sw + " - ro" + sw + ") * m;\n";
+            // (where the box follows the sliders, SceneIR::box_at_defaults, iqc_box_lo() and iqc_box_hi() pick it)
+            const bool follows = scene.box_at_defaults.has_value() && scene.module.find(ir::names::kBoxLo) >= 0;
+            const std::string lo = follows ? std::string(ir::names::kBoxLo) + "()" : "IQC_BOX_LO",
+                              hi = follows ? std::string(ir::names::kBoxHi) + "()" : "IQC_BOX_HI";
+            slabs = "    " + type + " m = 1.0 / rd" + sw + ";\n    " + type + " a = (" + lo + sw + " - ro" + sw +
+                    ") * m, b = (" + hi + sw + " - ro" + sw + ") * m;\n";
             if (n == 1)
                 slabs += "    float t_in = min(a, b), t_out = min(max(a, b), IQC_MAX_DIST);";
             else

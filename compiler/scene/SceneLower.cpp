@@ -173,6 +173,7 @@ public:
         if (o_.reflections || o_.refraction) out_.has_reflectivity = material_property(ir::names::kReflectivity);
         if (o_.refraction) out_.has_transmission = material_property(ir::names::kTransmission);
         prepare_function();
+        box_functions();
         if (o_.per_instance) per_instance_functions();
         out_.instances = int(plans_.size());
         out_.instance_ids.assign(plans_.size(), -1);
@@ -218,6 +219,8 @@ private:
     int ambient_fn_ = -1;
     std::map<std::pair<int, bool>, int> parts_;  // (material function, light part?) -> material_part
     std::vector<std::vector<size_t>> blend_items_;  // per [[blends]] entry: its members' items, in instance order
+    bool narrow_ = false;  // shape_intervals takes each slider near its default (the box at the sliders' defaults)
+    double box_tau_ = 0;   // the level of the last scene_box_at
     std::string owner_;  // the item being declared (Global::owner)
     Span owner_span_;    // its first instance's `type` (SceneIR::global_spans)
 
@@ -244,11 +247,28 @@ private:
             if (!o_.params_constant) {
                 const ir::ValueBounds& r = ranges[i];
                 if (r.input || r.lo.size() != params[i].size()) return std::nullopt;
-                for (size_t c = 0; c < params[i].size(); ++c) params[i][c] = ir::iv::hull(params[i][c], {r.lo[c], r.hi[c]});
+                for (size_t c = 0; c < params[i].size(); ++c) {
+                    ir::Interval range{r.lo[c], r.hi[c]};
+                    if (narrow_) {
+                        const std::optional<ir::Interval> near = near_default(range, params[i][c]);
+                        if (near) range = *near;
+                    }
+                    params[i][c] = ir::iv::hull(params[i][c], range);
+                }
             }
         }
         params[size_t(first.query)].assign(3, {});
         return params;
+    }
+
+    // A slider's range near its value v (the hull of its members' values): within 1/64 of the range of v, where the range
+    // is finite and wider than that (nothing: the whole range).
+    static std::optional<ir::Interval> near_default(ir::Interval range, ir::Interval v) {
+        const double w = (range.hi - range.lo) / 64;
+        if (!std::isfinite(w) || !(w > 0)) return std::nullopt;
+        ir::Interval near{std::max(range.lo, v.lo - w), std::min(range.hi, v.hi + w)};
+        if (!(near.lo <= near.hi) || (near.lo <= range.lo && near.hi >= range.hi)) return std::nullopt;
+        return near;
     }
 
     // A bounding-sphere radius for every member of a group without `bound`: the shape's extent by interval
@@ -286,6 +306,34 @@ private:
     // a smooth blend (its members' distances are divided by Lipschitz factors the passes derive later), or a
     // side unbounded on every axis.
     void scene_box() {
+        scene_box_whole();
+        if (o_.params_constant || !out_.box) return;
+        // Where sliders are uniforms: the box with each slider near its default, at the level the whole's was found at.
+        const auto whole = out_.box;
+        const auto instance_boxes = plan_box_;
+        const int analyses = out_.box_analyses;
+        narrow_ = true;
+        scene_box_at(box_tau_);
+        narrow_ = false;
+        auto near = out_.box;
+        out_.box = whole;
+        plan_box_ = instance_boxes;
+        out_.box_analyses += analyses;
+        if (!near) return;
+        // Kept where some bounded side moves in by over 2% of the box's extent on that axis (of the side's distance from
+        // the origin, at least 1, where the other side is unbounded: a terrain's top).
+        bool narrower = false;
+        for (size_t a = 0; a < 3; ++a) {
+            const double lo = whole->first[a], hi = whole->second[a];
+            if (near->first[a] < lo || near->second[a] > hi) return;  // (never wider: a narrower range's box)
+            auto scale = [&](double side) { return std::isfinite(hi - lo) ? hi - lo : std::max(1.0, std::fabs(side)); };
+            narrower |= std::isfinite(lo) && near->first[a] - lo > 0.02 * scale(lo);
+            narrower |= std::isfinite(hi) && hi - near->second[a] > 0.02 * scale(hi);
+        }
+        if (narrower) out_.box_at_defaults = near;
+    }
+
+    void scene_box_whole() {
         if (!o_.box_eye || !(o_.box_cone > 0) || o_.box_level_floor >= o_.box_level) {
             scene_box_at(o_.box_level);
             return;
@@ -318,6 +366,7 @@ private:
     // The boxes at level tau. `stop_when_open`: return without a scene box as soon as an instance leaves it
     // open (no box, or an unbounded side), analysing first the shapes whose boxes a quick test finds open.
     void scene_box_at(double tau, bool stop_when_open = false) {
+        box_tau_ = tau;
         const double inf = INFINITY;
         out_.box.reset();
         for (auto& b : plan_box_) b.reset();
@@ -2146,6 +2195,69 @@ private:
         f.result = b.op(Op::Select, {b.compare(CompareKind::Lt, p, b.scalar(1e-12)), round, general});
         m_.functions.push_back(std::move(f));
         return int(m_.functions.size() - 1);
+    }
+
+    // iqc_box_lo() and iqc_box_hi(): the box at the sliders' defaults (SceneIR::box_at_defaults) while every slider of
+    // every shape is within it (within 1/64 of its range of its default), else the box over their ranges. Not made
+    // (the box is the whole's constant) where a shape's parameter is a per-member table (a group's array).
+    void box_functions() {
+        if (!out_.box_at_defaults || !out_.box) return;
+        ir::Function lo_f, hi_f;
+        lo_f.name = lo_f.glsl_name = ir::names::kBoxLo;
+        hi_f.name = hi_f.glsl_name = ir::names::kBoxHi;
+        lo_f.entry = hi_f.entry = true;
+        std::vector<std::pair<int, std::vector<std::pair<size_t, ir::Interval>>>> tests;  // global, (component, where)
+        for (const Item& it : items_) {
+            const InstancePlan& first = plan(it.members[0]);
+            const std::vector<ir::ValueBounds> ranges = parameter_bounds(*first.shape);
+            for (size_t k = 0; k < it.shape_params.size() && k < ranges.size(); ++k) {
+                const Field& f = it.shape_params[k];
+                if (f.global < 0 || int(k) == first.query || ranges[k].input) continue;
+                if (f.array) {
+                    out_.box_at_defaults.reset();
+                    return;
+                }
+                std::vector<std::pair<size_t, ir::Interval>> where;
+                const auto& v = first.shape_values[k];
+                for (size_t c = 0; c < v.size() && c < ranges[k].lo.size(); ++c) {
+                    ir::Interval value = ir::iv::hull({v[c], v[c]}, {double(float(v[c])), double(float(v[c]))});
+                    if (auto near = near_default({ranges[k].lo[c], ranges[k].hi[c]}, value)) where.push_back({c, *near});
+                }
+                if (!where.empty()) tests.push_back({f.global, std::move(where)});
+            }
+        }
+        if (tests.empty()) {
+            out_.box_at_defaults.reset();
+            return;
+        }
+        auto side = [](const std::array<double, 3>& v) {
+            std::vector<double> w(v.begin(), v.end());
+            for (double& x : w) x = std::isinf(x) ? std::copysign(1e30, x) : x;
+            return w;
+        };
+        for (int hi = 0; hi < 2; ++hi) {
+            ir::Function& f = hi ? hi_f : lo_f;
+            Builder b(m_, f);
+            ValueId in = ValueId(-1);
+            for (const auto& [g, where] : tests) {
+                ValueId u = b.global(g);
+                for (const auto& [c, near] : where) {
+                    ValueId x = m_.globals[size_t(g)].type.is_scalar() ? u : b.op(Op::Extract, {u}, int(c));
+                    // (the test's ends in float rounded inward: a value it lets through lies in the range analysed)
+                    float lo = float(near.lo), hi = float(near.hi);
+                    if (double(lo) < near.lo) lo = std::nextafter(lo, INFINITY);
+                    if (double(hi) > near.hi) hi = std::nextafter(hi, -INFINITY);
+                    ValueId t = b.op(Op::And, {b.compare(ir::CompareKind::Ge, x, b.scalar(double(lo))),
+                                               b.compare(ir::CompareKind::Le, x, b.scalar(double(hi)))});
+                    in = in == ValueId(-1) ? t : b.op(Op::And, {in, t});
+                }
+            }
+            const auto& near = hi ? out_.box_at_defaults->second : out_.box_at_defaults->first;
+            const auto& whole = hi ? out_.box->second : out_.box->first;
+            f.result = b.op(Op::Select, {in, b.constant(Type::vector(3), side(near)), b.constant(Type::vector(3), side(whole))});
+        }
+        m_.functions.push_back(std::move(lo_f));
+        m_.functions.push_back(std::move(hi_f));
     }
 
     void prepare_function() {

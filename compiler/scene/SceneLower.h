@@ -84,6 +84,10 @@ struct SceneIR {
     // Absent where no side is bounded or the compiler cannot tell (a transform that moves at run time, a blend).
     std::optional<std::pair<std::array<double, 3>, std::array<double, 3>>> box;
     int box_analyses = 0;  // the shapes' boxes analysed for it (ir::support_box calls: a measure of the work)
+    // Where sliders are uniforms: the box with every slider of a shape within 1/64 of its range of its default (the
+    // picture a page opens with), where narrower than `box`; the IR's entry functions iqc_box_lo/iqc_box_hi pick it
+    // while the sliders are there, else `box`.
+    std::optional<std::pair<std::array<double, 3>, std::array<double, 3>>> box_at_defaults;
     std::optional<ThinPart> thinnest;      // where SceneLowerOptions::thickness_level asks for it (and one is bounded)
     std::vector<std::string> group_notes;  // "torus with lambert: 1000 instances in one loop"
     std::vector<int> instance_ids;         // per plan: the id iqc_scene returns for it (and iqc_distance_of takes)
