@@ -45,7 +45,7 @@ constexpr size_t kMaxRefined = 16;  // items whose bounds the refinements may ti
 constexpr double kSplitWorkPerEstimate = 8e6, kSplitWorkPerModule = 5e5;
 // Estimates of slider cells (K as a function of the sliders, where they are uniforms) per module: up to 27 per item
 // (~5 ms each for the displaced torus), items past this keep the one K of their whole ranges.
-constexpr long kMaxCellEstimates = 96;
+constexpr long kMaxCellEstimates = 128;
 // Items whose K follows their sliders, per module: each is a value iqc_prepare computes per pixel and every step reads,
 // and llvmpipe compiles a march with many such values live much more slowly (ir/passes/Hoist.cpp's cap); the others
 // keep the K of their sliders' whole ranges.
@@ -2024,12 +2024,15 @@ double decided_factor(const LipschitzEstimate& e, bool* too_steep = nullptr) {
     return 1;
 }
 
-// A cell's factor: as decided for the whole (`whole`, an upper limit), or the whole's where the cell is too steep
-// to march by its samples.
-double cell_factor(const LipschitzEstimate& e, double whole) {
+// A cell's factor: its derived bound where that is useful (proven over the cell: never the rule that takes 1 where
+// every sample is within 1, since a cell's fewer samples missed a slope of 2 at a slider's end that the whole's had
+// met: a trial's, stop 55), else its samples' steepest times the margin, at most `cap`; where even that is too steep,
+// `fallback` (the whole's).
+double cell_factor(const LipschitzEstimate& e, double cap, double fallback) {
+    if (std::isfinite(e.derived) && e.derived <= kUnbounded) return std::clamp(e.derived, 1.0, cap);
     bool too_steep = false;
     const double K = decided_factor(e, &too_steep);
-    return too_steep ? whole : std::clamp(K, 1.0, whole);
+    return too_steep ? fallback : std::clamp(K, 1.0, cap);
 }
 
 // The cells of one analysis (shared by the items of a cluster: their sliders in the same order).
@@ -2062,7 +2065,8 @@ std::vector<double> cell_edges(double lo, double hi, double d, const std::vector
 // uniforms: nothing (nullopt) where no slider is a scalar with finite bounds, where the cell of the defaults gains
 // less than a fifth, or past `budget` estimates (decremented by those taken).
 std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& spec, const std::vector<Interval>& region,
-                                        const std::vector<std::vector<Interval>>& others, double whole, long& budget) {
+                                        const std::vector<std::vector<Interval>>& others, double whole, bool sampled, long& budget,
+                                        bool& over_budget) {
     const std::vector<size_t> all = sliders_read(m, spec.object_fn);
     std::vector<size_t> candidates;  // positions in `all`
     for (size_t k = 0; k < all.size(); ++k) {
@@ -2086,30 +2090,41 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     const int grad = differentiate(work, spec.object_fn, 0, "lipschitz_cells_gradient", &why);
     if (grad < 0) return std::nullopt;
     for (size_t k : candidates) set(k, m.globals[all[k]].value[0], m.globals[all[k]].value[0]);
+    // No bound at the defaults either (metaballs' singular centres, a recurrence): intervals cannot tell, and where the
+    // K comes from samples every slider counts (the first two); a derived K would not come from cells.
     const double pinned = derive(work, grad, region, others, spec.ball, 48);
+    if (!std::isfinite(pinned) && !sampled) return std::nullopt;
     std::vector<std::pair<double, size_t>> influence;
     for (size_t k : candidates) {
+        if (!std::isfinite(pinned)) {
+            influence.push_back({kInf, k});
+            continue;
+        }
         reset(k);
         const double ranged = derive(work, grad, region, others, spec.ball, 48);
-        if (!std::isfinite(pinned) || !(ranged <= 1.1 * pinned)) influence.push_back({std::isfinite(pinned) ? ranged / pinned : kInf, k});
+        if (!(ranged <= 1.1 * pinned)) influence.push_back({ranged / pinned, k});
         set(k, m.globals[all[k]].value[0], m.globals[all[k]].value[0]);
     }
     for (size_t k : candidates) reset(k);
     work.functions.resize(m.functions.size());  // (the gradient: each estimate differentiates its own)
     if (influence.empty()) return std::nullopt;
     std::stable_sort(influence.begin(), influence.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    if (influence.size() > 3) influence.resize(3);
+    // Where the K comes from samples (each cell's estimate as costly as the whole's: 27 cells of a twisted, rippled smooth
+    // union took 1.8 s), up to two sliders, 7 or 3×3 cells.
+    if (influence.size() > (sampled ? 2 : 3)) influence.resize(sampled ? 2 : 3);
     SliderCells c;
     // Fewer cells each where more sliders are cut: 7, 5×5 or 3×3×3 at most.
     static const std::vector<double> kFractions[] = {{1.0 / 64, 1.0 / 16, 1.0 / 4}, {1.0 / 32, 1.0 / 6}, {1.0 / 16}};
+    const size_t fractions = sampled && influence.size() == 2 ? 2 : influence.size() - 1;
     size_t cells = 1;
     for (const auto& [ratio, k] : influence) {
         const Global& g = m.globals[all[k]];
         c.which.push_back(k);
-        c.edges.push_back(cell_edges(g.bounds.lo[0], g.bounds.hi[0], g.value[0], kFractions[influence.size() - 1]));
+        c.edges.push_back(cell_edges(g.bounds.lo[0], g.bounds.hi[0], g.value[0], kFractions[fractions]));
         cells *= c.edges.back().size() - 1;
     }
-    if (long(cells) > budget) return std::nullopt;
+    over_budget = long(cells) > budget;
+    if (over_budget) return std::nullopt;
     budget -= long(cells);
     c.estimates = long(cells);
     c.K.assign(cells, whole);
@@ -2126,15 +2141,20 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
             holds_defaults = holds_defaults && d >= e[i] && (d < e[i + 1] || i + 2 == e.size());
         }
         if (holds_defaults) at_defaults = cell;
-        // (the cell of the defaults, where the picture starts, with the case splitting a whole's estimate may spend;
-        // elsewhere less: the twisted bar's 7 cells took 480 ms with it everywhere)
+        // The cell of the defaults, where the picture starts, with the case splitting a whole's estimate may spend;
+        // elsewhere less (the twisted bar's 7 cells took 480 ms with it everywhere), and, where the cell's K is its
+        // derived bound, fewer samples (they only word the warning). Where the whole's K came from its samples, each
+        // cell has as many as the whole had: the K is theirs.
         double allowance = kSplitWorkPerEstimate / (holds_defaults ? 16 : 128);
-        LipschitzEstimate e = estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, 250, holds_defaults ? 64 : 32, true, &allowance, false);
-        c.K[cell] = cell_factor(e, whole);
+        const int samples = sampled ? 1000 : holds_defaults ? 250 : 64, boxes = sampled ? 128 : holds_defaults ? 64 : 32;
+        LipschitzEstimate e = estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, samples, boxes, true, &allowance, false);
+        c.K[cell] = cell_factor(e, sampled ? kSampledCap : whole, whole);
         if (holds_defaults) c.sampled_at_defaults = e.sampled;
     }
     c.at_defaults = c.K[at_defaults];
-    if (c.at_defaults > whole / 1.2) return std::nullopt;
+    // Kept where the defaults' cell gains a fifth, or where some cell is steeper than the whole (marched as if
+    // 1-Lipschitz, its samples too steep over the sliders' whole ranges: a frequency f ∈ [0, 10⁴] made holes at f = 20).
+    if (c.at_defaults > whole / 1.2 && *std::max_element(c.K.begin(), c.K.end()) <= whole) return std::nullopt;
     return c;
 }
 
@@ -2252,13 +2272,22 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         }
         // Where the sliders are uniforms and the K comes from the estimate: K per cell of the sliders' box (the warnings
         // below say what it is at the sliders' defaults and as they move).
+        // Also where the whole has no useful bound (above 64, or none): a slider's wide range may be why (a frequency
+        // f ∈ [0, 10⁴] was marched as if 1-Lipschitz, holes at its default 20, where Shadertoy derives 4.5).
         const SliderCells* cells = nullptr;
+        bool cells_skipped = false;  // (past the cells' budget: the report says so)
+        const bool useful = std::isfinite(e.derived) && e.derived <= kUnbounded;
         const double decided = spec.declared > 0 || spec.trusted ? 1 : decided_factor(e);
-        if (decided > 1 + 1e-9 && !m.constant_parameters && spec.declared <= 0 && !spec.trusted && spec.factor_global >= 0 &&
+        if ((decided > 1 + 1e-9 || !useful) && !m.constant_parameters && spec.declared <= 0 && !spec.trusted && spec.factor_global >= 0 &&
             size_t(spec.factor_global) < m.globals.size()) {
             auto known = cut.find(cluster);
-            if (known == cut.end()) known = cut.emplace(cluster, slider_cells(m, spec, region, others, decided, cell_budget)).first;
+            if (known == cut.end()) {
+                bool over = false;
+                known = cut.emplace(cluster, slider_cells(m, spec, region, others, decided, !useful, cell_budget, over)).first;
+                cells_skipped = over;
+            }
             if (known->second && cell_items < kMaxCellItems) cells = &*known->second;
+            cells_skipped = cells_skipped || (known->second && !cells);
         }
         // "K = 194", or with cells "K = 46.5 at its sliders' defaults (10.2–194 as they move)".
         auto k_words = [&](double K) {
@@ -2339,7 +2368,11 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                        steep, apart ? fmt::format(" outside it ({:.4g} inside)", e.sampled) : "");
                 // (and where even the samples' K is too large to march by, it says that it marches with K = 1: two
                 // new users' trials, stop 40, read the warning as if some K were applied)
-                std::string marched = applied > 1 ? fmt::format("iqc marches it with {}, {:g} times the steepest gradient its samples "
+                std::string marched = cells && !(applied > 1) ? fmt::format("iqc marches it with {}, from each cell of the sliders' ranges "
+                                                                              "(its derived bound, or {:g} times the steepest gradient its samples reach, "
+                                                                              "which is not a proven bound; as if 1-Lipschitz where that is too steep): ",
+                                                                              k_words(applied), kSampledMargin)
+                                      : applied > 1 ? fmt::format("iqc marches it with {}, {:g} times the steepest gradient its samples "
                                                                 "reach{}, which is not a proven bound: ", k_words(applied), kSampledMargin, apart ? " outside it" : "")
                                       : e.sampled > 1 + 1e-3 ? "iqc marches it as if it were 1-Lipschitz: "
                                                              : "";
@@ -2399,9 +2432,11 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                             d, at[0], at[1], at[2])});
         }
         if (repeat) warnings.resize(warned);
-        if (largest && applied > *largest) *largest = applied;
         if (cells && !(applied == decided)) cells = nullptr;  // (the branches above decide as decided_factor does)
-        if (applied > 1 + 1e-9) {
+        // (steps up to the steepest cell's K shorter: the step cap grows by it)
+        const double steepest = cells ? std::max(applied, *std::max_element(cells->K.begin(), cells->K.end())) : applied;
+        if (largest && steepest > *largest) *largest = steepest;
+        if (applied > 1 + 1e-9 || cells) {
             const int g = spec.factor_global >= 0 && size_t(spec.factor_global) < m.globals.size() ? spec.factor_global : -1;
             // (an item's variants share its factor: the first to reach here decides whether it follows the sliders)
             if (g >= 0 && factor_done.insert(g).second) {
@@ -2428,7 +2463,8 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                               (cells ? fmt::format("; by the sliders' values {:.4g} at their defaults, {:.4g}–{:.4g} over {} cells", cells->at_defaults,
                                                    *std::min_element(cells->K.begin(), cells->K.end()),
                                                    *std::max_element(cells->K.begin(), cells->K.end()), cells->K.size())
-                                     : ""));
+                                     : cells_skipped ? "; not by the sliders' values: past the cells' budget (128 estimates, 8 items a scene)"
+                                                     : ""));
         m.functions[fi].lipschitz.object_fn = -1;  // done
     }
     // The runtime's hit test reads the factors back (a distance divided by K is a step, not a proximity):
