@@ -1629,6 +1629,9 @@ TEST_CASE("where sliders are uniforms, K follows their values: each cell's K bou
         {"wide", "shape\nsin from trigonometry\nD = ‖p‖ - 1 + 0.1 sin(f p_1) sin(f p_2) sin(f p_3)\nwhere\np ∈ ℝ³\n"
                  "f ∈ [0, 10000] default = 20\n",
          {-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}, false, 10},
+        // A vector slider (a trial's, stop 55: K = 4 at every value, 1.2 at the default; its components are cut now).
+        {"squash", "shape\nD = ‖(t_1 p_1, t_2 p_2, t_3 p_3)‖ - 1\nwhere\np ∈ ℝ³\nt ∈ [0.5, 4]x[0.5, 4]x[0.5, 4] default = (1, 1.2, 0.8)\n",
+         {-2, -2, -2}, {2, 2, 2}, false, 1.25},
     };
     for (const Case& cs : cases) {
         INFO(cs.name);
@@ -1654,21 +1657,21 @@ TEST_CASE("where sliders are uniforms, K follows their values: each cell's K bou
         for (size_t f = 0; f < m.functions.size(); ++f)
             if (m.functions[f].name.rfind("iqc_object.", 0) == 0) object = int(f);
         REQUIRE(object >= 0);
-        std::vector<int> sliders;
+        std::vector<std::pair<int, int>> sliders;  // (global, component): scalar and vector sliders
         for (size_t g = 0; g < m.globals.size(); ++g)
-            if (m.globals[g].kind == ir::Global::Kind::Parameter && m.globals[g].bounds.lo.size() == 1 && m.globals[g].type.is_scalar())
-                sliders.push_back(int(g));
+            if (m.globals[g].kind == ir::Global::Kind::Parameter && !m.globals[g].type.is_array())
+                for (size_t c = 0; c < m.globals[g].bounds.lo.size(); ++c) sliders.push_back({int(g), int(c)});
         REQUIRE(!sliders.empty());
         // The settings: the defaults, random ones, and each cell edge (the upper cell starts there) with the others at random.
         std::vector<std::vector<double>> settings;
         std::vector<double> defaults;
-        for (int g : sliders) defaults.push_back(m.globals[size_t(g)].value[0]);
+        for (auto [g, c] : sliders) defaults.push_back(m.globals[size_t(g)].value[size_t(c)]);
         settings.push_back(defaults);
         std::mt19937 rng(55);
         auto random_setting = [&] {
             std::vector<double> u;
-            for (int g : sliders)
-                u.push_back(std::uniform_real_distribution<double>(m.globals[size_t(g)].bounds.lo[0], m.globals[size_t(g)].bounds.hi[0])(rng));
+            for (auto [g, c] : sliders)
+                u.push_back(std::uniform_real_distribution<double>(m.globals[size_t(g)].bounds.lo[size_t(c)], m.globals[size_t(g)].bounds.hi[size_t(c)])(rng));
             return u;
         };
         for (int k = 0; k < 12; ++k) settings.push_back(random_setting());
@@ -1677,8 +1680,10 @@ TEST_CASE("where sliders are uniforms, K follows their values: each cell's K bou
         for (const ir::Instr& in : pf.body) {
             if (in.op != ir::Op::Compare || in.aux != int(ir::CompareKind::Lt)) continue;
             const ir::Instr &a = pf.body[in.args[0]], &b = pf.body[in.args[1]];
-            if (a.op != ir::Op::Global || b.op != ir::Op::Const) continue;
-            const size_t k = size_t(std::find(sliders.begin(), sliders.end(), a.aux) - sliders.begin());
+            const bool component = a.op == ir::Op::Extract && pf.body[a.args[0]].op == ir::Op::Global;
+            if ((a.op != ir::Op::Global && !component) || b.op != ir::Op::Const) continue;
+            const std::pair<int, int> which = component ? std::pair<int, int>{pf.body[a.args[0]].aux, a.aux} : std::pair<int, int>{a.aux, 0};
+            const size_t k = size_t(std::find(sliders.begin(), sliders.end(), which) - sliders.begin());
             REQUIRE(k < sliders.size());
             std::vector<double> u = random_setting();
             u[k] = b.data[0];
@@ -1689,7 +1694,12 @@ TEST_CASE("where sliders are uniforms, K follows their values: each cell's K bou
         ir::Evaluator ev(m);
         double K_defaults = 0;
         for (const auto& u : settings) {
-            for (size_t k = 0; k < sliders.size(); ++k) ev.set_global(sliders[k], {u[k]});
+            std::map<int, std::vector<double>> values;
+            for (size_t k = 0; k < sliders.size(); ++k) {
+                auto& v = values.try_emplace(sliders[k].first, m.globals[size_t(sliders[k].first)].value).first->second;
+                v[size_t(sliders[k].second)] = u[k];
+            }
+            for (auto& [g, v] : values) ev.set_global(g, v);
             const double K = ev.call(lipschitz, {{Type::integer(), {0}}}).v[0];
             if (&u == &settings[0]) K_defaults = K;
             double steepest = 0;

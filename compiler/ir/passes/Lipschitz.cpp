@@ -2036,8 +2036,11 @@ double cell_factor(const LipschitzEstimate& e, double cap, double fallback) {
 }
 
 // The cells of one analysis (shared by the items of a cluster: their sliders in the same order).
+struct SliderComponent {
+    size_t k = 0, c = 0;  // a slider, by its position in sliders_read's order, and a component of it (a vector slider's)
+};
 struct SliderCells {
-    std::vector<size_t> which;               // positions, in sliders_read's order, of the sliders cut
+    std::vector<SliderComponent> which;      // the sliders (components) cut
     std::vector<std::vector<double>> edges;  // per slider cut: its low end = e₀ < e₁ < … < e_n = its high end
     std::vector<double> K;                   // per cell, the first slider's cell index varying slowest
     double at_defaults = 0;                  // the cell holding the defaults' K
@@ -2051,8 +2054,8 @@ std::vector<double> cell_edges(double lo, double hi, double d, const std::vector
     const double r = hi - lo;
     std::vector<double> e = {lo, hi};
     for (double f : fractions)
-        for (double x : {d - f * r, d + f * r})
-            if (x > lo + 1e-3 * r && x < hi - 1e-3 * r) e.push_back(x);
+        for (double x : {d - f * r, d + f * r})  // (in float: the shader compares a uniform with the same number)
+            if (x > lo + 1e-3 * r && x < hi - 1e-3 * r) e.push_back(double(float(x)));
     std::sort(e.begin(), e.end());
     std::vector<double> out;
     for (double x : e)
@@ -2068,34 +2071,42 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
                                         const std::vector<std::vector<Interval>>& others, double whole, bool sampled, long& budget,
                                         bool& over_budget) {
     const std::vector<size_t> all = sliders_read(m, spec.object_fn);
-    std::vector<size_t> candidates;  // positions in `all`
+    // Each component of a scalar or vector slider with a finite range (a vector's ‖t∘p‖ - 1, t ∈ [0.5, 4]³, marched with
+    // 4 where its default needs 1.2: a trial's).
+    std::vector<SliderComponent> candidates;
     for (size_t k = 0; k < all.size(); ++k) {
         const Global& g = m.globals[all[k]];
-        if (g.type.is_scalar() && g.value.size() == 1 && g.bounds.lo.size() == 1 && g.bounds.hi.size() == 1 &&
-            std::isfinite(g.bounds.lo[0]) && std::isfinite(g.bounds.hi[0]) && g.bounds.lo[0] < g.bounds.hi[0])
-            candidates.push_back(k);
+        if (g.type.is_array() || g.value.size() != size_t(g.type.components()) || g.bounds.lo.size() != g.value.size() ||
+            g.bounds.hi.size() != g.value.size())
+            continue;
+        for (size_t c = 0; c < g.value.size(); ++c)
+            if (std::isfinite(g.bounds.lo[c]) && std::isfinite(g.bounds.hi[c]) && g.bounds.lo[c] < g.bounds.hi[c]) candidates.push_back({k, c});
     }
     if (candidates.empty() || candidates.size() > 8 || budget <= 0) return std::nullopt;
     Module work = m;
-    auto set = [&](size_t k, double lo, double hi) {
-        Global& g = work.globals[all[k]];
-        g.bounds.lo[0] = lo;
-        g.bounds.hi[0] = hi;
-        g.value[0] = std::clamp(m.globals[all[k]].value[0], lo, hi);
+    auto value_of = [&](const SliderComponent& s) { return m.globals[all[s.k]].value[s.c]; };
+    auto set = [&](const SliderComponent& s, double lo, double hi) {
+        Global& g = work.globals[all[s.k]];
+        g.bounds.lo[s.c] = lo;
+        g.bounds.hi[s.c] = hi;
+        g.value[s.c] = std::clamp(value_of(s), lo, hi);
     };
-    auto reset = [&](size_t k) { work.globals[all[k]] = m.globals[all[k]]; };
+    auto reset = [&](const SliderComponent& s) {
+        const Global& g = m.globals[all[s.k]];
+        set(s, g.bounds.lo[s.c], g.bounds.hi[s.c]);
+    };
     // Which sliders the bound depends on: intervals alone (no samples, no refinements) with every slider at its
     // default, then each in turn over its range.
     std::string why;
     const int grad = differentiate(work, spec.object_fn, 0, "lipschitz_cells_gradient", &why);
     if (grad < 0) return std::nullopt;
-    for (size_t k : candidates) set(k, m.globals[all[k]].value[0], m.globals[all[k]].value[0]);
+    for (const SliderComponent& k : candidates) set(k, value_of(k), value_of(k));
     // No bound at the defaults either (metaballs' singular centres, a recurrence): intervals cannot tell, and where the
     // K comes from samples every slider counts (the first two); a derived K would not come from cells.
     const double pinned = derive(work, grad, region, others, spec.ball, 48);
     if (!std::isfinite(pinned) && !sampled) return std::nullopt;
-    std::vector<std::pair<double, size_t>> influence;
-    for (size_t k : candidates) {
+    std::vector<std::pair<double, SliderComponent>> influence;
+    for (const SliderComponent& k : candidates) {
         if (!std::isfinite(pinned)) {
             influence.push_back({kInf, k});
             continue;
@@ -2103,9 +2114,9 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         reset(k);
         const double ranged = derive(work, grad, region, others, spec.ball, 48);
         if (!(ranged <= 1.1 * pinned)) influence.push_back({ranged / pinned, k});
-        set(k, m.globals[all[k]].value[0], m.globals[all[k]].value[0]);
+        set(k, value_of(k), value_of(k));
     }
-    for (size_t k : candidates) reset(k);
+    for (const SliderComponent& k : candidates) reset(k);
     work.functions.resize(m.functions.size());  // (the gradient: each estimate differentiates its own)
     if (influence.empty()) return std::nullopt;
     std::stable_sort(influence.begin(), influence.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
@@ -2118,9 +2129,9 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     const size_t fractions = sampled && influence.size() == 2 ? 2 : influence.size() - 1;
     size_t cells = 1;
     for (const auto& [ratio, k] : influence) {
-        const Global& g = m.globals[all[k]];
+        const Global& g = m.globals[all[k.k]];
         c.which.push_back(k);
-        c.edges.push_back(cell_edges(g.bounds.lo[0], g.bounds.hi[0], g.value[0], kFractions[fractions]));
+        c.edges.push_back(cell_edges(g.bounds.lo[k.c], g.bounds.hi[k.c], g.value[k.c], kFractions[fractions]));
         cells *= c.edges.back().size() - 1;
     }
     over_budget = long(cells) > budget;
@@ -2137,7 +2148,7 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
             const size_t i = rest % (e.size() - 1);
             rest /= e.size() - 1;
             set(c.which[s], e[i], e[i + 1]);
-            const double d = m.globals[all[c.which[s]]].value[0];
+            const double d = value_of(c.which[s]);
             holds_defaults = holds_defaults && d >= e[i] && (d < e[i + 1] || i + 2 == e.size());
         }
         if (holds_defaults) at_defaults = cell;
@@ -2174,11 +2185,12 @@ void prepare_cell_factor(Module& m, int factor, const std::vector<size_t>& all, 
     // The cell index along each slider cut, then the table as selects over the first slider's index (rows), each row
     // over the next slider's, …: a few comparisons once per pixel.
     std::vector<ValueId> value, inside;
-    for (size_t k : cells.which) {
-        value.push_back(b.global(int(all[k])));
-        const Global& g = m.globals[all[k]];
-        inside.push_back(b.op(Op::And, {b.compare(CompareKind::Ge, value.back(), b.scalar(g.bounds.lo[0])),
-                                        b.compare(CompareKind::Le, value.back(), b.scalar(g.bounds.hi[0]))}));
+    for (const SliderComponent& k : cells.which) {
+        const Global& g = m.globals[all[k.k]];
+        const ValueId u = b.global(int(all[k.k]));
+        value.push_back(g.type.is_scalar() ? u : b.op(Op::Extract, {u}, int(k.c)));
+        inside.push_back(b.op(Op::And, {b.compare(CompareKind::Ge, value.back(), b.scalar(g.bounds.lo[k.c])),
+                                        b.compare(CompareKind::Le, value.back(), b.scalar(g.bounds.hi[k.c]))}));
     }
     std::function<ValueId(size_t, size_t)> table = [&](size_t s, size_t base) -> ValueId {
         const std::vector<double>& e = cells.edges[s];
