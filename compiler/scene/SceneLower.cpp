@@ -2206,24 +2206,35 @@ private:
         lo_f.name = lo_f.glsl_name = ir::names::kBoxLo;
         hi_f.name = hi_f.glsl_name = ir::names::kBoxHi;
         lo_f.entry = hi_f.entry = true;
-        std::vector<std::pair<int, std::vector<std::pair<size_t, ir::Interval>>>> tests;  // global, (component, where)
+        // Per slider global: its members (one for an instance; a group's per-member table: each element, up to 16) and,
+        // per component, the window its values must lie in (shape_intervals' near_default over the members' values).
+        struct Test {
+            int global;
+            size_t members;
+            std::vector<std::pair<size_t, ir::Interval>> where;
+        };
+        std::vector<Test> tests;
         for (const Item& it : items_) {
             const InstancePlan& first = plan(it.members[0]);
             const std::vector<ir::ValueBounds> ranges = parameter_bounds(*first.shape);
             for (size_t k = 0; k < it.shape_params.size() && k < ranges.size(); ++k) {
                 const Field& f = it.shape_params[k];
                 if (f.global < 0 || int(k) == first.query || ranges[k].input) continue;
-                if (f.array) {
+                if (f.array && it.members.size() > 16) {
                     out_.box_at_defaults.reset();
                     return;
                 }
-                std::vector<std::pair<size_t, ir::Interval>> where;
-                const auto& v = first.shape_values[k];
-                for (size_t c = 0; c < v.size() && c < ranges[k].lo.size(); ++c) {
-                    ir::Interval value = ir::iv::hull({v[c], v[c]}, {double(float(v[c])), double(float(v[c]))});
-                    if (auto near = near_default({ranges[k].lo[c], ranges[k].hi[c]}, value)) where.push_back({c, *near});
+                Test t{f.global, f.array ? it.members.size() : 1, {}};
+                const size_t n = first.shape_values[k].size();
+                for (size_t c = 0; c < n && c < ranges[k].lo.size(); ++c) {
+                    ir::Interval value{INFINITY, -INFINITY};
+                    for (size_t mi : it.members) {
+                        const double v = plan(mi).shape_values[k][c];
+                        value = ir::iv::hull(value, ir::iv::hull({v, v}, {double(float(v)), double(float(v))}));
+                    }
+                    if (auto near = near_default({ranges[k].lo[c], ranges[k].hi[c]}, value)) t.where.push_back({c, *near});
                 }
-                if (!where.empty()) tests.push_back({f.global, std::move(where)});
+                if (!t.where.empty()) tests.push_back(std::move(t));
             }
         }
         if (tests.empty()) {
@@ -2238,11 +2249,20 @@ private:
         for (int hi = 0; hi < 2; ++hi) {
             ir::Function& f = hi ? hi_f : lo_f;
             Builder b(m_, f);
+            const auto& near = hi ? out_.box_at_defaults->second : out_.box_at_defaults->first;
+            const auto& whole = hi ? out_.box->second : out_.box->first;
+            if (side(near) == side(whole)) {  // (this corner is the same: no test)
+                f.result = b.constant(Type::vector(3), side(whole));
+                continue;
+            }
             ValueId in = ValueId(-1);
-            for (const auto& [g, where] : tests) {
-                ValueId u = b.global(g);
-                for (const auto& [c, near] : where) {
-                    ValueId x = m_.globals[size_t(g)].type.is_scalar() ? u : b.op(Op::Extract, {u}, int(c));
+            for (const Test& test : tests)
+                for (size_t member = 0; member < test.members; ++member)
+                for (const auto& [c, near] : test.where) {
+                    const Type& type = m_.globals[size_t(test.global)].type;
+                    ValueId u = b.global(test.global);
+                    if (type.is_array()) u = b.op(Op::Index, {u, b.integer((long long)member)});
+                    ValueId x = (type.is_array() ? type.element() : type).is_scalar() ? u : b.op(Op::Extract, {u}, int(c));
                     // (the test's ends in float rounded inward: a value it lets through lies in the range analysed)
                     float lo = float(near.lo), hi = float(near.hi);
                     if (double(lo) < near.lo) lo = std::nextafter(lo, INFINITY);
@@ -2251,9 +2271,6 @@ private:
                                                b.compare(ir::CompareKind::Le, x, b.scalar(double(hi)))});
                     in = in == ValueId(-1) ? t : b.op(Op::And, {in, t});
                 }
-            }
-            const auto& near = hi ? out_.box_at_defaults->second : out_.box_at_defaults->first;
-            const auto& whole = hi ? out_.box->second : out_.box->first;
             f.result = b.op(Op::Select, {in, b.constant(Type::vector(3), side(near)), b.constant(Type::vector(3), side(whole))});
         }
         m_.functions.push_back(std::move(lo_f));

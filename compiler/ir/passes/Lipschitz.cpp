@@ -2072,35 +2072,68 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
                                         bool& over_budget) {
     const std::vector<size_t> all = sliders_read(m, spec.object_fn);
     // Each component of a scalar or vector slider with a finite range (a vector's ‖t∘p‖ - 1, t ∈ [0.5, 4]³, marched with
-    // 4 where its default needs 1.2: a trial's).
+    // 4 where its default needs 1.2: a trial's), and of a group's per-member table of one (up to 16 members: the group's
+    // K is the largest of its members' cells' K; six bumpy balls in a group took 52× Shadertoy's steps: a trial's).
     std::vector<SliderComponent> candidates;
+    auto shape_of = [&](const Global& g, size_t& n, size_t& count) {  // components per element, elements
+        n = size_t(g.type.is_array() ? g.type.element().components() : g.type.components());
+        count = n > 0 ? g.value.size() / n : 0;
+        return n > 0 && count >= 1 && count <= 16 && g.value.size() == n * count && (g.type.is_array() || count == 1) &&
+               (g.bounds.lo.size() == n || g.bounds.lo.size() == n * count) && g.bounds.hi.size() == g.bounds.lo.size();
+    };
     for (size_t k = 0; k < all.size(); ++k) {
         const Global& g = m.globals[all[k]];
-        if (g.type.is_array() || g.value.size() != size_t(g.type.components()) || g.bounds.lo.size() != g.value.size() ||
-            g.bounds.hi.size() != g.value.size())
-            continue;
-        for (size_t c = 0; c < g.value.size(); ++c)
-            if (std::isfinite(g.bounds.lo[c]) && std::isfinite(g.bounds.hi[c]) && g.bounds.lo[c] < g.bounds.hi[c]) candidates.push_back({k, c});
+        size_t n = 0, count = 0;
+        if (!shape_of(g, n, count)) continue;
+        for (size_t c = 0; c < n; ++c) {
+            bool ok = true;  // (every member's range of the component the same, finite and wide)
+            for (size_t j = c; j < g.bounds.lo.size(); j += n)
+                ok = ok && g.bounds.lo[j] == g.bounds.lo[c] && g.bounds.hi[j] == g.bounds.hi[c] && std::isfinite(g.bounds.lo[j]) &&
+                     std::isfinite(g.bounds.hi[j]) && g.bounds.lo[j] < g.bounds.hi[j];
+            if (ok) candidates.push_back({k, c});
+        }
     }
     if (candidates.empty() || candidates.size() > 8 || budget <= 0) return std::nullopt;
     Module work = m;
-    auto value_of = [&](const SliderComponent& s) { return m.globals[all[s.k]].value[s.c]; };
+    auto stride = [&](const SliderComponent& s) {
+        size_t n = 0, count = 0;
+        shape_of(m.globals[all[s.k]], n, count);
+        return n;
+    };
+    // A component's values: one, or one per member; their hull; and its range.
+    auto values_of = [&](const SliderComponent& s) {
+        std::vector<double> v;
+        const Global& g = m.globals[all[s.k]];
+        for (size_t j = s.c; j < g.value.size(); j += stride(s)) v.push_back(g.value[j]);
+        return v;
+    };
+    auto value_of = [&](const SliderComponent& s) {  // (the middle of the members' values)
+        const std::vector<double> v = values_of(s);
+        return 0.5 * (*std::min_element(v.begin(), v.end()) + *std::max_element(v.begin(), v.end()));
+    };
     auto set = [&](const SliderComponent& s, double lo, double hi) {
         Global& g = work.globals[all[s.k]];
-        g.bounds.lo[s.c] = lo;
-        g.bounds.hi[s.c] = hi;
-        g.value[s.c] = std::clamp(value_of(s), lo, hi);
+        const size_t n = stride(s);
+        for (size_t j = s.c; j < g.bounds.lo.size(); j += n) {
+            g.bounds.lo[j] = lo;
+            g.bounds.hi[j] = hi;
+        }
+        for (size_t j = s.c; j < g.value.size(); j += n) g.value[j] = std::clamp(m.globals[all[s.k]].value[j], lo, hi);
     };
     auto reset = [&](const SliderComponent& s) {
         const Global& g = m.globals[all[s.k]];
         set(s, g.bounds.lo[s.c], g.bounds.hi[s.c]);
+    };
+    auto pin = [&](const SliderComponent& s) {  // to the hull of its values
+        const std::vector<double> v = values_of(s);
+        set(s, *std::min_element(v.begin(), v.end()), *std::max_element(v.begin(), v.end()));
     };
     // Which sliders the bound depends on: intervals alone (no samples, no refinements) with every slider at its
     // default, then each in turn over its range.
     std::string why;
     const int grad = differentiate(work, spec.object_fn, 0, "lipschitz_cells_gradient", &why);
     if (grad < 0) return std::nullopt;
-    for (const SliderComponent& k : candidates) set(k, value_of(k), value_of(k));
+    for (const SliderComponent& k : candidates) pin(k);
     // No bound at the defaults either (metaballs' singular centres, a recurrence): intervals cannot tell, and where the
     // K comes from samples every slider counts (the first two); a derived K would not come from cells.
     const double pinned = derive(work, grad, region, others, spec.ball, 48);
@@ -2114,7 +2147,7 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         reset(k);
         const double ranged = derive(work, grad, region, others, spec.ball, 48);
         if (!(ranged <= 1.1 * pinned)) influence.push_back({ranged / pinned, k});
-        set(k, value_of(k), value_of(k));
+        pin(k);
     }
     for (const SliderComponent& k : candidates) reset(k);
     work.functions.resize(m.functions.size());  // (the gradient: each estimate differentiates its own)
@@ -2139,19 +2172,32 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     budget -= long(cells);
     c.estimates = long(cells);
     c.K.assign(cells, whole);
-    size_t at_defaults = 0;
+    // The cells of the defaults: each member's values' (one for an instance).
+    std::set<size_t> default_cells;
+    {
+        const size_t members = values_of(c.which[0]).size();
+        for (size_t member = 0; member < members; ++member) {
+            size_t cell = 0;
+            for (size_t s = 0; s < c.which.size(); ++s) {
+                const std::vector<double>& e = c.edges[s];
+                const double d = values_of(c.which[s])[std::min(member, values_of(c.which[s]).size() - 1)];
+                size_t i = 0;
+                while (i + 2 < e.size() && !(d < e[i + 1])) ++i;  // (the shader's choice: the first edge above it)
+                cell = cell * (e.size() - 1) + i;
+            }
+            default_cells.insert(cell);
+        }
+    }
+    std::vector<double> sampled_in(cells, 0);
     for (size_t cell = 0; cell < cells; ++cell) {
         size_t rest = cell;
-        bool holds_defaults = true;
         for (size_t s = c.which.size(); s-- > 0;) {
             const std::vector<double>& e = c.edges[s];
             const size_t i = rest % (e.size() - 1);
             rest /= e.size() - 1;
             set(c.which[s], e[i], e[i + 1]);
-            const double d = value_of(c.which[s]);
-            holds_defaults = holds_defaults && d >= e[i] && (d < e[i + 1] || i + 2 == e.size());
         }
-        if (holds_defaults) at_defaults = cell;
+        const bool holds_defaults = default_cells.count(cell) > 0;
         // The cell of the defaults, where the picture starts, with the case splitting a whole's estimate may spend;
         // elsewhere less (the twisted bar's 7 cells took 480 ms with it everywhere), and, where the cell's K is its
         // derived bound, fewer samples (they only word the warning). Where the whole's K came from its samples, each
@@ -2160,9 +2206,12 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         const int samples = sampled ? 1000 : holds_defaults ? 250 : 64, boxes = sampled ? 128 : holds_defaults ? 64 : 32;
         LipschitzEstimate e = estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, samples, boxes, true, &allowance, false);
         c.K[cell] = cell_factor(e, sampled ? kSampledCap : whole, whole);
-        if (holds_defaults) c.sampled_at_defaults = e.sampled;
+        sampled_in[cell] = e.sampled;
     }
-    c.at_defaults = c.K[at_defaults];
+    for (size_t cell : default_cells) {  // (a group's: the steepest of its members' cells)
+        c.at_defaults = std::max(c.at_defaults, c.K[cell]);
+        c.sampled_at_defaults = std::max(c.sampled_at_defaults, sampled_in[cell]);
+    }
     // Kept where the defaults' cell gains a fifth, or where some cell is steeper than the whole (marched as if
     // 1-Lipschitz, its samples too steep over the sliders' whole ranges: a frequency f ∈ [0, 10⁴] made holes at f = 20).
     if (c.at_defaults > whole / 1.2 && *std::max_element(c.K.begin(), c.K.end()) <= whole) return std::nullopt;
@@ -2182,30 +2231,44 @@ void prepare_cell_factor(Module& m, int factor, const std::vector<size_t>& all, 
     }
     Function& f = m.functions[size_t(prep)];
     Builder b(m, f);
-    // The cell index along each slider cut, then the table as selects over the first slider's index (rows), each row
-    // over the next slider's, …: a few comparisons once per pixel.
-    std::vector<ValueId> value, inside;
-    for (const SliderComponent& k : cells.which) {
-        const Global& g = m.globals[all[k.k]];
-        const ValueId u = b.global(int(all[k.k]));
-        value.push_back(g.type.is_scalar() ? u : b.op(Op::Extract, {u}, int(k.c)));
-        inside.push_back(b.op(Op::And, {b.compare(CompareKind::Ge, value.back(), b.scalar(g.bounds.lo[k.c])),
-                                        b.compare(CompareKind::Le, value.back(), b.scalar(g.bounds.hi[k.c]))}));
+    // The table as selects over the first slider's cell (rows), each row over the next slider's, …: a few comparisons
+    // once per pixel; outside a slider's range, the whole's K. For a group's per-member tables, per member, and the
+    // largest of the members' K.
+    size_t members = 1;
+    for (const SliderComponent& k : cells.which)
+        if (m.globals[all[k.k]].type.is_array())
+            members = std::max(members, m.globals[all[k.k]].value.size() / size_t(m.globals[all[k.k]].type.element().components()));
+    ValueId K = 0;
+    for (size_t member = 0; member < members; ++member) {
+        std::vector<ValueId> value, inside;
+        for (const SliderComponent& k : cells.which) {
+            const Global& g = m.globals[all[k.k]];
+            ValueId u = b.global(int(all[k.k]));
+            Type t = g.type;
+            if (t.is_array()) {
+                u = b.op(Op::Index, {u, b.integer((long long)member)});
+                t = t.element();
+            }
+            value.push_back(t.is_scalar() ? u : b.op(Op::Extract, {u}, int(k.c)));
+            inside.push_back(b.op(Op::And, {b.compare(CompareKind::Ge, value.back(), b.scalar(g.bounds.lo[k.c])),
+                                            b.compare(CompareKind::Le, value.back(), b.scalar(g.bounds.hi[k.c]))}));
+        }
+        std::function<ValueId(size_t, size_t)> table = [&](size_t s, size_t base) -> ValueId {
+            const std::vector<double>& e = cells.edges[s];
+            const size_t n = e.size() - 1;
+            size_t stride = 1;
+            for (size_t t = s + 1; t < cells.edges.size(); ++t) stride *= cells.edges[t].size() - 1;
+            auto cell = [&](size_t i) { return s + 1 == cells.edges.size() ? b.scalar(cells.K[base + i]) : table(s + 1, base + i * stride); };
+            ValueId v = cell(n - 1);
+            for (size_t i = n - 1; i-- > 0;) v = b.op(Op::Select, {b.compare(CompareKind::Lt, value[s], b.scalar(e[i + 1])), cell(i), v});
+            return v;
+        };
+        ValueId own = table(0, 0);
+        ValueId in = inside[0];
+        for (size_t s = 1; s < inside.size(); ++s) in = b.op(Op::And, {in, inside[s]});
+        own = b.op(Op::Select, {in, own, b.scalar(whole)});
+        K = member == 0 ? own : b.builtin("max", {K, own});
     }
-    std::function<ValueId(size_t, size_t)> table = [&](size_t s, size_t base) -> ValueId {
-        const std::vector<double>& e = cells.edges[s];
-        const size_t n = e.size() - 1;
-        size_t stride = 1;
-        for (size_t t = s + 1; t < cells.edges.size(); ++t) stride *= cells.edges[t].size() - 1;
-        auto cell = [&](size_t i) { return s + 1 == cells.edges.size() ? b.scalar(cells.K[base + i]) : table(s + 1, base + i * stride); };
-        ValueId v = cell(n - 1);
-        for (size_t i = n - 1; i-- > 0;) v = b.op(Op::Select, {b.compare(CompareKind::Lt, value[s], b.scalar(e[i + 1])), cell(i), v});
-        return v;
-    };
-    ValueId K = table(0, 0);
-    ValueId in = inside[0];
-    for (size_t s = 1; s < inside.size(); ++s) in = b.op(Op::And, {in, inside[s]});
-    K = b.op(Op::Select, {in, K, b.scalar(whole)});
     Global& g = m.globals[size_t(factor)];
     g.kind = Global::Kind::Prepared;
     g.comment = fmt::format("the Lipschitz factor dividing its distance (the hit test multiplies it back): per cell of its sliders' "
