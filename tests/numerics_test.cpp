@@ -1738,6 +1738,22 @@ TEST_CASE("where sliders are uniforms, K follows their values: each cell's K bou
     }
 }
 
+namespace {
+// Steps a pixel of a render at 80x45 on Shadertoy and on WebGL2 (sliders as constants, as uniforms), with no NaN pixel.
+std::array<double, 2> steps_both(const std::filesystem::path& path) {
+    std::array<double, 2> steps{};
+    int k = 0;
+    for (const char* target : {"shadertoy", "webgl2"}) {
+        RunResult r = run_iqc("render " + path.string() + " -o " + (temp_dir() / "steps.png").string() + " --size 80x45 --stats --target " + target);
+        INFO(r.err);
+        REQUIRE(r.exit_code == 0);
+        CHECK(stat(r.out, "nan_pixels") == 0);
+        steps[size_t(k++)] = stat(r.out, "steps_mean");
+    }
+    return steps;
+}
+}  // namespace
+
 TEST_CASE("where sliders are uniforms, rays are clipped to the scene box at the sliders' defaults while they are there", "[numerics][render][cells]") {
     // The box over the sliders' ranges (the terrain's top at 2.05 for a ∈ [0, 2], the torus's ±1.81 for a ≤ 0.3) made
     // rays on WebGL2 march from far above the shape: at the defaults the box with each slider within 1/64 of its range
@@ -1746,15 +1762,7 @@ TEST_CASE("where sliders are uniforms, rays are clipped to the scene box at the 
     for (const char* name : {"displaced_torus.iq", "sine_terrain.iq"}) {
         INFO(name);
         const auto path = std::filesystem::path(IQC_SOURCE_DIR) / "bench" / name;
-        double steps[2];
-        int k = 0;
-        for (const char* target : {"shadertoy", "webgl2"}) {
-            RunResult r = run_iqc("render " + path.string() + " -o " + (temp_dir() / "box.png").string() + " --size 80x45 --stats --target " + target);
-            INFO(r.err);
-            REQUIRE(r.exit_code == 0);
-            CHECK(stat(r.out, "nan_pixels") == 0);
-            steps[k++] = stat(r.out, "steps_mean");
-        }
+        const std::array<double, 2> steps = steps_both(path);
         INFO("steps a pixel: Shadertoy " << steps[0] << ", WebGL2 " << steps[1]);
         CHECK(steps[1] <= 1.6 * steps[0]);
         RunResult code = run_iqc(path.string() + " --target webgl2 -o " + (temp_dir() / "box.frag").string());
@@ -1769,15 +1777,7 @@ TEST_CASE("where sliders are uniforms, rays are clipped to the scene box at the 
                         "[camera]\nposition = [0, 2.5, -7]\ntarget = [0, 0, 0]\n";
     for (int i = 0; i < 6; ++i) scene += fmt::format("[[shapes]]\ntype = \"blob\"\ntransform = \"T(({}, {}, 0))\"\n", i - 2.5, 0.3 * (i % 2));
     const auto group = write_temp("group_cells.iq", scene);
-    double steps[2];
-    int k = 0;
-    for (const char* target : {"shadertoy", "webgl2"}) {
-        RunResult r = run_iqc("render " + group.string() + " -o " + (temp_dir() / "group.png").string() + " --size 80x45 --stats --target " + target);
-        INFO(r.err);
-        REQUIRE(r.exit_code == 0);
-        CHECK(stat(r.out, "nan_pixels") == 0);
-        steps[k++] = stat(r.out, "steps_mean");
-    }
+    const std::array<double, 2> steps = steps_both(group);
     INFO("the group's steps a pixel: Shadertoy " << steps[0] << ", WebGL2 " << steps[1]);
     CHECK(steps[1] <= 2 * steps[0]);
     RunResult ir = run_iqc(group.string() + " --target webgl2 --dump-ir -o /dev/null");
