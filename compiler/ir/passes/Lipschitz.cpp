@@ -2175,12 +2175,17 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     // The cells of the defaults: each member's values' (one for an instance).
     std::set<size_t> default_cells;
     {
-        const size_t members = values_of(c.which[0]).size();
+        std::vector<std::vector<double>> values;  // per slider cut: its values (one, or one per member)
+        size_t members = 1;
+        for (const SliderComponent& k : c.which) {
+            values.push_back(values_of(k));
+            members = std::max(members, values.back().size());
+        }
         for (size_t member = 0; member < members; ++member) {
             size_t cell = 0;
             for (size_t s = 0; s < c.which.size(); ++s) {
                 const std::vector<double>& e = c.edges[s];
-                const double d = values_of(c.which[s])[std::min(member, values_of(c.which[s]).size() - 1)];
+                const double d = values[s][std::min(member, values[s].size() - 1)];
                 size_t i = 0;
                 while (i + 2 < e.size() && !(d < e[i + 1])) ++i;  // (the shader's choice: the first edge above it)
                 cell = cell * (e.size() - 1) + i;
