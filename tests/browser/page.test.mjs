@@ -279,6 +279,38 @@ if (parts.has("pages")) {
   await page.close();
 }
 
+// K and the scene box follow the sliders (stop 55): where a slider moves in the page, the shader divides by the K of
+// its cell and clips to the box over the sliders' ranges (the defaults' box only while they are near their defaults).
+// Moved to a = 0.15, f = 20.5, the page draws what a page compiled with those defaults draws: no hole where a cell's K
+// were too small, nothing clipped by a box too small.
+if (parts.has("pages")) {
+  const scene = (a, f) => '[modules]\nbumpy = """\nshape\nsin from trigonometry\nD = ‖p‖ - 1 + a sin(f p_1) sin(f p_2) sin(f p_3)\n' +
+    `where\np ∈ ℝ³\na ∈ [0, 0.3] default = ${a}\nf ∈ [1, 40] default = ${f}\n"""\n[camera]\nposition = [0, 1.2, -3.2]\n[[shapes]]\ntype = "bumpy"\n`;
+  const moved = path.join(tmp, "cells_moved.html"), at = path.join(tmp, "cells_at.html");
+  fs.writeFileSync(path.join(tmp, "cells_moved.iq"), scene(0.05, 8));
+  fs.writeFileSync(path.join(tmp, "cells_at.iq"), scene(0.15, 20.5));
+  execFileSync(iqc, [path.join(tmp, "cells_moved.iq"), "--target", "html", "-o", moved], { stdio: "pipe" });
+  execFileSync(iqc, [path.join(tmp, "cells_at.iq"), "--target", "html", "-o", at], { stdio: "pipe" });
+  const a = await open("file://" + moved);
+  const frames = await a.page.evaluate(() => window.iqcFrames);
+  await a.page.evaluate(() => {
+    const s = document.querySelectorAll("#params input[type=range]");
+    s[0].value = 0.15; s[0].dispatchEvent(new Event("input"));
+    s[1].value = 20.5; s[1].dispatchEvent(new Event("input"));
+  });
+  await waitFor(a.page, n => window.iqcFrames > n, frames);  // (both inputs in one frame)
+  const values = await a.page.evaluate(() => Array.from(document.querySelectorAll("#params input[type=range]")).map(s => Number(s.value)));
+  const seen = await picture(a.page);
+  const b = await open("file://" + at);
+  const expected = await picture(b.page);
+  const off = seen.data.filter((v, i) => Math.abs(v - expected.data[i]) > 8).length;
+  check(Math.abs(values[0] - 0.15) < 1e-3 && Math.abs(values[1] - 20.5) < 0.02 && off <= 0.01 * seen.data.length && seen.colours > 50,
+        `cells: sliders moved to (${values.join(", ")}) draw what their defaults draw (${off} of ${seen.data.length} samples differ)`);
+  check(a.errors.length === 0 && b.errors.length === 0, `cells: no console errors ${a.errors.concat(b.errors).join(" | ")}`);
+  await a.page.close();
+  await b.page.close();
+}
+
 // A phone (390×844 at 3 device pixels per CSS pixel, touch): the drawing buffer is the canvas's exact size (60vh is
 // 506.4 CSS pixels: clientHeight's whole pixels made it a row short), and a finger's drag on the picture reaches
 // the page as pointer moves (the browser's pan cancelled it after two and scrolled the page).
