@@ -2006,22 +2006,36 @@ Clusters analysis_clusters(const Module& m) {
 // multiplies it back. Each cell's K is a bound over the cell (or, where the whole has no useful bound, the cell's
 // samples with the same margin), never above the whole's.
 
-// The factor an estimate of a shape with no declaration or pragma gives, as apply_lipschitz_bounds decides it (its
-// branches word the same rules): 1 where every sample is within 1 and the bound within 2; the derived bound where
-// useful; else the samples' steepest (outside the shape where the inside is over 4× steeper) times the margin, or 1
-// where even that is too steep to march by (`too_steep` is then set).
-double decided_factor(const LipschitzEstimate& e, bool* too_steep = nullptr) {
-    if (too_steep) *too_steep = false;
+// What an estimate of a shape with no declaration or pragma decides (apply_lipschitz_bounds words it, the cells take
+// its K): 1 where every sample is within 1 and the bound within 2 (unless within 1 at the sliders' defaults: the rest
+// comes from their ranges); the derived bound where useful (at most kUnbounded); else the samples' steepest (outside the
+// shape where the inside is over 4× steeper) times the margin, or the derived bound where smaller; or 1 where even the
+// samples' margin is too steep to march by.
+struct Decision {
+    enum Kind { OneLipschitz, Derived, Sampled, TooSteep } kind = OneLipschitz;
+    double K = 1;
+    bool apart = false;  // (no useful bound) the samples outside the shape chose
+    double steep = 0;    // (no useful bound) the steepest sample the K comes from
+};
+Decision decide(const LipschitzEstimate& e) {
+    Decision d;
     if (e.sampled <= 1 + 1e-3 && e.derived <= 2 * (1 + 1e-9) && e.blend_steepest <= 1 + 1e-3 &&
         !(e.at_defaults > 0 && e.at_defaults <= 1 + 1e-9))
-        return 1;
-    if (std::isfinite(e.derived) && e.derived <= kUnbounded) return e.derived;
-    const bool apart = e.outside > 0 && e.sampled > 4 * e.outside;
-    const double steep = apart ? e.outside : e.sampled;
-    if (steep > 1 + 1e-3 && kSampledMargin * steep <= kSampledCap)
-        return std::min(kSampledMargin * steep, std::isfinite(e.derived) ? e.derived : kInf);
-    if (too_steep) *too_steep = steep > 1 + 1e-3;
-    return 1;
+        return d;
+    if (std::isfinite(e.derived) && e.derived <= kUnbounded) {
+        d.kind = Decision::Derived;
+        d.K = e.derived;
+        return d;
+    }
+    d.apart = e.outside > 0 && e.sampled > 4 * e.outside;
+    d.steep = d.apart ? e.outside : e.sampled;
+    if (d.steep > 1 + 1e-3 && kSampledMargin * d.steep <= kSampledCap) {
+        d.kind = Decision::Sampled;
+        d.K = std::min(kSampledMargin * d.steep, std::isfinite(e.derived) ? e.derived : kInf);
+    } else {
+        d.kind = Decision::TooSteep;  // (K 1: as if 1-Lipschitz where the samples are steeper than 1)
+    }
+    return d;
 }
 
 // A cell's factor: its derived bound where that is useful (proven over the cell: never the rule that takes 1 where
@@ -2030,9 +2044,8 @@ double decided_factor(const LipschitzEstimate& e, bool* too_steep = nullptr) {
 // `fallback` (the whole's).
 double cell_factor(const LipschitzEstimate& e, double cap, double fallback) {
     if (std::isfinite(e.derived) && e.derived <= kUnbounded) return std::clamp(e.derived, 1.0, cap);
-    bool too_steep = false;
-    const double K = decided_factor(e, &too_steep);
-    return too_steep ? fallback : std::clamp(K, 1.0, cap);
+    const Decision d = decide(e);
+    return d.kind == Decision::TooSteep && d.steep > 1 + 1e-3 ? fallback : std::clamp(d.K, 1.0, cap);
 }
 
 // The cells of one analysis (shared by the items of a cluster: their sliders in the same order).
@@ -2357,7 +2370,8 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         const SliderCells* cells = nullptr;
         bool cells_skipped = false;  // (past the cells' budget: the report says so)
         const bool useful = std::isfinite(e.derived) && e.derived <= kUnbounded;
-        const double decided = spec.declared > 0 || spec.trusted ? 1 : decided_factor(e);
+        const Decision decision = spec.declared > 0 || spec.trusted ? Decision{} : decide(e);
+        const double decided = decision.K;
         if ((decided > 1 + 1e-9 || !useful) && !m.constant_parameters && spec.declared <= 0 && !spec.trusted && spec.factor_global >= 0 &&
             size_t(spec.factor_global) < m.globals.size()) {
             auto known = cut.find(cluster);
@@ -2407,10 +2421,9 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                                 "surface; remove the pragma and iqc derives its own bound",
                                                                 spec.shape, steepest)});
             }
-        } else if (e.sampled <= 1 + 1e-3 && e.derived <= 2 * (1 + 1e-9) && e.blend_steepest <= 1 + 1e-3 &&
-                   !(e.at_defaults > 0 && e.at_defaults <= 1 + 1e-9)) {
+        } else if (decision.kind == Decision::OneLipschitz) {
             how = "1-Lipschitz at every sample";
-        } else if (!std::isfinite(e.derived) || e.derived > kUnbounded) {
+        } else if (decision.kind != Decision::Derived) {
             how = "no useful bound";
             // Without a bound worth marching by, the samples' steepest gradient with a margin: not proven (a
             // steeper spot between samples may still be stepped through), but 1 would skip what samples saw.
@@ -2418,10 +2431,10 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             // metaballs near their centres (10⁴), is marched by its slope outside (47). Only where the inside is far steeper (over 4×: a singular centre): elsewhere the steepest sample anywhere,
             // as samples outside may miss a steep shell the others met (a ball of slope 2 beside a cluster: 2.47 → 1.45,
             // before this rule).
-            const bool apart = e.outside > 0 && e.sampled > 4 * e.outside;
-            const double steep = apart ? e.outside : e.sampled;
-            if (steep > 1 + 1e-3 && kSampledMargin * steep <= kSampledCap) {  // beyond, as useless as the bound
-                applied = std::min(kSampledMargin * steep, std::isfinite(e.derived) ? e.derived : kInf);
+            const bool apart = decision.apart;
+            const double steep = decision.steep;
+            if (decision.kind == Decision::Sampled) {  // (beyond kSampledCap, as useless as the bound)
+                applied = decision.K;
                 how = fmt::format("no useful bound: {:g} times the steepest sample{}, not proven", kSampledMargin, apart ? " outside the shape" : "");
             }
             // The derived bound itself, where the samples' margin would exceed it: proven, only slow (‖p‖/k² over
@@ -2464,7 +2477,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                             reason, marched, fix)});
             }
         } else {
-            applied = e.derived;
+            applied = decision.K;  // (the derived bound)
             how = e.at_defaults > 0 && e.at_defaults <= 1 + 1e-9 && e.sampled <= 1 + 1e-3
                       ? fmt::format("derived: within {:.4g} at the sliders' defaults", e.at_defaults)
                       : "derived";
@@ -2512,7 +2525,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                             d, at[0], at[1], at[2])});
         }
         if (repeat) warnings.resize(warned);
-        if (cells && !(applied == decided)) cells = nullptr;  // (the branches above decide as decided_factor does)
+        if (cells && !(applied == decided)) cells = nullptr;  // (never: the branches above take the decision's K)
         // (steps up to the steepest cell's K shorter: the step cap grows by it)
         const double steepest = cells ? std::max(applied, *std::max_element(cells->K.begin(), cells->K.end())) : applied;
         if (largest && steepest > *largest) *largest = steepest;
