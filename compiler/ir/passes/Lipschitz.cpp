@@ -2472,6 +2472,9 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                 std::string fix = bounded ? "declare `# lipschitz: K` in the module (the instance's `bound` does not make its gradient boundable)"
                                           : "give the instance `bound = R` (a sphere around the shape) so iqc can bound its gradient there, "
                                             "or declare `# lipschitz: K`";
+                // (where it has cells, a slider's range is what leaves it without a useful bound: a frequency f ∈ [0, 10⁴]
+                // whose default 20 needs 4.5; a trial's)
+                if (cells) fix = "narrow the range of a slider it is steep at the end of, " + fix;
                 warnings.push_back({spec.where, fmt::format("shape '{}' {} ({}): {}marching may step through its surface; {}", spec.shape,
                                                             e.why.empty() && e.sampled <= 1 + 1e-3 ? "has no Lipschitz bound iqc can derive" : "is not 1-Lipschitz",
                                                             reason, marched, fix)});
