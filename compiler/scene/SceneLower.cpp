@@ -237,13 +237,7 @@ private:
         std::vector<std::vector<ir::Interval>> params(first.shape->params.size());
         for (size_t i = 0; i < params.size(); ++i) {
             if (int(i) == first.query) continue;
-            for (size_t mi : members) {
-                const auto& v = plan(mi).shape_values[i];
-                if (params[i].empty()) params[i].assign(v.size(), {INFINITY, -INFINITY});
-                for (size_t c = 0; c < v.size() && c < params[i].size(); ++c)
-                    // The value and its float (the shader's constant: 10000000.49 is 10000000 there).
-                    params[i][c] = ir::iv::hull(params[i][c], ir::iv::hull({v[c], v[c]}, {double(float(v[c])), double(float(v[c]))}));
-            }
+            for (size_t c = 0; c < plan(members[0]).shape_values[i].size(); ++c) params[i].push_back(value_hull(members, i, c));
             if (!o_.params_constant) {
                 const ir::ValueBounds& r = ranges[i];
                 if (r.input || r.lo.size() != params[i].size()) return std::nullopt;
@@ -259,6 +253,17 @@ private:
         }
         params[size_t(first.query)].assign(3, {});
         return params;
+    }
+
+    // The hull of parameter i's component c over the members, each value with its float (the shader's constant:
+    // 10000000.49 is 10000000 there).
+    ir::Interval value_hull(const std::vector<size_t>& members, size_t i, size_t c) const {
+        ir::Interval h{INFINITY, -INFINITY};
+        for (size_t mi : members) {
+            const auto& v = plan(mi).shape_values[i];
+            if (c < v.size()) h = ir::iv::hull(h, ir::iv::hull({v[c], v[c]}, {double(float(v[c])), double(float(v[c]))}));
+        }
+        return h;
     }
 
     // A slider's range near its value v (the hull of its members' values): within 1/64 of the range of v, where the range
@@ -2213,8 +2218,8 @@ private:
     }
 
     // iqc_box_lo() and iqc_box_hi(): the box at the sliders' defaults (SceneIR::box_at_defaults) while every slider of
-    // every shape is within it (within 1/64 of its range of its default), else the box over their ranges. Not made
-    // (the box is the whole's constant) where a shape's parameter is a per-member table (a group's array).
+    // every shape is within it (within 1/64 of its range of its default; in a group, every member's), else the box over
+    // their ranges. Not made (the box is the whole's constant) for a group of more than 16 members.
     void box_functions() {
         if (!out_.box_at_defaults || !out_.box) return;
         ir::Function lo_f, hi_f;
@@ -2241,14 +2246,8 @@ private:
                 }
                 Test t{f.global, f.array ? it.members.size() : 1, {}};
                 const size_t n = first.shape_values[k].size();
-                for (size_t c = 0; c < n && c < ranges[k].lo.size(); ++c) {
-                    ir::Interval value{INFINITY, -INFINITY};
-                    for (size_t mi : it.members) {
-                        const double v = plan(mi).shape_values[k][c];
-                        value = ir::iv::hull(value, ir::iv::hull({v, v}, {double(float(v)), double(float(v))}));
-                    }
-                    if (auto near = near_default({ranges[k].lo[c], ranges[k].hi[c]}, value)) t.where.push_back({c, *near});
-                }
+                for (size_t c = 0; c < n && c < ranges[k].lo.size(); ++c)
+                    if (auto near = near_default({ranges[k].lo[c], ranges[k].hi[c]}, value_hull(it.members, k, c))) t.where.push_back({c, *near});
                 if (!t.where.empty()) tests.push_back(std::move(t));
             }
         }

@@ -2058,7 +2058,6 @@ struct SliderCells {
     std::vector<double> K;                   // per cell, the first slider's cell index varying slowest
     double at_defaults = 0;                  // the cell holding the defaults' K
     double sampled_at_defaults = 0;          // and the steepest gradient its samples met
-    long estimates = 0;                      // the estimates they took
 };
 
 // The edges of a slider's cells: a cell around the default d, `fractions` of the range r wide on each side, and
@@ -2120,10 +2119,6 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         for (size_t j = s.c; j < g.value.size(); j += stride(s)) v.push_back(g.value[j]);
         return v;
     };
-    auto value_of = [&](const SliderComponent& s) {  // (the middle of the members' values)
-        const std::vector<double> v = values_of(s);
-        return 0.5 * (*std::min_element(v.begin(), v.end()) + *std::max_element(v.begin(), v.end()));
-    };
     auto set = [&](const SliderComponent& s, double lo, double hi) {
         Global& g = work.globals[all[s.k]];
         const size_t n = stride(s);
@@ -2183,7 +2178,6 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     over_budget = long(cells) > budget;
     if (over_budget) return std::nullopt;
     budget -= long(cells);
-    c.estimates = long(cells);
     c.K.assign(cells, whole);
     // The cells of the defaults: each member's values' (one for an instance).
     std::set<size_t> default_cells;
@@ -2528,7 +2522,6 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                             d, at[0], at[1], at[2])});
         }
         if (repeat) warnings.resize(warned);
-        if (cells && !(applied == decided)) cells = nullptr;  // (never: the branches above take the decision's K)
         // (steps up to the steepest cell's K shorter: the step cap grows by it)
         const double steepest = cells ? std::max(applied, *std::max_element(cells->K.begin(), cells->K.end())) : applied;
         if (largest && steepest > *largest) *largest = steepest;
