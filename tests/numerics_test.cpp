@@ -1786,3 +1786,43 @@ TEST_CASE("where sliders are uniforms, rays are clipped to the scene box at the 
     CHECK_THAT(ir.err, Catch::Contains("by the sliders' values"));
     CHECK_THAT(ir.err, Catch::Contains("global @") && Catch::Contains("iqc_box_lo"));
 }
+
+TEST_CASE("the slider cells' analysis costs a few times the whole's at most", "[numerics][cells]") {
+    // The cells repeat the Lipschitz estimate per cell of the sliders' values: a sampled recurrence (three folds of
+    // space, golden/lang/folded.md) took 9 estimates as costly as its whole, 12× Shadertoy's compile (700 ms, 10 s under
+    // ASan: the CI's fuzzing stopped at it), and kept no cell. The work is counted in ir::analysis_work's units (evaluator
+    // steps and bounded instructions: the same on every machine), each input compiled for WebGL2 and for Shadertoy,
+    // whose sliders are constants (no cells).
+    namespace fs = std::filesystem;
+    const fs::path root = IQC_SOURCE_DIR;
+    std::vector<fs::path> inputs = {root / "golden/lang/folded.md"};
+    for (const char* dir : {"bench", "examples", "golden/lang"})
+        for (const auto& e : fs::directory_iterator(root / dir))
+            if (e.is_regular_file() && (e.path().extension() == ".iq" || e.path().extension() == ".md")) inputs.push_back(e.path());
+    std::sort(inputs.begin() + 1, inputs.end());
+    auto work = [](const fs::path& p, Target t) {
+        CompileOptions o;
+        o.target = t;
+        const uint64_t before = ir::analysis_work();
+        Compiled c = compile_path(p, o);
+        return std::pair<int, double>{c.result.exit_code, double(ir::analysis_work() - before)};
+    };
+    for (const fs::path& p : inputs) {
+        const auto [rs, shadertoy] = work(p, Target::Shadertoy);
+        const auto [rw, webgl2] = work(p, Target::WebGL2);
+        INFO(p.string() << ": Shadertoy " << shadertoy << ", WebGL2 " << webgl2);
+        REQUIRE(rs == rw);
+        // An item's cells may take 8× its whole estimate (at least 4·10⁶, at most 4·10⁷), and a uniform target's
+        // whole samples the sliders' ends too (about 2× Shadertoy's): the displaced torus takes 8.7× Shadertoy's work;
+        // the folds took 20× before their cells were budgeted.
+        CHECK(webgl2 <= 12 * shadertoy + 8e6);
+    }
+    // The folds keep the K of their sliders' ranges, and the report says why.
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    Compiled folded = compile_path(inputs[0], o);
+    REQUIRE(folded.result.exit_code == 0);
+    std::string report;
+    for (const auto& line : folded.result.lipschitz) report += line + "\n";
+    CHECK_THAT(report, Catch::Contains("not by the sliders' values: past the cells' budget"));
+}

@@ -502,8 +502,17 @@ Evaluator::FrameBuffers& Evaluator::frame_buffers() {
     return *frames_[depth_++];
 }
 
+namespace {
+// Adds a call's steps to the thread's analysis work meter however the call ends (EvalLimit included).
+struct Metered {
+    const uint64_t& steps;
+    ~Metered() { analysis_work() += steps; }
+};
+}  // namespace
+
 void Evaluator::call(int fn, const double* const* args, double* out) {
     steps_ = 0;
+    Metered meter{steps_};
     Frame fr(*this, fn, args);
     fr.run_region(0);
     work_ += steps_;
@@ -539,6 +548,7 @@ std::vector<Value> Evaluator::call_all(int fn, const std::vector<Value>& args) {
     const Function& f = m_.functions[size_t(fn)];
     auto a = arg_pointers(f, args);
     steps_ = 0;
+    Metered meter{steps_};
     Frame fr(*this, fn, a.data());
     fr.run_region(0);
     work_ += steps_;

@@ -432,5 +432,10 @@ std::string verify(const Module& m) {
     return "";
 }
 
+uint64_t& analysis_work() {
+    thread_local uint64_t work = 0;
+    return work;
+}
+
 }  // namespace ir
 }  // namespace iqc

@@ -291,4 +291,10 @@ std::optional<ValueId> selected_term(const Function& body, size_t j);
 // of m; marked entries are not visited again).
 void mark_reachable(const Module& m, int fn, std::vector<char>& seen);
 
+// This thread's analysis work meter: evaluator steps (Evaluator::work's unit) plus instructions the interval
+// analysis has bounded, since the thread began. Compile-time analyses that repeat an estimate (the Lipschitz
+// pass' slider cells) budget themselves by its differences: the same on every machine and under any load, unlike
+// time.
+uint64_t& analysis_work();
+
 }  // namespace iqc::ir

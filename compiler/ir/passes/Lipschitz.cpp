@@ -46,6 +46,12 @@ constexpr double kSplitWorkPerEstimate = 8e6, kSplitWorkPerModule = 5e5;
 // Estimates of slider cells (K as a function of the sliders, where they are uniforms) per module: up to 27 per item
 // (~5 ms each for the displaced torus), items past this keep the one K of their whole ranges.
 constexpr long kMaxCellEstimates = 128;
+// The analysis work (ir::analysis_work) an item's cells may take: 8 of its whole's estimate (the displaced torus' 25
+// cells took 3.2, a sampled metaballs' 7 cells 6.9), at least 4·10⁶ (~30 ms) and at most 4·10⁷ (~250 ms; 10× that
+// under the sanitizers); per module, 10⁸. A sampled recurrence's 9 cells, each as costly as its whole, took 700 ms and
+// kept none (the CI's fuzzing stopped at it: 10 s under ASan). Past it, the item keeps the K of its sliders' ranges.
+constexpr double kCellWorkRatio = 8;
+constexpr uint64_t kCellWorkFloor = 4'000'000, kCellWorkPerItem = 40'000'000, kCellWorkPerModule = 100'000'000;
 // Items whose K follows their sliders, per module: each is a value iqc_prepare computes per pixel and every step reads,
 // and llvmpipe compiles a march with many such values live much more slowly (ir/passes/Hoist.cpp's cap); the others
 // keep the K of their sliders' whole ranges.
@@ -2078,10 +2084,19 @@ std::vector<double> cell_edges(double lo, double hi, double d, const std::vector
 
 // Estimates the cells of an item whose whole bound `whole` (applied) comes from its estimate, where its sliders are
 // uniforms: nothing (nullopt) where no slider is a scalar with finite bounds, where the cell of the defaults gains
-// less than a fifth, or past `budget` estimates (decremented by those taken).
+// less than a fifth, past `budget` estimates (decremented by those taken), or where the cells' analysis work would pass
+// kCellWorkRatio × `whole_work` (the whole's estimate's, clamped) or `work_left` (decremented by the work taken).
 std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& spec, const std::vector<Interval>& region,
-                                        const std::vector<std::vector<Interval>>& others, double whole, bool sampled, long& budget,
-                                        bool& over_budget) {
+                                        const std::vector<std::vector<Interval>>& others, double whole, bool sampled,
+                                        uint64_t whole_work, long& budget, uint64_t& work_left, bool& over_budget) {
+    const uint64_t start = analysis_work();
+    const uint64_t work_allowed =
+        std::min(work_left, std::clamp(uint64_t(kCellWorkRatio * double(whole_work)), kCellWorkFloor, kCellWorkPerItem));
+    struct Spend {  // (however it returns: the work taken comes off the module's)
+        uint64_t& left;
+        uint64_t start;
+        ~Spend() { left -= std::min(left, analysis_work() - start); }
+    } spend{work_left, start};
     const std::vector<size_t> all = sliders_read(m, spec.object_fn);
     // Each component of a scalar or vector slider with a finite range (a vector's ‖t∘p‖ - 1, t ∈ [0.5, 4]³, marched with
     // 4 where its default needs 1.2: a trial's), and of a group's per-member table of one (up to 16 members: the group's
@@ -2201,7 +2216,13 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         }
     }
     std::vector<double> sampled_in(cells, 0);
-    for (size_t cell = 0; cell < cells; ++cell) {
+    // The defaults' cells first: the others are predicted to cost as much each as they did, and where that, or later
+    // what they took, is past the allowance, the item keeps its whole's K.
+    std::vector<size_t> order(default_cells.begin(), default_cells.end());
+    for (size_t cell = 0; cell < cells; ++cell)
+        if (!default_cells.count(cell)) order.push_back(cell);
+    for (size_t n = 0; n < order.size(); ++n) {
+        const size_t cell = order[n];
         size_t rest = cell;
         for (size_t s = c.which.size(); s-- > 0;) {
             const std::vector<double>& e = c.edges[s];
@@ -2217,6 +2238,13 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         double allowance = kSplitWorkPerEstimate / (holds_defaults ? 16 : 128);
         const int samples = sampled ? 1000 : holds_defaults ? 250 : 64, boxes = sampled ? 128 : holds_defaults ? 64 : 32;
         LipschitzEstimate e = estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, samples, boxes, true, &allowance, false);
+        const uint64_t spent = analysis_work() - start;
+        // (after the defaults' cells, the others predicted to cost as much each; then what they take)
+        const double predicted = n + 1 == default_cells.size() ? double(spent) / double(n + 1) * double(order.size() - n - 1) : 0;
+        if (double(spent) + predicted > double(work_allowed)) {
+            over_budget = true;
+            return std::nullopt;
+        }
         c.K[cell] = cell_factor(e, sampled ? kSampledCap : whole, whole);
         sampled_in[cell] = e.sampled;
     }
@@ -2312,6 +2340,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
     std::set<std::string> trusted_checked;  // the shapes saying `# exact` or `# bound` whose samples were checked
     std::map<int, std::optional<SliderCells>> cut;  // by cluster: the cells of the sliders (uniform targets)
     long cell_budget = kMaxCellEstimates;
+    uint64_t cell_work = kCellWorkPerModule;
     size_t cell_items = 0;
     std::set<int> factor_done;  // the factor globals set (a constant) or prepared (per cell of the sliders)
     for (size_t fi = 0; fi < m.functions.size(); ++fi) {
@@ -2335,6 +2364,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                     // compares with the bound intervals give (a looser one: a jump must be larger to be proven).
                     const bool refine = analysed.size() < kMaxRefined;
                     LipschitzEstimate est;
+                    const uint64_t before = analysis_work();
                     try {
                         est = estimate_lipschitz(m, spec.object_fn, region, others, spec.ball, 1000, 128,
                                                  refine && spec.declared <= 0, &allowance, refine);
@@ -2350,6 +2380,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                         if (!limit.span.valid()) limit.span = spec.where;
                         throw;
                     }
+                    est.work = analysis_work() - before;
                     same = analysed.emplace(cluster, std::move(est)).first;
                     split_work -= given - allowance;
                 }
@@ -2371,7 +2402,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             auto known = cut.find(cluster);
             if (known == cut.end()) {
                 bool over = false;
-                known = cut.emplace(cluster, slider_cells(m, spec, region, others, decided, !useful, cell_budget, over)).first;
+                known = cut.emplace(cluster, slider_cells(m, spec, region, others, decided, !useful, e.work, cell_budget, cell_work, over)).first;
                 cells_skipped = over;
             }
             if (known->second && cell_items < kMaxCellItems) cells = &*known->second;
@@ -2552,7 +2583,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                               (cells ? fmt::format("; by the sliders' values {:.4g} at their defaults, {:.4g}–{:.4g} over {} cells", cells->at_defaults,
                                                    *std::min_element(cells->K.begin(), cells->K.end()),
                                                    *std::max_element(cells->K.begin(), cells->K.end()), cells->K.size())
-                                     : cells_skipped ? "; not by the sliders' values: past the cells' budget (128 estimates, 8 items a scene)"
+                                     : cells_skipped ? "; not by the sliders' values: past the cells' budget (their analysis up to 8× the whole's, 128 estimates and 8 items a scene)"
                                                      : ""));
         m.functions[fi].lipschitz.object_fn = -1;  // done
     }

@@ -53,6 +53,9 @@ struct LipschitzEstimate {
     // The work spent: interval evaluations of a gradient (or a warp's Jacobian) over a box or at a point, the
     // refinements' included (a regression measure; a box is ~1-100 µs depending on the shape's size).
     long boxes = 0;
+    // The analysis work (ir::analysis_work's unit: evaluator steps and bounded instructions) the estimate took, set by
+    // apply_lipschitz_bounds, where the slider cells' estimates are budgeted by it.
+    uint64_t work = 0;
     bool unevaluable = false;  // neither the gradient nor the distance evaluates within the step limit (`why` says)
     // The largest Σ|∂f/∂x_i| the analysis of a blend f of distances x_i (a smooth minimum written in the module)
     // met at a point of its arguments: above 1, f is no convex combination of its distances' gradients, and a
