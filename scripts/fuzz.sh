@@ -6,17 +6,19 @@
 # (the whole compiler on a scene, document or module file, through glslang; exit 3 counts as a crash).
 # Each runs SECONDS (default 60) with one job on its corpus in build-asan/fuzz/corpus/HARNESS, seeded from
 # examples/, stdlib/ and tests/ (every regression input in tests/fuzz/HARNESS/ included), with the token
-# dictionary fuzz/iqc.dict, 10 s and 2 GB per input, and a fixed seed (IQC_FUZZ_SEED, default 1: CI fuzzes
+# dictionary fuzz/iqc.dict, 120 s and 2 GB per input, and a fixed seed (IQC_FUZZ_SEED, default 1: CI fuzzes
 # the same inputs on every run, so a red run is a reproducible one; set it to 0 for a random seed). The harnesses live in the sanitizer build
 # (scripts/sanitize.sh; built here if missing), so every ASan/UBSan report is a finding too.
 #
 # A long campaign (the issue-16 report: `IQC_FUZZ_BUILD=build-fuzz IQC_FUZZ_SANITIZERS=undefined
 # IQC_FUZZ_JOBS=2 IQC_FUZZ_TIMEOUT=120 nice -n 10 bash scripts/fuzz.sh 3600`) may use a build of its own with
 # UBSan alone, several times the executions per second of ASan's; IQC_FUZZ_JOBS runs that many processes per
-# harness; IQC_FUZZ_TIMEOUT (seconds per input, default 10) keeps a niced process that a build starves from
-# reporting a false hang. The timeout is wall time: at nice 19 beside two busy processes (ctest -j2, a build)
-# a fuzzer gets about 1% of a core, and an input of 4 s reached 60 s and was reported as a hang; nice 10 gets
-# it about 5%.
+# harness; IQC_FUZZ_TIMEOUT is the seconds per input (default 120). The harnesses' build (ASan, UBSan and
+# libFuzzer's coverage instrumentation) compiles about 40× slower than a release build: the seeds' Mandelbulb (0.8 s
+# in release) takes 38 s there and the Christmas tree 21 s, on 2 cores; a 10 s limit reported them as hangs (the CI
+# stopped at a 10 s one). 120 s is the sanitizer suite's own bound per compile (tests/hostile_test.cpp), and a hang
+# still ends the run. The timeout is wall time: at nice 19 beside two busy processes (ctest -j2, a build) a fuzzer
+# gets about 1% of a core, and an input of 4 s reached 60 s and was reported as a hang; nice 10 gets it about 5%.
 #
 # A finding stops that harness with the input in build-asan/fuzz/artifacts/. Minimise it with
 #   build-asan/fuzz/fuzz_HARNESS -minimize_crash=1 -runs=100000 ARTIFACT
@@ -94,7 +96,7 @@ for h in "${HARNESSES[@]}"; do
   for ((j = 0; j < JOBS; j++)); do
     seed_j=$(( ${IQC_FUZZ_SEED:-1} == 0 ? 0 : ${IQC_FUZZ_SEED:-1} + j ))
     "$B/fuzz/fuzz_$h" "$B/fuzz/corpus/$h" -dict=fuzz/iqc.dict \
-      -seed="$seed_j" -max_total_time="$SECONDS_EACH" -timeout="${IQC_FUZZ_TIMEOUT:-10}" -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 \
+      -seed="$seed_j" -max_total_time="$SECONDS_EACH" -timeout="${IQC_FUZZ_TIMEOUT:-120}" -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 \
       -artifact_prefix="$B/fuzz/artifacts/$h-" >"$log.$j" 2>&1 &
     pids+=($!)
   done
