@@ -2215,6 +2215,12 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
             default_cells.insert(cell);
         }
     }
+    // Where the K comes from samples, each cell's estimate is as costly as the whole's (as many samples, at the same
+    // settings of the sliders): past the allowance before any is taken (the folds' 9 cells, 8 allowed).
+    if (sampled && double(cells) * double(whole_work) > double(work_allowed)) {
+        over_budget = true;
+        return std::nullopt;
+    }
     std::vector<double> sampled_in(cells, 0);
     // The defaults' cells first: the others are predicted to cost as much each as they did, and where that, or later
     // what they took, is past the allowance, the item keeps its whole's K.
