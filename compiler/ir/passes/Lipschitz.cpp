@@ -1663,7 +1663,7 @@ double sampled_gradient(const Module& m, int fn, const std::vector<Interval>& re
 
 LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<Interval>& box,
                                      const std::vector<std::vector<Interval>>& others, double ball, int samples, int boxes,
-                                     bool refine_bound, double* split_work, bool jumps) {
+                                     bool refine_bound, double* split_work, bool jumps, bool derived_suffices) {
     LipschitzEstimate e;
     double own_work = kSplitWorkPerEstimate;
     if (!split_work) split_work = &own_work;
@@ -1744,7 +1744,8 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     // the defaults reached 1 and the warning invited a declaration that would have made holes (a trial's, stop 54).
     const bool decides = !std::isfinite(e.derived) || e.derived > kUnbounded || (e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3) ||
                          !refine_bound || (!work.constant_parameters && e.derived > 3 * std::max(e.sampled, 1.0));
-    if (evaluated > 0 && e.derived > 1 + 1e-9 && decides) {
+    const bool useful = std::isfinite(e.derived) && e.derived <= kUnbounded;
+    if (evaluated > 0 && e.derived > 1 + 1e-9 && decides && !(derived_suffices && useful)) {
         std::vector<std::array<double, 3>> ends;
         // (without a useful bound, the samples outside the shape are kept apart: they choose the K marched by)
         // (a field that moves is sampled over time by `sample` only: its outside samples, at time 0, are not taken)
@@ -2243,7 +2244,9 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         // cell has as many as the whole had: the K is theirs.
         double allowance = kSplitWorkPerEstimate / (holds_defaults ? 16 : 128);
         const int samples = sampled ? 1000 : holds_defaults ? 250 : 64, boxes = sampled ? 128 : holds_defaults ? 64 : 32;
-        LipschitzEstimate e = estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, samples, boxes, true, &allowance, false);
+        // (away from the defaults, a derived K is the cell's: its samples would word nothing)
+        LipschitzEstimate e =
+            estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, samples, boxes, true, &allowance, false, !holds_defaults && !sampled);
         const uint64_t spent = analysis_work() - start;
         // (after the defaults' cells, the others predicted to cost as much each; then what they take)
         const double predicted = n + 1 == default_cells.size() ? double(spent) / double(n + 1) * double(order.size() - n - 1) : 0;

@@ -77,11 +77,13 @@ struct LipschitzEstimate {
 // `refine`: try the tighter bounds (chain rule at a warp, unions, roots of squares, case splitting) where the
 // direct one decides something; case splitting spends at most `*split_work` interval instruction evaluations
 // (decremented; null: 8·10⁶, about a second). `jumps`: look for a jump (LipschitzEstimate::jump) against the
-// bound derived.
+// bound derived. `derived_suffices`: the caller applies the derived bound wherever it is useful (finite, ≤ 64: a
+// slider cell away from the defaults), so the samples that choose or word a K (near the shape, at the sliders'
+// settings: ~85% of a smooth union's cell) are not taken there; the uniform ones are.
 LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<Interval>& box,
                                      const std::vector<std::vector<Interval>>& others, double ball = 0,
                                      int samples = 1000, int boxes = 128, bool refine = true, double* split_work = nullptr,
-                                     bool jumps = true);
+                                     bool jumps = true, bool derived_suffices = false);
 
 // A standard-library combinator of two distances (stdlib/operators.iql: "operators.smooth_union", …) and its
 // Lipschitz factor in them: ‖∇F(a, b)‖ ≤ factor · max(‖∇a‖, ‖∇b‖). 0 for any other function name.
