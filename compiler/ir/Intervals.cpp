@@ -1299,7 +1299,7 @@ void analyse(std::vector<Bounds>& r, IntervalScratch& scratch, const Module& m, 
             return;
         }
         const Instr& in = f.body[i];
-        ++analysis_work();
+        analysis_work() += kIntervalWork;
         if (work && --*work < 0) {  // the budget is spent: this value and the rest are unbounded
             for (size_t j = i; j < f.body.size(); ++j) {
                 r[j] = f.body[j].op == Op::Loop ? Bounds{} : unknown(f.body[j].type);

@@ -46,12 +46,14 @@ constexpr double kSplitWorkPerEstimate = 8e6, kSplitWorkPerModule = 5e5;
 // Estimates of slider cells (K as a function of the sliders, where they are uniforms) per module: up to 27 per item
 // (~5 ms each for the displaced torus), items past this keep the one K of their whole ranges.
 constexpr long kMaxCellEstimates = 128;
-// The analysis work (ir::analysis_work) an item's cells may take: 8 of its whole's estimate (the displaced torus' 25
-// cells took 3.2, a sampled metaballs' 7 cells 6.9), at least 4·10⁶ (~30 ms) and at most 4·10⁷ (~250 ms; 10× that
-// under the sanitizers); per module, 10⁸. A sampled recurrence's 9 cells, each as costly as its whole, took 700 ms and
-// kept none (the CI's fuzzing stopped at it: 10 s under ASan). Past it, the item keeps the K of its sliders' ranges.
+// The analysis work (ir::analysis_work: ~180·10⁶ a second in a release build) an item's cells may take: 8 of its
+// whole's estimate (the displaced torus' 25 cells took 0.6, a sampled metaballs' 7 cells 7, a smooth subtraction's 6
+// cells 3 for a K of 2.2 at its defaults where its whole's is 7.5), at least 4·10⁶ (~20 ms); a module's, 2·10⁸ (~1.1 s;
+// 30× that in the fuzzing build: six moving instances of that smooth subtraction, each with cells, took 7 s). A
+// sampled recurrence's 9 cells, each as costly as its whole, took 700 ms and kept none (the CI's fuzzing stopped at
+// it). Past it, the item keeps the K of its sliders' ranges.
 constexpr double kCellWorkRatio = 8;
-constexpr uint64_t kCellWorkFloor = 4'000'000, kCellWorkPerItem = 40'000'000, kCellWorkPerModule = 100'000'000;
+constexpr uint64_t kCellWorkFloor = 100'000'000, kCellWorkPerModule = 300'000'000;
 // Items whose K follows their sliders, per module: each is a value iqc_prepare computes per pixel and every step reads,
 // and llvmpipe compiles a march with many such values live much more slowly (ir/passes/Hoist.cpp's cap); the others
 // keep the K of their sliders' whole ranges.
@@ -2092,12 +2094,17 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
                                         uint64_t whole_work, long& budget, uint64_t& work_left, bool& over_budget) {
     const uint64_t start = analysis_work();
     const uint64_t work_allowed =
-        std::min(work_left, std::clamp(uint64_t(kCellWorkRatio * double(whole_work)), kCellWorkFloor, kCellWorkPerItem));
+        std::min(work_left, std::max(uint64_t(kCellWorkRatio * double(whole_work)), kCellWorkFloor));
     struct Spend {  // (however it returns: the work taken comes off the module's)
         uint64_t& left;
         uint64_t start;
         ~Spend() { left -= std::min(left, analysis_work() - start); }
     } spend{work_left, start};
+    // (what is left of the module's below the whole's own work: a few cells would spend it and keep none)
+    if (work_allowed < std::min(whole_work, kCellWorkFloor)) {
+        over_budget = true;
+        return std::nullopt;
+    }
     const std::vector<size_t> all = sliders_read(m, spec.object_fn);
     // Each component of a scalar or vector slider with a finite range (a vector's ‖t∘p‖ - 1, t ∈ [0.5, 4]³, marched with
     // 4 where its default needs 1.2: a trial's), and of a group's per-member table of one (up to 16 members: the group's
@@ -2223,11 +2230,12 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         return std::nullopt;
     }
     std::vector<double> sampled_in(cells, 0);
-    // The defaults' cells first: the others are predicted to cost as much each as they did, and where that, or later
-    // what they took, is past the allowance, the item keeps its whole's K.
+    // The defaults' cells first: the others are predicted to cost as much each as they did, then as much as the others
+    // taken so far, and where the prediction is past the allowance, the item keeps its whole's K.
     std::vector<size_t> order(default_cells.begin(), default_cells.end());
     for (size_t cell = 0; cell < cells; ++cell)
         if (!default_cells.count(cell)) order.push_back(cell);
+    uint64_t others_start = 0;
     for (size_t n = 0; n < order.size(); ++n) {
         const size_t cell = order[n];
         size_t rest = cell;
@@ -2248,9 +2256,12 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         LipschitzEstimate e =
             estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, samples, boxes, true, &allowance, false, !holds_defaults && !sampled);
         const uint64_t spent = analysis_work() - start;
-        // (after the defaults' cells, the others predicted to cost as much each; then what they take)
-        const double predicted = n + 1 == default_cells.size() ? double(spent) / double(n + 1) * double(order.size() - n - 1) : 0;
-        if (double(spent) + predicted > double(work_allowed)) {
+        // (the cells left predicted to cost as much each as those taken: after the defaults' cells, theirs; then the
+        // others')
+        if (n + 1 == default_cells.size()) others_start = analysis_work();
+        const double each = n + 1 <= default_cells.size() ? double(spent) / double(n + 1)
+                                                          : double(analysis_work() - others_start) / double(n + 1 - default_cells.size());
+        if (double(spent) + each * double(order.size() - n - 1) > double(work_allowed)) {
             over_budget = true;
             return std::nullopt;
         }
