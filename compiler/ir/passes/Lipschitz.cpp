@@ -48,10 +48,10 @@ constexpr double kSplitWorkPerEstimate = 8e6, kSplitWorkPerModule = 5e5;
 constexpr long kMaxCellEstimates = 128;
 // The analysis work (ir::analysis_work: ~180·10⁶ a second in a release build) an item's cells may take: 8 of its
 // whole's estimate (the displaced torus' 25 cells took 0.6, a sampled metaballs' 7 cells 7, a smooth subtraction's 6
-// cells 3 for a K of 2.2 at its defaults where its whole's is 7.5), at least 4·10⁶ (~20 ms); a module's, 2·10⁸ (~1.1 s;
-// 30× that in the fuzzing build: six moving instances of that smooth subtraction, each with cells, took 7 s). A
-// sampled recurrence's 9 cells, each as costly as its whole, took 700 ms and kept none (the CI's fuzzing stopped at
-// it). Past it, the item keeps the K of its sliders' ranges.
+// cells 3 for a K of 2.2 at its defaults where its whole's is 7.5), or 10⁸ (~0.55 s) where that is more; a module's,
+// 3·10⁸ (~1.7 s; 30× that in the fuzzing build: six moving instances of that smooth subtraction, each with cells, took
+// 7 s, 24 of them 15 s). A sampled recurrence's 9 cells, each as costly as its whole, took 700 ms and kept none (the CI's
+// fuzzing stopped at it). Past it, the item keeps the K of its sliders' ranges.
 constexpr double kCellWorkRatio = 8;
 constexpr uint64_t kCellWorkFloor = 100'000'000, kCellWorkPerModule = 300'000'000;
 // Items whose K follows their sliders, per module: each is a value iqc_prepare computes per pixel and every step reads,
@@ -2603,7 +2603,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                               (cells ? fmt::format("; by the sliders' values {:.4g} at their defaults, {:.4g}–{:.4g} over {} cells", cells->at_defaults,
                                                    *std::min_element(cells->K.begin(), cells->K.end()),
                                                    *std::max_element(cells->K.begin(), cells->K.end()), cells->K.size())
-                                     : cells_skipped ? "; not by the sliders' values: past the cells' budget (their analysis up to 8× the whole's, 128 estimates and 8 items a scene)"
+                                     : cells_skipped ? "; not by the sliders' values: past the cells' budget (an item's analysis up to 8× its whole's or ~0.5 s, a scene's ~1.7 s, 128 estimates and 8 items)"
                                                      : ""));
         m.functions[fi].lipschitz.object_fn = -1;  // done
     }
