@@ -2088,7 +2088,8 @@ std::vector<double> cell_edges(double lo, double hi, double d, const std::vector
 // Estimates the cells of an item whose whole bound `whole` (applied) comes from its estimate, where its sliders are
 // uniforms: nothing (nullopt) where no slider is a scalar with finite bounds, where the cell of the defaults gains
 // less than a fifth, past `budget` estimates (decremented by those taken), or where the cells' analysis work would pass
-// kCellWorkRatio × `whole_work` (the whole's estimate's, clamped) or `work_left` (decremented by the work taken).
+// kCellWorkRatio × `whole_work` (the whole's estimate's; kCellWorkFloor where that is more) or `work_left` (the
+// module's, decremented by the work taken).
 std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& spec, const std::vector<Interval>& region,
                                         const std::vector<std::vector<Interval>>& others, double whole, bool sampled,
                                         uint64_t whole_work, long& budget, uint64_t& work_left, bool& over_budget) {
@@ -2100,7 +2101,8 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         uint64_t start;
         ~Spend() { left -= std::min(left, analysis_work() - start); }
     } spend{work_left, start};
-    // (what is left of the module's below the whole's own work: a few cells would spend it and keep none)
+    // (what is left of the module's below the whole's own work, or below the floor where that is less: a few cells
+    // would spend it and keep none)
     if (work_allowed < std::min(whole_work, kCellWorkFloor)) {
         over_budget = true;
         return std::nullopt;
