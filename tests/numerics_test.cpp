@@ -1833,7 +1833,7 @@ TEST_CASE("the slider cells' analysis costs a few times the whole's at most", "[
     REQUIRE(folded.result.exit_code == 0);
     std::string report;
     for (const auto& line : folded.result.lipschitz) report += line + "\n";
-    CHECK_THAT(report, Catch::Contains("not by the sliders' values: past the cells' budget"));
+    CHECK_THAT(report, Catch::Contains("not by the sliders' values: past the cells' budget (an item's cells' analysis past 8× its whole's"));
 }
 
 TEST_CASE("the slider cells of a scene's instances share one budget: the first get cells, the rest their whole's K", "[numerics][cells]") {
@@ -1859,7 +1859,8 @@ TEST_CASE("the slider cells of a scene's instances share one budget: the first g
     size_t with_cells = 0, skipped = 0;
     for (const auto& line : c.result.lipschitz) {
         with_cells += line.find("by the sliders' values") != std::string::npos;
-        skipped += line.find("past the cells' budget") != std::string::npos;
+        // (the limit that stops them named: trial74 could not tell which of the budget's limits it met)
+        skipped += line.find("past the cells' budget (the scene's cells' analysis, ~1.7 s, spent)") != std::string::npos;
     }
     INFO(work);
     CHECK(with_cells >= 1);

@@ -2092,7 +2092,7 @@ std::vector<double> cell_edges(double lo, double hi, double d, const std::vector
 // module's, decremented by the work taken).
 std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& spec, const std::vector<Interval>& region,
                                         const std::vector<std::vector<Interval>>& others, double whole, bool sampled,
-                                        uint64_t whole_work, long& budget, uint64_t& work_left, bool& over_budget) {
+                                        uint64_t whole_work, long& budget, uint64_t& work_left, std::string& over_budget) {
     const uint64_t start = analysis_work();
     const uint64_t work_allowed =
         std::min(work_left, std::max(uint64_t(kCellWorkRatio * double(whole_work)), kCellWorkFloor));
@@ -2101,10 +2101,13 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         uint64_t start;
         ~Spend() { left -= std::min(left, analysis_work() - start); }
     } spend{work_left, start};
+    // Which limit stops the cells, in the report's words.
+    const std::string past_work = work_allowed == work_left ? "the scene's cells' analysis, ~1.7 s, spent"
+                                                            : "an item's cells' analysis past 8× its whole's or ~0.55 s";
     // (what is left of the module's below the whole's own work, or below the floor where that is less: a few cells
     // would spend it and keep none)
     if (work_allowed < std::min(whole_work, kCellWorkFloor)) {
-        over_budget = true;
+        over_budget = past_work;
         return std::nullopt;
     }
     const std::vector<size_t> all = sliders_read(m, spec.object_fn);
@@ -2200,8 +2203,10 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         c.edges.push_back(cell_edges(g.bounds.lo[k.c], g.bounds.hi[k.c], g.value[k.c], kFractions[fractions]));
         cells *= c.edges.back().size() - 1;
     }
-    over_budget = long(cells) > budget;
-    if (over_budget) return std::nullopt;
+    if (long(cells) > budget) {
+        over_budget = fmt::format("{} cell estimates a scene", kMaxCellEstimates);
+        return std::nullopt;
+    }
     budget -= long(cells);
     c.K.assign(cells, whole);
     // The cells of the defaults: each member's values' (one for an instance).
@@ -2228,7 +2233,7 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     // Where the K comes from samples, each cell's estimate is as costly as the whole's (as many samples, at the same
     // settings of the sliders): past the allowance before any is taken (the folds' 9 cells, 8 allowed).
     if (sampled && double(cells) * double(whole_work) > double(work_allowed)) {
-        over_budget = true;
+        over_budget = past_work;
         return std::nullopt;
     }
     std::vector<double> sampled_in(cells, 0);
@@ -2264,7 +2269,7 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         const double each = n + 1 <= default_cells.size() ? double(spent) / double(n + 1)
                                                           : double(analysis_work() - others_start) / double(n + 1 - default_cells.size());
         if (double(spent) + each * double(order.size() - n - 1) > double(work_allowed)) {
-            over_budget = true;
+            over_budget = past_work;
             return std::nullopt;
         }
         c.K[cell] = cell_factor(e, sampled ? kSampledCap : whole, whole);
@@ -2415,7 +2420,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         // Also where the whole has no useful bound (above 64, or none): a slider's wide range may be why (a frequency
         // f ∈ [0, 10⁴] was marched as if 1-Lipschitz, holes at its default 20, where Shadertoy derives 4.5).
         const SliderCells* cells = nullptr;
-        bool cells_skipped = false;  // (past the cells' budget: the report says so)
+        std::string cells_skipped;  // (past the cells' budget: which limit, the report says)
         const bool useful = std::isfinite(e.derived) && e.derived <= kUnbounded;
         const Decision decision = spec.declared > 0 || spec.trusted ? Decision{} : decide(e);
         const double decided = decision.K;
@@ -2423,12 +2428,12 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             size_t(spec.factor_global) < m.globals.size()) {
             auto known = cut.find(cluster);
             if (known == cut.end()) {
-                bool over = false;
+                std::string over;
                 known = cut.emplace(cluster, slider_cells(m, spec, region, others, decided, !useful, e.work, cell_budget, cell_work, over)).first;
                 cells_skipped = over;
             }
             if (known->second && cell_items < kMaxCellItems) cells = &*known->second;
-            cells_skipped = cells_skipped || (known->second && !cells);
+            if (known->second && !cells && cells_skipped.empty()) cells_skipped = fmt::format("{} items with cells a scene", kMaxCellItems);
         }
         // "K = 194", or with cells "K = 46.5 at its sliders' defaults (10.2–194 as they move)".
         auto k_words = [&](double K) {
@@ -2605,8 +2610,8 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                               (cells ? fmt::format("; by the sliders' values {:.4g} at their defaults, {:.4g}–{:.4g} over {} cells", cells->at_defaults,
                                                    *std::min_element(cells->K.begin(), cells->K.end()),
                                                    *std::max_element(cells->K.begin(), cells->K.end()), cells->K.size())
-                                     : cells_skipped ? "; not by the sliders' values: past the cells' budget (an item's analysis up to 8× its whole's or ~0.5 s, a scene's ~1.7 s, 128 estimates and 8 items)"
-                                                     : ""));
+                                     : !cells_skipped.empty() ? "; not by the sliders' values: past the cells' budget (" + cells_skipped + ")"
+                                                              : ""));
         m.functions[fi].lipschitz.object_fn = -1;  // done
     }
     // The runtime's hit test reads the factors back (a distance divided by K is a step, not a proximity):
