@@ -2102,7 +2102,7 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         ~Spend() { left -= std::min(left, analysis_work() - start); }
     } spend{work_left, start};
     // Which limit stops the cells, in the report's words.
-    const std::string past_work = work_allowed == work_left ? "the scene's cells' analysis, ~1.7 s, spent"
+    const std::string past_work = work_allowed == work_left ? "the scene's cells' analysis past ~1.7 s"
                                                             : "an item's cells' analysis past 8× its whole's or ~0.55 s";
     // (what is left of the module's below the whole's own work, or below the floor where that is less: a few cells
     // would spend it and keep none)
@@ -2527,6 +2527,11 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                 // (where it has cells, a slider's range is what leaves it without a useful bound: a frequency f ∈ [0, 10⁴]
                 // whose default 20 needs 4.5; a trial's)
                 if (cells) fix = "narrow the range of a slider it is steep at the end of, " + fix;
+                // (where cells were not taken for the budget, that they might have bounded it: a trial's, stop 56, saw
+                // WebGL2 march as if 1-Lipschitz what Shadertoy bounds, and nothing said why)
+                else if (!cells_skipped.empty())
+                    fix = "narrow the range of a slider it is steep at the end of (iqc bounds it per cell of its sliders' values only within "
+                          "its compile budget, past here: " + cells_skipped + "), " + fix;
                 warnings.push_back({spec.where, fmt::format("shape '{}' {} ({}): {}marching may step through its surface; {}", spec.shape,
                                                             e.why.empty() && e.sampled <= 1 + 1e-3 ? "has no Lipschitz bound iqc can derive" : "is not 1-Lipschitz",
                                                             reason, marched, fix)});
