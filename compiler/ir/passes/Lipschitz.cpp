@@ -31,6 +31,8 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kWorkBudget = 2e7;  // instructions evaluated per estimate (boxes and samples)
 constexpr double kUnbounded = 64;  // a derived K above this over the region is useless for marching
+// A derived bound marching can use: finite and at most kUnbounded.
+bool useful_bound(double derived) { return std::isfinite(derived) && derived <= kUnbounded; }
 // Without a useful bound, 1.25 times the steepest sample outside the shape is marched by up to this (beyond, as if
 // 1-Lipschitz: a singular spot sampled at 10⁴ would stop every ray short). Classic metaballs r − ∑_i 1/‖p − x_i‖²
 // sample 47 at their surface (more at r's high end, on targets with sliders), 70(‖p‖ − 1) 70: each drawn with its
@@ -1744,17 +1746,16 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     // Where sliders are uniforms and the bound is over 3× the samples (the "up to N× slower" warning), the samples
     // at the sliders' ends too: ‖p‖/(k m) over k ∈ [0.25, 3], m ∈ [0.5, 2] is 8, exactly the bound, where samples at
     // the defaults reached 1 and the warning invited a declaration that would have made holes (a trial's, stop 54).
-    const bool decides = !std::isfinite(e.derived) || e.derived > kUnbounded || (e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3) ||
+    const bool decides = !useful_bound(e.derived) || (e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3) ||
                          !refine_bound || (!work.constant_parameters && e.derived > 3 * std::max(e.sampled, 1.0));
-    const bool useful = std::isfinite(e.derived) && e.derived <= kUnbounded;
-    if (evaluated > 0 && e.derived > 1 + 1e-9 && decides && !(derived_suffices && useful)) {
+    if (evaluated > 0 && e.derived > 1 + 1e-9 && decides && !(derived_suffices && useful_bound(e.derived))) {
         std::vector<std::array<double, 3>> ends;
         // (without a useful bound, the samples outside the shape are kept apart: they choose the K marched by)
         // (a field that moves is sampled over time by `sample` only: its outside samples, at time 0, are not taken)
         bool moves = false;
         for (const auto& f : work.functions)
             for (const Instr& in : f.body) moves = moves || in.op == Op::Input;
-        const bool no_bound = (!std::isfinite(e.derived) || e.derived > kUnbounded) && !moves;
+        const bool no_bound = !useful_bound(e.derived) && !moves;
         double* outside = no_bound ? &e.outside : nullptr;
         for (const auto& b : worst) e.sampled = std::max(e.sampled, sample(work, grad, b, others, ball, 32, nullptr, false, nullptr, fn, outside));
         e.sampled = std::max(e.sampled, sample_towards_surface(work, fn, grad, box, others, ball, 64, &ends, outside));
@@ -2031,7 +2032,7 @@ Decision decide(const LipschitzEstimate& e) {
     if (e.sampled <= 1 + 1e-3 && e.derived <= 2 * (1 + 1e-9) && e.blend_steepest <= 1 + 1e-3 &&
         !(e.at_defaults > 0 && e.at_defaults <= 1 + 1e-9))
         return d;
-    if (std::isfinite(e.derived) && e.derived <= kUnbounded) {
+    if (useful_bound(e.derived)) {
         d.kind = Decision::Derived;
         d.K = e.derived;
         return d;
@@ -2052,7 +2053,7 @@ Decision decide(const LipschitzEstimate& e) {
 // met: a trial's, stop 55), else its samples' steepest times the margin, at most `cap`; where even that is too steep,
 // `fallback` (the whole's).
 double cell_factor(const LipschitzEstimate& e, double cap, double fallback) {
-    if (std::isfinite(e.derived) && e.derived <= kUnbounded) return std::clamp(e.derived, 1.0, cap);
+    if (useful_bound(e.derived)) return std::clamp(e.derived, 1.0, cap);
     const Decision d = decide(e);
     return d.kind == Decision::TooSteep && d.steep > 1 + 1e-3 ? fallback : std::clamp(d.K, 1.0, cap);
 }
@@ -2421,7 +2422,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         // f ∈ [0, 10⁴] was marched as if 1-Lipschitz, holes at its default 20, where Shadertoy derives 4.5).
         const SliderCells* cells = nullptr;
         std::string cells_skipped;  // (past the cells' budget: which limit, the report says)
-        const bool useful = std::isfinite(e.derived) && e.derived <= kUnbounded;
+        const bool useful = useful_bound(e.derived);
         const Decision decision = spec.declared > 0 || spec.trusted ? Decision{} : decide(e);
         const double decided = decision.K;
         if ((decided > 1 + 1e-9 || !useful) && !m.constant_parameters && spec.declared <= 0 && !spec.trusted && spec.factor_global >= 0 &&
