@@ -1697,6 +1697,23 @@ Type Checker::check_index(Expr& e) {
     Type a = check(*e.args[0]);
     allow_sequence_ = false;
     if (!a.valid()) return {};
+    // A subscripted scalar is most often a name meant whole (k_0, r_1 beside a slider k or r): say so, with
+    // where to declare it, before any subscript's own checks (a trial's `k_0` read "subscript 0 is out of range").
+    if (a.is_scalar() && e.args[0]->kind == ExprKind::Name) {
+        const std::string& x = e.args[0]->text;
+        const bool simple = e.indices.size() == 1 && e.indices[0].expr &&
+                            (e.indices[0].expr->kind == ExprKind::Number || e.indices[0].expr->kind == ExprKind::Name);
+        std::string message = fmt::format("cannot subscript '{}': it is {}, with no components or elements", x, a.str());
+        if (simple) {
+            const std::string whole = x + "_" + e.indices[0].expr->text;
+            message += fmt::format("; to use a value of its own named {}, declare it in `where` ({} ∈ ℝ) or define it ({} = …)",
+                                   whole, whole, whole);
+        }
+        auto& err = d_.error(e.span, message);
+        if (int pi = m_.find_param(x); pi >= 0)
+            Diagnostics::note(err, m_.params[size_t(pi)].span, fmt::format("'{}' is declared here", x));
+        return {};
+    }
     std::vector<int> idx;
     bool ok = true;
     for (auto& it : e.indices) {
