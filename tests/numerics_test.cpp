@@ -223,7 +223,6 @@ TEST_CASE("a smooth union of many points, -k log of a sum of exponentials, meets
     // saw neither form whole), likewise: the module's functions are inlined where the form shows.
     for (int n : {2, 17, 40, 300})
     for (int form : {0, 1, 2}) {
-        const bool local = form == 1;
         if (n == 2 && form != 1) continue;  // (two terms: tests elsewhere)
         std::string points, weights;
         for (int k = 0; k < n; ++k) {
@@ -1117,6 +1116,54 @@ TEST_CASE("a group of instances with parameters of their own is bounded over the
     REQUIRE(u.result.exit_code == 0);
     INFO(line(u));
     CHECK(derived(u) > derived(c) + 1);  // any amplitude up to the slider's 0.2, four times the largest member's
+}
+
+TEST_CASE("a group whose members' parameters are constants is bounded member by member", "[numerics]") {
+    // A new user's trial (stop 56): six smooth-subtraction cups with blends 0.1…0.6, one group on Shadertoy, derived
+    // K = 7 from the hull of the blends where each cup alone derives ≤ 1.005. Here bumps whose frequency and amplitude
+    // trade off (f·a = 0.45 in every member: 1 + 0.45√3 = 1.78 each) have a hull of f·a = 50 · 0.09 = 4.5 (K 8.8).
+    std::string text = "[modules]\nbumps = \"\"\"\nshape\nsin from trigonometry\nD = ‖p‖ - 0.5 + a sin(f p_1)sin(f p_2)sin(f p_3)\n"
+                       "where\np ∈ ℝ³\na ∈ [0,0.2] default = 0.04\nf ∈ [1,60] default = 5\n\"\"\"\n[camera]\nposition = [0, 2, -9]\n"
+                       "target = [0, 0.5, 0]\n";
+    const double fs[] = {5, 50, 10, 25};
+    for (int i = 0; i < 4; ++i)
+        text += fmt::format("[[shapes]]\ntype = \"bumps\"\ntransform = \"T(({}, 0, 0))\"\nshape_params = {{ f = {}, a = {} }}\n", 2 * i - 3,
+                            fs[i], 0.45 / fs[i]);
+    Compiled c = compile_text("group_members.iq", text);
+    REQUIRE(c.result.exit_code == 0);
+    REQUIRE(c.result.lipschitz.size() == 1);
+    const std::string line = c.result.lipschitz[0];
+    INFO(line << "\n" << c.diagnostics);
+    CHECK_THAT(line, Catch::Contains("(its 4 members' largest)") && Catch::Contains("applied (derived)"));
+    const size_t at = line.find("K ≤ ");
+    REQUIRE(at != std::string::npos);
+    const double K = std::stod(line.substr(at + std::string("K ≤ ").size()));
+    CHECK(K >= 1 + 0.45 * std::sqrt(3.0) * 0.6);  // (a sample's worth: the bound covers the steepest member)
+    CHECK(K < 2.2);                                // the hull's 8.8 before
+    // Where the members' values are sliders (uniform targets), a member's bound is over the sliders' ranges: not taken.
+    CompileOptions webgl2;
+    webgl2.target = Target::WebGL2;
+    Compiled u = compile_path(write_temp("group_members_webgl2.iq", text), webgl2);
+    REQUIRE(u.result.exit_code == 0);
+    for (const std::string& l : u.result.lipschitz) CHECK_THAT(l, !Catch::Contains("members' largest"));
+}
+
+TEST_CASE("a group's warning about its gradient is at its steepest member and says it is one of a group", "[numerics]") {
+    // A new user's trial (stop 56): twelve noisy rocks of one group were warned of at the first instance, the flattest,
+    // with nothing to say the K was the group's or which member was steep. Here the third of four is (a·f = 60).
+    std::string text = "[modules]\nbumps = \"\"\"\nshape\nsin from trigonometry\nD = ‖p‖ - 0.5 + a sin(f p_1)sin(f p_2)sin(f p_3)\n"
+                       "where\np ∈ ℝ³\na ∈ [0,0.3] default = 0.04\nf ∈ [1,200] default = 5\n\"\"\"\n[camera]\nposition = [0, 2, -9]\n"
+                       "target = [0, 0.5, 0]\n";
+    for (int i = 0; i < 4; ++i)
+        text += fmt::format("[[shapes]]\ntype = \"bumps\"\ntransform = \"T(({}, 0, 0))\"\nshape_params = {{ f = {}, a = {} }}\n", 2 * i - 3,
+                            i == 2 ? 200 : 5, i == 2 ? 0.3 : 0.01 * (i + 1));
+    // (the header is 14 lines, each instance 4: the third's type is on line 23)
+    Compiled c = compile_text("group_steepest.iq", text);
+    REQUIRE(c.result.exit_code == 0);
+    INFO(c.diagnostics);
+    CHECK_THAT(c.diagnostics, Catch::Contains("group_steepest.iq:23:8: warning: shape 'bumps' (here at the steepest of a group of 4 "
+                                              "instances, which share one K) is not 1-Lipschitz"));
+    CHECK_THAT(c.diagnostics, !Catch::Contains("group_steepest.iq:15:8"));
 }
 
 TEST_CASE("moving instances of one shape share its analysis and each keeps its own warning", "[numerics]") {

@@ -126,6 +126,7 @@ struct LipschitzSpec {
     double declared = 0;         // `# lipschitz: K` of the shape (0: none)
     bool trusted = false;        // the shape says `# exact` or `# bound`: 1-Lipschitz by construction
     Span where;                  // the instance, for diagnostics
+    std::vector<Span> member_where;  // a group's members' instances, up to 16 (member k's at k): its warnings name the steepest
     std::string shape;           // the shape module's name
     int factor_global = -1;      // >= 0: the Constant global that receives the factor applied (iqc_lipschitz reads it)
 };

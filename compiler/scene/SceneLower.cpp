@@ -1362,6 +1362,8 @@ private:
         const auto& cam = s_.camera;
         double reach = s_.render.max_dist;
         for (int c = 0; c < 3; ++c) reach += std::fabs(cam.position[size_t(c)] - cam.target[size_t(c)]);  // an orbiting camera
+        if (spec.group > 0 && spec.group <= 16)
+            for (size_t mi : it.members) spec.member_where.push_back(plan(mi).desc->type_span);
         for (size_t mi : it.members) {
             const InstancePlan& p = plan(mi);
             if (bound_of(mi) > 0 && spec.bounds.size() < 8) {

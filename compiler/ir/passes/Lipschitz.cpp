@@ -501,7 +501,7 @@ double sample_by_line_search(const Module& m, int fn, int grad, const std::vecto
             random.others(args, g, others);
             std::array<double, 3> p = {args[0].v[0], args[0].v[1], args[0].v[2]};
             for (int round = 0; round < kRounds; ++round) {
-                std::array<double, 3> gp;
+                std::array<double, 3> gp{};
                 const double d = distance(p), n = gradient(p, gp);
                 if (!std::isfinite(d) || !(n > 1e-30) || d == 0) break;
                 if (outside && d > 0) *outside = std::max(*outside, n);
@@ -1655,6 +1655,26 @@ void divide_result(Module& m, int fn, double K, int global) {
 
 // The steepest gradient `samples` uniform samples of fn reach over the region (0 where it has no derivative):
 // the check of a shape that says it is 1-Lipschitz (`# exact`, `# bound`), which is not estimated.
+// The member of a group (k ∈ [0, group − 1], the last of `others`) whose gradient's samples are steepest, `samples`
+// points each: where a warning about the group's gradient is located (twelve noisy rocks of one group were warned of
+// at the first, the flattest, with nothing to say which one was steep: a trial's, stop 56). -1 where none was
+// sampled steeper than 1.
+int steepest_member(const Module& m, int fn, const std::vector<Interval>& region, std::vector<std::vector<Interval>> others,
+                    double ball, int group, int samples) {
+    Module work = m;
+    std::string why;
+    const int grad = differentiate(work, fn, 0, "lipschitz_gradient", &why);
+    if (grad < 0 || others.empty()) return -1;
+    int best = -1;
+    double steepest = 1 + 1e-3;  // (steeper than 1: members all within it are none the steeper)
+    for (int k = 0; k < group; ++k) {
+        others.back() = {{double(k), double(k)}};
+        const double s = sample(work, grad, region, others, ball, samples);
+        if (s > steepest) steepest = s, best = k;
+    }
+    return best;
+}
+
 double sampled_gradient(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
                         double ball, int samples) {
     Module work = m;
@@ -2348,6 +2368,27 @@ void prepare_cell_factor(Module& m, int factor, const std::vector<size_t>& all, 
     f.result = f.outputs[0].second;
 }
 
+// A group's derived bound member by member, where its parameters are constants: the group's own bound holds k ∈ [0, n − 1]
+// and reads the hull of each per-member table, so a blend radius 0.1 in one cup and 0.6 in another bounds every cup's
+// blend as if it could be either (six smooth-subtraction cups: 7 for the group, where each derives ≤ 1.005 alone; a
+// trial's, stop 56). Each member's estimate with k fixed (refinements, no samples that only choose or word a K: its
+// samples are the group's); the largest of them. ∞ where one has no useful bound, or where the members' analysis work
+// would pass `work_allowed` (predicted from those taken: 16 members at most, so the first tells).
+double member_bound(const Module& m, int fn, const std::vector<Interval>& region, std::vector<std::vector<Interval>> others,
+                    double ball, int group, uint64_t work_allowed) {
+    const uint64_t start = analysis_work();
+    double worst = 0, split_work = kSplitWorkPerEstimate;
+    for (int k = 0; k < group; ++k) {
+        others.back() = {{double(k), double(k)}};
+        const LipschitzEstimate e = estimate_lipschitz(m, fn, region, others, ball, 16, 128, true, &split_work, false, true);
+        if (!useful_bound(e.derived)) return kInf;
+        worst = std::max(worst, e.derived);
+        const uint64_t spent = analysis_work() - start;
+        if (k + 1 < group && double(spent) / double(k + 1) * double(group) > double(work_allowed)) return kInf;
+    }
+    return worst;
+}
+
 std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::string>* report, double* largest) {
     std::vector<RangeIssue> warnings;
     if (largest) *largest = 1;
@@ -2407,6 +2448,19 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                         // located where it grew, else at the instance (a new user's trial: it had no location).
                         if (!limit.span.valid()) limit.span = spec.where;
                         throw;
+                    }
+                    // (a group of constants: its members' bounds where the group's would be applied or is not useful)
+                    if (spec.group >= 2 && spec.group <= 16 && m.constant_parameters && spec.declared <= 0 && refine &&
+                        (decide(est).K > 1 + 1e-9 || !useful_bound(est.derived)) && cell_work > 0) {
+                        const uint64_t allowed =
+                            std::min(cell_work, std::max(uint64_t(kCellWorkRatio * double(analysis_work() - before)), kCellWorkFloor));
+                        const uint64_t members_start = analysis_work();
+                        const double per_member = member_bound(m, spec.object_fn, region, others, spec.ball, spec.group, allowed);
+                        cell_work -= std::min(cell_work, analysis_work() - members_start);
+                        if (per_member < est.derived) {
+                            est.derived = per_member;
+                            est.per_member = true;
+                        }
                     }
                     est.work = analysis_work() - before;
                     same = analysed.emplace(cluster, std::move(est)).first;
@@ -2554,6 +2608,20 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                             "thin steep part, and iqc warns only where its samples exceed K)",
                                                             spec.shape, k_words(e.derived), seen, cells ? " there" : "", K / std::max(seen, 1.0))});
         }
+        // A group's warnings about its gradient at its steepest member, which they name (one K serves them all).
+        if (spec.group >= 2 && spec.member_where.size() == size_t(spec.group) && warnings.size() > warned && !repeat) {
+            int k = -1;
+            try {
+                k = steepest_member(m, spec.object_fn, region, others, spec.ball, spec.group, 64);
+            } catch (const SizeLimit&) {
+            }
+            const std::string named = fmt::format("shape '{}'", spec.shape);
+            for (size_t w = warned; k >= 0 && w < warnings.size(); ++w) {
+                if (warnings[w].message.rfind(named, 0) != 0) continue;
+                warnings[w].span = spec.member_where[size_t(k)];
+                warnings[w].message.insert(named.size(), fmt::format(" (here at the steepest of a group of {} instances, which share one K)", spec.group));
+            }
+        }
         if (e.jump > 0)
             warnings.push_back({spec.where, fmt::format("shape '{}' has a discontinuous distance: it jumps by {:.3g} between two points "
                                                         "{:.3g} apart near ({:.3g}, {:.3g}, {:.3g}) in its own space (a floor, a mod, or a "
@@ -2610,8 +2678,9 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         if (report && spec.trusted && spec.declared <= 0)
             report->push_back(fmt::format("{} ({}): not derived, {:.4g} applied ({})", spec.shape, m.functions[fi].glsl_name, applied, how));
         else if (report)
-            report->push_back(fmt::format("{} ({}): K ≤ {:.4g} derived, {:.4g} sampled, {:.4g} applied ({}){}", spec.shape,
-                                          m.functions[fi].glsl_name, e.derived, e.sampled, applied, how,
+            report->push_back(fmt::format("{} ({}): K ≤ {:.4g} derived{}, {:.4g} sampled, {:.4g} applied ({}){}", spec.shape,
+                                          m.functions[fi].glsl_name, e.derived,
+                                          e.per_member ? fmt::format(" (its {} members' largest)", spec.group) : "", e.sampled, applied, how,
                                           e.jump > 0 ? fmt::format("; jumps by {:.3g} (discontinuous)", e.jump) : "") +
                               (cells ? fmt::format("; by the sliders' values {:.4g} at their defaults, {:.4g}–{:.4g} over {} cells", cells->at_defaults,
                                                    *std::min_element(cells->K.begin(), cells->K.end()),

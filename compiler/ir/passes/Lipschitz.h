@@ -69,6 +69,9 @@ struct LipschitzEstimate {
     // Without a useful bound: the steepest sample where the distance is ≥ 0 (outside the shape, where sphere tracing
     // steps from; 0: none taken). The K marched by then comes from it.
     double outside = 0;
+    // A group whose parameters are constants: `derived` is the largest of its members' bounds, each with the member's
+    // values (the group's over the hull of its per-member tables was larger).
+    bool per_member = false;
 };
 
 // Bounds ‖∇f‖ with respect to parameter 0 (ℝ³) of function `fn` over `box` (its three components); other
