@@ -2088,6 +2088,8 @@ struct SliderCells {
     std::vector<double> K;                   // per cell, the first slider's cell index varying slowest
     double at_defaults = 0;                  // the cell holding the defaults' K
     double sampled_at_defaults = 0;          // and the steepest gradient its samples met
+    size_t estimated = 0;                    // the cells estimated (nearest the defaults first); the others keep the whole's K
+    bool window = false;                     // one cell around the defaults estimated (slider_cells' window), the whole's K outside
 };
 
 // The edges of a slider's cells: a cell around the default d, `fractions` of the range r wide on each side, and
@@ -2106,6 +2108,17 @@ std::vector<double> cell_edges(double lo, double hi, double d, const std::vector
     return out;
 }
 
+// The edges of a slider's window around its default d: ±1/64 of the range r, at most ±d/2 (a ripple frequency 5 of
+// [0, 1000] is 5 ± 2.5, not 5 ± 15.6: the window's K is the picture's at the defaults), up to the ends.
+std::vector<double> window_edges(double lo, double hi, double d) {
+    const double r = hi - lo, w = d != 0 ? std::min(r / 64, std::fabs(d) / 2) : r / 64;
+    std::vector<double> out = {lo};
+    for (double x : {d - w, d + w})  // (in float: the shader compares a uniform with the same number)
+        if (x > out.back() + 1e-3 * r && x < hi - 1e-3 * r) out.push_back(double(float(x)));
+    out.push_back(hi);
+    return out;
+}
+
 // Estimates the cells of an item whose whole bound `whole` (applied) comes from its estimate, where its sliders are
 // uniforms: nothing (nullopt) where no slider is a scalar with finite bounds, where the cell of the defaults gains
 // less than a fifth, past `budget` estimates (decremented by those taken), or where the cells' analysis work would pass
@@ -2113,7 +2126,8 @@ std::vector<double> cell_edges(double lo, double hi, double d, const std::vector
 // module's, decremented by the work taken).
 std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& spec, const std::vector<Interval>& region,
                                         const std::vector<std::vector<Interval>>& others, double whole, bool sampled,
-                                        uint64_t whole_work, long& budget, uint64_t& work_left, std::string& over_budget) {
+                                        bool too_steep, uint64_t whole_work, long& budget, uint64_t& work_left,
+                                        std::string& over_budget) {
     const uint64_t start = analysis_work();
     const uint64_t work_allowed =
         std::min(work_left, std::max(uint64_t(kCellWorkRatio * double(whole_work)), kCellWorkFloor));
@@ -2210,100 +2224,151 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     work.functions.resize(m.functions.size());  // (the gradient: each estimate differentiates its own)
     if (influence.empty()) return std::nullopt;
     std::stable_sort(influence.begin(), influence.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    // Where the K comes from samples (each cell's estimate as costly as the whole's: 27 cells of a twisted, rippled smooth
-    // union took 1.8 s), up to two sliders, 7 or 3×3 cells.
-    if (influence.size() > (sampled ? 2 : 3)) influence.resize(sampled ? 2 : 3);
-    SliderCells c;
-    // Fewer cells each where more sliders are cut: 7, 5×5 or 3×3×3 at most.
-    static const std::vector<double> kFractions[] = {{1.0 / 64, 1.0 / 16, 1.0 / 4}, {1.0 / 32, 1.0 / 6}, {1.0 / 16}};
-    const size_t fractions = sampled && influence.size() == 2 ? 2 : influence.size() - 1;
-    size_t cells = 1;
-    for (const auto& [ratio, k] : influence) {
-        const Global& g = m.globals[all[k.k]];
-        c.which.push_back(k);
-        c.edges.push_back(cell_edges(g.bounds.lo[k.c], g.bounds.hi[k.c], g.value[k.c], kFractions[fractions]));
-        cells *= c.edges.back().size() - 1;
-    }
-    if (long(cells) > budget) {
-        over_budget = fmt::format("{} cell estimates a scene", kMaxCellEstimates);
-        return std::nullopt;
-    }
-    budget -= long(cells);
-    c.K.assign(cells, whole);
-    // The cells of the defaults: each member's values' (one for an instance).
-    std::set<size_t> default_cells;
-    {
-        std::vector<std::vector<double>> values;  // per slider cut: its values (one, or one per member)
-        size_t members = 1;
-        for (const SliderComponent& k : c.which) {
-            values.push_back(values_of(k));
-            members = std::max(members, values.back().size());
+    // Two layouts. The cells: where the K comes from samples (each cell's estimate as costly as the whole's: 27 cells of a
+    // twisted, rippled smooth union took 1.8 s), up to two sliders, 7 or 3×3 cells; else up to three, 7, 5×5 or 3×3×3.
+    // The window, where even the whole's samples are too steep to march by (it is marched as if 1-Lipschitz) and the
+    // cells find nothing or would pass the allowance: up to five sliders, the defaults' cell (window_edges), estimated
+    // alone (a twist, an amplitude and a frequency f ∈ [0, 500]: the uncut slider over its whole range in every
+    // cell of two left each too steep; a trial's, stop 56). Outside it, the whole's K.
+    auto layout = [&](bool window) -> std::optional<SliderCells> {
+        std::vector<std::pair<double, SliderComponent>> cut = influence;
+        const size_t cut_most = window ? 5 : sampled ? 2 : 3;
+        if (cut.size() > cut_most) cut.resize(cut_most);
+        SliderCells c;
+        c.window = window;
+        static const std::vector<double> kFractions[] = {{1.0 / 64, 1.0 / 16, 1.0 / 4}, {1.0 / 32, 1.0 / 6}, {1.0 / 16}};
+        const size_t fractions = window ? 0 : sampled && cut.size() == 2 ? 2 : cut.size() - 1;
+        size_t cells = 1;
+        for (const auto& [ratio, k] : cut) {
+            const Global& g = m.globals[all[k.k]];
+            c.which.push_back(k);
+            c.edges.push_back(window ? window_edges(g.bounds.lo[k.c], g.bounds.hi[k.c], g.value[k.c])
+                                     : cell_edges(g.bounds.lo[k.c], g.bounds.hi[k.c], g.value[k.c], kFractions[fractions]));
+            cells *= c.edges.back().size() - 1;
         }
-        for (size_t member = 0; member < members; ++member) {
-            size_t cell = 0;
-            for (size_t s = 0; s < c.which.size(); ++s) {
-                const std::vector<double>& e = c.edges[s];
-                const double d = values[s][std::min(member, values[s].size() - 1)];
-                size_t i = 0;
-                while (i + 2 < e.size() && !(d < e[i + 1])) ++i;  // (the shader's choice: the first edge above it)
-                cell = cell * (e.size() - 1) + i;
+        c.K.assign(cells, whole);
+        // The cells of the defaults: each member's values' (one for an instance).
+        std::set<size_t> default_cells;
+        {
+            std::vector<std::vector<double>> values;  // per slider cut: its values (one, or one per member)
+            size_t members = 1;
+            for (const SliderComponent& k : c.which) {
+                values.push_back(values_of(k));
+                members = std::max(members, values.back().size());
             }
-            default_cells.insert(cell);
+            for (size_t member = 0; member < members; ++member) {
+                size_t cell = 0;
+                for (size_t s = 0; s < c.which.size(); ++s) {
+                    const std::vector<double>& e = c.edges[s];
+                    const double d = values[s][std::min(member, values[s].size() - 1)];
+                    size_t i = 0;
+                    while (i + 2 < e.size() && !(d < e[i + 1])) ++i;  // (the shader's choice: the first edge above it)
+                    cell = cell * (e.size() - 1) + i;
+                }
+                default_cells.insert(cell);
+            }
         }
-    }
-    // Where the K comes from samples, each cell's estimate is as costly as the whole's (as many samples, at the same
-    // settings of the sliders): past the allowance before any is taken (the folds' 9 cells, 8 allowed).
-    if (sampled && double(cells) * double(whole_work) > double(work_allowed)) {
-        over_budget = past_work;
-        return std::nullopt;
-    }
-    std::vector<double> sampled_in(cells, 0);
-    // The defaults' cells first: the others are predicted to cost as much each as they did, then as much as the others
-    // taken so far, and where the prediction is past the allowance, the item keeps its whole's K.
-    std::vector<size_t> order(default_cells.begin(), default_cells.end());
-    for (size_t cell = 0; cell < cells; ++cell)
-        if (!default_cells.count(cell)) order.push_back(cell);
-    uint64_t others_start = 0;
-    for (size_t n = 0; n < order.size(); ++n) {
-        const size_t cell = order[n];
-        size_t rest = cell;
-        for (size_t s = c.which.size(); s-- > 0;) {
-            const std::vector<double>& e = c.edges[s];
-            const size_t i = rest % (e.size() - 1);
-            rest /= e.size() - 1;
-            set(c.which[s], e[i], e[i + 1]);
-        }
-        const bool holds_defaults = default_cells.count(cell) > 0;
-        // The cell of the defaults, where the picture starts, with the case splitting a whole's estimate may spend;
-        // elsewhere less (the twisted bar's 7 cells took 480 ms with it everywhere), and, where the cell's K is its
-        // derived bound, fewer samples (they only word the warning). Where the whole's K came from its samples, each
-        // cell has as many as the whole had: the K is theirs.
-        double allowance = kSplitWorkPerEstimate / (holds_defaults ? 16 : 128);
-        const int samples = sampled ? 1000 : holds_defaults ? 250 : 64, boxes = sampled ? 128 : holds_defaults ? 64 : 32;
-        // (away from the defaults, a derived K is the cell's: its samples would word nothing)
-        LipschitzEstimate e =
-            estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, samples, boxes, true, &allowance, false, !holds_defaults && !sampled);
-        const uint64_t spent = analysis_work() - start;
-        // (the cells left predicted to cost as much each as those taken: after the defaults' cells, theirs; then the
-        // others')
-        if (n + 1 == default_cells.size()) others_start = analysis_work();
-        const double each = n + 1 <= default_cells.size() ? double(spent) / double(n + 1)
-                                                          : double(analysis_work() - others_start) / double(n + 1 - default_cells.size());
-        if (double(spent) + each * double(order.size() - n - 1) > double(work_allowed)) {
+        // Where the K comes from samples, each cell's estimate is as costly as the whole's (as many samples, at the same
+        // settings of the sliders): none is taken where the defaults' cells alone (a group's: one per member) would pass
+        // the allowance, or the scene's count of estimates.
+        if (sampled && double(default_cells.size()) * double(whole_work) > double(work_allowed) - double(analysis_work() - start)) {
             over_budget = past_work;
             return std::nullopt;
         }
-        c.K[cell] = cell_factor(e, sampled ? kSampledCap : whole, whole);
-        sampled_in[cell] = e.sampled;
+        if (long(default_cells.size()) > budget) {
+            over_budget = fmt::format("{} cell estimates a scene", kMaxCellEstimates);
+            return std::nullopt;
+        }
+        std::vector<double> sampled_in(cells, 0);
+        // A cell's index along each slider cut (the first slider's varying slowest).
+        auto indices = [&](size_t cell) {
+            std::vector<size_t> at(c.which.size());
+            for (size_t s = c.which.size(); s-- > 0;) {
+                at[s] = cell % (c.edges[s].size() - 1);
+                cell /= c.edges[s].size() - 1;
+            }
+            return at;
+        };
+        // The defaults' cells first, then the others nearest them first (in cells along the farthest slider, then along all):
+        // each cell not estimated keeps the whole's K, which holds over every value, so the budget only stops the estimates.
+        std::vector<size_t> order(default_cells.begin(), default_cells.end());
+        {
+            std::vector<std::pair<std::pair<size_t, size_t>, size_t>> rest;  // ((farthest, total), cell)
+            for (size_t cell = 0; cell < cells; ++cell) {
+                if (default_cells.count(cell)) continue;
+                const std::vector<size_t> at = indices(cell);
+                std::pair<size_t, size_t> nearest{SIZE_MAX, SIZE_MAX};
+                for (size_t d : default_cells) {
+                    const std::vector<size_t> home = indices(d);
+                    size_t farthest = 0, total = 0;
+                    for (size_t s = 0; s < at.size(); ++s) {
+                        const size_t apart = at[s] > home[s] ? at[s] - home[s] : home[s] - at[s];
+                        farthest = std::max(farthest, apart);
+                        total += apart;
+                    }
+                    nearest = std::min(nearest, std::pair<size_t, size_t>{farthest, total});
+                }
+                rest.push_back({nearest, cell});
+            }
+            std::stable_sort(rest.begin(), rest.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+            for (const auto& r : rest) order.push_back(r.second);
+        }
+        // Each cell away from the defaults is taken where the work so far, and what it is predicted to cost (as much as
+        // those away from the defaults taken so far, or before any, as the defaults' each), is within the allowance.
+        const bool defaults_only = window || (sampled && double(cells) * double(whole_work) > double(work_allowed));
+        // (a too-steep whole's cells that could not all be taken: the window, tighter at the defaults, at the same cost)
+        if (defaults_only && !window && too_steep) return std::nullopt;
+        uint64_t others_start = 0;
+        for (size_t n = 0; n < order.size(); ++n) {
+            const size_t cell = order[n];
+            const bool holds_defaults = n < default_cells.size();
+            if (!holds_defaults) {
+                // (where the K comes from samples and every cell could not be taken, the defaults' only: the picture starts
+                // there, and the others, each as costly, would spend the allowance on values the sliders may never take)
+                if (defaults_only) {
+                    over_budget = past_work;
+                    break;
+                }
+                const uint64_t spent = analysis_work() - start;
+                const double each = n == default_cells.size() ? double(others_start - start) / double(n)
+                                                              : double(analysis_work() - others_start) / double(n - default_cells.size());
+                if (double(spent) + each > double(work_allowed) || budget <= 0) {
+                    over_budget = budget <= 0 ? fmt::format("{} cell estimates a scene", kMaxCellEstimates) : past_work;
+                    break;
+                }
+            }
+            const std::vector<size_t> at = indices(cell);
+            for (size_t s = 0; s < c.which.size(); ++s) set(c.which[s], c.edges[s][at[s]], c.edges[s][at[s] + 1]);
+            // The cell of the defaults, where the picture starts, with the case splitting a whole's estimate may spend;
+            // elsewhere less (the twisted bar's 7 cells took 480 ms with it everywhere), and, where the cell's K is its
+            // derived bound, fewer samples (they only word the warning). Where the whole's K came from its samples, each
+            // cell has as many as the whole had: the K is theirs.
+            double allowance = kSplitWorkPerEstimate / (holds_defaults ? 16 : 128);
+            const int samples = sampled ? 1000 : holds_defaults ? 250 : 64, boxes = sampled ? 128 : holds_defaults ? 64 : 32;
+            // (away from the defaults, a derived K is the cell's: its samples would word nothing)
+            LipschitzEstimate e =
+                estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, samples, boxes, true, &allowance, false, !holds_defaults && !sampled);
+            --budget;
+            ++c.estimated;
+            if (n + 1 == default_cells.size()) others_start = analysis_work();
+            c.K[cell] = cell_factor(e, sampled ? kSampledCap : whole, whole);
+            sampled_in[cell] = e.sampled;
+        }
+        for (size_t cell : default_cells) {  // (a group's: the steepest of its members' cells)
+            c.at_defaults = std::max(c.at_defaults, c.K[cell]);
+            c.sampled_at_defaults = std::max(c.sampled_at_defaults, sampled_in[cell]);
+        }
+        // Kept where the defaults' cell gains a fifth, or where some cell is steeper than the whole (marched as if
+        // 1-Lipschitz, its samples too steep over the sliders' whole ranges: a frequency f ∈ [0, 10⁴] made holes at f = 20).
+        if (c.at_defaults > whole / 1.2 && *std::max_element(c.K.begin(), c.K.end()) <= whole) return std::nullopt;
+        return c;
+    };
+    std::optional<SliderCells> found = layout(false);
+    if (!found && too_steep) {
+        over_budget.clear();
+        found = layout(true);
     }
-    for (size_t cell : default_cells) {  // (a group's: the steepest of its members' cells)
-        c.at_defaults = std::max(c.at_defaults, c.K[cell]);
-        c.sampled_at_defaults = std::max(c.sampled_at_defaults, sampled_in[cell]);
-    }
-    // Kept where the defaults' cell gains a fifth, or where some cell is steeper than the whole (marched as if
-    // 1-Lipschitz, its samples too steep over the sliders' whole ranges: a frequency f ∈ [0, 10⁴] made holes at f = 20).
-    if (c.at_defaults > whole / 1.2 && *std::max_element(c.K.begin(), c.K.end()) <= whole) return std::nullopt;
-    return c;
+    return found;
 }
 
 // Makes `factor` (the item's factor global) a prepared global that iqc_prepare sets to its cell's K from the sliders
@@ -2484,7 +2549,9 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
             auto known = cut.find(cluster);
             if (known == cut.end()) {
                 std::string over;
-                known = cut.emplace(cluster, slider_cells(m, spec, region, others, decided, !useful, e.work, cell_budget, cell_work, over)).first;
+                const bool too_steep = decision.kind == Decision::TooSteep && decision.steep > 1 + 1e-3;
+                known = cut.emplace(cluster, slider_cells(m, spec, region, others, decided, !useful, too_steep, e.work, cell_budget,
+                                                          cell_work, over)).first;
                 cells_skipped = over;
             }
             if (known->second && cell_items < kMaxCellItems) cells = &*known->second;
@@ -2493,6 +2560,9 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         // "K = 194", or with cells "K = 46.5 at its sliders' defaults (10.2–194 as they move)".
         auto k_words = [&](double K) {
             if (!cells) return fmt::format("K = {:.3g}", K);
+            if (cells->window)
+                return fmt::format("K = {:.3g} near its sliders' defaults (as if 1-Lipschitz beyond a window around them: the shader picks "
+                                   "it from their values)", cells->at_defaults);
             return fmt::format("K = {:.3g} at its sliders' defaults ({:.3g}–{:.3g} as they move: the shader picks it from their values)",
                                cells->at_defaults, *std::min_element(cells->K.begin(), cells->K.end()),
                                *std::max_element(cells->K.begin(), cells->K.end()));
@@ -2568,7 +2638,10 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                                        steep, apart ? fmt::format(" outside it ({:.4g} inside)", e.sampled) : "");
                 // (and where even the samples' K is too large to march by, it says that it marches with K = 1: two
                 // new users' trials, stop 40, read the warning as if some K were applied)
-                std::string marched = cells && !(applied > 1) ? fmt::format("iqc marches it with {}, from each cell of the sliders' ranges "
+                std::string marched = cells && cells->window && !(applied > 1)
+                                          ? fmt::format("iqc marches it with {}, {:g} times the steepest gradient its samples reach "
+                                                        "there, which is not a proven bound: ", k_words(applied), kSampledMargin)
+                                      : cells && !(applied > 1) ? fmt::format("iqc marches it with {}, from each cell of the sliders' ranges "
                                                                               "(its derived bound, or {:g} times the steepest gradient its samples reach, "
                                                                               "which is not a proven bound; as if 1-Lipschitz where that is too steep): ",
                                                                               k_words(applied), kSampledMargin)
@@ -2682,9 +2755,16 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                           m.functions[fi].glsl_name, e.derived,
                                           e.per_member ? fmt::format(" (its {} members' largest)", spec.group) : "", e.sampled, applied, how,
                                           e.jump > 0 ? fmt::format("; jumps by {:.3g} (discontinuous)", e.jump) : "") +
-                              (cells ? fmt::format("; by the sliders' values {:.4g} at their defaults, {:.4g}–{:.4g} over {} cells", cells->at_defaults,
+                              (cells && cells->window
+                                   ? fmt::format("; by the sliders' values {:.4g} in a window around their defaults, {:.4g} outside it",
+                                                 cells->at_defaults, applied)
+                               : cells ? fmt::format("; by the sliders' values {:.4g} at their defaults, {:.4g}–{:.4g} over {} cells{}", cells->at_defaults,
                                                    *std::min_element(cells->K.begin(), cells->K.end()),
-                                                   *std::max_element(cells->K.begin(), cells->K.end()), cells->K.size())
+                                                   *std::max_element(cells->K.begin(), cells->K.end()), cells->K.size(),
+                                                   cells->estimated < cells->K.size()
+                                                       ? fmt::format(" ({} estimated, nearest the defaults; the others keep the whole's K: past the "
+                                                                     "cells' budget ({}))", cells->estimated, cells_skipped)
+                                                       : "")
                                      : !cells_skipped.empty() ? "; not by the sliders' values: past the cells' budget (" + cells_skipped + ")"
                                                               : ""));
         m.functions[fi].lipschitz.object_fn = -1;  // done
