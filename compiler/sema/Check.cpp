@@ -780,9 +780,16 @@ void Checker::collect_sequences(const std::vector<const Stmt*>& inits, const std
     for (const Stmt* i : inits)
         if (m_.find_sequence(i->name) < 0 && !seq_leader_.count(i->name)) {
             bool has_rec = std::any_of(recs.begin(), recs.end(), [&](const Stmt* r) { return r->name == i->name; });
-            if (!has_rec)
-                d_.error(i->name_span, fmt::format("'{}' is not a sequence: define it with '{}_(k+1) = … for k ∈ 1..N'",
-                                                   i->name, i->name));
+            if (!has_rec) {
+                // (a trial's, stop 56: `k_1 = 0.1` meant a value named k_1, and the words offered only a recurrence)
+                const std::string sub = i->index && (i->index->kind == ExprKind::Number || i->index->kind == ExprKind::Name)
+                                            ? i->index->text
+                                            : "1";
+                d_.error(i->name_span, fmt::format("'{0}_{1} = …' starts a sequence '{0}', but no recurrence continues it "
+                                                   "('{0}_(n+1) = … for n ∈ 1..N'); to name one value {0}_{1}, write the "
+                                                   "name in backticks: `{0}_{1}` = …",
+                                                   i->name, sub));
+            }
         }
 }
 
@@ -925,8 +932,21 @@ void Checker::undefined(const Expr& e) {
             return;
         }
         auto& err = d_.error(e.word_span, fmt::format("undefined name '{}'", word));
-        if (auto hint = word_hint(word)) {
+        // A name of several letters that is defined, written without its backticks (`smooth_union` imported, then
+        // written smooth_union: "undefined name 'smooth'" and 'union'; a trial's, stop 56).
+        std::string longest;
+        const std::string_view rest = d_.sources().text(e.word_span.file).substr(e.word_span.begin);
+        for (const std::string& n : visible_names())
+            if (n.size() > word.size() && n.size() > longest.size() && rest.substr(0, n.size()) == n) longest = n;
+        if (!longest.empty()) {
+            // (the words after the first within it, `union`, are the same mistake: not said again)
+            for (uint32_t at = e.word_span.begin + 1; at < e.word_span.begin + uint32_t(longest.size()); ++at)
+                reported_words_.insert({e.word_span.file, at});
+            Diagnostics::note(err, e.word_span, fmt::format("'{0}' is one name: write it in backticks, `{0}`", longest));
+        } else if (auto hint = word_hint(word)) {
             Diagnostics::note(err, e.word_span, *hint);
+        } else if (auto sug = did_you_mean(word, visible_names())) {  // (sinn(x), smoothstpe(…): a trial's, stop 56)
+            Diagnostics::note(err, e.word_span, fmt::format("did you mean '{}'?", *sug));
         } else {
             Diagnostics::note(err, e.word_span,
                               fmt::format("names are one letter, so '{}' reads as {}: declare `{}` to use it as one name, "
@@ -1007,6 +1027,11 @@ Type Checker::check_name(Expr& e) {
         return n == "time" ? Type::scalar() : Type::vector(2);
     }
     if (m_.find_function(n) >= 0 || std::any_of(m_.imports.begin(), m_.imports.end(), [&](auto& im) { return im.name == n; })) {
+        // (the first letters of a longer word, `sinn(x)` read as sin·n·n: the word is what was written)
+        if (e.word_span.end > e.word_span.begin) {
+            undefined(e);
+            return {};
+        }
         d_.error(e.span, fmt::format("'{}' is a function: call it with arguments, as in {}(x)", n, n));
         return {};
     }
@@ -1704,10 +1729,11 @@ Type Checker::check_index(Expr& e) {
         const bool simple = e.indices.size() == 1 && e.indices[0].expr &&
                             (e.indices[0].expr->kind == ExprKind::Number || e.indices[0].expr->kind == ExprKind::Name);
         std::string message = fmt::format("cannot subscript '{}': it is {}, with no components or elements", x, a.str());
-        if (simple) {
+        if (simple) {  // (in backticks: `k_i ∈ ℝ` would declare a sequence k, `k_1 = …` start one)
             const std::string whole = x + "_" + e.indices[0].expr->text;
-            message += fmt::format("; to use a value of its own named {}, declare it in `where` ({} ∈ ℝ) or define it ({} = …)",
-                                   whole, whole, whole);
+            message += fmt::format("; to use a value of its own named {0}, write the name in backticks and declare it in "
+                                   "`where` (`{0}` ∈ ℝ) or define it (`{0}` = …)",
+                                   whole);
         }
         auto& err = d_.error(e.span, message);
         if (int pi = m_.find_param(x); pi >= 0)
