@@ -83,10 +83,18 @@ struct LipschitzEstimate {
 // bound derived. `derived_suffices`: the caller applies the derived bound wherever it is useful (finite, ≤ 64: a
 // slider cell away from the defaults), so the samples that choose or word a K (near the shape, at the sliders'
 // settings: ~85% of a smooth union's cell) are not taken there; the uniform ones are.
+// `shared`: where `valid`, a refined bound of the same shape over a box that holds `box` (uniform targets: instances
+// that differ only in the sliders' defaults share one), taken instead of refining (the refinements are ~90% of a
+// smooth subtraction's estimate). Else, with `force`, the refinements run even where the bound is within 2 and every
+// sample within 1 (the bound is for others, whose samples may not be).
+struct RefinedBound {
+    bool valid = false, force = false;
+    double derived = 0, blend_steepest = 0;
+};
 LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<Interval>& box,
                                      const std::vector<std::vector<Interval>>& others, double ball = 0,
                                      int samples = 1000, int boxes = 128, bool refine = true, double* split_work = nullptr,
-                                     bool jumps = true, bool derived_suffices = false);
+                                     bool jumps = true, bool derived_suffices = false, RefinedBound* shared = nullptr);
 
 // A standard-library combinator of two distances (stdlib/operators.iql: "operators.smooth_union", …) and its
 // Lipschitz factor in them: ‖∇F(a, b)‖ ≤ factor · max(‖∇a‖, ‖∇b‖). 0 for any other function name.
