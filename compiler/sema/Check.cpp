@@ -1726,11 +1726,24 @@ Type Checker::check_index(Expr& e) {
     // where to declare it, before any subscript's own checks (a trial's `k_0` read "subscript 0 is out of range").
     if (a.is_scalar() && e.args[0]->kind == ExprKind::Name) {
         const std::string& x = e.args[0]->text;
-        const bool simple = e.indices.size() == 1 && e.indices[0].expr &&
-                            (e.indices[0].expr->kind == ExprKind::Number || e.indices[0].expr->kind == ExprKind::Name);
+        // (the subscript as written: a word such as r_big too, whose letters would each be reported undefined)
+        std::string sub;
+        uint32_t sub_at = 0;
+        if (e.indices.size() == 1 && e.indices[0].expr && e.indices[0].expr->kind == ExprKind::Number) {
+            sub = e.indices[0].expr->text;
+        } else if (std::all_of(e.indices.begin(), e.indices.end(), [](const IndexItem& it) {
+                       return it.expr && (it.expr->kind == ExprKind::Name || it.expr->kind == ExprKind::Number);
+                   })) {  // the letters after the underscore, as written (r_big reads as r_b,i then g: a matrix's entry)
+            const std::string_view text = d_.sources().text(e.args[0]->span.file);
+            sub_at = e.args[0]->span.end;
+            if (sub_at < text.size() && text[sub_at] == '_') ++sub_at;
+            for (uint32_t at = sub_at; at < text.size() && std::isalnum(static_cast<unsigned char>(text[at])); ++at) sub += text[at];
+            for (uint32_t at = sub_at; at < sub_at + sub.size(); ++at) reported_words_.insert({e.args[0]->span.file, at});
+        }
+        const bool simple = !sub.empty();
         std::string message = fmt::format("cannot subscript '{}': it is {}, with no components or elements", x, a.str());
         if (simple) {  // (in backticks: `k_i ∈ ℝ` would declare a sequence k, `k_1 = …` start one)
-            const std::string whole = x + "_" + e.indices[0].expr->text;
+            const std::string whole = x + "_" + sub;
             message += fmt::format("; to use a value of its own named {0}, write the name in backticks and declare it in "
                                    "`where` (`{0}` ∈ ℝ) or define it (`{0}` = …)",
                                    whole);
@@ -1738,6 +1751,12 @@ Type Checker::check_index(Expr& e) {
         auto& err = d_.error(e.span, message);
         if (int pi = m_.find_param(x); pi >= 0)
             Diagnostics::note(err, m_.params[size_t(pi)].span, fmt::format("'{}' is declared here", x));
+        return {};
+    }
+    if (a.is_scalar()) {  // (p_1_2: a component subscripted again; a trial's, stop 56, read "cannot subscript ℝ")
+        d_.error(e.span, fmt::format("cannot subscript '{}': it is {}, with no components or elements (a matrix's entry is "
+                                     "A_1,2)",
+                                     std::string(d_.sources().slice(e.args[0]->span)), a.str()));
         return {};
     }
     std::vector<int> idx;
@@ -1827,7 +1846,11 @@ Type Checker::check_index(Expr& e) {
                                                         e.indices[first + k].value + 1, base.str(), size, what));
     };
     if (base.is_vector()) {
-        if (n != 1 || value(0) < 0) d_.error(e.span, fmt::format("a vector ({}) takes one subscript", base.str()));
+        if (first > 0 && n != 1)  // (x_1,2,3 on a sequence of vectors: a trial's, stop 56)
+            d_.error(e.span, fmt::format("an element of the sequence '{}' is {}: it takes one more subscript, for a component "
+                                         "({}_1,2), not {}",
+                                         e.args[0]->text, base.str(), e.args[0]->text, n));
+        else if (n != 1 || value(0) < 0) d_.error(e.span, fmt::format("a vector ({}) takes one subscript", base.str()));
         else if (value(0) >= base.rows) range_error(0, base.rows, "components");
         else return Type::scalar();
         return {};
