@@ -90,6 +90,13 @@ TEST_CASE("a shape without D and a material without C", "[cli]") {
                                              "```scene\n[[shapes]]\ntype = \"torus\"\nmaterial = \"flat\"\n```\n");
     CHECK(m.exit_code == 1);
     CHECK_THAT(m.err, Catch::Contains("no_c.md:12:1: error: material 'flat' does not assign 'C' (its RGB colour)"));
+    // A `D = …` that fails to parse is reported there, once: not also as missing (a trial's, stop 56: every parse error
+    // in D was followed by "does not assign 'D'").
+    RunResult p = compile_doc("bad_d.md", "❤: blob\n```iheartla\nshape\nD = |p_1 - 1\nwhere\np ∈ ℝ³\n```\n"
+                                          "```scene\n[[shapes]]\ntype = \"blob\"\n```\n");
+    CHECK(p.exit_code == 1);
+    CHECK_THAT(p.err, Catch::Contains("bad_d.md:5:1: error: expected '|' to close the absolute value, found 'where'"));
+    CHECK_THAT(p.err, !Catch::Contains("does not assign"));
 }
 
 TEST_CASE("a shape or material with a bare expression is an error located at the expression", "[cli][diag]") {

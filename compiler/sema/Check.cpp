@@ -2260,7 +2260,9 @@ void Checker::run() {
                                                                   what[r], m_.params[size_t(pi)].type.str()));
             }
         }
-        if (!assigns_.count(out)) {
+        if (!assigns_.count(out) && std::find(m_.ast.dropped.begin(), m_.ast.dropped.end(), out) != m_.ast.dropped.end()) {
+            // (its statement failed to parse: reported there)
+        } else if (!assigns_.count(out)) {
             d_.error(m_.ast.span, fmt::format("{} '{}' does not assign '{}' ({})", m_.ast.kind == ModuleKind::Shape ? "shape" : "material",
                                               m_.ast.name, out,
                                               m_.ast.kind == ModuleKind::Shape ? "its signed distance" : "its RGB colour"));

@@ -152,6 +152,9 @@ struct Module {
     Span span;
     std::vector<Stmt> stmts;
     std::vector<Decl> decls;
+    // The first word of each line that failed to parse (dropped, its error reported): a dropped `D = …` is not
+    // reported again as "does not assign 'D'".
+    std::vector<std::string> dropped;
 };
 
 }  // namespace iqc::ast

@@ -934,6 +934,7 @@ Module Parser::parse(std::string name, bool allow_header) {
         m.kind = cur().text == "shape" ? ModuleKind::Shape : ModuleKind::Material;
         advance();
     }
+    std::string first_word;
     while (!at(Tok::End)) {
         if (at(Tok::Newline) || at(Tok::Semicolon)) { advance(); continue; }
         try {
@@ -941,6 +942,7 @@ Module Parser::parse(std::string name, bool allow_header) {
             in_condition_ = 0;
             colon_ends_ = false;
             Span start = cur().span;
+            first_word = cur().text;
             parse_line(m);
             if (!at(Tok::Newline) && !at(Tok::End) && !at(Tok::Semicolon)) {
                 const Token& t = cur();
@@ -950,6 +952,7 @@ Module Parser::parse(std::string name, bool allow_header) {
                 fail(t.span, fmt::format("unexpected {} after the end of the statement", describe(t)));
             }
         } catch (Bail&) {
+            m.dropped.push_back(first_word);
             skip_line();
         }
         // Past the statement cap the rest of the module is not read (one error, not one per line).
