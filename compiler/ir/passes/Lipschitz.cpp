@@ -1653,8 +1653,6 @@ void divide_result(Module& m, int fn, double K, int global) {
     f.result = divided(b, f.result, f.body[f.result].type, K, global);
 }
 
-// The steepest gradient `samples` uniform samples of fn reach over the region (0 where it has no derivative):
-// the check of a shape that says it is 1-Lipschitz (`# exact`, `# bound`), which is not estimated.
 // The member of a group (k ∈ [0, group − 1], the last of `others`) whose gradient's samples are steepest, `samples`
 // points each: where a warning about the group's gradient is located (twelve noisy rocks of one group were warned of
 // at the first, the flattest, with nothing to say which one was steep: a trial's, stop 56). -1 where none was
@@ -1675,6 +1673,8 @@ int steepest_member(const Module& m, int fn, const std::vector<Interval>& region
     return best;
 }
 
+// The steepest gradient `samples` uniform samples of fn reach over the region (0 where it has no derivative):
+// the check of a shape that says it is 1-Lipschitz (`# exact`, `# bound`), which is not estimated.
 double sampled_gradient(const Module& m, int fn, const std::vector<Interval>& region, const std::vector<std::vector<Interval>>& others,
                         double ball, int samples) {
     Module work = m;
@@ -2134,8 +2134,7 @@ std::vector<double> window_edges(double lo, double hi, double d) { return cell_e
 // module's, decremented by the work taken).
 std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& spec, const std::vector<Interval>& region,
                                         const std::vector<std::vector<Interval>>& others, double whole, bool sampled,
-                                        uint64_t whole_work, long& budget, uint64_t& work_left,
-                                        std::string& over_budget) {
+                                        uint64_t whole_work, long& budget, uint64_t& work_left, std::string& over_budget) {
     const uint64_t start = analysis_work();
     const uint64_t work_allowed =
         std::min(work_left, std::max(uint64_t(kCellWorkRatio * double(whole_work)), kCellWorkFloor));
@@ -2327,22 +2326,21 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
             std::stable_sort(rest.begin(), rest.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
             for (const auto& r : rest) order.push_back(r.second);
         }
+        // (where the K comes from samples and the cells could not all be taken, each as costly as the whole: the window,
+        // tighter at the defaults, where the picture starts, at the cost of their cell)
+        if (!window && sampled && double(cells) * double(whole_work) > double(work_allowed)) {
+            over_budget = past_work;
+            return std::nullopt;
+        }
         // Each cell away from the defaults is taken where the work so far, and what it is predicted to cost (as much as
-        // those away from the defaults taken so far, or before any, as the defaults' each), is within the allowance.
-        const bool defaults_only = window || (sampled && double(cells) * double(whole_work) > double(work_allowed));
-        // (a sampled whole's cells that could not all be taken: the window, tighter at the defaults, at the same cost)
-        if (defaults_only && !window) return std::nullopt;
+        // those away from the defaults taken so far, or before any, as the defaults' each), is within the allowance;
+        // the window's, none.
         uint64_t others_start = 0;
         for (size_t n = 0; n < order.size(); ++n) {
             const size_t cell = order[n];
             const bool holds_defaults = n < default_cells.size();
             if (!holds_defaults) {
-                // (where the K comes from samples and every cell could not be taken, the defaults' only: the picture starts
-                // there, and the others, each as costly, would spend the allowance on values the sliders may never take)
-                if (defaults_only) {
-                    over_budget = past_work;
-                    break;
-                }
+                if (window) break;
                 const uint64_t spent = analysis_work() - start;
                 const double each = n == default_cells.size() ? double(others_start - start) / double(n)
                                                               : double(analysis_work() - others_start) / double(n - default_cells.size());
