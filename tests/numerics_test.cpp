@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <fmt/format.h>
 
@@ -1949,6 +1950,33 @@ TEST_CASE("the slider cells' analysis costs a few times the whole's at most", "[
                                                    "here: an item's cells' analysis past 8× its whole's or ~0.55 s"));
 }
 
+namespace {
+// `n` instances of a shape module moved by a slider x each (rows of `per_row`, 3 apart along z; x's default
+// `step`·(i mod per_row) − `first`), instance i with its own blend k = `k`(i), compiled for WebGL2, and the analysis
+// work (ir::analysis_work's units) the compile took.
+struct MovingCups {
+    Compiled c;
+    double work = 0;
+};
+MovingCups moving_cups(const std::string& name, const std::string& module, int n, int per_row, int step, int first,
+                       const std::function<double(int)>& k) {
+    const auto mod = write_temp(name + ".iql", module);
+    std::string scene = "include = [\"" + name + ".iql\"]\n[camera]\nposition = [0, 4, -12]\ntarget = [0, 0, 0]\n";
+    for (int i = 0; i < n; ++i)
+        scene += fmt::format("[[shapes]]\ntype = \"{}\"\ntransform = \"\"\"T((x, 0, {}))\nwhere\nx ∈ [-5, 5] default = {}\"\"\"\n"
+                             "shape_params = {{ k = {} }}\n",
+                             name, 3 * (i / per_row), step * (i % per_row) - first, k(i));
+    const auto path = mod.parent_path() / (name + "s.iq");
+    std::ofstream(path) << scene;
+    CompileOptions o;
+    o.target = Target::WebGL2;
+    const uint64_t before = ir::analysis_work();
+    MovingCups m{compile_path(path, o)};
+    m.work = double(ir::analysis_work() - before);
+    return m;
+}
+}  // namespace
+
 TEST_CASE("instances that differ only in their sliders' defaults share one refined bound", "[numerics][cells]") {
     // Moving instances of one shape, each with its own blend k, are analysed apart on uniform targets (their samples are
     // taken at their defaults), and each refined its bound (90% of the estimate: 24 cups took 5.7 s), and past the 16th
@@ -1956,19 +1984,7 @@ TEST_CASE("instances that differ only in their sliders' defaults share one refin
     // useful bound, as if 1-Lipschitz). Now the refinements run once over the hull of their boxes and every item reads them.
     const std::string module = "shape\nD = |max(-a, b) + ¼max(k - |a + b|, 0)²/k| - 0.05\na = ‖p - (0, 0.5, 0)‖ - 0.7\nb = ‖p‖ - 1\n"
                                "where\np ∈ ℝ³\nk ∈ [0.1, 0.11] default = 0.1\n";
-    const auto mod = write_temp("shared_cup.iql", module);
-    std::string scene = "include = [\"shared_cup.iql\"]\n[camera]\nposition = [0, 4, -12]\ntarget = [0, 0, 0]\n";
-    for (int i = 0; i < 18; ++i)
-        scene += fmt::format("[[shapes]]\ntype = \"shared_cup\"\ntransform = \"\"\"T((x, 0, {}))\nwhere\nx ∈ [-5, 5] default = {}\"\"\"\n"
-                             "shape_params = {{ k = {} }}\n",
-                             3 * (i / 6), 2 * (i % 6) - 5, 0.1 + 0.0005 * i);
-    const auto path = mod.parent_path() / "shared_cups.iq";
-    std::ofstream(path) << scene;
-    CompileOptions o;
-    o.target = Target::WebGL2;
-    const uint64_t before = ir::analysis_work();
-    Compiled c = compile_path(path, o);
-    const double work = double(ir::analysis_work() - before);
+    const auto [c, work] = moving_cups("shared_cup", module, 18, 6, 2, 5, [](int i) { return 0.1 + 0.0005 * i; });
     REQUIRE(c.result.exit_code == 0);
     REQUIRE(c.result.lipschitz.size() == 18);
     for (const auto& line : c.result.lipschitz) {
@@ -1985,19 +2001,7 @@ TEST_CASE("the slider cells of a scene's instances share one budget: the first g
     // module may take 3·10⁸ units of analysis work (~1.7 s); an item that would start past it takes none.
     const std::string module = "shape\nD = |max(-a, b) + ¼max(k - |a + b|, 0)²/k| - t\na = ‖p - (0, 0.5, 0)‖ - r\nb = ‖p‖ - 1\nwhere\n"
                                "p ∈ ℝ³\nk ∈ [0.01, 1] default = 0.15\nr ∈ [0.1, 1.5] default = 0.7\nt ∈ [0.01, 0.3] default = 0.05\n";
-    const auto mod = write_temp("onion_cup.iql", module);
-    std::string scene = "include = [\"onion_cup.iql\"]\n[camera]\nposition = [0, 4, -12]\ntarget = [0, 0, 0]\n";
-    for (int i = 0; i < 6; ++i)
-        scene += fmt::format("[[shapes]]\ntype = \"onion_cup\"\ntransform = \"\"\"T((x, 0, {}))\nwhere\nx ∈ [-5, 5] default = {}\"\"\"\n"
-                             "shape_params = {{ k = {} }}\n",
-                             3 * (i / 3), 3 * (i % 3) - 3, 0.1 * (i + 1));
-    const auto path = mod.parent_path() / "onion_cups.iq";
-    std::ofstream(path) << scene;
-    CompileOptions o;
-    o.target = Target::WebGL2;
-    const uint64_t before = ir::analysis_work();
-    Compiled c = compile_path(path, o);
-    const double work = double(ir::analysis_work() - before);
+    const auto [c, work] = moving_cups("onion_cup", module, 6, 3, 3, 3, [](int i) { return 0.1 * (i + 1); });
     REQUIRE(c.result.exit_code == 0);
     size_t with_cells = 0, skipped = 0, partial = 0;
     for (const auto& line : c.result.lipschitz) {
