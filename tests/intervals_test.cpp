@@ -2,6 +2,7 @@
 // what a formula makes obvious.
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <string>
 
 #include "ir/Intervals.h"
@@ -363,4 +364,121 @@ TEST_CASE("a factor that does not cancel bounds its value by the monomial's rang
     check(5, -3, 3);    // k²x/k = k·x (intervals alone: [-36, 36])
     check(7, -6, 6);    // k²x/(k m) = (k/m)·x (alone: [-72, 72])
     check(11, -2, 2);   // k·x/(k/2) = 2x
+}
+
+TEST_CASE("floor, ceil, round, fract and mod within one cell are the value shifted by its cell; smoothstep is monotone",
+          "[intervals]") {
+    // A point box's fract was [0, 1] and its floor two integers (value noise's lattice corner at one point: the
+    // Lipschitz search's point bounds were as loose as its boxes').
+    const char* text = R"(function f(x: ℝ) -> ℝ {
+  %0 = ℝ Param #0 x  ; x
+  %1 = ℝ Builtin floor %0
+  %2 = ℝ Builtin ceil %0
+  %3 = ℝ Builtin round %0
+  %4 = ℝ Builtin fract %0
+  %5 = ℝ Const 2.5
+  %6 = ℝ Builtin mod %0, %5
+  %7 = ℝ Const 1
+  %8 = ℝ Const 3
+  %9 = ℝ Builtin smoothstep %7, %8, %0
+  %10 = ℝ Builtin smoothstep %8, %7, %0
+  return %10
+}
+)";
+    const ir::Module m = parsed(text);
+    auto at = [&](ir::Interval x, size_t v) { return ir::interval_analysis(m, 0, {{x}})[v].c[0]; };
+    // (the ends as computed in double: -8.043 + 9 is 0.957 within a rounding)
+    auto within = [](ir::Interval r, double lo, double hi) { return std::fabs(r.lo - lo) <= 1e-12 && std::fabs(r.hi - hi) <= 1e-12; };
+    CHECK(within(at({-8.043, -8.043}, 1), -9, -9));
+    CHECK(within(at({-8.043, -8.043}, 4), 0.957, 0.957));
+    CHECK(within(at({2.2, 2.7}, 4), 0.2, 0.7));
+    CHECK(within(at({2.2, 3.7}, 4), 0, 1));      // across a lattice line: all of [0, 1)
+    CHECK(within(at({2.2, 3.7}, 1), 2, 3));
+    CHECK(within(at({2.2, 3.7}, 2), 3, 4));
+    CHECK(within(at({2.2, 2.4}, 3), 2, 2));
+    CHECK(within(at({2.4, 2.6}, 3), 2, 3));      // a tie goes either way
+    CHECK(within(at({-6.0, -5.5}, 6), 1.5, 2));  // -6 − 2.5·⌊-2.4⌋ = 1.5
+    CHECK(within(at({-6.0, -4.0}, 6), 0, 2.5));  // across a period
+    CHECK(within(at({1.5, 2}, 9), 0.15625, 0.5));
+    CHECK(within(at({0, 4}, 9), 0, 1));
+    CHECK(within(at({1.5, 2}, 10), 0.5, 0.84375));  // reversed edges: decreasing
+}
+
+TEST_CASE("a component read more than once through one source is bounded on pieces of that source", "[intervals]") {
+    // Value noise's weight u = f·f·(3 − 2f) of f = fract(x), and its derivative 2f(3 − 2f) − 2f², read by a
+    // product with y (another source): f ∈ [0, 1] made u [0, 3] and u′ [-2, 6] taken operand by operand, where
+    // they are [0, 1] and [0, 1.5] (a displacement by value noise derived K 51.6, its slope ≤ 2.1: trial76). Also
+    // w(1 − w) of w = f² (through w to f) and a vector's components apart. Only periodic values are sources: x(1 − x)
+    // of the box's own x is left to smaller boxes.
+    const char* text = R"(function f(x: ℝ, y: ℝ) -> ℝ {
+  %0 = ℝ Param #0 x  ; x
+  %1 = ℝ Param #1 y  ; y
+  %2 = ℝ Builtin fract %0
+  %3 = ℝ Hadamard %2, %2
+  %4 = ℝ Const 3
+  %5 = ℝ Const 2
+  %6 = ℝ Mul %5, %2
+  %7 = ℝ Sub %4, %6
+  %8 = ℝ Mul %3, %7
+  %9 = ℝ Mul %6, %7
+  %10 = ℝ Mul %5, %3
+  %11 = ℝ Sub %9, %10
+  %12 = ℝ Mul %8, %1
+  %13 = ℝ Mul %11, %1
+  %14 = ℝ Mul %2, %2
+  %15 = ℝ Const 1
+  %16 = ℝ Sub %15, %14
+  %17 = ℝ Mul %14, %16
+  %18 = ℝ Mul %17, %1
+  %19 = ℝ² Construct %2, %0
+  %20 = ℝ² Hadamard %19, %19
+  %21 = ℝ Extract [0] %20
+  %22 = ℝ Mul %21, %1
+  %23 = ℝ Add %12, %13
+  %24 = ℝ Add %23, %18
+  %25 = ℝ Add %24, %22
+  %26 = ℝ Sub %15, %0
+  %27 = ℝ Mul %0, %26
+  %28 = ℝ Mul %27, %1
+  %29 = ℝ Add %25, %28
+  return %29
+}
+)";
+    const ir::Module m = parsed(text);
+    const ir::Interval x{-10.3, 7.9};
+    auto r = ir::interval_analysis(m, 0, {{x}, {{1, 2}}});
+    const ir::Interval u = r[8].c[0], du = r[11].c[0];
+    INFO("u " << ir::iv::text(u) << ", u' " << ir::iv::text(du));
+    CHECK(u.lo <= 0);
+    CHECK(u.hi >= 1);
+    CHECK(u.lo >= -0.01);
+    CHECK(u.hi <= 1.07);
+    CHECK(du.lo <= 0);
+    CHECK(du.hi >= 1.5);
+    CHECK(du.lo >= -0.06);
+    CHECK(du.hi <= 1.8);
+    // w(1 − w), w = f² ∈ [0, 1]: within [0, ¼] (plain: [0, 1]), through w to f
+    const ir::Interval b = r[17].c[0];
+    INFO("w(1 - w) " << ir::iv::text(b));
+    CHECK(b.hi >= 0.25);
+    CHECK(b.hi <= 0.3);
+    CHECK(b.lo <= 0);
+    CHECK(b.lo >= -0.05);
+    // the first component of (f, x)∘(f, x): f², within [0, 1]
+    CHECK(r[21].c[0].lo >= 0);
+    CHECK(r[21].c[0].hi <= 1.000001);
+    CHECK(r[20].c[1].hi >= 10.3 * 10.3);  // (the second, x²)
+    // x(1 − x) over the box's x: not refined (the box search splits x)
+    const ir::Interval plain = ir::iv::mul(x, ir::iv::add({1, 1}, ir::iv::neg(x)));
+    CHECK(r[27].c[0].lo == plain.lo);
+    CHECK(r[27].c[0].hi == plain.hi);
+    // Every point's values are inside (the pieces cover the source's interval).
+    for (int k = 0; k <= 2000; ++k) {
+        const double xv = x.lo + (x.hi - x.lo) * k / 2000.0, f = xv - std::floor(xv);
+        const double uv = f * f * (3 - 2 * f), dv = 2 * f * (3 - 2 * f) - 2 * f * f, w = f * f;
+        INFO("x = " << xv);
+        CHECK((uv >= u.lo && uv <= u.hi));
+        CHECK((dv >= du.lo && dv <= du.hi));
+        CHECK((w * (1 - w) >= b.lo && w * (1 - w) <= b.hi));
+    }
 }

@@ -169,6 +169,7 @@ std::vector<Bounds> interval_analysis(const Module& m, const Function& f, const 
 // its result. The support and Lipschitz searches analyse one function over thousands of boxes; fresh vectors
 // per call and per callee were most of their time under AddressSanitizer (its allocator fills and faults in
 // each block) and a sixth of it without. Owned by the search, so nothing outlives it.
+struct UnivariatePlan;  // (ir/Intervals.cpp)
 struct IntervalScratch {
     std::vector<std::unique_ptr<std::vector<Bounds>>> values;
     std::vector<std::unique_ptr<std::vector<IntervalVec>>> args;
@@ -185,6 +186,9 @@ struct IntervalScratch {
     // sum of an unrolled ∑ of 100 quotients walking its subtree was 60% of a compile); bit 2, a scalar Param or
     // Global some value is divided by (directly, or through products and negations): a symbol of Bounds::factor.
     std::map<std::pair<const Function*, size_t>, std::vector<char>> marks;
+    // Per function analysed (and its size): its components that are functions of one other component alone, read
+    // more than once (ir/Intervals.cpp, UnivariatePlan), bounded on pieces of that component's interval.
+    std::map<std::pair<const Function*, size_t>, std::shared_ptr<const UnivariatePlan>> univariate;
     size_t depth = 0;
 };
 // The same into `r` (resized; every value written), with `scratch` reused from call to call.

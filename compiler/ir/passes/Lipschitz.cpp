@@ -30,6 +30,8 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kWorkBudget = 2e7;  // instructions evaluated per estimate (boxes and samples)
+constexpr double kStallDrop = 1e-3;  // derive(): a search whose worst bound drops less than this ...
+constexpr int kStallBoxes = 256;     // ... over this many boxes stops
 constexpr double kUnbounded = 64;  // a derived K above this over the region is useless for marching
 // A derived bound marching can use: finite and at most kUnbounded.
 bool useful_bound(double derived) { return std::isfinite(derived) && derived <= kUnbounded; }
@@ -91,7 +93,9 @@ void mix_forms(Function& f) {
                 ValueId h;
                 const ValueId x = u.args[size_t(1 - su)], y = v.args[size_t(1 - sv)];
                 if (!one_minus(u.args[size_t(su)], h) || v.args[size_t(sv)] != h) continue;
-                if (!f.body[x].type.is_scalar() || !f.body[y].type.is_scalar()) continue;
+                // (scalars; or vectors of one size with a scalar weight: a gradient's (1 − h)∂x + h∂y)
+                const Type &tx = f.body[x].type, &ty = f.body[y].type;
+                if (!f.body[h].type.is_scalar() || !(tx.is_scalar() || tx.is_vector()) || tx != ty) continue;
                 out[0] = x, out[1] = y, out[2] = h;
                 return true;
             }
@@ -99,7 +103,7 @@ void mix_forms(Function& f) {
     };
     for (size_t i = 0; i < f.body.size(); ++i) {
         Instr& in = f.body[i];
-        if (in.op != Op::Add || in.args.size() != 2 || !in.type.is_scalar()) continue;
+        if (in.op != Op::Add || in.args.size() != 2 || !(in.type.is_scalar() || in.type.is_vector())) continue;
         ValueId xyh[3];
         for (int order = 0; order < 2; ++order) {
             if (!mix_of(f.body[in.args[size_t(order)]], f.body[in.args[size_t(1 - order)]], xyh)) continue;
@@ -215,9 +219,19 @@ double derive(const Module& m, int grad, const std::vector<Interval>& region, co
     BoxScratch scratch;
     q.push({region, box_bound(scratch, m, grad, region, others, jacobian, split)});
     double seen = 0;  // the largest bound at a point
+    // A plateau: the worst bound lowered by less than kStallDrop over kStallBoxes splits. The points' bounds stop most
+    // searches, but a worst box whose bound no split lowers (a Jacobian's bound at a warp's seam, above every point's)
+    // spent the whole budget: 2,048 boxes per cut at 2.56 all the way (examples/christmas_tree.iq's tree, whose points
+    // were as loose as its boxes until a point's fract and floor were points).
+    double plateau = kInf;
+    int plateau_from = 1;
     for (int used = 1, pops = 0; used + 2 <= budget && !q.empty(); ++pops) {
         Box worst = q.top();
         if (!std::isfinite(worst.bound) && used > budget / 2) break;
+        if (std::isfinite(worst.bound)) {
+            if (worst.bound < plateau * (1 - kStallDrop)) plateau = worst.bound, plateau_from = used;
+            else if (used - plateau_from >= kStallBoxes) break;
+        }
         if (std::isfinite(worst.bound) && pops % 8 == 0) {
             std::vector<Interval> mid = worst.c;
             // off-centre: a symmetric region's centre is where shapes are singular (‖p‖'s gradient at 0) and
@@ -1706,6 +1720,7 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
     // One value for each value written twice: a weight read in ∑_i w_i t_i and again in ∑_j w_j is one weight, which
     // the interval analysis' convex combinations need (ir/Intervals.cpp, convex_form).
     eliminate_common_subexpressions(work.functions[size_t(grad)]);
+    mix_forms(work.functions[size_t(grad)]);  // (1 − h)∂x + h∂y: mix's rule (a blend of value noise's corners)
     // The work is boxes and samples times the gradient's size: a huge shape (a min of 100,000 terms) gets
     // fewer of both, so the pass stays within about a second (its bound is then looser, never smaller).
     size_t size = 0;
