@@ -255,6 +255,7 @@ private:
     std::optional<int> computed_size(const Expr& x, const std::string& name);
     std::vector<std::string> visible_names() const;
     void undefined(const Expr& e);
+    bool library_import(Span s, const std::string& name);
     std::set<std::pair<uint32_t, uint32_t>> reported_words_;  // split words already reported (file, offset)
     // The built-in id of a constant imported by this name (e from trigonometry), or -1.
     int imported_constant(const std::string& name) const {
@@ -913,6 +914,18 @@ std::vector<std::string> Checker::visible_names() const {
     return v;
 }
 
+// A standard-library function used without its import (fbm(p) without `fbm from noise` was "names are one letter,
+// so 'fbm' reads as f·b·m", a trial's): the import to add, at `s`. False where no library module defines `name`.
+bool Checker::library_import(Span s, const std::string& name) {
+    const std::vector<std::string> modules = library_modules_of(name);
+    if (modules.empty()) return false;
+    const std::string spelled = import_spelling(name);
+    std::string also;
+    for (size_t k = 1; k < modules.size(); ++k) also += fmt::format("{}'{} from {}'", k == 1 ? " (or " : ", ", spelled, modules[k]);
+    d_.error(s, fmt::format("'{}' needs an import: add '{} from {}'{}", name, spelled, modules[0], also.empty() ? "" : also + ")"));
+    return true;
+}
+
 void Checker::undefined(const Expr& e) {
     const std::string& name = e.text;
     if (unbound_functions_.count(name)) return;  // reported at its declaration
@@ -931,6 +944,7 @@ void Checker::undefined(const Expr& e) {
             d_.error(e.word_span, fmt::format("'{}' needs an import: add '{} from {}'", word, word, builtin(*b).module));
             return;
         }
+        if (library_import(e.word_span, word)) return;
         auto& err = d_.error(e.word_span, fmt::format("undefined name '{}'", word));
         // A name of several letters that is defined, written without its backticks (`smooth_union` imported, then
         // written smooth_union: "undefined name 'smooth'" and 'union'; a trial's, stop 56).
@@ -961,6 +975,7 @@ void Checker::undefined(const Expr& e) {
             d_.error(s, fmt::format("'{}' is a function: call it with arguments, as in {}(x)", name, name));
         return;
     }
+    if (library_import(s, name)) return;
     auto& err = d_.error(s, fmt::format("undefined name '{}'", name));
     if (auto sug = did_you_mean(name, visible_names())) Diagnostics::note(err, s, fmt::format("did you mean '{}'?", *sug));
     else if (auto hint = word_hint(name)) Diagnostics::note(err, s, *hint);

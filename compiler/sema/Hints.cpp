@@ -1,7 +1,12 @@
 #include "sema/Hints.h"
 
+#include <algorithm>
+#include <cctype>
+#include <map>
+
 #include <fmt/format.h>
 
+#include "resources/Embedded.h"
 #include "source/Source.h"
 
 namespace iqc {
@@ -111,6 +116,41 @@ std::string spell_letters(std::string_view word, std::string_view sep) {
         out += word.substr(b, i - b);
     }
     return out;
+}
+
+std::vector<std::string> library_modules_of(std::string_view name) {
+    // The functions each library module defines: a line that starts with a name of two or more letters (in backticks
+    // or not) and its parameters, `name(…) = …` (a one-letter name, x or f, is a value's in other modules).
+    static const std::map<std::string, std::vector<std::string>, std::less<>> index = [] {
+        std::map<std::string, std::vector<std::string>, std::less<>> out;
+        for (const EmbeddedFile& f : embedded_resources()) {
+            const std::string_view p = f.path;
+            if (p.rfind("stdlib/", 0) != 0 || p.size() <= 11 || p.substr(p.size() - 4) != ".iql") continue;
+            const std::string module(p.substr(7, p.size() - 11));
+            std::string_view text = f.contents;
+            for (size_t at = 0; at < text.size();) {
+                size_t end = text.find('\n', at);
+                if (end == std::string_view::npos) end = text.size();
+                std::string_view line = text.substr(at, end - at);
+                at = end + 1;
+                const bool ticked = !line.empty() && line[0] == '`';
+                size_t k = ticked ? 1 : 0, start = k;
+                while (k < line.size() && (std::isalnum(static_cast<unsigned char>(line[k])) || line[k] == '_')) ++k;
+                if (k < start + 2 || (ticked && (k >= line.size() || line[k++] != '`'))) continue;  // (one letter: a value's)
+                if (k >= line.size() || line[k] != '(' || line.find(") = ", k) == std::string_view::npos) continue;
+                std::vector<std::string>& modules = out[std::string(line.substr(start, k - start - (ticked ? 1 : 0)))];
+                if (std::find(modules.begin(), modules.end(), module) == modules.end()) modules.push_back(module);
+            }
+        }
+        for (auto& [n, modules] : out) std::sort(modules.begin(), modules.end());
+        return out;
+    }();
+    auto it = index.find(name);
+    return it == index.end() ? std::vector<std::string>{} : it->second;
+}
+
+std::string import_spelling(std::string_view name) {
+    return name.find('_') != std::string_view::npos ? fmt::format("`{}`", name) : std::string(name);
 }
 
 }  // namespace iqc

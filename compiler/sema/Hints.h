@@ -28,4 +28,11 @@ std::optional<std::string> match_key(const std::string& key, const std::vector<s
 // The letters a word is read as, joined by `sep` (`rad`, "·" -> r·a·d).
 std::string spell_letters(std::string_view word, std::string_view sep);
 
+// The standard-library modules (stdlib/*.iql, embedded) that define a function of this name (`fbm` -> noise,
+// `smooth_union` -> operators), in name order: what an import of it reads `name from module`. Empty where none does.
+std::vector<std::string> library_modules_of(std::string_view name);
+
+// How an import writes a name: in backticks where it is more than one letter with an underscore (`` `value_noise` ``).
+std::string import_spelling(std::string_view name);
+
 }  // namespace iqc
