@@ -2033,6 +2033,31 @@ TEST_CASE("instances that differ only in their sliders' defaults share one refin
     CHECK(work <= 1.2e8);  // (6.2·10⁷: one refinement and 18 items' samples; 0.4 s against 2.1 s before, ~5×)
 }
 
+TEST_CASE("instances that differ only in their sliders' defaults take the samples at the sliders' settings once", "[numerics][cells]") {
+    // Moving rings displaced by fbm, each its own amplitude (trial76, N3): each whole estimate sampled the gradient at
+    // 18 settings of the sliders (their ends, corners, random values), the same ranges for every ring, 40% of its
+    // work (four rings 5.1 s, sixty 17 s). Now once, over the hull of their boxes, with 16 random settings where each
+    // took 4; every ring reads them.
+    const std::string module = "shape\nD = |‖(‖(p_1, p_3)‖ - 0.3, p_2)‖ - 0.08| - 0.02 + k fbm(g p)\nfbm from noise\nwhere\np ∈ ℝ³\n"
+                               "k ∈ [0, 0.2] default = 0.02\ng ∈ [0, 50] default = 6\n";
+    const auto one = moving_cups("fbm_ring", module, 1, 4, 2, 3, [](int i) { return 0.01 + 0.004 * i; });
+    const auto four = moving_cups("fbm_ring", module, 4, 4, 2, 3, [](int i) { return 0.01 + 0.004 * i; });
+    REQUIRE(four.c.result.exit_code == 0);
+    REQUIRE(four.c.result.lipschitz.size() == 4);
+    auto sampled = [](const std::string& line) {
+        const size_t at = line.find(" sampled");
+        REQUIRE(at != std::string::npos);
+        return std::stod(line.substr(line.rfind(' ', at - 1) + 1));
+    };
+    for (const auto& line : four.c.result.lipschitz) {
+        INFO(line);
+        CHECK(sampled(line) == sampled(four.c.result.lipschitz.front()));  // the settings' steepest, shared
+        CHECK(sampled(line) > 1);
+    }
+    INFO("one ring " << one.work << ", four " << four.work);
+    CHECK(four.work <= 4 * one.work);  // (3.6× now; 4.6× when each took its own settings)
+}
+
 TEST_CASE("the slider cells of a scene's instances share one budget: the first get cells, the rest their whole's K", "[numerics][cells]") {
     // Six moving instances of a smooth-subtraction onion, each with its own blend k (a trial's, stop 56): each is an
     // estimate of its own on uniform targets, and each took its cells too (7.2 s, Shadertoy 0.08 s). The cells of a

@@ -1871,7 +1871,13 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
         // Where the sliders are uniforms (WebGL2, GLSL, …) the bound holds over their ranges and so must the
         // samples: at settings of the sliders the shape reads besides their defaults (below), since a slope of 1.9
         // at a slider's end, 1 at its default, was marched as 1-Lipschitz (a trial's, stop 40).
-        if (!work.constant_parameters) {
+        if (!work.constant_parameters && shared && shared->settings_valid) {
+            e.sampled = std::max(e.sampled, shared->settings_sampled);
+            if (outside) e.outside = std::max(e.outside, shared->settings_outside);
+        } else if (!work.constant_parameters) {
+            // (the settings' own samples apart, for the items that share them)
+            const double sampled_before = e.sampled, outside_before = e.outside;
+            e.sampled = 0, e.outside = 0;
             const std::vector<size_t> sliders = sliders_read(work, fn);
             size_t size = 0;
             for (const auto& f : work.functions) size += f.body.size();
@@ -1903,7 +1909,8 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
                     ends.push_back(std::move(e_k));
                 }
             const size_t ends_settings = ends.size();
-            for (int r = 0; r < 4; ++r) ends.push_back(std::vector<int>(n_sliders, 2));
+            // (16 random settings where they are taken once for several items, which each took 4 of their own)
+            for (int r = 0; r < (shared ? 16 : 4); ++r) ends.push_back(std::vector<int>(n_sliders, 2));
             for (size_t v = 0; v < ends.size() && !sliders.empty() && size < 200000; ++v) {
                 for (size_t k = 0; k < sliders.size(); ++k) {
                     Global& gl = work.globals[sliders[k]];
@@ -1923,6 +1930,13 @@ LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<
                 if (v < ends_settings) near_samples(moved, scaled(32), scaled(16));
             }
             for (size_t k = 0; k < sliders.size(); ++k) work.globals[sliders[k]].value = std::move(defaults[k]);
+            if (shared) {
+                shared->settings_valid = true;
+                shared->settings_sampled = e.sampled;
+                shared->settings_outside = outside ? e.outside : 0;
+            }
+            e.sampled = std::max(e.sampled, sampled_before);
+            e.outside = std::max(e.outside, outside_before);
         }
     }
     if (!work.constant_parameters && evaluated > 0 && e.derived > 1 + 1e-9 && e.derived <= 2 * (1 + 1e-9) && e.sampled <= 1 + 1e-3 &&
@@ -2570,7 +2584,7 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                 rb.force = true;
                                 const LipschitzEstimate h = estimate_lipschitz(m, spec.object_fn, ranges.box[size_t(ranges.of[fi])], others,
                                                                                spec.ball, 16, 128, true, &hull_work, false, true, &rb);
-                                rb = {true, false, h.derived, h.blend_steepest};
+                                rb.valid = true, rb.force = false, rb.derived = h.derived, rb.blend_steepest = h.blend_steepest;
                             }
                             shared = &rb;
                         }

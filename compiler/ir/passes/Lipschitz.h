@@ -90,6 +90,11 @@ struct LipschitzEstimate {
 struct RefinedBound {
     bool valid = false, force = false;
     double derived = 0, blend_steepest = 0;
+    // The samples at settings of the sliders (their ends, corners, random values: over the same ranges for every item
+    // that shares this), taken once by the first estimate that reaches them and reused by the others: four moving fbm
+    // rings spent 40% of each whole estimate on them (trial76, N3).
+    bool settings_valid = false;
+    double settings_sampled = 0, settings_outside = 0;
 };
 LipschitzEstimate estimate_lipschitz(const Module& m, int fn, const std::vector<Interval>& box,
                                      const std::vector<std::vector<Interval>>& others, double ball = 0,
