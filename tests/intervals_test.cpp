@@ -406,48 +406,49 @@ TEST_CASE("floor, ceil, round, fract and mod within one cell are the value shift
 
 TEST_CASE("a component read more than once through one source is bounded on pieces of that source", "[intervals]") {
     // Value noise's weight u = f·f·(3 − 2f) of f = fract(x), and its derivative 2f(3 − 2f) − 2f², read by a
-    // product with y (another source): f ∈ [0, 1] made u [0, 3] and u′ [-2, 6] taken operand by operand, where
+    // product with y (another component of the point: another leaf): f ∈ [0, 1] made u [0, 3] and u′ [-2, 6] taken operand by operand, where
     // they are [0, 1] and [0, 1.5] (a displacement by value noise derived K 51.6, its slope ≤ 2.1: trial76). Also
     // w(1 − w) of w = f² (through w to f) and a vector's components apart. Only periodic values are sources: x(1 − x)
     // of the box's own x is left to smaller boxes.
-    const char* text = R"(function f(x: ℝ, y: ℝ) -> ℝ {
-  %0 = ℝ Param #0 x  ; x
-  %1 = ℝ Param #1 y  ; y
-  %2 = ℝ Builtin fract %0
-  %3 = ℝ Hadamard %2, %2
-  %4 = ℝ Const 3
-  %5 = ℝ Const 2
-  %6 = ℝ Mul %5, %2
-  %7 = ℝ Sub %4, %6
-  %8 = ℝ Mul %3, %7
-  %9 = ℝ Mul %6, %7
-  %10 = ℝ Mul %5, %3
-  %11 = ℝ Sub %9, %10
-  %12 = ℝ Mul %8, %1
-  %13 = ℝ Mul %11, %1
-  %14 = ℝ Mul %2, %2
-  %15 = ℝ Const 1
-  %16 = ℝ Sub %15, %14
-  %17 = ℝ Mul %14, %16
-  %18 = ℝ Mul %17, %1
-  %19 = ℝ² Construct %2, %0
-  %20 = ℝ² Hadamard %19, %19
-  %21 = ℝ Extract [0] %20
-  %22 = ℝ Mul %21, %1
-  %23 = ℝ Add %12, %13
-  %24 = ℝ Add %23, %18
-  %25 = ℝ Add %24, %22
-  %26 = ℝ Sub %15, %0
-  %27 = ℝ Mul %0, %26
-  %28 = ℝ Mul %27, %1
-  %29 = ℝ Add %25, %28
-  return %29
+    const char* text = R"(function f(q: ℝ²) -> ℝ {
+  %0 = ℝ² Param #0 q  ; q
+  %1 = ℝ Extract [0] %0
+  %2 = ℝ Extract [1] %0
+  %3 = ℝ Builtin fract %1
+  %4 = ℝ Hadamard %3, %3
+  %5 = ℝ Const 3
+  %6 = ℝ Const 2
+  %7 = ℝ Mul %6, %3
+  %8 = ℝ Sub %5, %7
+  %9 = ℝ Mul %4, %8
+  %10 = ℝ Mul %7, %8
+  %11 = ℝ Mul %6, %4
+  %12 = ℝ Sub %10, %11
+  %13 = ℝ Mul %9, %2
+  %14 = ℝ Mul %12, %2
+  %15 = ℝ Mul %3, %3
+  %16 = ℝ Const 1
+  %17 = ℝ Sub %16, %15
+  %18 = ℝ Mul %15, %17
+  %19 = ℝ Mul %18, %2
+  %20 = ℝ² Construct %3, %1
+  %21 = ℝ² Hadamard %20, %20
+  %22 = ℝ Extract [0] %21
+  %23 = ℝ Mul %22, %2
+  %24 = ℝ Add %13, %14
+  %25 = ℝ Add %24, %19
+  %26 = ℝ Add %25, %23
+  %27 = ℝ Sub %16, %1
+  %28 = ℝ Mul %1, %27
+  %29 = ℝ Mul %28, %2
+  %30 = ℝ Add %26, %29
+  return %30
 }
 )";
     const ir::Module m = parsed(text);
     const ir::Interval x{-10.3, 7.9};
-    auto r = ir::interval_analysis(m, 0, {{x}, {{1, 2}}});
-    const ir::Interval u = r[8].c[0], du = r[11].c[0];
+    auto r = ir::interval_analysis(m, 0, {{x, {1, 2}}});
+    const ir::Interval u = r[9].c[0], du = r[12].c[0];
     INFO("u " << ir::iv::text(u) << ", u' " << ir::iv::text(du));
     CHECK(u.lo <= 0);
     CHECK(u.hi >= 1);
@@ -458,20 +459,20 @@ TEST_CASE("a component read more than once through one source is bounded on piec
     CHECK(du.lo >= -0.06);
     CHECK(du.hi <= 1.8);
     // w(1 − w), w = f² ∈ [0, 1]: within [0, ¼] (plain: [0, 1]), through w to f
-    const ir::Interval b = r[17].c[0];
+    const ir::Interval b = r[18].c[0];
     INFO("w(1 - w) " << ir::iv::text(b));
     CHECK(b.hi >= 0.25);
     CHECK(b.hi <= 0.3);
     CHECK(b.lo <= 0);
     CHECK(b.lo >= -0.05);
     // the first component of (f, x)∘(f, x): f², within [0, 1]
-    CHECK(r[21].c[0].lo >= 0);
-    CHECK(r[21].c[0].hi <= 1.000001);
-    CHECK(r[20].c[1].hi >= 10.3 * 10.3);  // (the second, x²)
+    CHECK(r[22].c[0].lo >= 0);
+    CHECK(r[22].c[0].hi <= 1.000001);
+    CHECK(r[21].c[1].hi >= 10.3 * 10.3);  // (the second, x²)
     // x(1 − x) over the box's x: not refined (the box search splits x)
     const ir::Interval plain = ir::iv::mul(x, ir::iv::add({1, 1}, ir::iv::neg(x)));
-    CHECK(r[27].c[0].lo == plain.lo);
-    CHECK(r[27].c[0].hi == plain.hi);
+    CHECK(r[28].c[0].lo == plain.lo);
+    CHECK(r[28].c[0].hi == plain.hi);
     // Every point's values are inside (the pieces cover the source's interval).
     for (int k = 0; k <= 2000; ++k) {
         const double xv = x.lo + (x.hi - x.lo) * k / 2000.0, f = xv - std::floor(xv);
@@ -481,4 +482,26 @@ TEST_CASE("a component read more than once through one source is bounded on piec
         CHECK((dv >= du.lo && dv <= du.hi));
         CHECK((w * (1 - w) >= b.lo && w * (1 - w) <= b.hi));
     }
+}
+
+TEST_CASE("a mix of two vectors by one weight within [0, 1] is no longer than the longer", "[intervals]") {
+    // Gradient noise blends its corners' unit gradients: each component's hull is [-1, 1], the norm 1, not √3.
+    const char* text = R"(function f(u: ℝ³, v: ℝ³, t: ℝ) -> ℝ³ {
+  %0 = ℝ³ Param #0 u  ; u
+  %1 = ℝ³ Param #1 v  ; v
+  %2 = ℝ Param #2 t  ; t
+  %3 = ℝ³ Builtin normalize %0
+  %4 = ℝ³ Builtin normalize %1
+  %5 = ℝ³ Builtin mix %3, %4, %2
+  return %5
+}
+)";
+    const ir::Module m = parsed(text);
+    const ir::Interval any{-1, 1};
+    auto r = ir::interval_analysis(m, 0, {{any, any, any}, {any, any, any}, {{0, 1}}});
+    CHECK(r[5].norm <= 1 + 1e-12);
+    CHECK(r[5].c[0].lo == -1);
+    // A weight past 1 extrapolates: no such bound
+    r = ir::interval_analysis(m, 0, {{any, any, any}, {any, any, any}, {{0, 2}}});
+    CHECK(r[5].norm > 1.5);
 }

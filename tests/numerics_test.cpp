@@ -627,6 +627,18 @@ TEST_CASE("value noise displacements are bounded near their slope, and a value n
         CHECK(sampled <= derived);
         CHECK(sampled >= 1);
     }
+    // A frequency on a slider (trial77: f ∈ [0.49, 0.51] derived 9.6 on both targets, the literal 0.5 2.96): f·x read
+    // two leaves, the point and f, and its fract's weights were not bounded on pieces. Whatever does not read the
+    // point (a slider, a group member's parameters) is read at its interval in the pieces' cone.
+    for (Target target : {Target::Shadertoy, Target::WebGL2}) {
+        CompileOptions o;
+        o.target = target;
+        Compiled c = compile_path(write_temp("noisy.iql", "shape\nD = p_2 + 1 - 0.5 `fbm2`((p_1, p_3) f)\n`fbm2` from noise\nwhere\n"
+                                                          "p ∈ ℝ³\nf ∈ [0.49, 0.51] default = 0.5\n"), o);
+        INFO(target_name(target) << "\n" << c.diagnostics);
+        REQUIRE(c.result.exit_code == 0);
+        CHECK(derived_bound(c, "noisy") <= 1.35 * std::sqrt(1 + 0.25 * 0.25 * 2 * 6 * 6) * 1.02);
+    }
     Compiled t = compile_path(scene("value_noise_terrain.iq"));
     INFO(t.diagnostics);
     CHECK(applied_bound(t, "terrain") <= 1.3 * std::sqrt(1 + 0.25 * 0.25 * 2 * 6 * 6));
