@@ -1,6 +1,7 @@
 #include "sema/Check.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fmt/format.h>
 #include <functional>
@@ -256,6 +257,7 @@ private:
     std::vector<std::string> visible_names() const;
     void undefined(const Expr& e);
     bool library_import(Span s, const std::string& name);
+    std::optional<std::string> library_suggestion(const std::string& name);
     std::set<std::pair<uint32_t, uint32_t>> reported_words_;  // split words already reported (file, offset)
     // The built-in id of a constant imported by this name (e from trigonometry), or -1.
     int imported_constant(const std::string& name) const {
@@ -926,6 +928,19 @@ bool Checker::library_import(Span s, const std::string& name) {
     return true;
 }
 
+// "did you mean 'value_noise' (add '`value_noise` from noise')?" for a misspelled standard-library function that is
+// not imported either (`valu_noise`, `fmb`: "undefined name" alone, or "declare `fmb`"; a trial's, stop 58).
+std::optional<std::string> Checker::library_suggestion(const std::string& name) {
+    std::string lower = name;  // (FBM: fbm)
+    for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+    std::optional<std::string> sug = lower != name && !library_modules_of(lower).empty() ? std::optional<std::string>(lower)
+                                                                                          : did_you_mean(name, library_function_names());
+    if (!sug) return std::nullopt;
+    const std::vector<std::string> modules = library_modules_of(*sug);
+    if (modules.empty()) return std::nullopt;
+    return fmt::format("did you mean '{}' (add '{} from {}')?", *sug, import_spelling(*sug), modules[0]);
+}
+
 void Checker::undefined(const Expr& e) {
     const std::string& name = e.text;
     if (unbound_functions_.count(name)) return;  // reported at its declaration
@@ -961,6 +976,8 @@ void Checker::undefined(const Expr& e) {
             Diagnostics::note(err, e.word_span, *hint);
         } else if (auto sug = did_you_mean(word, visible_names())) {  // (sinn(x), smoothstpe(…): a trial's, stop 56)
             Diagnostics::note(err, e.word_span, fmt::format("did you mean '{}'?", *sug));
+        } else if (auto lib = library_suggestion(word)) {  // (fmb(p), not imported: a trial's, stop 58)
+            Diagnostics::note(err, e.word_span, *lib);
         } else {
             Diagnostics::note(err, e.word_span,
                               fmt::format("names are one letter, so '{}' reads as {}: declare `{}` to use it as one name, "
@@ -979,6 +996,7 @@ void Checker::undefined(const Expr& e) {
     auto& err = d_.error(s, fmt::format("undefined name '{}'", name));
     if (auto sug = did_you_mean(name, visible_names())) Diagnostics::note(err, s, fmt::format("did you mean '{}'?", *sug));
     else if (auto hint = word_hint(name)) Diagnostics::note(err, s, *hint);
+    else if (auto lib = library_suggestion(name)) Diagnostics::note(err, s, *lib);
 }
 
 Type Checker::value_type_for_scope(const std::string& name, Type t, Expr& e, int resolved, int aux) {

@@ -118,7 +118,23 @@ std::string spell_letters(std::string_view word, std::string_view sep) {
     return out;
 }
 
+namespace {
+const std::map<std::string, std::vector<std::string>, std::less<>>& library_index();
+}
+
 std::vector<std::string> library_modules_of(std::string_view name) {
+    auto it = library_index().find(name);
+    return it == library_index().end() ? std::vector<std::string>{} : it->second;
+}
+
+std::vector<std::string> library_function_names() {
+    std::vector<std::string> names;
+    for (const auto& [n, modules] : library_index()) names.push_back(n);
+    return names;
+}
+
+namespace {
+const std::map<std::string, std::vector<std::string>, std::less<>>& library_index() {
     // The functions each library module defines: a line that starts with a name of two or more letters (in backticks
     // or not) and its parameters, `name(…) = …` (a one-letter name, x or f, is a value's in other modules).
     static const std::map<std::string, std::vector<std::string>, std::less<>> index = [] {
@@ -138,6 +154,7 @@ std::vector<std::string> library_modules_of(std::string_view name) {
                 while (k < line.size() && (std::isalnum(static_cast<unsigned char>(line[k])) || line[k] == '_')) ++k;
                 if (k < start + 2 || (ticked && (k >= line.size() || line[k++] != '`'))) continue;  // (one letter: a value's)
                 if (k >= line.size() || line[k] != '(' || line.find(") = ", k) == std::string_view::npos) continue;
+                if (line[k - 1 - (ticked ? 1 : 0)] == '_') continue;  // (a sequence's recurrence, w_(k+1) = …)
                 std::vector<std::string>& modules = out[std::string(line.substr(start, k - start - (ticked ? 1 : 0)))];
                 if (std::find(modules.begin(), modules.end(), module) == modules.end()) modules.push_back(module);
             }
@@ -145,9 +162,9 @@ std::vector<std::string> library_modules_of(std::string_view name) {
         for (auto& [n, modules] : out) std::sort(modules.begin(), modules.end());
         return out;
     }();
-    auto it = index.find(name);
-    return it == index.end() ? std::vector<std::string>{} : it->second;
+    return index;
 }
+}  // namespace
 
 std::string import_spelling(std::string_view name) {
     return name.find('_') != std::string_view::npos ? fmt::format("`{}`", name) : std::string(name);
