@@ -1649,7 +1649,8 @@ Interval cone_step(const ConeStep& s, const Interval* in) {
         case Op::Construct: return s.count == 1 ? in[0] : Interval{};
         case Op::Builtin: {
             Bounds b[3];
-            std::vector<const Bounds*> a;
+            thread_local std::vector<const Bounds*> a;  // (builtin_bounds' operands: one buffer for every step)
+            a.clear();
             for (size_t j = 0; j < s.count; ++j) {
                 b[j].c = {in[j]};
                 a.push_back(&b[j]);
