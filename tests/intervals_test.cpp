@@ -366,7 +366,7 @@ TEST_CASE("a factor that does not cancel bounds its value by the monomial's rang
     check(11, -2, 2);   // k·x/(k/2) = 2x
 }
 
-TEST_CASE("floor, ceil, round, fract and mod within one cell are the value shifted by its cell; smoothstep is monotone",
+TEST_CASE("floor, ceil, round, fract and mod within one cell are the value shifted by its cell, smoothstep is monotone",
           "[intervals]") {
     // A point box's fract was [0, 1] and its floor two integers (value noise's lattice corner at one point: the
     // Lipschitz search's point bounds were as loose as its boxes').
