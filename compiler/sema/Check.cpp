@@ -256,6 +256,7 @@ private:
     std::optional<int> computed_size(const Expr& x, const std::string& name);
     std::vector<std::string> visible_names() const;
     void undefined(const Expr& e);
+    std::set<std::string> failed_imports_;  // names whose import was reported (their uses are not reported again)
     bool library_import(Span s, const std::string& name);
     std::optional<std::string> library_suggestion(const std::string& name);
     std::set<std::pair<uint32_t, uint32_t>> reported_words_;  // split words already reported (file, offset)
@@ -620,13 +621,18 @@ void Checker::collect_imports() {
                 if (b && std::string_view(builtin(*b).module).empty())
                     Diagnostics::note(e, span, fmt::format("'{}' is built in: use it without an import", name));
                 else if (auto s = did_you_mean(name, cands)) Diagnostics::note(e, span, fmt::format("did you mean '{}'?", *s));
+                failed_imports_.insert(name);
                 return;
             }
             im.builtin = *b;
         } else {
             const CheckedModule* from = lookup_ ? lookup_(module, from_span) : nullptr;
             if (!from) {
-                d_.error(from_span, fmt::format("no module named '{}' to import from", module));
+                auto& e = d_.error(from_span, fmt::format("no module named '{}' to import from", module));
+                std::vector<std::string> modules = library_module_names();  // (`from nosie`: a trial's, stop 58)
+                for (const char* b : {"trigonometry", "linearalgebra"}) modules.emplace_back(b);
+                if (auto s = did_you_mean(module, modules)) Diagnostics::note(e, from_span, fmt::format("did you mean '{}'?", *s));
+                failed_imports_.insert(name);
                 return;
             }
             im.from = from;
@@ -639,6 +645,15 @@ void Checker::collect_imports() {
                 for (auto& f : from->functions) cands.push_back(f.stmt->name);
                 auto& e = d_.error(span, fmt::format("module '{}' defines no function '{}'", module, name));
                 if (auto s = did_you_mean(name, cands)) Diagnostics::note(e, span, fmt::format("did you mean '{}'?", *s));
+                else if (!cands.empty() && cands.size() <= 24) {
+                    // (`perlin from noise`: what the module has instead; a trial's, stop 58)
+                    std::string list;
+                    for (const std::string& c : cands)
+                        if (c.find('_') == std::string::npos || c.rfind('_') + 1 < c.size())
+                            list += (list.empty() ? "" : ", ") + import_spelling(c);
+                    Diagnostics::note(e, span, fmt::format("'{}' defines {}", module, list));
+                }
+                failed_imports_.insert(name);
                 return;
             }
         }
@@ -944,6 +959,8 @@ std::optional<std::string> Checker::library_suggestion(const std::string& name) 
 void Checker::undefined(const Expr& e) {
     const std::string& name = e.text;
     if (unbound_functions_.count(name)) return;  // reported at its declaration
+    if (failed_imports_.count(name)) return;     // reported at its import
+    if (e.word_span.end > e.word_span.begin && failed_imports_.count(std::string(d_.sources().slice(e.word_span)))) return;
     // Past the diagnostics that are shown, only the count matters: no suggestions (did_you_mean scans every
     // name: 10,000 undefined names against 10,000 defined ones would take a minute).
     if (d_.error_count() >= Diagnostics::kMaxKept) {

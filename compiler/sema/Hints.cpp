@@ -127,6 +127,15 @@ std::vector<std::string> library_modules_of(std::string_view name) {
     return it == library_index().end() ? std::vector<std::string>{} : it->second;
 }
 
+std::vector<std::string> library_module_names() {
+    std::vector<std::string> names;
+    for (const EmbeddedFile& f : embedded_resources()) {
+        const std::string_view p = f.path;
+        if (p.rfind("stdlib/", 0) == 0 && p.size() > 11 && p.substr(p.size() - 4) == ".iql") names.emplace_back(p.substr(7, p.size() - 11));
+    }
+    return names;
+}
+
 std::vector<std::string> library_function_names() {
     std::vector<std::string> names;
     for (const auto& [n, modules] : library_index()) names.push_back(n);
@@ -167,7 +176,8 @@ const std::map<std::string, std::vector<std::string>, std::less<>>& library_inde
 }  // namespace
 
 std::string import_spelling(std::string_view name) {
-    return name.find('_') != std::string_view::npos ? fmt::format("`{}`", name) : std::string(name);
+    const bool ticked = std::any_of(name.begin(), name.end(), [](char c) { return c == '_' || std::isdigit(static_cast<unsigned char>(c)); });
+    return ticked ? fmt::format("`{}`", name) : std::string(name);
 }
 
 }  // namespace iqc

@@ -32,10 +32,13 @@ std::string spell_letters(std::string_view word, std::string_view sep);
 // `smooth_union` -> operators), in name order: what an import of it reads `name from module`. Empty where none does.
 std::vector<std::string> library_modules_of(std::string_view name);
 
+// The standard library's module names (stdlib/*.iql: noise, operators, …), for "did you mean".
+std::vector<std::string> library_module_names();
+
 // Every function name library_modules_of knows (for "did you mean").
 std::vector<std::string> library_function_names();
 
-// How an import writes a name: in backticks where it is more than one letter with an underscore (`` `value_noise` ``).
+// How an import writes a name: in backticks where it has an underscore or a digit (`` `value_noise` ``, `` `fbm2` ``).
 std::string import_spelling(std::string_view name);
 
 }  // namespace iqc

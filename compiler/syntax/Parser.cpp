@@ -943,12 +943,31 @@ Module Parser::parse(std::string name, bool allow_header) {
             colon_ends_ = false;
             Span start = cur().span;
             first_word = cur().text;
+            const size_t stmts = m.stmts.size(), decls = m.decls.size();
             parse_line(m);
             if (!at(Tok::Newline) && !at(Tok::End) && !at(Tok::Semicolon)) {
                 const Token& t = cur();
+                // (the line is dropped whole: what was read of it before is not checked as a statement of its own,
+                // `value_noise from noise` was "unexpected 'from'" and then four errors about `value_noise` as a value)
+                m.stmts.resize(stmts);
+                m.decls.resize(decls);
                 if (t.kind == Tok::Unknown)
                     fail(t.span, fmt::format("unexpected character '{}'", t.text));
                 if (t.kind == Tok::Eq) suggest_backticks(start, t.span);
+                if (is_kw(t, "from") && t.span.file == start.file && t.span.begin > start.begin) {
+                    // `value_noise from noise`: the name read as letters and a subscript
+                    Diagnostic& d = diags_.error(t.span, fmt::format("unexpected {} after the end of the statement", describe(t)));
+                    std::string names(diags_.sources().slice(Span{start.file, start.begin, t.span.begin}));
+                    while (!names.empty() && (names.back() == ' ' || names.back() == '\t')) names.pop_back();
+                    const Token& module = peek_raw(1);
+                    const std::string from = module.word.end > module.word.begin ? std::string(diags_.sources().slice(module.word))
+                                                                                 : module.text;
+                    if (names.find(',') == std::string::npos && names.find('`') == std::string::npos && is_name_token(module))
+                        Diagnostics::note(d, Span{start.file, start.begin, start.begin + uint32_t(names.size())},
+                                          fmt::format("an import writes a name of several letters or with '_' in backticks: "
+                                                                "`{}` from {}", names, from));
+                    throw Bail{};
+                }
                 fail(t.span, fmt::format("unexpected {} after the end of the statement", describe(t)));
             }
         } catch (Bail&) {
