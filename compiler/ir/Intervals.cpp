@@ -1671,7 +1671,11 @@ Interval cone_over(const Refinement& ref, const std::vector<Bounds>& r, Interval
         Interval in[3];
         for (size_t j = 0; j < s.count; ++j) {
             const ConeOperand& o = s.operands[j];
-            in[j] = o.step >= 0 ? values[size_t(o.step)] : o.step == -1 ? piece : comp(r[o.v], o.comp);
+            // (a constant operand without that component's bounds, none the analysis keeps: unbounded)
+            in[j] = o.step >= 0                                           ? values[size_t(o.step)]
+                    : o.step == -1                                        ? piece
+                    : r[o.v].c.size() == 1 || o.comp < r[o.v].c.size() ? comp(r[o.v], o.comp)
+                                                                          : Interval{};
         }
         values[t] = cone_step(s, in);
     }
@@ -1685,7 +1689,7 @@ void univariate_refine(const UnivariatePlan& plan, std::vector<Bounds>& r, size_
     bool changed = false;
     std::vector<Interval> values;
     for (const Refinement& ref : plan.at[i]) {
-        if (ref.comp >= x.c.size() || r[ref.source].nan) continue;
+        if (ref.comp >= x.c.size() || r[ref.source].nan || r[ref.source].c.empty()) continue;
         const Interval s = comp(r[ref.source], ref.source_comp);
         if (!(s.hi > s.lo) || !std::isfinite(s.lo) || !std::isfinite(s.hi)) continue;
         struct Piece {
