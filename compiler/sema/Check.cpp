@@ -662,6 +662,18 @@ void Checker::collect_imports() {
     for (const auto& s : m_.ast.stmts)
         if (s.kind == StmtKind::Import)
             for (auto& [n, sp] : s.imports) add_import(n, s.from, sp, s.from_span);
+    // A name imported and defined here too: which one a call meant was the local one's, silently (`fbm from noise`
+    // beside `fbm(x) = x_1`: a trial's, stop 58).
+    for (const auto& s : m_.ast.stmts) {
+        if (s.kind != StmtKind::Assign && s.kind != StmtKind::Function) continue;
+        for (const ImportedFunction& im : m_.imports)
+            if (im.name == s.name) {
+                auto& e = d_.error(s.name_span, fmt::format("'{}' is imported from '{}' and defined here too: rename this one, or "
+                                                            "remove the import",
+                                                            s.name, im.module));
+                Diagnostics::note(e, im.span, fmt::format("'{}' is imported here", s.name));
+            }
+    }
     for (auto& [n, mod] : opts_.implicit_imports) {
         bool defined = decl_spans_.count(n) > 0;
         for (const auto& s : m_.ast.stmts)
