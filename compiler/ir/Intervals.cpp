@@ -123,6 +123,15 @@ Interval comp(const Bounds& b, size_t k) { return b.c.size() == 1 ? b.c[0] : b.c
 
 Interval monotone(Interval a, double (*f)(double)) { return {f(a.lo), f(a.hi)}; }
 
+// mod(x, m) = x − m⌊x/m⌋ for x within `a` and a period m > 0, where x/m stays within one cell: x shifted by its cell
+// (rounded outwards, within [0, m]); nullopt where it crosses a cell's edge (anything in [0, m) then).
+std::optional<Interval> within_period(Interval a, double m) {
+    if (!(m > 0) || !std::isfinite(m) || !std::isfinite(a.lo) || !std::isfinite(a.hi)) return std::nullopt;
+    const double cell = std::floor(a.lo / m);
+    if (cell != std::floor(a.hi / m) || std::fabs(cell) > 1e15) return std::nullopt;
+    return Interval{std::max(0.0, std::nextafter(a.lo - cell * m, -kInf)), std::min(m, std::nextafter(a.hi - cell * m, kInf))};
+}
+
 // The hull of the elements of an array of `count` elements that an index within `k` may read (`at`: At's
 // rounding and clamping to the array; else an index outside the array reads nothing), into x (one element's
 // components); `element(j, q)` is component q of element j. False where the index is unbounded.
@@ -244,15 +253,8 @@ Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
         each([&](size_t k) { return Interval{std::ceil(arg(0, k).lo), std::ceil(arg(0, k).hi)}; });
     else if (n == B::round)  // a tie goes either way (GLSL leaves it to the implementation)
         each([&](size_t k) { return Interval{std::ceil(arg(0, k).lo - 0.5), std::floor(arg(0, k).hi + 0.5)}; });
-    else if (n == B::fract)
-        each([&](size_t k) {
-            // x − ⌊x⌋: within one cell of the lattice, x shifted by its cell (so a point box's fract is a point)
-            const Interval v = arg(0, k);
-            const double cell = std::floor(v.lo);
-            if (!std::isfinite(v.lo) || !std::isfinite(v.hi) || cell != std::floor(v.hi) || std::fabs(cell) > 1e15)
-                return Interval{0, 1};
-            return Interval{std::max(0.0, std::nextafter(v.lo - cell, -kInf)), std::min(1.0, std::nextafter(v.hi - cell, kInf))};
-        });
+    else if (n == B::fract)  // x − ⌊x⌋: mod(x, 1) (a point box's fract is a point)
+        each([&](size_t k) { return within_period(arg(0, k), 1).value_or(Interval{0, 1}); });
     else if (n == B::sign)
         each([&](size_t k) {
             Interval v = arg(0, k);
@@ -289,14 +291,8 @@ Bounds builtin_bounds(const Instr& in, const std::vector<const Bounds*>& a) {
     else if (n == B::mod)
         each([&](size_t k) {
             Interval v = arg(0, k), m = arg(1, k);
-            // x − m⌊x/m⌋ with a fixed modulus m > 0 (a repetition's period): x shifted by its period where x/m stays
-            // within one cell
-            if (m.lo == m.hi && m.lo > 0 && std::isfinite(m.lo) && std::isfinite(v.lo) && std::isfinite(v.hi)) {
-                const double cell = std::floor(v.lo / m.lo);
-                if (cell == std::floor(v.hi / m.lo) && std::fabs(cell) < 1e15)
-                    return Interval{std::max(0.0, std::nextafter(v.lo - cell * m.lo, -kInf)),
-                                    std::min(m.lo, std::nextafter(v.hi - cell * m.lo, kInf))};
-            }
+            if (m.lo == m.hi)  // (a fixed modulus: a repetition's period)
+                if (auto r = within_period(v, m.lo)) return *r;
             return m.lo > 0 ? Interval{0, m.hi} : m.hi < 0 ? Interval{m.lo, 0} : Interval{};
         });
     else if (n == B::pow)
@@ -1301,6 +1297,8 @@ constexpr size_t kMaxConeSteps = 40;  // a longer cone is not refined (its bound
 constexpr int kEqualPieces = 8, kBisections = 8;
 constexpr int64_t kConstSource = -1;
 int64_t component_id(ValueId v, size_t k) { return (int64_t(v) << 20) | int64_t(k); }
+ValueId id_value(int64_t id) { return ValueId(id >> 20); }
+size_t id_component(int64_t id) { return size_t(id & ((1 << 20) - 1)); }
 
 struct ConeOperand {
     int32_t step;  // ≥ 0: an earlier step's value; -1: the piece of the source; -2: component `comp` of value `v` (constant)
@@ -1434,7 +1432,7 @@ UnivariatePlan univariate_plan(const Function& f) {
     std::vector<char> repeated(total, 0);   // a merge at or below it, on its leaf's
     std::vector<char> traced(n, 0);
     std::vector<char> point(n, 0);  // whether the value reads the query point
-    auto index = [&](int64_t id) { return offset[size_t(id >> 20)] + size_t(id & ((1 << 20) - 1)); };
+    auto index = [&](int64_t id) { return offset[id_value(id)] + id_component(id); };
     // The nearest common dominator of two components of one leaf (-1 past 64 steps: then none is looked for).
     auto common = [&](int64_t x, int64_t y) -> int64_t {
         for (int steps = 0; x != y; ++steps) {
@@ -1467,7 +1465,7 @@ UnivariatePlan univariate_plan(const Function& f) {
             int64_t s = kConstSource, dom = -1;
             int count = 0, matched = 0;
             bool ok = traced[i], rep = false, single = true;
-            size_t used = in.op == Op::Construct ? in.args.size() : operand_count(in);
+            size_t used = operand_count(in);
             for (size_t j = 0; ok && j < used; ++j) {
                 ValueId v;
                 size_t c;
@@ -1514,7 +1512,7 @@ UnivariatePlan univariate_plan(const Function& f) {
             continue;
         }
         for (size_t k = 0; k < offset[i + 1] - offset[i]; ++k) {
-            size_t used = in.op == Op::Construct ? in.args.size() : operand_count(in);
+            size_t used = operand_count(in);
             for (size_t j = 0; j < used; ++j) {
                 ValueId v;
                 size_t c;
@@ -1533,8 +1531,8 @@ UnivariatePlan univariate_plan(const Function& f) {
     // too took a slider blend's compile 0.39 → 0.93 s for the same K).
     auto periodic = [&](int64_t id) {
         for (int steps = 0; id >= 0 && steps < 16; ++steps) {
-            const ValueId v = ValueId(id >> 20);
-            const size_t c = size_t(id & ((1 << 20) - 1));
+            const ValueId v = id_value(id);
+            const size_t c = id_component(id);
             const Instr& in = f.body[v];
             if (in.op == Op::Builtin) {
                 const B kind = builtin_kind(in.aux);
@@ -1576,8 +1574,8 @@ UnivariatePlan univariate_plan(const Function& f) {
             const int64_t lf = leaf[offset[i] + k];
             Refinement ref;
             ref.comp = uint32_t(k);
-            ref.source = ValueId(s >> 20);
-            ref.source_comp = uint32_t(s & ((1 << 20) - 1));
+            ref.source = id_value(s);
+            ref.source_comp = uint32_t(id_component(s));
             bool fits = true;
             std::vector<std::pair<size_t, size_t>> stack = {{i, k}};
             while (!stack.empty() && fits) {
@@ -1593,7 +1591,7 @@ UnivariatePlan univariate_plan(const Function& f) {
                 step.scalar.op = in.op;
                 step.scalar.aux = in.aux;
                 step.scalar.type = Type::scalar();
-                size_t used = in.op == Op::Construct ? in.args.size() : operand_count(in);
+                size_t used = operand_count(in);
                 for (size_t j = 0; j < used; ++j) {
                     ValueId a;
                     size_t ac;

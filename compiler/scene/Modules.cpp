@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "resources/Embedded.h"
+#include "sema/Hints.h"
 #include "source/Limits.h"
 #include "ir/Lower.h"
 #include "ir/Pipeline.h"
@@ -86,11 +87,7 @@ const ModuleSource* ModuleLibrary::find_source(const std::string& name, Span whe
 std::vector<std::string> ModuleLibrary::names() const {
     std::vector<std::string> names;
     for (auto& [n, m] : registry_) names.push_back(n);
-    for (const auto& f : embedded_resources()) {
-        std::string p(f.path);
-        if (p.rfind("stdlib/", 0) == 0 && p.size() > 11 && p.substr(p.size() - 4) == ".iql")
-            names.push_back(p.substr(7, p.size() - 11));
-    }
+    for (std::string& n : library_module_names()) names.push_back(std::move(n));
     for (const auto& dir : dirs_) {
         std::error_code ec;
         for (auto& e : fs::directory_iterator(dir, ec))

@@ -1,5 +1,7 @@
 #include "sema/Builtins.h"
 
+#include <algorithm>
+
 #include <cmath>
 #include <fmt/format.h>
 
@@ -122,7 +124,15 @@ std::vector<std::string> known_names() {
     return v;
 }
 
-bool is_builtin_module(std::string_view name) { return name == "trigonometry" || name == "linearalgebra"; }
+const std::vector<std::string>& builtin_modules() {
+    static const std::vector<std::string> modules = {"trigonometry", "linearalgebra"};
+    return modules;
+}
+
+bool is_builtin_module(std::string_view name) {
+    const auto& m = builtin_modules();
+    return std::find(m.begin(), m.end(), name) != m.end();
+}
 
 bool is_power_function(std::string_view name) {
     auto b = find_builtin(name);

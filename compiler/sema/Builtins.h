@@ -60,6 +60,7 @@ std::vector<std::string> known_names();
 
 // Modules made only of built-ins (`trigonometry`, `linearalgebra`), for import checking.
 bool is_builtin_module(std::string_view name);
+const std::vector<std::string>& builtin_modules();
 // A trigonometric or hyperbolic function, which I♥LA lets carry a power before its argument: sin²(x).
 bool is_power_function(std::string_view name);
 

@@ -630,7 +630,7 @@ void Checker::collect_imports() {
             if (!from) {
                 auto& e = d_.error(from_span, fmt::format("no module named '{}' to import from", module));
                 std::vector<std::string> modules = library_module_names();  // (`from nosie`: a trial's, stop 58)
-                for (const char* b : {"trigonometry", "linearalgebra"}) modules.emplace_back(b);
+                modules.insert(modules.end(), builtin_modules().begin(), builtin_modules().end());
                 if (auto s = did_you_mean(module, modules)) Diagnostics::note(e, from_span, fmt::format("did you mean '{}'?", *s));
                 failed_imports_.insert(name);
                 return;

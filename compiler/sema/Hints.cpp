@@ -120,7 +120,13 @@ std::string spell_letters(std::string_view word, std::string_view sep) {
 
 namespace {
 const std::map<std::string, std::vector<std::string>, std::less<>>& library_index();
+
+// The module an embedded file is (`stdlib/noise.iql` -> noise), or empty where it is no standard-library module.
+std::string_view stdlib_module(std::string_view path) {
+    if (path.rfind("stdlib/", 0) != 0 || path.size() <= 11 || path.substr(path.size() - 4) != ".iql") return {};
+    return path.substr(7, path.size() - 11);
 }
+}  // namespace
 
 std::vector<std::string> library_modules_of(std::string_view name) {
     auto it = library_index().find(name);
@@ -129,10 +135,8 @@ std::vector<std::string> library_modules_of(std::string_view name) {
 
 std::vector<std::string> library_module_names() {
     std::vector<std::string> names;
-    for (const EmbeddedFile& f : embedded_resources()) {
-        const std::string_view p = f.path;
-        if (p.rfind("stdlib/", 0) == 0 && p.size() > 11 && p.substr(p.size() - 4) == ".iql") names.emplace_back(p.substr(7, p.size() - 11));
-    }
+    for (const EmbeddedFile& f : embedded_resources())
+        if (std::string_view m = stdlib_module(f.path); !m.empty()) names.emplace_back(m);
     return names;
 }
 
@@ -149,9 +153,8 @@ const std::map<std::string, std::vector<std::string>, std::less<>>& library_inde
     static const std::map<std::string, std::vector<std::string>, std::less<>> index = [] {
         std::map<std::string, std::vector<std::string>, std::less<>> out;
         for (const EmbeddedFile& f : embedded_resources()) {
-            const std::string_view p = f.path;
-            if (p.rfind("stdlib/", 0) != 0 || p.size() <= 11 || p.substr(p.size() - 4) != ".iql") continue;
-            const std::string module(p.substr(7, p.size() - 11));
+            const std::string module(stdlib_module(f.path));
+            if (module.empty()) continue;
             std::string_view text = f.contents;
             for (size_t at = 0; at < text.size();) {
                 size_t end = text.find('\n', at);
