@@ -62,6 +62,9 @@ constexpr uint64_t kCellWorkFloor = 100'000'000, kCellWorkPerModule = 300'000'00
 // and llvmpipe compiles a march with many such values live much more slowly (ir/passes/Hoist.cpp's cap); the others
 // keep the K of their sliders' whole ranges.
 constexpr size_t kMaxCellItems = 8;
+// A group's members whose values iqc_prepare checks against their defaults' hull (a loop once per pixel, ~4 comparisons a
+// member and slider): larger groups keep the K of their sliders' whole ranges.
+constexpr size_t kMaxHullMembers = 1024;
 constexpr size_t kSplitMaxInstructions = 2000;  // a function larger than this is not split
 // The work of one sampled evaluation (a gradient through a recurrence of 10⁸ steps is not sampled: its
 // samples stop at the first evaluation past this, with what was seen so far).
@@ -2127,7 +2130,20 @@ struct SliderCells {
     double sampled_at_defaults = 0;          // and the steepest gradient its samples met
     size_t estimated = 0;                    // the cells estimated (nearest the defaults first); the others keep the whole's K
     bool window = false;                     // one cell around the defaults estimated (slider_cells' window), the whole's K outside
+    // A group's per-member tables past 16 members (too many for a cell per member): every estimate holds with each
+    // table's component within the hull [lo, hi] of its members' values (float-rounded outward), and iqc_prepare
+    // takes the cells' K only while every member's value is within it (a loop over the members), else the whole's.
+    // Where they are the only sliders cut (`which` empty), tiers: K[t] holds within tier t's [lo[t], hi[t]] (the hull,
+    // then the hull widened by kHullWidening of the range each side: a member's slider moved a little keeps a K near it).
+    struct Hull {
+        SliderComponent which;
+        std::vector<double> lo, hi;  // per tier
+    };
+    std::vector<Hull> hull;
 };
+
+// The widening of a group's hull tier past the first, in its slider's range each side (SliderCells::Hull).
+constexpr double kHullWidening = 1.0 / 8;
 
 // The half-width of the cell around a slider's default d: f·r (r its range), at most half the default's magnitude, and
 // at least r/4096 (a frequency f ∈ [0, 1000] whose default 1 was the cell [0, 63.5] marched its terrain with K = 174
@@ -2204,7 +2220,26 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
             if (ok) candidates.push_back({k, c});
         }
     }
-    if (candidates.empty() || candidates.size() > 8) return std::nullopt;
+    // A group's per-member tables past 16 members, each component alike over its members (as above): pinned to the hull
+    // of their values (48 bumpy balls on a floor: K 53 over the sliders' ranges where Shadertoy's constants give 4.2,
+    // 287 steps a pixel against 29; a trial's, trial77 #2).
+    std::vector<SliderComponent> large;
+    for (size_t k = 0; k < all.size(); ++k) {
+        const Global& g = m.globals[all[k]];
+        if (!g.type.is_array() || g.type.element().components() < 1) continue;
+        const size_t n = size_t(g.type.element().components()), count = g.value.size() / n;
+        if (count <= 16 || count > kMaxHullMembers || g.value.size() != n * count ||
+            (g.bounds.lo.size() != n && g.bounds.lo.size() != n * count) || g.bounds.hi.size() != g.bounds.lo.size())
+            continue;
+        for (size_t c = 0; c < n; ++c) {
+            bool ok = true;
+            for (size_t j = c; j < g.bounds.lo.size(); j += n)
+                ok = ok && g.bounds.lo[j] == g.bounds.lo[c] && g.bounds.hi[j] == g.bounds.hi[c] && std::isfinite(g.bounds.lo[j]) &&
+                     std::isfinite(g.bounds.hi[j]) && g.bounds.lo[j] < g.bounds.hi[j];
+            if (ok) large.push_back({k, c});
+        }
+    }
+    if ((candidates.empty() && large.empty()) || candidates.size() > 8) return std::nullopt;
     if (budget <= 0) {  // (said: items past it were marched by their whole's K with nothing to say why; a trial's, stop 56)
         over_budget = fmt::format("{} cell estimates a scene", kMaxCellEstimates);
         return std::nullopt;
@@ -2239,6 +2274,28 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         const std::vector<double> v = values_of(s);
         set(s, *std::min_element(v.begin(), v.end()), *std::max_element(v.begin(), v.end()));
     };
+    // The large tables' hulls, in every estimate below (float-rounded outward: the shader compares the uniforms, floats,
+    // with them).
+    std::vector<SliderCells::Hull> hulls;
+    for (const SliderComponent& k : large) {
+        Global& g = work.globals[all[k.k]];
+        const size_t n = size_t(g.type.element().components());
+        double lo = kInf, hi = -kInf;
+        for (size_t j = k.c; j < g.value.size(); j += n) lo = std::min(lo, g.value[j]), hi = std::max(hi, g.value[j]);
+        float flo = float(lo), fhi = float(hi);
+        if (double(flo) > lo) flo = std::nextafter(flo, -std::numeric_limits<float>::infinity());
+        if (double(fhi) < hi) fhi = std::nextafter(fhi, std::numeric_limits<float>::infinity());
+        lo = std::max(double(flo), g.bounds.lo[k.c]), hi = std::min(double(fhi), g.bounds.hi[k.c]);
+        for (size_t j = k.c; j < g.bounds.lo.size(); j += n) g.bounds.lo[j] = lo, g.bounds.hi[j] = hi;
+        hulls.push_back({k, {lo}, {hi}});
+    }
+    auto set_hulls = [&](size_t tier) {
+        for (const SliderCells::Hull& h : hulls) {
+            Global& g = work.globals[all[h.which.k]];
+            const size_t n = size_t(g.type.element().components());
+            for (size_t j = h.which.c; j < g.bounds.lo.size(); j += n) g.bounds.lo[j] = h.lo[tier], g.bounds.hi[j] = h.hi[tier];
+        }
+    };
     // Which sliders the bound depends on: intervals alone (no samples, no refinements) with every slider at its
     // default, then each in turn over its range.
     std::string why;
@@ -2264,7 +2321,53 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     }
     for (const SliderComponent& k : candidates) reset(k);
     work.functions.resize(m.functions.size());  // (the gradient: each estimate differentiates its own)
-    if (influence.empty()) return std::nullopt;
+    if (influence.empty() && hulls.empty()) return std::nullopt;
+    // Only the large tables: one estimate, within their hulls (as costly as the whole's where its K comes from samples).
+    if (influence.empty()) {
+        if (budget <= 0) {
+            over_budget = fmt::format("{} cell estimates a scene", kMaxCellEstimates);
+            return std::nullopt;
+        }
+        if (sampled && double(whole_work) > double(work_allowed) - double(analysis_work() - start)) {
+            over_budget = past_work;
+            return std::nullopt;
+        }
+        double allowance = kSplitWorkPerEstimate / 16;
+        const LipschitzEstimate e =
+            estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, sampled ? 1000 : 250, sampled ? 128 : 64, true, &allowance);
+        --budget;
+        SliderCells c;
+        c.K = {cell_factor(e, sampled ? kSampledCap : whole, whole)};
+        c.at_defaults = c.K[0];
+        c.sampled_at_defaults = e.sampled;
+        c.estimated = 1;
+        if (c.at_defaults > whole / 1.2 && c.K[0] <= whole) return std::nullopt;
+        // The widened tier, where the work allows another estimate as costly and it gains a fifth on the whole's.
+        const uint64_t one = analysis_work() - start;
+        if (budget > 0 && double(analysis_work() - start) + double(one) <= double(work_allowed)) {
+            bool wider = false;
+            for (SliderCells::Hull& h : hulls) {
+                const Global& g = m.globals[all[h.which.k]];
+                const double w = kHullWidening * (g.bounds.hi[h.which.c] - g.bounds.lo[h.which.c]);
+                h.lo.push_back(std::max(g.bounds.lo[h.which.c], double(float(h.lo[0] - w))));
+                h.hi.push_back(std::min(g.bounds.hi[h.which.c], double(float(h.hi[0] + w))));
+                wider = wider || h.lo[1] < h.lo[0] || h.hi[1] > h.hi[0];
+            }
+            if (wider) {
+                set_hulls(1);
+                allowance = kSplitWorkPerEstimate / 128;
+                const LipschitzEstimate w = estimate_lipschitz(work, spec.object_fn, region, others, spec.ball, sampled ? 1000 : 64,
+                                                               sampled ? 128 : 32, true, &allowance, false, !sampled);
+                --budget;
+                ++c.estimated;
+                const double K = cell_factor(w, sampled ? kSampledCap : whole, whole);
+                if (K <= whole / 1.2) c.K.push_back(std::max(K, c.K[0]));
+            }
+            for (SliderCells::Hull& h : hulls) h.lo.resize(c.K.size()), h.hi.resize(c.K.size());
+        }
+        c.hull = std::move(hulls);
+        return c;
+    }
     std::stable_sort(influence.begin(), influence.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
     // Two layouts. The cells: where the K comes from samples (each cell's estimate as costly as the whole's: 27 cells of a
     // twisted, rippled smooth union took 1.8 s), up to two sliders, 7 or 3×3 cells; else up to three, 7, 5×5 or 3×3×3.
@@ -2278,6 +2381,7 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
         if (cut.size() > cut_most) cut.resize(cut_most);
         SliderCells c;
         c.window = window;
+        c.hull = hulls;
         static const std::vector<double> kFractions[] = {{1.0 / 64, 1.0 / 16, 1.0 / 4}, {1.0 / 32, 1.0 / 6}, {1.0 / 16}};
         const size_t fractions = window ? 0 : sampled && cut.size() == 2 ? 2 : cut.size() - 1;
         size_t cells = 1;
@@ -2422,6 +2526,44 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
 // Makes `factor` (the item's factor global) a prepared global that iqc_prepare sets to its cell's K from the sliders
 // `all` (sliders_read's) as `cells` cut them: outside a slider's range, the whole's K (`whole`).
 void prepare_cell_factor(Module& m, int factor, const std::vector<size_t>& all, const SliderCells& cells, double whole) {
+    // A group's large tables: a loop over the members (one per table length) whose state stays 1 while each member's
+    // values are within their hull; the cells' K where every one stays, else the whole's. (Their bodies first: adding a
+    // function moves the others.)
+    std::vector<std::pair<size_t, int>> hull_loops;  // (members, body)
+    const size_t tiers = cells.hull.empty() ? 0 : cells.hull[0].lo.size();
+    {
+        std::map<size_t, std::vector<const SliderCells::Hull*>> by_count;
+        for (const SliderCells::Hull& h : cells.hull) {
+            const Global& g = m.globals[all[h.which.k]];
+            by_count[g.value.size() / size_t(g.type.element().components())].push_back(&h);
+        }
+        for (const auto& [count, hulls] : by_count) {
+            Function body;
+            body.name = fmt::format("{}.{}.members_within_hull", names::kPrepare, m.globals[size_t(factor)].name);
+            body.glsl_name = body.name;
+            Builder lb(m, body);
+            const ValueId k = lb.param("k", Type::integer());
+            std::vector<ValueId> state, v;
+            for (size_t t = 0; t < tiers; ++t) state.push_back(lb.param(t == 0 ? "inside" : fmt::format("inside_{}", t), Type::scalar()));
+            for (const SliderCells::Hull* h : hulls) {
+                const Global& g = m.globals[all[h->which.k]];
+                v.push_back(lb.op(Op::Index, {lb.global(int(all[h->which.k])), k}));
+                if (!g.type.element().is_scalar()) v.back() = lb.op(Op::Extract, {v.back()}, int(h->which.c));
+            }
+            for (size_t t = 0; t < tiers; ++t) {
+                ValueId all_in = 0;
+                for (size_t j = 0; j < hulls.size(); ++j) {
+                    const ValueId in = lb.op(Op::And, {lb.compare(CompareKind::Ge, v[j], lb.scalar(hulls[j]->lo[t])),
+                                                       lb.compare(CompareKind::Le, v[j], lb.scalar(hulls[j]->hi[t]))});
+                    all_in = j == 0 ? in : lb.op(Op::And, {all_in, in});
+                }
+                body.outputs.push_back({t == 0 ? "inside" : fmt::format("inside_{}", t), lb.op(Op::Select, {all_in, state[t], lb.scalar(0)})});
+            }
+            body.result = body.outputs[0].second;
+            hull_loops.push_back({count, int(m.functions.size())});
+            m.functions.push_back(std::move(body));
+        }
+    }
     int prep = m.find(names::kPrepare);
     if (prep < 0) {
         Function f;
@@ -2464,16 +2606,54 @@ void prepare_cell_factor(Module& m, int factor, const std::vector<size_t>& all, 
             for (size_t i = n - 1; i-- > 0;) v = b.op(Op::Select, {b.compare(CompareKind::Lt, value[s], b.scalar(e[i + 1])), cell(i), v});
             return v;
         };
+        if (cells.which.empty()) {  // (a group's large tables alone: their hulls' tiers, below)
+            K = b.scalar(whole);
+            break;
+        }
         ValueId own = table(0, 0);
         ValueId in = inside[0];
         for (size_t s = 1; s < inside.size(); ++s) in = b.op(Op::And, {in, inside[s]});
         own = b.op(Op::Select, {in, own, b.scalar(whole)});
         K = member == 0 ? own : b.builtin("max", {K, own});
     }
+    // (each tier: every table's loop says its members are within it)
+    std::vector<ValueId> within(tiers, 0);
+    bool first = true;
+    for (const auto& [count, fn] : hull_loops) {
+        Instr loop;
+        loop.op = Op::Loop;
+        loop.type = Type::tuple(int(tiers));
+        loop.args = {b.integer((long long)count - 1)};
+        for (size_t t = 0; t < tiers; ++t) loop.args.push_back(b.scalar(1));
+        loop.aux = fn;
+        loop.data = {0};
+        const ValueId lv = f.add(std::move(loop));
+        for (size_t t = 0; t < tiers; ++t) {
+            Instr mem;
+            mem.op = Op::Member;
+            mem.type = Type::scalar();
+            mem.args = {lv};
+            mem.aux = int(t);
+            const ValueId in = b.compare(CompareKind::Gt, f.add(std::move(mem)), b.scalar(0.5));
+            within[t] = first ? in : b.op(Op::And, {within[t], in});
+        }
+        first = false;
+    }
+    if (cells.which.empty()) {  // (the tiers, widest first: the narrowest that holds the values chooses)
+        for (size_t t = tiers; t-- > 0;) K = b.op(Op::Select, {within[t], b.scalar(cells.K[t]), K});
+    } else if (tiers > 0) {
+        K = b.op(Op::Select, {within[0], K, b.scalar(whole)});
+    }
     Global& g = m.globals[size_t(factor)];
     g.kind = Global::Kind::Prepared;
-    g.comment = fmt::format("the Lipschitz factor dividing its distance (the hit test multiplies it back): per cell of its sliders' "
-                            "values, {} cells ({:.4g} at their defaults)", cells.K.size(), cells.at_defaults);
+    g.comment = cells.which.empty()
+                    ? fmt::format("the Lipschitz factor dividing its distance (the hit test multiplies it back): {:.4g} while its members' "
+                                  "sliders are within the hull of their defaults, {}{:.4g} beyond", cells.at_defaults,
+                                  cells.K.size() > 1 ? fmt::format("{:.4g} within {:g} of their ranges around it, ", cells.K[1], kHullWidening) : "",
+                                  whole)
+                    : fmt::format("the Lipschitz factor dividing its distance (the hit test multiplies it back): per cell of its sliders' "
+                                  "values, {} cells ({:.4g} at their defaults){}", cells.K.size(), cells.at_defaults,
+                                  cells.hull.empty() ? "" : ", while its members' sliders are within the hull of their defaults");
     g.value.clear();
     g.bounds = ValueBounds{};
     g.bounds.input = true;
@@ -2653,6 +2833,11 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
         // "K = 194", or with cells "K = 46.5 at its sliders' defaults (10.2–194 as they move)".
         auto k_words = [&](double K) {
             if (!cells) return fmt::format("K = {:.3g}", K);
+            if (cells->which.empty())
+                return fmt::format("K = {:.3g} while its members' sliders stay within the span of their values ({}{} beyond it: the shader "
+                                   "checks them)", cells->at_defaults,
+                                   cells->K.size() > 1 ? fmt::format("{:.3g} within {:g} of their ranges around it, ", cells->K[1], kHullWidening) : "",
+                                   K > 1 + 1e-9 ? fmt::format("{:.3g}", K) : std::string("as if 1-Lipschitz"));
             if (cells->window)
                 return fmt::format("K = {:.3g} near its sliders' defaults ({} beyond a window around them: the shader picks it from their "
                                    "values)", cells->at_defaults, K > 1 + 1e-9 ? fmt::format("{:.3g}", K) : std::string("as if 1-Lipschitz"));
@@ -2848,16 +3033,21 @@ std::vector<RangeIssue> apply_lipschitz_bounds(Module& m, std::vector<std::strin
                                           m.functions[fi].glsl_name, e.derived,
                                           e.per_member ? fmt::format(" (its {} members' largest)", spec.group) : "", e.sampled, applied, how,
                                           e.jump > 0 ? fmt::format("; jumps by {:.3g} (discontinuous)", e.jump) : "") +
-                              (cells && cells->window
-                                   ? fmt::format("; by the sliders' values {:.4g} in a window around their defaults, {:.4g} outside it",
-                                                 cells->at_defaults, applied)
+                              (cells && cells->which.empty()
+                                   ? fmt::format("; by the members' sliders {:.4g} within the hull of their values, {}{:.4g} beyond it",
+                                                 cells->at_defaults,
+                                                 cells->K.size() > 1 ? fmt::format("{:.4g} within {:g} of their ranges around it, ", cells->K[1], kHullWidening) : "",
+                                                 applied)
+                               : cells && cells->window
+                                   ? fmt::format("; by the sliders' values {:.4g} in a window around their defaults, {:.4g} outside it{}",
+                                                 cells->at_defaults, applied, cells->hull.empty() ? "" : " or the members' hull")
                                : cells ? fmt::format("; by the sliders' values {:.4g} at their defaults, {:.4g}–{:.4g} over {} cells{}", cells->at_defaults,
                                                    *std::min_element(cells->K.begin(), cells->K.end()),
                                                    *std::max_element(cells->K.begin(), cells->K.end()), cells->K.size(),
                                                    cells->estimated < cells->K.size()
                                                        ? fmt::format(" ({} estimated, nearest the defaults; the others keep the whole's K: past the "
                                                                      "cells' budget ({}))", cells->estimated, cells_skipped)
-                                                       : "")
+                                                       : "") + (cells->hull.empty() ? "" : fmt::format(" within the members' hull, {:.4g} beyond it", applied))
                                      : !cells_skipped.empty() ? "; not by the sliders' values: past the cells' budget (" + cells_skipped + ")"
                                                               : ""));
         m.functions[fi].lipschitz.object_fn = -1;  // done
