@@ -3,6 +3,7 @@
 #pragma once
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
@@ -100,6 +101,18 @@ inline size_t count_of(const std::string& text, const std::string& what) {
     size_t n = 0;
     for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
     return n;
+}
+
+// PSNR in dB of two images of one size over their 8-bit channels, as ImageMagick's `compare -metric PSNR` (1e9 where
+// they are equal).
+inline double psnr_8bit(const render::Image& a, const render::Image& b) {
+    double se = 0;
+    for (size_t i = 0; i < a.rgba.size() && i < b.rgba.size(); ++i) {
+        const double d = std::round(a.rgba[i] * 255.0) - std::round(b.rgba[i] * 255.0);
+        se += d * d;
+    }
+    const double mse = se / double(a.rgba.size()) / (255.0 * 255.0);
+    return mse == 0 ? 1e9 : 10 * std::log10(1 / mse);
 }
 
 // Renders a compiled shader of any target on the headless renderer with what its host sets (uniform

@@ -428,13 +428,7 @@ TEST_CASE("every bench scene's hand-written reference draws iqc's picture (50 dB
         REQUIRE(iqc::render::read_png(a.string(), ia, nullptr));
         REQUIRE(iqc::render::read_png(b.string(), ib, nullptr));
         REQUIRE(ia.rgba.size() == ib.rgba.size());
-        double se = 0;  // over the 8-bit channels, as ImageMagick's PSNR
-        for (size_t i = 0; i < ia.rgba.size(); ++i) {
-            double d = std::round(ia.rgba[i] * 255.0) - std::round(ib.rgba[i] * 255.0);
-            se += d * d;
-        }
-        double mse = se / double(ia.rgba.size()) / (255.0 * 255.0);
-        double psnr = mse == 0 ? 1e9 : 10 * std::log10(1 / mse);
+        const double psnr = psnr_8bit(ia, ib);
         INFO("PSNR " << psnr << " dB");
         CHECK(psnr >= 50);
         ++n;

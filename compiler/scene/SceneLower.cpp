@@ -94,6 +94,10 @@ struct Item {
     // its node tables per level (centre, radius, first child, child count) and the members in leaf order.
     BoundsTree tree;
     bool derived_bound = false;  // its members' bound spheres were derived from the shape (no `bound` written)
+    // Where sliders are uniforms and the spheres over their ranges are too wide, derived over the hull of the members'
+    // values: the prepared global (1 while every member's values are within that hull, iqc_prepare's loop) guards the
+    // hierarchy's skips and the spheres' stand-ins; -1 where the spheres hold over the ranges.
+    int hull_valid = -1;
     struct TreeLevel {
         Field center, half, first, count;
     };
@@ -173,6 +177,7 @@ public:
         if (o_.reflections || o_.refraction) out_.has_reflectivity = material_property(ir::names::kReflectivity);
         if (o_.refraction) out_.has_transmission = material_property(ir::names::kTransmission);
         prepare_function();
+        hull_functions();
         box_functions();
         if (o_.per_instance) per_instance_functions();
         out_.instances = int(plans_.size());
@@ -197,6 +202,11 @@ private:
     const SceneDesc& s_;
     const std::vector<InstancePlan>& plans_;
     std::vector<double> derived_bound_ = std::vector<double>(plans_.size(), 0.0);  // per plan; 0: none
+    // Per plan: 1 where derived_bound_ holds only over the hull of its group's values (Item::hull_valid guards it at run
+    // time): the scene box and the Lipschitz analysis do not read it.
+    std::vector<char> hull_bound_ = std::vector<char>(plans_.size(), 0);
+    // The most members iqc_prepare's loops test (prepare_within: a group's hull, the box's window), once per pixel.
+    static constexpr size_t kMaxHullMembers = 1024;
     // Per plan: its world box from scene_box (none where it found none, or stopped before it).
     std::vector<std::optional<std::array<ir::Interval, 3>>> plan_box_ = std::vector<std::optional<std::array<ir::Interval, 3>>>(plans_.size());
     const SceneLowerOptions& o_;
@@ -231,14 +241,14 @@ private:
     // The intervals of a shape's parameters over the members of a group (their values' hull; on targets with
     // sliders, their slider ranges too); the query point's entry is left unbounded. Nothing when a parameter
     // has no range on a slider target (an input).
-    std::optional<std::vector<std::vector<ir::Interval>>> shape_intervals(const std::vector<size_t>& members) {
+    std::optional<std::vector<std::vector<ir::Interval>>> shape_intervals(const std::vector<size_t>& members, bool hull_only = false) {
         const InstancePlan& first = plan(members[0]);
         std::vector<ir::ValueBounds> ranges = parameter_bounds(*first.shape);
         std::vector<std::vector<ir::Interval>> params(first.shape->params.size());
         for (size_t i = 0; i < params.size(); ++i) {
             if (int(i) == first.query) continue;
             for (size_t c = 0; c < plan(members[0]).shape_values[i].size(); ++c) params[i].push_back(value_hull(members, i, c));
-            if (!o_.params_constant) {
+            if (!o_.params_constant && !hull_only) {
                 const ir::ValueBounds& r = ranges[i];
                 if (r.input || r.lo.size() != params[i].size()) return std::nullopt;
                 for (size_t c = 0; c < params[i].size(); ++c) {
@@ -279,10 +289,10 @@ private:
     // A bounding-sphere radius for every member of a group without `bound`: the shape's extent by interval
     // arithmetic (ir/Support.h) over the hull of the members' parameter values (on targets with sliders, their
     // slider ranges too), or nothing (an unbounded shape such as a plane; a parameter without a range).
-    std::optional<double> derived_bound(const std::vector<size_t>& members) {
+    std::optional<double> derived_bound(const std::vector<size_t>& members, bool hull_only = false) {
         const InstancePlan& first = plan(members[0]);
         int fn = lower_module_cached(*first.shape, ctx_);
-        auto params = shape_intervals(members);
+        auto params = shape_intervals(members, hull_only);
         if (!params) return std::nullopt;
         auto R = ir::support_radius(m_, fn, first.query, std::move(*params));
         if (!R) return R;
@@ -404,7 +414,7 @@ private:
         for (size_t i = 0; i < plans_.size(); ++i) {
             const InstancePlan& p = plan(i);
             if (runtime_transform(p) || p.blend >= 0) return;
-            if (bound_of(i) > 0) {
+            if (bound_of(i) > 0 && !hull_bound_[i]) {
                 // Outside its sphere the instance's nearness is (|q| - R)·scale (q in object space): within tau
                 // inside the object-space ball R + tau/scale, mapped to the world (a non-uniform scale
                 // stretches it more along some axes than the scale says).
@@ -698,6 +708,17 @@ private:
                     for (size_t mi : members) derived_bound_[mi] = *R;
                     bounded = true;
                     out_.group_notes.push_back(fmt::format("{}: `bound = {}` derived from the shape", shape, fmt::format("{:.4g}", *R)));
+                } else if (auto H = !o_.params_constant && members.size() <= kMaxHullMembers ? derived_bound(members, true)
+                                                                                               : std::optional<double>{}) {
+                    // Over the hull of the members' values (Shadertoy's), guarded at run time: while any member's
+                    // values leave it, the hierarchy enters every node and no sphere stands in (48 bumpy balls on
+                    // WebGL2 evaluated all 48 at every step: a frame 9× Shadertoy's; trial77).
+                    for (size_t mi : members) derived_bound_[mi] = *H, hull_bound_[mi] = 1;
+                    bounded = true;
+                    g.hull_valid = add_prepared(g.name + "_within_hull", Type::scalar(),
+                                                "1 while every member's sliders are within the hull of their values (its bounding spheres hold)");
+                    out_.group_notes.push_back(fmt::format("{}: `bound = {}` derived from the shape while its members' sliders are within "
+                                                           "the hull of their values", shape, fmt::format("{:.4g}", *H)));
                 } else if (!o_.params_constant) {
                     // On a target with sliders the bound must hold over the sliders' whole ranges, which are often far
                     // wider than the members' spacing (a sphere's radius up to 3 on a grid of 1): then every step
@@ -706,14 +727,15 @@ private:
                     out_.warnings.push_back(
                         {plan(members[0]).desc->type_span,
                          fmt::format("{} instances of '{}' without `bound` are all evaluated at every step on this target: the "
-                                     "bounding sphere iqc derives from the shape over its sliders' ranges is unbounded or wider "
+                                     "bounding sphere iqc derives from the shape over its sliders' ranges{} is unbounded or wider "
                                      "than their spacing; give them `bound = R` (a radius that holds for the slider values you "
                                      "use) for a bounding-volume hierarchy",
-                                     members.size(), shape)});
+                                     members.size(), shape,
+                                     members.size() <= kMaxHullMembers ? ", and over its members' values alone," : "")});
                 }
             }
             g.derived_bound = bounded && !std::get<2>(key);
-            if (bounded && members.size() >= kMinTree) find_lattice(g);
+            if (bounded && members.size() >= kMinTree && g.hull_valid < 0) find_lattice(g);
             if (bounded && members.size() >= kMinTree && (!o_.params_constant || members.size() <= kMaxTreeInCode)) build_tree(g);
             else if (std::get<2>(key) && members.size() > kMaxTreeInCode && !g.lattice.found())
                 out_.warnings.push_back({plan(members[0]).desc->type_span,
@@ -1327,6 +1349,7 @@ private:
             bound_d = conservative(b.op(Op::Sub, {b.builtin("length", {q}), read(b, it.bound, k)}));
             f.body[bound_d].name = "bound";
             far = b.compare(CompareKind::Gt, bound_d, b.scalar(o_.bound_margin));
+            if (it.hull_valid >= 0) far = b.op(Op::And, {far, b.compare(CompareKind::Gt, b.global(it.hull_valid), b.scalar(0.5))});
         }
         ValueId d = conservative(b.call(shape_fn, std::move(args)));
         if (stand_in) d = b.if_(far, bound_d, d);
@@ -1366,13 +1389,13 @@ private:
             for (size_t mi : it.members) spec.member_where.push_back(plan(mi).desc->type_span);
         for (size_t mi : it.members) {
             const InstancePlan& p = plan(mi);
-            if (bound_of(mi) > 0 && spec.bounds.size() < 8) {
+            if (bound_of(mi) > 0 && !hull_bound_[mi] && spec.bounds.size() < 8) {
                 spec.bounds.push_back(bound_of(mi));
                 spec.bound_where.push_back(plan(mi).desc->bound > 0 ? plan(mi).desc->bound_span : Span{});
             }
             for (int r = 0; r < 3; ++r) {
                 double lo, hi;
-                if (bound_of(mi) > 0) {
+                if (bound_of(mi) > 0 && !hull_bound_[mi]) {
                     double R = bound_of(mi) + 2 * o_.bound_margin / std::max(p.scale, 1e-9);
                     lo = -R, hi = R;
                     spec.ball = std::max(spec.ball, R);
@@ -1482,6 +1505,13 @@ private:
         std::vector<std::tuple<long long, long long, ValueId>> cs;
         for (Item& it : items_) {
             ValueId K = b.global(lipschitz_factor(it));
+            // Its variants' too (without the bound sphere, centred on a lattice's cells): where the factor follows the
+            // sliders (a prepared global), each divides by it. The variant without the sphere, which soft shadows
+            // march, was divided by the K of the sliders' whole ranges while the hit test and the shadows' values
+            // multiplied by the cell's, and penumbrae darkened (a bounded displaced sphere on WebGL2: 18.6 dB from
+            // Shadertoy's picture).
+            for (int fn : {it.unbounded_fn, it.centred_fn})
+                if (fn >= 0) m_.functions[size_t(fn)].lipschitz.factor_global = it.lipschitz_global;
             // A blend's distance is divided by its members' largest factor (blend_distance): its hit test multiplies that back.
             if (it.blend >= 0 && &items_[blend_items_[size_t(it.blend)][0]] == &it)
                 for (size_t mi : blend_items_[size_t(it.blend)])
@@ -1774,6 +1804,9 @@ private:
             ValueId ds = b.builtin("length", {b.builtin("max", {outside, b.constant(Type::vector(3), {0, 0, 0})})});
             ds = b.named(ds, "node", "distance to the node's bounding box");
             ValueId enter = b.compare(CompareKind::Lt, ds, st[0]);
+            // (spheres over the members' hull: every node entered while some member's values are outside it)
+            ValueId valid = it.hull_valid >= 0 ? b.compare(CompareKind::Gt, b.global(it.hull_valid), b.scalar(0.5)) : ValueId(-1);
+            if (valid != ValueId(-1)) enter = b.op(Op::Or, {enter, b.compare(CompareKind::Le, b.global(it.hull_valid), b.scalar(0.5))});
             ValueId first = read(b, g.first, node);
             ValueId last = b.op(Op::Sub, {read(b, g.count, node), b.integer(1)});
             std::vector<ValueId> inner = l + 1 < it.tree.levels.size() ? tree_loop(b, it, l + 1, cap[0], first, last, st, bounded)
@@ -1787,6 +1820,7 @@ private:
                 // Its id is -1, no instance: at the step cap a ray whose last sample is a stand-in is no hit.
                 ValueId reach = b.builtin("max", {b.builtin("length", {read(b, g.half, node)}), b.scalar(o_.bound_margin)});
                 ValueId far = b.compare(CompareKind::Gt, ds, reach);
+                if (valid != ValueId(-1)) far = b.op(Op::And, {far, valid});
                 std::vector<ValueId> stand_in = {ds, b.scalar(-1)};
                 if (st.size() > 2) stand_in.push_back(st[2]);
                 below = b.if_(far, b.construct(vt, stand_in), below);
@@ -2219,9 +2253,102 @@ private:
         return int(m_.functions.size() - 1);
     }
 
+    // A slider global's values tested against intervals: its members (one for an instance; a group's per-member table,
+    // each element) and, per component, the interval its values must lie in.
+    struct WithinTest {
+        int global;
+        size_t members;
+        std::vector<std::pair<size_t, ir::Interval>> where;
+    };
+
+    // One value's test, member `member` (ℤ; -1 for a global that is no table) and component c within `near` (its ends
+    // in float rounded inward: a value it lets through lies in the interval).
+    ValueId within_test(Builder& b, const WithinTest& test, ValueId member, size_t c, const ir::Interval& near) {
+        const Type& type = m_.globals[size_t(test.global)].type;
+        ValueId u = b.global(test.global);
+        if (type.is_array()) u = b.op(Op::Index, {u, member});
+        ValueId x = (type.is_array() ? type.element() : type).is_scalar() ? u : b.op(Op::Extract, {u}, int(c));
+        float lo = float(near.lo), hi = float(near.hi);
+        if (double(lo) < near.lo) lo = std::nextafter(lo, INFINITY);
+        if (double(hi) > near.hi) hi = std::nextafter(hi, -INFINITY);
+        return b.op(Op::And, {b.compare(ir::CompareKind::Ge, x, b.scalar(double(lo))), b.compare(ir::CompareKind::Le, x, b.scalar(double(hi)))});
+    }
+
+    // Makes iqc_prepare (made where there is none) set the prepared global `out` to 1 where every test holds, else 0:
+    // per table length a loop over the members (its body `iqc_prepare.<what>_<members>`), once per pixel.
+    void prepare_within(int out, const std::vector<WithinTest>& tests, const std::string& what) {
+        std::map<size_t, std::vector<const WithinTest*>> by_members;
+        for (const WithinTest& test : tests) by_members[test.members].push_back(&test);
+        std::vector<std::pair<size_t, int>> loops;  // (members, body)
+        for (const auto& [members, group] : by_members) {
+            ir::Function body;
+            body.name = body.glsl_name = fmt::format("{}.{}_{}", ir::names::kPrepare, what, members);
+            Builder lb(m_, body);
+            const ValueId k = lb.param("k", Type::integer()), state = lb.param("within", Type::scalar());
+            ValueId in = ValueId(-1);
+            for (const WithinTest* test : group)
+                for (const auto& [c, near] : test->where) {
+                    const bool array = m_.globals[size_t(test->global)].type.is_array();
+                    const ValueId t = within_test(lb, *test, array ? k : ValueId(-1), c, near);
+                    in = in == ValueId(-1) ? t : lb.op(Op::And, {in, t});
+                }
+            body.outputs.push_back({"within", in == ValueId(-1) ? state : lb.op(Op::Select, {in, state, lb.scalar(0)})});
+            body.result = body.outputs[0].second;
+            loops.push_back({members, int(m_.functions.size())});
+            m_.functions.push_back(std::move(body));
+        }
+        int prep = m_.find(ir::names::kPrepare);
+        if (prep < 0) {
+            ir::Function f;
+            f.name = f.glsl_name = ir::names::kPrepare;
+            m_.functions.push_back(std::move(f));
+            prep = int(m_.functions.size() - 1);
+            out_.has_prepare = true;
+        }
+        ir::Function& pf = m_.functions[size_t(prep)];
+        Builder b(m_, pf);
+        ValueId all = ValueId(-1);
+        for (const auto& [members, fn] : loops) {
+            ir::Instr loop;
+            loop.op = Op::Loop;
+            loop.type = Type::tuple(1);
+            loop.args = {b.integer((long long)members - 1), b.scalar(1)};
+            loop.aux = fn;
+            loop.data = {0};
+            ir::Instr mem;
+            mem.op = Op::Member;
+            mem.type = Type::scalar();
+            mem.args = {pf.add(std::move(loop))};
+            const ValueId v = pf.add(std::move(mem));
+            all = all == ValueId(-1) ? v : b.op(Op::Mul, {all, v});
+        }
+        pf.outputs.push_back({m_.globals[size_t(out)].name, all});
+        pf.result = pf.outputs[0].second;
+    }
+
+    // The groups whose bounding spheres hold over the hull of their members' values (Item::hull_valid): its test.
+    void hull_functions() {
+        for (const Item& it : items_) {
+            if (it.hull_valid < 0) continue;
+            std::vector<WithinTest> tests;
+            const InstancePlan& first = plan(it.members[0]);
+            const std::vector<ir::ValueBounds> ranges = parameter_bounds(*first.shape);
+            for (size_t k = 0; k < it.shape_params.size() && k < ranges.size(); ++k) {
+                const Field& f = it.shape_params[k];
+                if (f.global < 0 || int(k) == first.query || ranges[k].input) continue;
+                WithinTest t{f.global, f.array ? it.members.size() : 1, {}};
+                for (size_t c = 0; c < first.shape_values[k].size(); ++c) t.where.push_back({c, value_hull(it.members, k, c)});
+                if (!t.where.empty()) tests.push_back(std::move(t));
+            }
+            prepare_within(it.hull_valid, tests, it.name + "_within_hull");
+        }
+    }
+
     // iqc_box_lo() and iqc_box_hi(): the box at the sliders' defaults (SceneIR::box_at_defaults) while every slider of
     // every shape is within it (within 1/64 of its range of its default; in a group, every member's), else the box over
-    // their ranges. Not made (the box is the whole's constant) for a group of more than 16 members.
+    // their ranges. A group of more than 16 members is tested by a loop over them in iqc_prepare, once per pixel (its
+    // answer a prepared global the two read); of more than kMaxHullMembers, not made (the box is the whole's constant:
+    // 48 bumpy balls on WebGL2 marched the box over their sliders' ranges; trial77).
     void box_functions() {
         if (!out_.box_at_defaults || !out_.box) return;
         ir::Function lo_f, hi_f;
@@ -2230,23 +2357,18 @@ private:
         lo_f.entry = hi_f.entry = true;
         // Per slider global: its members (one for an instance; a group's per-member table: each element, up to 16) and,
         // per component, the window its values must lie in (shape_intervals' near_default over the members' values).
-        struct Test {
-            int global;
-            size_t members;
-            std::vector<std::pair<size_t, ir::Interval>> where;
-        };
-        std::vector<Test> tests;
+        std::vector<WithinTest> tests;
         for (const Item& it : items_) {
             const InstancePlan& first = plan(it.members[0]);
             const std::vector<ir::ValueBounds> ranges = parameter_bounds(*first.shape);
             for (size_t k = 0; k < it.shape_params.size() && k < ranges.size(); ++k) {
                 const Field& f = it.shape_params[k];
                 if (f.global < 0 || int(k) == first.query || ranges[k].input) continue;
-                if (f.array && it.members.size() > 16) {
+                if (f.array && it.members.size() > kMaxHullMembers) {
                     out_.box_at_defaults.reset();
                     return;
                 }
-                Test t{f.global, f.array ? it.members.size() : 1, {}};
+                WithinTest t{f.global, f.array ? it.members.size() : 1, {}};
                 const size_t n = first.shape_values[k].size();
                 for (size_t c = 0; c < n && c < ranges[k].lo.size(); ++c)
                     if (auto near = near_default({ranges[k].lo[c], ranges[k].hi[c]}, value_hull(it.members, k, c))) t.where.push_back({c, *near});
@@ -2262,6 +2384,19 @@ private:
             for (double& x : w) x = std::isinf(x) ? std::copysign(1e30, x) : x;
             return w;
         };
+        // The large groups' tests: a loop over the members in iqc_prepare (its answer the prepared global
+        // iqc_box_members_near).
+        int near_global = -1;
+        {
+            std::vector<WithinTest> large;
+            for (const WithinTest& test : tests)
+                if (test.members > 16) large.push_back(test);
+            if (!large.empty()) {
+                near_global = add_prepared("iqc_box_members_near", Type::scalar(),
+                                           "1 while every member of a large group has its sliders near their defaults (the scene box's test)");
+                prepare_within(near_global, large, "box_members_near");
+            }
+        }
         for (int hi = 0; hi < 2; ++hi) {
             ir::Function& f = hi ? hi_f : lo_f;
             Builder b(m_, f);
@@ -2272,21 +2407,17 @@ private:
                 continue;
             }
             ValueId in = ValueId(-1);
-            for (const Test& test : tests)
-                for (size_t member = 0; member < test.members; ++member)
-                for (const auto& [c, near] : test.where) {
-                    const Type& type = m_.globals[size_t(test.global)].type;
-                    ValueId u = b.global(test.global);
-                    if (type.is_array()) u = b.op(Op::Index, {u, b.integer((long long)member)});
-                    ValueId x = (type.is_array() ? type.element() : type).is_scalar() ? u : b.op(Op::Extract, {u}, int(c));
-                    // (the test's ends in float rounded inward: a value it lets through lies in the range analysed)
-                    float lo = float(near.lo), hi = float(near.hi);
-                    if (double(lo) < near.lo) lo = std::nextafter(lo, INFINITY);
-                    if (double(hi) > near.hi) hi = std::nextafter(hi, -INFINITY);
-                    ValueId t = b.op(Op::And, {b.compare(ir::CompareKind::Ge, x, b.scalar(double(lo))),
-                                               b.compare(ir::CompareKind::Le, x, b.scalar(double(hi)))});
-                    in = in == ValueId(-1) ? t : b.op(Op::And, {in, t});
-                }
+            for (const WithinTest& test : tests)
+                for (size_t member = 0; member < test.members && test.members <= 16; ++member)
+                    for (const auto& [c, near] : test.where) {
+                        const bool array = m_.globals[size_t(test.global)].type.is_array();
+                        const ValueId t = within_test(b, test, array ? b.integer((long long)member) : ValueId(-1), c, near);
+                        in = in == ValueId(-1) ? t : b.op(Op::And, {in, t});
+                    }
+            if (near_global >= 0) {
+                const ValueId t = b.compare(ir::CompareKind::Gt, b.global(near_global), b.scalar(0.5));
+                in = in == ValueId(-1) ? t : b.op(Op::And, {in, t});
+            }
             f.result = b.op(Op::Select, {in, b.constant(Type::vector(3), side(near)), b.constant(Type::vector(3), side(whole))});
         }
         m_.functions.push_back(std::move(lo_f));
