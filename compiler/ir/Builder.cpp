@@ -143,4 +143,67 @@ ValueId Builder::mod_by_constant(ValueId k, long long d, long long n) {
     return op(Op::Sub, {k, op(Op::Mul, {op(Op::IntDiv, {op(Op::Mul, {k, integer(M)}), integer(1LL << s)}), integer(d)})});
 }
 
+std::vector<ValueId> members_within(Module& m, int& prep, const std::string& body_name, size_t members,
+                                    const std::vector<MemberTest>& tests, const std::vector<std::string>& state_names) {
+    const size_t tiers = state_names.size();
+    {
+        Function body;
+        body.name = body.glsl_name = body_name;
+        Builder b(m, body);
+        const ValueId k = b.param("k", Type::integer());
+        std::vector<ValueId> state, value;
+        for (const std::string& n : state_names) state.push_back(b.param(n, Type::scalar()));
+        for (const MemberTest& t : tests) {
+            const Global& g = m.globals[size_t(t.global)];
+            ValueId v = b.global(t.global);
+            int c = t.component;
+            if (g.type.is_array()) {  // (member k's element of a table; else a sequence's element, by the flat component)
+                const int n = g.type.element().components();
+                v = b.op(Op::Index, {v, g.per_member ? k : b.integer(c / n)});
+                if (!g.per_member) c %= n;
+            }
+            if (!(g.type.is_array() ? g.type.element() : g.type).is_scalar()) v = b.op(Op::Extract, {v}, c);
+            value.push_back(v);
+        }
+        for (size_t tier = 0; tier < tiers; ++tier) {
+            ValueId all = ValueId(-1);
+            for (size_t j = 0; j < tests.size(); ++j) {
+                const ValueId in = b.op(Op::And, {b.compare(CompareKind::Ge, value[j], b.scalar(tests[j].lo[tier])),
+                                                  b.compare(CompareKind::Le, value[j], b.scalar(tests[j].hi[tier]))});
+                all = all == ValueId(-1) ? in : b.op(Op::And, {all, in});
+            }
+            body.outputs.push_back({state_names[tier], all == ValueId(-1) ? state[tier] : b.op(Op::Select, {all, state[tier], b.scalar(0)})});
+        }
+        body.result = body.outputs[0].second;
+        m.functions.push_back(std::move(body));
+    }
+    const int fn = int(m.functions.size() - 1);
+    if (prep < 0) {
+        Function f;
+        f.name = f.glsl_name = names::kPrepare;
+        m.functions.push_back(std::move(f));
+        prep = int(m.functions.size() - 1);
+    }
+    Function& pf = m.functions[size_t(prep)];
+    Builder b(m, pf);
+    Instr loop;
+    loop.op = Op::Loop;
+    loop.type = Type::tuple(int(tiers));
+    loop.args = {b.integer((long long)members - 1)};
+    for (size_t t = 0; t < tiers; ++t) loop.args.push_back(b.scalar(1));
+    loop.aux = fn;
+    loop.data = {0};
+    const ValueId lv = pf.add(std::move(loop));
+    std::vector<ValueId> out;
+    for (size_t t = 0; t < tiers; ++t) {
+        Instr mem;
+        mem.op = Op::Member;
+        mem.type = Type::scalar();
+        mem.args = {lv};
+        mem.aux = int(t);
+        out.push_back(pf.add(std::move(mem)));
+    }
+    return out;
+}
+
 }  // namespace iqc::ir

@@ -50,4 +50,21 @@ private:
     ValueId add(Instr in);
 };
 
+// One value a loop over a group's members tests (members_within): component `component` of global `global` (a per-member
+// table: of its element k at member k; any other global, the same for every member: its flat component) against an interval per tier
+// [lo[t], hi[t]] (the ends as given: the shader compares its uniforms, floats, with these numbers).
+struct MemberTest {
+    int global = -1;
+    int component = 0;
+    std::vector<double> lo, hi;  // per tier
+};
+
+// Appends to `m`'s function `prep` (iqc_prepare, made where -1: its index returned in `prep`) a loop over the members
+// k = 0..members-1, its body a new function `body_name` whose states (one per tier, named state_names[t], each ℝ: 1 at
+// the start) stay 1 while every test holds at member k; returns the states after the loop, values of `prep`. Once per
+// pixel, where a group's bounds hold only while every member's sliders are within some intervals (the Lipschitz pass's
+// hull of the members' values, the scene box's window around their defaults).
+std::vector<ValueId> members_within(Module& m, int& prep, const std::string& body_name, size_t members,
+                                    const std::vector<MemberTest>& tests, const std::vector<std::string>& state_names);
+
 }  // namespace iqc::ir

@@ -2261,67 +2261,49 @@ private:
         std::vector<std::pair<size_t, ir::Interval>> where;
     };
 
-    // One value's test, member `member` (ℤ; -1 for a global that is no table) and component c within `near` (its ends
-    // in float rounded inward: a value it lets through lies in the interval).
+    // An interval's ends in float rounded inward: a value a test with them lets through lies in the interval.
+    static std::pair<double, double> inward(const ir::Interval& near) {
+        float lo = float(near.lo), hi = float(near.hi);
+        if (double(lo) < near.lo) lo = std::nextafter(lo, INFINITY);
+        if (double(hi) > near.hi) hi = std::nextafter(hi, -INFINITY);
+        return {double(lo), double(hi)};
+    }
+
+    // One value's test, member `member` (ℤ; -1 for a global that is no table) and component c within `near`.
     ValueId within_test(Builder& b, const WithinTest& test, ValueId member, size_t c, const ir::Interval& near) {
         const Type& type = m_.globals[size_t(test.global)].type;
         ValueId u = b.global(test.global);
         if (type.is_array()) u = b.op(Op::Index, {u, member});
         ValueId x = (type.is_array() ? type.element() : type).is_scalar() ? u : b.op(Op::Extract, {u}, int(c));
-        float lo = float(near.lo), hi = float(near.hi);
-        if (double(lo) < near.lo) lo = std::nextafter(lo, INFINITY);
-        if (double(hi) > near.hi) hi = std::nextafter(hi, -INFINITY);
-        return b.op(Op::And, {b.compare(ir::CompareKind::Ge, x, b.scalar(double(lo))), b.compare(ir::CompareKind::Le, x, b.scalar(double(hi)))});
+        const auto [lo, hi] = inward(near);
+        return b.op(Op::And, {b.compare(ir::CompareKind::Ge, x, b.scalar(lo)), b.compare(ir::CompareKind::Le, x, b.scalar(hi))});
     }
 
     // Makes iqc_prepare (made where there is none) set the prepared global `out` to 1 where every test holds, else 0:
-    // per table length a loop over the members (its body `iqc_prepare.<what>_<members>`), once per pixel.
+    // per table length a loop over the members (ir::members_within; its body `iqc_prepare.<what>_<members>`), once
+    // per pixel.
     void prepare_within(int out, const std::vector<WithinTest>& tests, const std::string& what) {
-        std::map<size_t, std::vector<const WithinTest*>> by_members;
-        for (const WithinTest& test : tests) by_members[test.members].push_back(&test);
-        std::vector<std::pair<size_t, int>> loops;  // (members, body)
-        for (const auto& [members, group] : by_members) {
-            ir::Function body;
-            body.name = body.glsl_name = fmt::format("{}.{}_{}", ir::names::kPrepare, what, members);
-            Builder lb(m_, body);
-            const ValueId k = lb.param("k", Type::integer()), state = lb.param("within", Type::scalar());
-            ValueId in = ValueId(-1);
-            for (const WithinTest* test : group)
-                for (const auto& [c, near] : test->where) {
-                    const bool array = m_.globals[size_t(test->global)].type.is_array();
-                    const ValueId t = within_test(lb, *test, array ? k : ValueId(-1), c, near);
-                    in = in == ValueId(-1) ? t : lb.op(Op::And, {in, t});
-                }
-            body.outputs.push_back({"within", in == ValueId(-1) ? state : lb.op(Op::Select, {in, state, lb.scalar(0)})});
-            body.result = body.outputs[0].second;
-            loops.push_back({members, int(m_.functions.size())});
-            m_.functions.push_back(std::move(body));
-        }
+        std::map<size_t, std::vector<ir::MemberTest>> by_members;
+        for (const WithinTest& test : tests)
+            for (const auto& [c, near] : test.where) {
+                const auto [lo, hi] = inward(near);
+                by_members[test.members].push_back({test.global, int(c), {lo}, {hi}});
+            }
         int prep = m_.find(ir::names::kPrepare);
-        if (prep < 0) {
+        std::vector<ValueId> states;
+        for (const auto& [members, group] : by_members)
+            states.push_back(ir::members_within(m_, prep, fmt::format("{}.{}_{}", ir::names::kPrepare, what, members), members, group, {"within"})[0]);
+        if (prep < 0) {  // (no test: the global is 1)
             ir::Function f;
             f.name = f.glsl_name = ir::names::kPrepare;
             m_.functions.push_back(std::move(f));
             prep = int(m_.functions.size() - 1);
-            out_.has_prepare = true;
         }
+        out_.has_prepare = true;
         ir::Function& pf = m_.functions[size_t(prep)];
         Builder b(m_, pf);
-        ValueId all = ValueId(-1);
-        for (const auto& [members, fn] : loops) {
-            ir::Instr loop;
-            loop.op = Op::Loop;
-            loop.type = Type::tuple(1);
-            loop.args = {b.integer((long long)members - 1), b.scalar(1)};
-            loop.aux = fn;
-            loop.data = {0};
-            ir::Instr mem;
-            mem.op = Op::Member;
-            mem.type = Type::scalar();
-            mem.args = {pf.add(std::move(loop))};
-            const ValueId v = pf.add(std::move(mem));
-            all = all == ValueId(-1) ? v : b.op(Op::Mul, {all, v});
-        }
+        ValueId all = states.empty() ? b.scalar(1) : states[0];
+        for (size_t j = 1; j < states.size(); ++j) all = b.op(Op::Mul, {all, states[j]});
         pf.outputs.push_back({m_.globals[size_t(out)].name, all});
         pf.result = pf.outputs[0].second;
     }
@@ -2332,10 +2314,10 @@ private:
             if (it.hull_valid < 0) continue;
             std::vector<WithinTest> tests;
             const InstancePlan& first = plan(it.members[0]);
-            const std::vector<ir::ValueBounds> ranges = parameter_bounds(*first.shape);
-            for (size_t k = 0; k < it.shape_params.size() && k < ranges.size(); ++k) {
+            // (every parameter the renderer sets, a slider or not: a sequence without a range is a uniform too)
+            for (size_t k = 0; k < it.shape_params.size(); ++k) {
                 const Field& f = it.shape_params[k];
-                if (f.global < 0 || int(k) == first.query || ranges[k].input) continue;
+                if (f.global < 0 || int(k) == first.query) continue;
                 WithinTest t{f.global, f.array ? it.members.size() : 1, {}};
                 for (size_t c = 0; c < first.shape_values[k].size(); ++c) t.where.push_back({c, value_hull(it.members, k, c)});
                 if (!t.where.empty()) tests.push_back(std::move(t));

@@ -2226,7 +2226,7 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     std::vector<SliderComponent> large;
     for (size_t k = 0; k < all.size(); ++k) {
         const Global& g = m.globals[all[k]];
-        if (!g.type.is_array() || g.type.element().components() < 1) continue;
+        if (!g.type.is_array() || !g.per_member || g.type.element().components() < 1) continue;
         const size_t n = size_t(g.type.element().components()), count = g.value.size() / n;
         if (count <= 16 || count > kMaxHullMembers || g.value.size() != n * count ||
             (g.bounds.lo.size() != n && g.bounds.lo.size() != n * count) || g.bounds.hi.size() != g.bounds.lo.size())
@@ -2526,45 +2526,24 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
 // Makes `factor` (the item's factor global) a prepared global that iqc_prepare sets to its cell's K from the sliders
 // `all` (sliders_read's) as `cells` cut them: outside a slider's range, the whole's K (`whole`).
 void prepare_cell_factor(Module& m, int factor, const std::vector<size_t>& all, const SliderCells& cells, double whole) {
-    // A group's large tables: a loop over the members (one per table length) whose state stays 1 while each member's
-    // values are within their hull; the cells' K where every one stays, else the whole's. (Their bodies first: adding a
-    // function moves the others.)
-    std::vector<std::pair<size_t, int>> hull_loops;  // (members, body)
+    int prep = m.find(names::kPrepare);
+    // A group's large tables: a loop over the members (one per table length) whose states (per tier) stay 1 while each
+    // member's values are within the tier's hull; the cells' K where every one stays, else the whole's. (First: adding
+    // the loops' bodies moves the functions.)
     const size_t tiers = cells.hull.empty() ? 0 : cells.hull[0].lo.size();
+    std::vector<std::vector<ValueId>> hull_states;  // per table length, per tier
     {
-        std::map<size_t, std::vector<const SliderCells::Hull*>> by_count;
+        std::map<size_t, std::vector<MemberTest>> by_count;
         for (const SliderCells::Hull& h : cells.hull) {
             const Global& g = m.globals[all[h.which.k]];
-            by_count[g.value.size() / size_t(g.type.element().components())].push_back(&h);
+            by_count[g.value.size() / size_t(g.type.element().components())].push_back({int(all[h.which.k]), int(h.which.c), h.lo, h.hi});
         }
-        for (const auto& [count, hulls] : by_count) {
-            Function body;
-            body.name = fmt::format("{}.{}.members_within_hull", names::kPrepare, m.globals[size_t(factor)].name);
-            body.glsl_name = body.name;
-            Builder lb(m, body);
-            const ValueId k = lb.param("k", Type::integer());
-            std::vector<ValueId> state, v;
-            for (size_t t = 0; t < tiers; ++t) state.push_back(lb.param(t == 0 ? "inside" : fmt::format("inside_{}", t), Type::scalar()));
-            for (const SliderCells::Hull* h : hulls) {
-                const Global& g = m.globals[all[h->which.k]];
-                v.push_back(lb.op(Op::Index, {lb.global(int(all[h->which.k])), k}));
-                if (!g.type.element().is_scalar()) v.back() = lb.op(Op::Extract, {v.back()}, int(h->which.c));
-            }
-            for (size_t t = 0; t < tiers; ++t) {
-                ValueId all_in = 0;
-                for (size_t j = 0; j < hulls.size(); ++j) {
-                    const ValueId in = lb.op(Op::And, {lb.compare(CompareKind::Ge, v[j], lb.scalar(hulls[j]->lo[t])),
-                                                       lb.compare(CompareKind::Le, v[j], lb.scalar(hulls[j]->hi[t]))});
-                    all_in = j == 0 ? in : lb.op(Op::And, {all_in, in});
-                }
-                body.outputs.push_back({t == 0 ? "inside" : fmt::format("inside_{}", t), lb.op(Op::Select, {all_in, state[t], lb.scalar(0)})});
-            }
-            body.result = body.outputs[0].second;
-            hull_loops.push_back({count, int(m.functions.size())});
-            m.functions.push_back(std::move(body));
-        }
+        std::vector<std::string> states;
+        for (size_t t = 0; t < tiers; ++t) states.push_back(t == 0 ? "inside" : fmt::format("inside_{}", t));
+        for (const auto& [count, tests] : by_count)
+            hull_states.push_back(members_within(m, prep, fmt::format("{}.{}.members_within_hull", names::kPrepare, m.globals[size_t(factor)].name),
+                                                 count, tests, states));
     }
-    int prep = m.find(names::kPrepare);
     if (prep < 0) {
         Function f;
         f.name = names::kPrepare;
@@ -2618,27 +2597,11 @@ void prepare_cell_factor(Module& m, int factor, const std::vector<size_t>& all, 
     }
     // (each tier: every table's loop says its members are within it)
     std::vector<ValueId> within(tiers, 0);
-    bool first = true;
-    for (const auto& [count, fn] : hull_loops) {
-        Instr loop;
-        loop.op = Op::Loop;
-        loop.type = Type::tuple(int(tiers));
-        loop.args = {b.integer((long long)count - 1)};
-        for (size_t t = 0; t < tiers; ++t) loop.args.push_back(b.scalar(1));
-        loop.aux = fn;
-        loop.data = {0};
-        const ValueId lv = f.add(std::move(loop));
+    for (size_t l = 0; l < hull_states.size(); ++l)
         for (size_t t = 0; t < tiers; ++t) {
-            Instr mem;
-            mem.op = Op::Member;
-            mem.type = Type::scalar();
-            mem.args = {lv};
-            mem.aux = int(t);
-            const ValueId in = b.compare(CompareKind::Gt, f.add(std::move(mem)), b.scalar(0.5));
-            within[t] = first ? in : b.op(Op::And, {within[t], in});
+            const ValueId in = b.compare(CompareKind::Gt, hull_states[l][t], b.scalar(0.5));
+            within[t] = l == 0 ? in : b.op(Op::And, {within[t], in});
         }
-        first = false;
-    }
     if (cells.which.empty()) {  // (the tiers, widest first: the narrowest that holds the values chooses)
         for (size_t t = tiers; t-- > 0;) K = b.op(Op::Select, {within[t], b.scalar(cells.K[t]), K});
     } else if (tiers > 0) {
