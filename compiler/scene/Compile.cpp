@@ -469,9 +469,14 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
         V["BOX_HI"] = vec3_literal(side(box->second, 1e30));
         // iqc_far's slab test on the axes where the box is bounded on either side (on the others every ray lies
         // within the slab: its t interval is all of ℝ, and the test cost llvmpipe's compile 3% on a ground plane).
+        // (where the box follows the sliders, SceneIR::box_at_defaults, iqc_box_lo() and iqc_box_hi() pick it: its axes
+        // too, the whole's may be open on every side)
+        const bool follows = scene.box_at_defaults.has_value() && scene.module.find(ir::names::kBoxLo) >= 0;
         std::string axes;
         for (int a = 0; a < 3; ++a)
-            if (std::isfinite(box->first[size_t(a)]) || std::isfinite(box->second[size_t(a)])) axes += "xyz"[a];
+            if (std::isfinite(box->first[size_t(a)]) || std::isfinite(box->second[size_t(a)]) ||
+                (follows && (std::isfinite(scene.box_at_defaults->first[size_t(a)]) || std::isfinite(scene.box_at_defaults->second[size_t(a)]))))
+                axes += "xyz"[a];
         // One slab per bounded axis: float, vec2 or vec3 arithmetic on those components (all of rd where all three).
         std::string& slabs = V["BOX_SLABS"];
         const size_t n = axes.size();
@@ -479,8 +484,6 @@ std::string SceneCompiler::assemble(const SceneIR& scene, const SceneCode& code)
             slabs = "    float t_in = 0.0, t_out = IQC_MAX_DIST;";
         } else {
             const std::string type = n == 1 ? "float" : "vec" + std::to_string(n), sw = n == 3 ? "" : "." + axes;
-            // (where the box follows the sliders, SceneIR::box_at_defaults, iqc_box_lo() and iqc_box_hi() pick it)
-            const bool follows = scene.box_at_defaults.has_value() && scene.module.find(ir::names::kBoxLo) >= 0;
             const std::string lo = follows ? std::string(ir::names::kBoxLo) + "()" : "IQC_BOX_LO",
                               hi = follows ? std::string(ir::names::kBoxHi) + "()" : "IQC_BOX_HI";
             slabs = "    " + type + " m = 1.0 / rd" + sw + ";\n    " + type + " a = (" + lo + sw + " - ro" + sw +

@@ -322,7 +322,14 @@ private:
     // side unbounded on every axis.
     void scene_box() {
         scene_box_whole();
-        if (o_.params_constant || !out_.box) return;
+        if (o_.params_constant) return;
+        // (without a box over the sliders' ranges, one at their defaults still clips rays while they are there: a
+        // smooth union whose blend k ∈ [0, 10] reaches 0, dividing by it, had none, and its rays that missed marched
+        // 427 steps a pixel where Shadertoy's took 20 (trial76, N4); not where no box can be: a transform that moves
+        // at run time, a blend)
+        if (!out_.box)
+            for (size_t i = 0; i < plans_.size(); ++i)
+                if (runtime_transform(plan(i)) || plan(i).blend >= 0) return;
         // (only where some shape has a slider near_default narrows: the Menger sponge has none, and its second analysis
         // doubled the lowering)
         bool any = false;
@@ -347,6 +354,14 @@ private:
         plan_box_ = instance_boxes;
         out_.box_analyses += analyses;
         if (!near) return;
+        if (!whole) {  // (the whole's box open on every side; the defaults' where it has a side)
+            bool bounded = false;
+            for (size_t a = 0; a < 3; ++a) bounded |= std::isfinite(near->first[a]) || std::isfinite(near->second[a]);
+            if (!bounded) return;
+            out_.box = std::pair<std::array<double, 3>, std::array<double, 3>>{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
+            out_.box_at_defaults = near;
+            return;
+        }
         // Kept where some bounded side moves in by over 2% of the box's extent on that axis (of the side's distance from
         // the origin, at least 1, where the other side is unbounded: a terrain's top).
         bool narrower = false;
