@@ -387,10 +387,13 @@ std::optional<double> interval_radius(const Module& m, int fn, int query, std::v
     if (fn < 0 || size_t(fn) >= m.functions.size() || query < 0 || size_t(query) >= params.size()) return std::nullopt;
     const Function& f = m.functions[size_t(fn)];
     if (!f.body[f.result].type.is_scalar()) return std::nullopt;
-    // The distance's lowest value over a box.
+    // The distance's lowest value over a box. (One scratch for every box: a fresh one planned the function's
+    // refinements (UnivariatePlan) again per box, 13% of 100 tori's compile on WebGL2.)
+    IntervalScratch scratch;
+    std::vector<Bounds> v;
     auto lowest = [&](const Box& b) {
         params[size_t(query)] = {{b.lo[0], b.hi[0]}, {b.lo[1], b.hi[1]}, {b.lo[2], b.hi[2]}};
-        std::vector<Bounds> v = interval_analysis(m, fn, params);
+        interval_analysis(scratch, v, m, f, params);
         const Bounds& r = v[f.result];
         double lo = r.c.empty() ? -INFINITY : r.c[0].lo;
         return std::isnan(lo) ? -INFINITY : lo;
