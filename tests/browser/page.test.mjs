@@ -311,6 +311,49 @@ if (parts.has("pages")) {
   await b.page.close();
 }
 
+// A group of 48 bumpy balls (stop 59): K, the scene box and the bounding spheres are taken over the hull of the
+// members' values, guarded in iqc_prepare by a loop over the members. One member's sliders moved far past the others'
+// (r 0.3 → 1.2, a → 0) in the page draw what a page compiled with those values draws: the whole's K, every node of the
+// hierarchy entered, no sphere of the hull standing in for that member, no box clipping it.
+if (parts.has("pages")) {
+  const scene = (r5, a5) => {
+    let s = '[modules]\nbump = """\nshape\nD = ‖p‖ - r + a sin(f p_1) sin(f p_2) sin(f p_3)\nsin from trigonometry\nwhere\n' +
+      'p ∈ ℝ³\nr ∈ [0.1, 2] default = 0.4\na ∈ [0, 0.5] default = 0.03\nf ∈ [0, 60] default = 10\n"""\n' +
+      '[camera]\nposition = [0, 4, -8]\ntarget = [0, 0, 1]\n[[lights]]\nposition = [-4, 8, -5]\n';
+    for (let k = 0; k < 48; ++k) {
+      const r = k === 5 ? r5 : 0.3 + 0.03 * (k % 7), a = k === 5 ? a5 : 0.02 * (k % 5);
+      s += `[[shapes]]\ntype = "bump"\nname = "b${k}"\ntransform = "T((${-3.5 + (k % 8)}, 0, ${-1 + Math.floor(k / 8) * 1.5}))"\n` +
+        `shape_params = { r = ${r}, a = ${a}, f = ${4 + 3 * (k % 7) + Math.floor(k / 7)} }\n`;
+    }
+    return s;
+  };
+  const moved = path.join(tmp, "hull_moved.html"), at = path.join(tmp, "hull_at.html");
+  fs.writeFileSync(path.join(tmp, "hull_moved.iq"), scene(0.45, 0));
+  fs.writeFileSync(path.join(tmp, "hull_at.iq"), scene(1.2, 0));
+  execFileSync(iqc, [path.join(tmp, "hull_moved.iq"), "--target", "html", "-o", moved], { stdio: "pipe" });
+  execFileSync(iqc, [path.join(tmp, "hull_at.iq"), "--target", "html", "-o", at], { stdio: "pipe" });
+  const a = await open("file://" + moved);
+  const frames = await a.page.evaluate(() => window.iqcFrames);
+  const found = await a.page.evaluate(() => {
+    for (const d of document.querySelectorAll("#params details"))
+      if (d.querySelector("summary").textContent === "b5")
+        for (const s of d.querySelectorAll("input[type=range]"))
+          if (s.dataset.name === "r") { s.value = 1.2; s.dispatchEvent(new Event("input")); return Number(s.value); }
+    return -1;
+  });
+  await waitFor(a.page, n => window.iqcFrames > n, frames);
+  const seen = await picture(a.page);
+  const b = await open("file://" + at);
+  const expected = await picture(b.page);
+  const before = await (async () => { const c = await open("file://" + moved); const p = await picture(c.page); await c.page.close(); return p; })();
+  const off = seen.data.filter((v, i) => Math.abs(v - expected.data[i]) > 8).length;
+  check(Math.abs(found - 1.2) < 0.01 && differs(before, seen) && off <= 0.01 * seen.data.length && seen.colours > 50,
+        `hull: a member's r moved to ${found} past its group's values draws what its default there draws (${off} of ${seen.data.length} samples differ)`);
+  check(a.errors.length === 0 && b.errors.length === 0, `hull: no console errors ${a.errors.concat(b.errors).join(" | ")}`);
+  await a.page.close();
+  await b.page.close();
+}
+
 // A phone (390×844 at 3 device pixels per CSS pixel, touch): the drawing buffer is the canvas's exact size (60vh is
 // 506.4 CSS pixels: clientHeight's whole pixels made it a row short), and a finger's drag on the picture reaches
 // the page as pointer moves (the browser's pan cancelled it after two and scrolled the page).
