@@ -90,6 +90,19 @@ double derived_bound(const Compiled& c, const std::string& shape) {
 }
 
 // The factor applied to `shape`'s distance ("…, 2.47 applied (…)"), -1 where there is none.
+// The IR text of a run's `--dump-ir` output (its standard error, which holds the warnings too: from the first global or
+// function on, without iqc's own lines).
+std::string dumped_ir(const std::string& err) {
+    std::string text;
+    std::istringstream in(err);
+    bool ir = false;
+    for (std::string line; std::getline(in, line);) {
+        ir = ir || line.rfind("global ", 0) == 0 || line.rfind("function ", 0) == 0;
+        if (ir && line.rfind("iqc:", 0) != 0) text += line + "\n";
+    }
+    return text;
+}
+
 double applied_bound(const Compiled& c, const std::string& shape) {
     for (const auto& l : c.result.lipschitz) {
         const size_t at = l.find(" applied");
@@ -1796,18 +1809,9 @@ TEST_CASE("where sliders are uniforms, K follows their values: each cell's K bou
         if (std::string(cs.name) == "wide") CHECK_THAT(r.err, Catch::Contains("; narrow the range of a slider it is steep at the end of, give"));
         if (std::string(cs.name) == "window")
             CHECK_THAT(r.err, Catch::Contains("near its sliders' defaults (as if 1-Lipschitz beyond a window around them"));
-        std::string text;  // the IR (stderr also holds the warnings)
-        {
-            std::istringstream in(r.err);
-            bool ir = false;
-            for (std::string line; std::getline(in, line);) {
-                ir = ir || line.rfind("global ", 0) == 0 || line.rfind("function ", 0) == 0;
-                if (ir && line.rfind("iqc:", 0) != 0) text += line + "\n";
-            }
-        }
         ir::Module m;
         std::string error;
-        REQUIRE(ir::parse_module(text, m, error));
+        REQUIRE(ir::parse_module(dumped_ir(r.err), m, error));
         const int prep = m.find(ir::names::kPrepare), lipschitz = m.find(ir::names::kLipschitz);
         REQUIRE(prep >= 0);
         REQUIRE(lipschitz >= 0);
@@ -1940,18 +1944,9 @@ TEST_CASE("a WebGL2 group past 16 members is marched by the K of its members' va
     INFO(r.err.substr(0, 2000));
     REQUIRE(r.exit_code == 0);
     CHECK_THAT(r.err, Catch::Contains("by the members' sliders"));
-    std::string ir_text;
-    {
-        std::istringstream in(r.err);
-        bool ir = false;
-        for (std::string line; std::getline(in, line);) {
-            ir = ir || line.rfind("global ", 0) == 0 || line.rfind("function ", 0) == 0;
-            if (ir && line.rfind("iqc:", 0) != 0) ir_text += line + "\n";
-        }
-    }
     ir::Module m;
     std::string error;
-    REQUIRE(ir::parse_module(ir_text, m, error));
+    REQUIRE(ir::parse_module(dumped_ir(r.err), m, error));
     const int lipschitz = m.find(ir::names::kLipschitz), object = m.find("iqc_object.bump_lambert");
     REQUIRE(lipschitz >= 0);
     REQUIRE(object >= 0);

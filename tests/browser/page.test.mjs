@@ -279,6 +279,30 @@ if (parts.has("pages")) {
   await page.close();
 }
 
+// Pages of scene `movedText` (with `move`, run in the page, setting sliders and returning their values) and of
+// `atText` (those values as defaults): the picture before and after the move, the defaults' picture, and how many
+// samples differ from it by more than 8/255. Checks that neither page logs an error.
+async function movedAgainstDefaults(name, movedText, atText, move) {
+  const moved = path.join(tmp, name + "_moved.html"), at = path.join(tmp, name + "_at.html");
+  fs.writeFileSync(path.join(tmp, name + "_moved.iq"), movedText);
+  fs.writeFileSync(path.join(tmp, name + "_at.iq"), atText);
+  execFileSync(iqc, [path.join(tmp, name + "_moved.iq"), "--target", "html", "-o", moved], { stdio: "pipe" });
+  execFileSync(iqc, [path.join(tmp, name + "_at.iq"), "--target", "html", "-o", at], { stdio: "pipe" });
+  const a = await open("file://" + moved);
+  const before = await picture(a.page);
+  const frames = await a.page.evaluate(() => window.iqcFrames);
+  const values = await a.page.evaluate(move);
+  await waitFor(a.page, n => window.iqcFrames > n, frames);  // (every input in one frame)
+  const seen = await picture(a.page);
+  const b = await open("file://" + at);
+  const expected = await picture(b.page);
+  const off = seen.data.filter((v, i) => Math.abs(v - expected.data[i]) > 8).length;
+  check(a.errors.length === 0 && b.errors.length === 0, `${name}: no console errors ${a.errors.concat(b.errors).join(" | ")}`);
+  await a.page.close();
+  await b.page.close();
+  return { values, before, seen, off };
+}
+
 // K and the scene box follow the sliders (stop 55): where a slider moves in the page, the shader divides by the K of
 // its cell and clips to the box over the sliders' ranges (the defaults' box only while they are near their defaults).
 // Moved to a = 0.15, f = 20.5, the page draws what a page compiled with those defaults draws: no hole where a cell's K
@@ -286,29 +310,14 @@ if (parts.has("pages")) {
 if (parts.has("pages")) {
   const scene = (a, f) => '[modules]\nbumpy = """\nshape\nsin from trigonometry\nD = ‖p‖ - 1 + a sin(f p_1) sin(f p_2) sin(f p_3)\n' +
     `where\np ∈ ℝ³\na ∈ [0, 0.3] default = ${a}\nf ∈ [1, 40] default = ${f}\n"""\n[camera]\nposition = [0, 1.2, -3.2]\n[[shapes]]\ntype = "bumpy"\n`;
-  const moved = path.join(tmp, "cells_moved.html"), at = path.join(tmp, "cells_at.html");
-  fs.writeFileSync(path.join(tmp, "cells_moved.iq"), scene(0.05, 8));
-  fs.writeFileSync(path.join(tmp, "cells_at.iq"), scene(0.15, 20.5));
-  execFileSync(iqc, [path.join(tmp, "cells_moved.iq"), "--target", "html", "-o", moved], { stdio: "pipe" });
-  execFileSync(iqc, [path.join(tmp, "cells_at.iq"), "--target", "html", "-o", at], { stdio: "pipe" });
-  const a = await open("file://" + moved);
-  const frames = await a.page.evaluate(() => window.iqcFrames);
-  await a.page.evaluate(() => {
+  const { values, seen, off } = await movedAgainstDefaults("cells", scene(0.05, 8), scene(0.15, 20.5), () => {
     const s = document.querySelectorAll("#params input[type=range]");
     s[0].value = 0.15; s[0].dispatchEvent(new Event("input"));
     s[1].value = 20.5; s[1].dispatchEvent(new Event("input"));
+    return Array.from(s).map(x => Number(x.value));
   });
-  await waitFor(a.page, n => window.iqcFrames > n, frames);  // (both inputs in one frame)
-  const values = await a.page.evaluate(() => Array.from(document.querySelectorAll("#params input[type=range]")).map(s => Number(s.value)));
-  const seen = await picture(a.page);
-  const b = await open("file://" + at);
-  const expected = await picture(b.page);
-  const off = seen.data.filter((v, i) => Math.abs(v - expected.data[i]) > 8).length;
   check(Math.abs(values[0] - 0.15) < 1e-3 && Math.abs(values[1] - 20.5) < 0.02 && off <= 0.01 * seen.data.length && seen.colours > 50,
         `cells: sliders moved to (${values.join(", ")}) draw what their defaults draw (${off} of ${seen.data.length} samples differ)`);
-  check(a.errors.length === 0 && b.errors.length === 0, `cells: no console errors ${a.errors.concat(b.errors).join(" | ")}`);
-  await a.page.close();
-  await b.page.close();
 }
 
 // A group of 48 bumpy balls (stop 59): K, the scene box and the bounding spheres are taken over the hull of the
@@ -327,31 +336,15 @@ if (parts.has("pages")) {
     }
     return s;
   };
-  const moved = path.join(tmp, "hull_moved.html"), at = path.join(tmp, "hull_at.html");
-  fs.writeFileSync(path.join(tmp, "hull_moved.iq"), scene(0.45, 0));
-  fs.writeFileSync(path.join(tmp, "hull_at.iq"), scene(1.2, 0));
-  execFileSync(iqc, [path.join(tmp, "hull_moved.iq"), "--target", "html", "-o", moved], { stdio: "pipe" });
-  execFileSync(iqc, [path.join(tmp, "hull_at.iq"), "--target", "html", "-o", at], { stdio: "pipe" });
-  const a = await open("file://" + moved);
-  const frames = await a.page.evaluate(() => window.iqcFrames);
-  const found = await a.page.evaluate(() => {
+  const { values: found, before, seen, off } = await movedAgainstDefaults("hull", scene(0.45, 0), scene(1.2, 0), () => {
     for (const d of document.querySelectorAll("#params details"))
       if (d.querySelector("summary").textContent === "b5")
         for (const s of d.querySelectorAll("input[type=range]"))
           if (s.dataset.name === "r") { s.value = 1.2; s.dispatchEvent(new Event("input")); return Number(s.value); }
     return -1;
   });
-  await waitFor(a.page, n => window.iqcFrames > n, frames);
-  const seen = await picture(a.page);
-  const b = await open("file://" + at);
-  const expected = await picture(b.page);
-  const before = await (async () => { const c = await open("file://" + moved); const p = await picture(c.page); await c.page.close(); return p; })();
-  const off = seen.data.filter((v, i) => Math.abs(v - expected.data[i]) > 8).length;
   check(Math.abs(found - 1.2) < 0.01 && differs(before, seen) && off <= 0.01 * seen.data.length && seen.colours > 50,
         `hull: a member's r moved to ${found} past its group's values draws what its default there draws (${off} of ${seen.data.length} samples differ)`);
-  check(a.errors.length === 0 && b.errors.length === 0, `hull: no console errors ${a.errors.concat(b.errors).join(" | ")}`);
-  await a.page.close();
-  await b.page.close();
 }
 
 // A phone (390×844 at 3 device pixels per CSS pixel, touch): the drawing buffer is the canvas's exact size (60vh is
