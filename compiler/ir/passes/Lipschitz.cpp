@@ -2201,42 +2201,28 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     // Each component of a scalar or vector slider with a finite range (a vector's ‖t∘p‖ - 1, t ∈ [0.5, 4]³, marched with
     // 4 where its default needs 1.2: a trial's), and of a group's per-member table of one (up to 16 members: the group's
     // K is the largest of its members' cells' K; six bumpy balls in a group took 52× Shadertoy's steps: a trial's).
-    std::vector<SliderComponent> candidates;
+    // A group's per-member tables past 16 members (up to kMaxHullMembers), each component alike over its members: `large`,
+    // pinned to the hull of their values (48 bumpy balls on a floor: K 53 over the sliders' ranges where Shadertoy's
+    // constants give 4.2, 287 steps a pixel against 29; a trial's, trial77 #2).
+    std::vector<SliderComponent> candidates, large;
     auto shape_of = [&](const Global& g, size_t& n, size_t& count) {  // components per element, elements
         n = size_t(g.type.is_array() ? g.type.element().components() : g.type.components());
         count = n > 0 ? g.value.size() / n : 0;
-        return n > 0 && count >= 1 && count <= 16 && g.value.size() == n * count && (g.type.is_array() || count == 1) &&
+        return n > 0 && count >= 1 && g.value.size() == n * count && (g.type.is_array() || count == 1) &&
                (g.bounds.lo.size() == n || g.bounds.lo.size() == n * count) && g.bounds.hi.size() == g.bounds.lo.size();
     };
     for (size_t k = 0; k < all.size(); ++k) {
         const Global& g = m.globals[all[k]];
         size_t n = 0, count = 0;
         if (!shape_of(g, n, count)) continue;
+        const bool hull = count > 16;
+        if (hull && (!g.per_member || count > kMaxHullMembers)) continue;
         for (size_t c = 0; c < n; ++c) {
             bool ok = true;  // (every member's range of the component the same, finite and wide)
             for (size_t j = c; j < g.bounds.lo.size(); j += n)
                 ok = ok && g.bounds.lo[j] == g.bounds.lo[c] && g.bounds.hi[j] == g.bounds.hi[c] && std::isfinite(g.bounds.lo[j]) &&
                      std::isfinite(g.bounds.hi[j]) && g.bounds.lo[j] < g.bounds.hi[j];
-            if (ok) candidates.push_back({k, c});
-        }
-    }
-    // A group's per-member tables past 16 members, each component alike over its members (as above): pinned to the hull
-    // of their values (48 bumpy balls on a floor: K 53 over the sliders' ranges where Shadertoy's constants give 4.2,
-    // 287 steps a pixel against 29; a trial's, trial77 #2).
-    std::vector<SliderComponent> large;
-    for (size_t k = 0; k < all.size(); ++k) {
-        const Global& g = m.globals[all[k]];
-        if (!g.type.is_array() || !g.per_member || g.type.element().components() < 1) continue;
-        const size_t n = size_t(g.type.element().components()), count = g.value.size() / n;
-        if (count <= 16 || count > kMaxHullMembers || g.value.size() != n * count ||
-            (g.bounds.lo.size() != n && g.bounds.lo.size() != n * count) || g.bounds.hi.size() != g.bounds.lo.size())
-            continue;
-        for (size_t c = 0; c < n; ++c) {
-            bool ok = true;
-            for (size_t j = c; j < g.bounds.lo.size(); j += n)
-                ok = ok && g.bounds.lo[j] == g.bounds.lo[c] && g.bounds.hi[j] == g.bounds.hi[c] && std::isfinite(g.bounds.lo[j]) &&
-                     std::isfinite(g.bounds.hi[j]) && g.bounds.lo[j] < g.bounds.hi[j];
-            if (ok) large.push_back({k, c});
+            if (ok) (hull ? large : candidates).push_back({k, c});
         }
     }
     if ((candidates.empty() && large.empty()) || candidates.size() > 8) return std::nullopt;
