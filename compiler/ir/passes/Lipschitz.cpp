@@ -1599,9 +1599,9 @@ std::vector<double> outside_bound(const Module& m, const LipschitzSpec& spec, do
     return {};
 }
 
-// The sliders function `fn` reads, through its calls and loops: the indices of the parameter globals with bounds,
-// in increasing order.
-std::vector<size_t> sliders_read(const Module& m, int fn) {
+// The sliders function `fn` reads, through its calls and loops: the indices of the parameter globals with bounds (with
+// `unbounded`, those without too), in increasing order.
+std::vector<size_t> sliders_read(const Module& m, int fn, bool unbounded = false) {
     std::vector<char> reached(m.functions.size(), 0);
     std::vector<int> todo = {fn};
     std::vector<size_t> sliders;
@@ -1612,7 +1612,8 @@ std::vector<size_t> sliders_read(const Module& m, int fn) {
         reached[size_t(f)] = 1;
         for (const Instr& in : m.functions[size_t(f)].body) {
             if (in.op == Op::Call || in.op == Op::Loop) todo.push_back(in.aux);
-            if (in.op == Op::Global && m.globals[size_t(in.aux)].kind == Global::Kind::Parameter && !m.globals[size_t(in.aux)].bounds.lo.empty())
+            if (in.op == Op::Global && m.globals[size_t(in.aux)].kind == Global::Kind::Parameter &&
+                (unbounded || !m.globals[size_t(in.aux)].bounds.lo.empty()))
                 sliders.push_back(size_t(in.aux));
         }
     }
@@ -2214,17 +2215,27 @@ std::optional<SliderCells> slider_cells(const Module& m, const LipschitzSpec& sp
     for (size_t k = 0; k < all.size(); ++k) {
         const Global& g = m.globals[all[k]];
         size_t n = 0, count = 0;
-        if (!shape_of(g, n, count)) continue;
-        const bool hull = count > 16;
-        if (hull && (!g.per_member || count > kMaxHullMembers)) continue;
+        const bool shaped = shape_of(g, n, count), hull = g.type.is_array() && g.per_member && count > 16;
+        // (a table past 16 members with a component of no finite range: no hull, since the loop would not test it and
+        // the tiers' K held only near its values; trial78 #1: a ∈ ℝ moved in the page drew holes)
+        if (hull && !shaped) return std::nullopt;
+        if (!shaped || (count > 16 && (!hull || count > kMaxHullMembers))) continue;
         for (size_t c = 0; c < n; ++c) {
             bool ok = true;  // (every member's range of the component the same, finite and wide)
             for (size_t j = c; j < g.bounds.lo.size(); j += n)
                 ok = ok && g.bounds.lo[j] == g.bounds.lo[c] && g.bounds.hi[j] == g.bounds.hi[c] && std::isfinite(g.bounds.lo[j]) &&
                      std::isfinite(g.bounds.hi[j]) && g.bounds.lo[j] < g.bounds.hi[j];
+            if (hull && !ok) return std::nullopt;  // (as above)
             if (ok) (hull ? large : candidates).push_back({k, c});
         }
     }
+    // (a table past 16 members without a range, which sliders_read leaves out: no hull, as above)
+    if (!large.empty())
+        for (size_t gi : sliders_read(m, spec.object_fn, true)) {
+            const Global& g = m.globals[gi];
+            if (g.bounds.lo.empty() && g.type.is_array() && g.per_member && g.value.size() > 16 * size_t(g.type.element().components()))
+                return std::nullopt;
+        }
     if ((candidates.empty() && large.empty()) || candidates.size() > 8) return std::nullopt;
     if (budget <= 0) {  // (said: items past it were marched by their whole's K with nothing to say why; a trial's, stop 56)
         over_budget = fmt::format("{} cell estimates a scene", kMaxCellEstimates);
