@@ -2034,6 +2034,16 @@ TEST_CASE("a WebGL2 group past 16 members is marched by the K of its members' va
             CHECK(d < 0.002);  // (at most its own: a point inside a neighbour is nearer still)
         }
     }
+    // A table without a range (a ∈ ℝ) is not tested by the loop: no hull tiers then (trial78 #1: the tiers' K, taken near
+    // its values, drew holes where the page moved one member's a to 1.5).
+    {
+        std::string unbounded = text;
+        unbounded.replace(unbounded.find("a ∈ [0, 0.5] default = 0.03"), std::string("a ∈ [0, 0.5] default = 0.03").size(), "a ∈ ℝ default = 0.03");
+        RunResult u = run_iqc(write_temp("bumps_48_unbounded.iq", unbounded).string() + " --target webgl2 --dump-ir -o /dev/null");
+        REQUIRE(u.exit_code == 0);
+        CHECK_THAT(u.err, Catch::Contains("; lipschitz: bump ("));
+        CHECK_THAT(u.err, !Catch::Contains("by the members' sliders"));
+    }
     // The picture's cost: steps a pixel within 1.25× Shadertoy's (10× before; 1.3× with the K alone: the scene box's
     // test, a loop over the members in iqc_prepare too, takes the box at their defaults).
     const std::array<double, 2> steps = steps_both(path);
