@@ -143,6 +143,14 @@ ValueId Builder::mod_by_constant(ValueId k, long long d, long long n) {
     return op(Op::Sub, {k, op(Op::Mul, {op(Op::IntDiv, {op(Op::Mul, {k, integer(M)}), integer(1LL << s)}), integer(d)})});
 }
 
+int prepare_function(Module& m) {
+    if (int f = m.find(names::kPrepare); f >= 0) return f;
+    Function f;
+    f.name = f.glsl_name = names::kPrepare;
+    m.functions.push_back(std::move(f));
+    return int(m.functions.size() - 1);
+}
+
 std::vector<ValueId> members_within(Module& m, int& prep, const std::string& body_name, size_t members,
                                     const std::vector<MemberTest>& tests, const std::vector<std::string>& state_names) {
     const size_t tiers = state_names.size();
@@ -178,12 +186,7 @@ std::vector<ValueId> members_within(Module& m, int& prep, const std::string& bod
         m.functions.push_back(std::move(body));
     }
     const int fn = int(m.functions.size() - 1);
-    if (prep < 0) {
-        Function f;
-        f.name = f.glsl_name = names::kPrepare;
-        m.functions.push_back(std::move(f));
-        prep = int(m.functions.size() - 1);
-    }
+    if (prep < 0) prep = prepare_function(m);
     Function& pf = m.functions[size_t(prep)];
     Builder b(m, pf);
     Instr loop;

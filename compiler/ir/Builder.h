@@ -59,6 +59,9 @@ struct MemberTest {
     std::vector<double> lo, hi;  // per tier
 };
 
+// The index of `m`'s iqc_prepare function (names::kPrepare), made empty where there is none.
+int prepare_function(Module& m);
+
 // Appends to `m`'s function `prep` (iqc_prepare, made where -1: its index returned in `prep`) a loop over the members
 // k = 0..members-1, its body a new function `body_name` whose states (one per tier, named state_names[t], each ℝ: 1 at
 // the start) stay 1 while every test holds at member k; returns the states after the loop, values of `prep`. Once per

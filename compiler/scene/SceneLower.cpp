@@ -2312,12 +2312,7 @@ private:
         std::vector<ValueId> states;
         for (const auto& [members, group] : by_members)
             states.push_back(ir::members_within(m_, prep, fmt::format("{}.{}_{}", ir::names::kPrepare, what, members), members, group, {"within"})[0]);
-        if (prep < 0) {  // (no test: the global is 1)
-            ir::Function f;
-            f.name = f.glsl_name = ir::names::kPrepare;
-            m_.functions.push_back(std::move(f));
-            prep = int(m_.functions.size() - 1);
-        }
+        if (prep < 0) prep = ir::prepare_function(m_);  // (no test: the global is 1)
         out_.has_prepare = true;
         ir::Function& pf = m_.functions[size_t(prep)];
         Builder b(m_, pf);

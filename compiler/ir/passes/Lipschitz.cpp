@@ -2541,13 +2541,7 @@ void prepare_cell_factor(Module& m, int factor, const std::vector<size_t>& all, 
             hull_states.push_back(members_within(m, prep, fmt::format("{}.{}.members_within_hull", names::kPrepare, m.globals[size_t(factor)].name),
                                                  count, tests, states));
     }
-    if (prep < 0) {
-        Function f;
-        f.name = names::kPrepare;
-        f.glsl_name = names::kPrepare;
-        m.functions.push_back(std::move(f));
-        prep = int(m.functions.size() - 1);
-    }
+    if (prep < 0) prep = prepare_function(m);
     Function& f = m.functions[size_t(prep)];
     Builder b(m, f);
     // The table as selects over the first slider's cell (rows), each row over the next slider's, …: a few comparisons
